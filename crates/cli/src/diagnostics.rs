@@ -1,0 +1,119 @@
+//! Failures and how they are shown: bad input (exit 2) rendered with the file,
+//! line and column and the offending text underlined; failed runs (exit 1).
+
+use ariadne::{Label, Report, ReportKind, Source};
+use std::path::Path;
+
+/// Why the program stops without a result.
+pub enum Failure {
+    /// Bad input: a message, optionally located in a source text.
+    Input {
+        file: String,
+        message: String,
+        located: Option<(String, std::ops::Range<usize>)>,
+        help: Option<String>,
+    },
+    /// A run that failed midway.
+    Run { message: String },
+}
+
+impl Failure {
+    /// Bad input about a file as a whole.
+    pub fn input(path: &Path, message: impl Into<String>) -> Failure {
+        Failure::Input { file: path.display().to_string(), message: message.into(), located: None, help: None }
+    }
+
+    /// A model error, located in the model's text.
+    pub fn model(path: &Path, source: &str, e: mech::ModelError) -> Failure {
+        Failure::Input {
+            file: path.display().to_string(),
+            message: e.message,
+            located: e.span.map(|s| (source.to_string(), clamp(s, source))),
+            help: e.help,
+        }
+    }
+
+    /// A failed run.
+    pub fn run(message: impl Into<String>) -> Failure {
+        Failure::Run { message: message.into() }
+    }
+
+    /// The process exit code.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            Failure::Input { .. } => 2,
+            Failure::Run { .. } => 1,
+        }
+    }
+
+    /// The message for stderr.
+    pub fn render(&self) -> String {
+        match self {
+            Failure::Run { message } => format!("error: {message}\n"),
+            Failure::Input { file, message, located: None, help } => {
+                let mut s = format!("error: {file}: {message}\n");
+                if let Some(h) = help {
+                    s.push_str(&format!("  help: {h}\n"));
+                }
+                s
+            }
+            Failure::Input { file, message, located: Some((source, span)), help } => {
+                let (line, col) = line_col(source, span.start);
+                let mut out = format!("error: {file}:{line}:{col}: {message}\n");
+                let mut report = Report::build(ReportKind::Error, (file.as_str(), span.clone()))
+                    .with_config(ariadne::Config::default().with_color(false))
+                    .with_message(message)
+                    .with_label(Label::new((file.as_str(), span.clone())).with_message(short(message)));
+                if let Some(h) = help {
+                    report = report.with_help(h);
+                }
+                let mut buf = Vec::new();
+                if report.finish().write((file.as_str(), Source::from(source.as_str())), &mut buf).is_ok() {
+                    out.push_str(&String::from_utf8_lossy(&buf));
+                } else if let Some(h) = help {
+                    out.push_str(&format!("  help: {h}\n"));
+                }
+                out
+            }
+        }
+    }
+}
+
+/// The label under the span: the message up to its first colon-separated detail.
+fn short(message: &str) -> String {
+    message.rsplit(": ").next().unwrap_or(message).to_string()
+}
+
+/// Keeps a span inside the text and on character boundaries.
+fn clamp(span: std::ops::Range<usize>, source: &str) -> std::ops::Range<usize> {
+    let mut start = span.start.min(source.len());
+    while !source.is_char_boundary(start) {
+        start -= 1;
+    }
+    let mut end = span.end.clamp(start, source.len());
+    while !source.is_char_boundary(end) {
+        end += 1;
+    }
+    start..end
+}
+
+/// 1-based line and column (in characters) of a byte offset.
+pub fn line_col(source: &str, offset: usize) -> (usize, usize) {
+    let before = &source[..offset.min(source.len())];
+    let line = before.matches('\n').count() + 1;
+    let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, col)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lines_and_columns_are_one_based() {
+        let s = "a = 1\nbé = \"x\"\n";
+        assert_eq!(line_col(s, 0), (1, 1));
+        assert_eq!(line_col(s, 6), (2, 1));
+        assert_eq!(line_col(s, 11), (2, 5));
+    }
+}

@@ -1,0 +1,117 @@
+//! The `lagrange` command-line program: argument parsing, reading files,
+//! rendering diagnostics and writing results. Everything it prints is computed
+//! by the `mech` library; this crate only does IO.
+//!
+//! Exit codes: 0 done; 2 bad input (file, expression, model, arguments), with a
+//! message naming file, line and column; 1 a run that failed midway.
+
+mod diagnostics;
+mod format;
+
+use clap::{Parser, Subcommand, ValueEnum};
+use diagnostics::Failure;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// Analytical mechanics from a model file: equations of motion, Hamiltonian, conserved quantities.
+#[derive(Parser)]
+#[command(name = "lagrange", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Derive momenta, Euler–Lagrange equations, M q'' = f, cyclic coordinates, H and Hamilton's equations.
+    Derive {
+        /// The model file (TOML).
+        model: PathBuf,
+        /// Output format.
+        #[arg(long, value_enum, default_value_t = Format::Text)]
+        format: Format,
+        /// Override a parameter: --set g=1.62 (repeatable).
+        #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_set)]
+        set: Vec<(String, f64)>,
+    },
+}
+
+/// Output formats of `derive`.
+#[derive(Clone, Copy, ValueEnum)]
+enum Format {
+    /// Text that reads like the lecture notes.
+    Text,
+    /// LaTeX equations.
+    Latex,
+    /// JSON (`lagrange.derive/1`).
+    Json,
+}
+
+fn parse_set(s: &str) -> Result<(String, f64), String> {
+    let (name, value) = s
+        .split_once('=')
+        .ok_or_else(|| format!("expected NAME=VALUE, found '{s}'"))?;
+    let value: f64 = value
+        .trim()
+        .parse()
+        .map_err(|_| format!("the value of '{}' must be a number, found '{}'", name.trim(), value.trim()))?;
+    if !value.is_finite() {
+        return Err(format!("the value of '{}' must be finite", name.trim()));
+    }
+    Ok((name.trim().to_string(), value))
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Derive { model, format, set } => derive(&model, format, &set),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(failure) => {
+            let _ = std::io::stdout().flush();
+            eprint!("{}", failure.render());
+            ExitCode::from(failure.exit_code())
+        }
+    }
+}
+
+/// Reads a model file, or explains why it cannot.
+fn read_source(path: &Path) -> Result<String, Failure> {
+    let bytes = std::fs::read(path).map_err(|e| Failure::input(path, format!("cannot read the file: {e}")))?;
+    if bytes.len() > mech::MAX_FILE_BYTES {
+        return Err(Failure::input(
+            path,
+            format!("the file is {} bytes; a model file may have at most {}", bytes.len(), mech::MAX_FILE_BYTES),
+        ));
+    }
+    String::from_utf8(bytes).map_err(|e| Failure::input(path, format!("the file is not UTF-8 text: {e}")))
+}
+
+fn derive(path: &Path, format: Format, set: &[(String, f64)]) -> Result<(), Failure> {
+    let source = read_source(path)?;
+    let model = mech::Model::parse(&source, set).map_err(|e| Failure::model(path, &source, e))?;
+    let derivation = mech::Derivation::new(model).map_err(|e| Failure::model(path, &source, e))?;
+    let text = match format {
+        Format::Json => {
+            let report = mech::DeriveReport::new(&derivation);
+            let mut s = serde_json::to_string_pretty(&report).map_err(|e| Failure::run(format!("cannot write JSON: {e}")))?;
+            s.push('\n');
+            s
+        }
+        Format::Text => format::text(&derivation),
+        Format::Latex => format::latex(&derivation),
+    };
+    write_stdout(&text)
+}
+
+/// Writes to stdout; a closed pipe is not an error worth a message.
+fn write_stdout(text: &str) -> Result<(), Failure> {
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|_| out.flush()) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        Err(e) => Err(Failure::run(format!("cannot write the output: {e}"))),
+    }
+}

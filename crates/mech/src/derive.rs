@@ -1,0 +1,617 @@
+//! The derivation: from a model to momenta, Euler–Lagrange equations, the mass
+//! matrix form `M q'' = f`, cyclic coordinates, the Hamiltonian and Hamilton's
+//! equations, as the notes' chapter 2 derives them by hand.
+//!
+//! Entry point: [`Derivation::new`]. Everything is built in the model's pool, so
+//! subexpressions are shared across all results. `M` is never inverted
+//! symbolically for the equations of motion; only the Hamiltonian needs
+//! `M⁻¹(p − b)`, built block by block (diagonal and small blocks in closed form).
+
+use crate::error::ModelError;
+use crate::model::{Model, RANK_COORDINATE};
+use crate::probe::{self, Subst};
+use sym::{ExprId, NameId, Pool, Symbol};
+
+/// A quantity the derivation shows to be conserved.
+#[derive(Debug, Clone)]
+pub struct Conserved {
+    /// Its name (`p_th`, `H`).
+    pub name: String,
+    /// The quantity as an expression in (q, q', t).
+    pub expr: ExprId,
+    /// Why it is conserved, in one sentence.
+    pub reason: String,
+}
+
+/// Why the Hamiltonian is or is not the energy, and is or is not conserved.
+#[derive(Debug, Clone, Default)]
+pub struct Verdicts {
+    /// Sentences explaining `hamiltonian_is_energy`.
+    pub energy: Vec<String>,
+    /// Sentences explaining `hamiltonian_conserved`.
+    pub conservation: Vec<String>,
+}
+
+/// Everything derived from a model. Expressions live in `model.pool`.
+#[derive(Debug, Clone)]
+pub struct Derivation {
+    /// The model it was derived from (it owns the pool).
+    pub model: Model,
+    /// Coordinate symbols q.
+    pub q: Vec<ExprId>,
+    /// Velocity symbols q'.
+    pub qd: Vec<ExprId>,
+    /// Acceleration symbols q''.
+    pub qdd: Vec<ExprId>,
+    /// Momentum symbols p_q.
+    pub p: Vec<ExprId>,
+    /// The time symbol.
+    pub t: ExprId,
+    /// Kinetic energy T (None when the model gives only a Lagrangian).
+    pub kinetic: Option<ExprId>,
+    /// Potential U, possibly velocity-dependent (None for a Lagrangian-only model).
+    pub potential: Option<ExprId>,
+    /// The Lagrangian L = T − U.
+    pub lagrangian: ExprId,
+    /// Rayleigh's dissipation function R.
+    pub dissipation: Option<ExprId>,
+    /// Generalized forces Q (zero where none is given).
+    pub forces: Vec<ExprId>,
+    /// Generalized momenta p_q = ∂L/∂q'.
+    pub momenta: Vec<ExprId>,
+    /// E_q = d/dt ∂L/∂q' − ∂L/∂q + ∂R/∂q' − Q_q.
+    pub equations: Vec<ExprId>,
+    /// M with E = M q'' − f.
+    pub mass_matrix: Vec<Vec<ExprId>>,
+    /// f with E = M q'' − f.
+    pub forcing: Vec<ExprId>,
+    /// Indices of cyclic coordinates (∂L/∂q = 0).
+    pub cyclic: Vec<usize>,
+    /// Conserved quantities.
+    pub conserved: Vec<Conserved>,
+    /// The energy function h = Σ q' ∂L/∂q' − L, in (q, q', t).
+    pub energy_function: ExprId,
+    /// The Hamiltonian H(q, p, t), when L is quadratic in the velocities.
+    pub hamiltonian: Option<ExprId>,
+    /// The velocities in terms of momenta, q'(q, p, t), when H exists.
+    pub velocities: Option<Vec<ExprId>>,
+    /// T + U₀ (U₀ the velocity-independent part of U); None for a Lagrangian-only model.
+    pub energy: Option<ExprId>,
+    /// Whether H is the energy T + U₀; None for a Lagrangian-only model.
+    pub hamiltonian_is_energy: Option<bool>,
+    /// Whether H is conserved (∂L/∂t = 0, no dissipation, no forces).
+    pub hamiltonian_conserved: bool,
+    /// Hamilton's equations (dq/dt, dp/dt) per coordinate, in (q, p, t).
+    pub hamilton: Option<Vec<(ExprId, ExprId)>>,
+    /// Whether L depends explicitly on time.
+    pub explicit_time: bool,
+    /// Explanations of the verdicts.
+    pub verdicts: Verdicts,
+}
+
+/// Symbols and the "is a variable" predicate used for collecting.
+struct Vars {
+    names: Vec<NameId>,
+    t: NameId,
+    momenta: Vec<NameId>,
+}
+
+impl Vars {
+    fn is_var(&self, s: Symbol) -> bool {
+        s.name == self.t || self.names.contains(&s.name) || self.momenta.contains(&s.name)
+    }
+}
+
+impl Derivation {
+    /// Derives everything from a model. Fails on a singular mass matrix.
+    pub fn new(mut model: Model) -> Result<Derivation, ModelError> {
+        let n = model.n_coords();
+        // The pool is taken out of the model while the model's other parts are read.
+        let mut pool_owned = std::mem::take(&mut model.pool);
+        let pool = &mut pool_owned;
+        let names: Vec<String> = model.coordinates.iter().map(|c| c.name.clone()).collect();
+        let q: Vec<ExprId> = names.iter().map(|c| pool.var(c, 0)).collect();
+        let qd: Vec<ExprId> = names.iter().map(|c| pool.var(c, 1)).collect();
+        let qdd: Vec<ExprId> = names.iter().map(|c| pool.var(c, 2)).collect();
+        let p: Vec<ExprId> = names.iter().map(|c| pool.symbol(&format!("p_{c}"))).collect();
+        let t = pool.symbol("t");
+        let vars = Vars {
+            names: names.iter().map(|c| pool.name(c)).collect(),
+            t: pool.name("t"),
+            momenta: names.iter().map(|c| pool.name(&format!("p_{c}"))).collect(),
+        };
+        debug_assert!(names.iter().all(|c| pool.find_name(c).is_some()));
+        let _ = RANK_COORDINATE;
+        let is_var = |s: Symbol| vars.is_var(s);
+        let moves = |name: NameId| vars.names.contains(&name);
+
+        // T and U from particles, kinetic and potential; or L itself.
+        let (kinetic, potential) = if model.lagrangian.is_some() {
+            (None, None)
+        } else {
+            let mut t_terms = Vec::new();
+            let mut u_terms = Vec::new();
+            if !model.particles.is_empty() {
+                t_terms.push(particle_kinetic(pool, &model, &q, &qd, t, &is_var));
+            }
+            for part in &model.particles {
+                if let Some(g) = &model.gravity {
+                    let height = part.position[part.position.len() - 1];
+                    u_terms.push(pool.mul(&[part.mass, g.expr, height]));
+                }
+                if let Some(u) = part.potential {
+                    u_terms.push(u);
+                }
+            }
+            if let Some(k) = &model.kinetic {
+                t_terms.push(k.expr);
+            }
+            if let Some(u) = &model.potential {
+                u_terms.push(u.expr);
+            }
+            let tt = pool.add(&t_terms);
+            let uu = pool.add(&u_terms);
+            (Some(pool.simplify_in(tt, &is_var)), Some(pool.simplify_in(uu, &is_var)))
+        };
+        let lagrangian = match (&model.lagrangian, kinetic, potential) {
+            (Some(l), _, _) => pool.simplify_in(l.expr, &is_var),
+            (None, Some(tt), Some(uu)) => pool.sub(tt, uu),
+            _ => unreachable!("a model has a Lagrangian or energies"),
+        };
+        let lagrangian = pool.simplify_in(lagrangian, &is_var);
+        let dissipation = model.dissipation.as_ref().map(|r| pool.simplify_in(r.expr, &is_var));
+        let forces: Vec<ExprId> = model
+            .forces
+            .iter()
+            .map(|f| match f {
+                Some(f) => pool.simplify_in(f.expr, &is_var),
+                None => pool.zero(),
+            })
+            .collect();
+
+        // Momenta and Euler–Lagrange equations.
+        let momenta: Vec<ExprId> = (0..n)
+            .map(|i| {
+                let d = pool.diff(lagrangian, qd[i]);
+                pool.simplify_in(d, &is_var)
+            })
+            .collect();
+        let mut equations = Vec::with_capacity(n);
+        let mut dl_dq = Vec::with_capacity(n);
+        for i in 0..n {
+            let dtp = pool.time_derivative(momenta[i], Some(t), &moves);
+            let dl = pool.diff(lagrangian, q[i]);
+            dl_dq.push(dl);
+            let mut terms = vec![dtp, pool.neg(dl)];
+            if let Some(r) = dissipation {
+                terms.push(pool.diff(r, qd[i]));
+            }
+            terms.push(pool.neg(forces[i]));
+            let e = pool.add(&terms);
+            equations.push(pool.simplify_in(e, &is_var));
+        }
+        let zero_acc: Subst = qdd.iter().map(|&a| (a, pool.zero())).collect();
+        let mut mass_matrix = vec![vec![pool.zero(); n]; n];
+        let mut forcing = Vec::with_capacity(n);
+        for i in 0..n {
+            for j in 0..n {
+                let m = pool.diff(equations[i], qdd[j]);
+                mass_matrix[i][j] = pool.simplify_in(m, &is_var);
+            }
+            let rest = pool.substitute(equations[i], &zero_acc);
+            let f = pool.neg(rest);
+            forcing.push(pool.simplify_in(f, &is_var));
+        }
+        if probe::is_singular(pool, &mass_matrix) {
+            let span = model
+                .lagrangian
+                .as_ref()
+                .or(model.kinetic.as_ref())
+                .map(|l| l.span.clone())
+                .or_else(|| model.particles.first().map(|p| p.span.clone()));
+            let message = "the mass matrix ∂²L/∂q'∂q' is singular: the equations of motion do not determine every acceleration";
+            let help = "each coordinate needs its own kinetic energy; a coordinate whose velocity never appears, or two that only appear as one combination, leave the motion undetermined";
+            return Err(ModelError { message: message.into(), span, help: Some(help.into()) });
+        }
+
+        // Cyclic coordinates and conserved momenta.
+        let mut cyclic = Vec::new();
+        let mut conserved = Vec::new();
+        for i in 0..n {
+            if !probe::is_zero(pool, dl_dq[i]) {
+                continue;
+            }
+            cyclic.push(i);
+            let damped = dissipation.is_some_and(|r| {
+                let d = pool.diff(r, qd[i]);
+                !probe::is_zero(pool, d)
+            });
+            let forced = !probe::is_zero(pool, forces[i]);
+            if !damped && !forced {
+                conserved.push(Conserved {
+                    name: format!("p_{}", names[i]),
+                    expr: momenta[i],
+                    reason: format!("'{}' is cyclic: L does not depend on it, so p_{} = ∂L/∂{}' is constant", names[i], names[i], names[i]),
+                });
+            }
+        }
+
+        // Energy function and the verdicts on H.
+        let mut h_terms: Vec<ExprId> = (0..n).map(|i| pool.mul2(qd[i], momenta[i])).collect();
+        h_terms.push(pool.neg(lagrangian));
+        let h_sum = pool.add(&h_terms);
+        let energy_function = pool.simplify_in(h_sum, &is_var);
+        let dl_dt = pool.diff(lagrangian, t);
+        let explicit_time = !probe::is_zero(pool, dl_dt);
+        let dissipative = dissipation.is_some_and(|r| !probe::is_zero(pool, r));
+        let forced: Vec<usize> = (0..n).filter(|&i| !probe::is_zero(pool, forces[i])).collect();
+        let hamiltonian_conserved = !explicit_time && !dissipative && forced.is_empty();
+        let mut verdicts = Verdicts::default();
+        if explicit_time {
+            verdicts.conservation.push("L depends explicitly on the time (∂L/∂t ≠ 0), so dH/dt = −∂L/∂t ≠ 0.".into());
+        }
+        if dissipative {
+            verdicts.conservation.push("the dissipation function R takes energy out: dH/dt = −Σ q'·∂R/∂q'.".into());
+        }
+        if !forced.is_empty() {
+            let list: Vec<&str> = forced.iter().map(|&i| names[i].as_str()).collect();
+            verdicts.conservation.push(format!(
+                "generalized forces act on {}: they do work dH/dt = Σ Q·q'.",
+                list.join(", ")
+            ));
+        }
+        if hamiltonian_conserved {
+            verdicts.conservation.push("L does not depend explicitly on t, and no dissipation or generalized force acts: dH/dt = −∂L/∂t = 0.".into());
+        }
+        let (energy, hamiltonian_is_energy) = match (kinetic, potential) {
+            (Some(tt), Some(uu)) => {
+                let zero_vel: Subst = qd.iter().map(|&v| (v, pool.zero())).collect();
+                let u0 = pool.substitute(uu, &zero_vel);
+                let e = pool.add2(tt, u0);
+                let e = pool.simplify_in(e, &is_var);
+                let same = probe::are_equal(pool, energy_function, e);
+                explain_energy(pool, &mut verdicts, same, tt, uu, u0, &qd, t, &moves);
+                (Some(e), Some(same))
+            }
+            _ => {
+                verdicts.energy.push("the model gives only L, so T and U (and hence the energy) are not known separately.".into());
+                (None, None)
+            }
+        };
+        if hamiltonian_conserved {
+            conserved.push(Conserved {
+                name: "H".into(),
+                expr: energy_function,
+                reason: if hamiltonian_is_energy == Some(true) {
+                    "H is the energy, and it is conserved".into()
+                } else {
+                    "H is conserved (it is not the energy T + U)".into()
+                },
+            });
+        }
+
+        // The Hamiltonian, by the Legendre transform for L quadratic in q'.
+        let quadratic = mass_matrix
+            .iter()
+            .flatten()
+            .all(|&m| qd.iter().all(|&v| pool.free_of(m, v)) && qdd.iter().all(|&a| pool.free_of(m, a)));
+        let (hamiltonian, velocities, hamilton) = if quadratic {
+            let zero_vel: Subst = qd.iter().map(|&v| (v, pool.zero())).collect();
+            let b: Vec<ExprId> = momenta.iter().map(|&pi| pool.substitute(pi, &zero_vel)).collect();
+            let l0 = pool.substitute(lagrangian, &zero_vel);
+            let shifted: Vec<ExprId> = (0..n).map(|i| pool.sub(p[i], b[i])).collect();
+            let v = solve_symbolic(pool, &mass_matrix, &shifted, &is_var);
+            let mut terms: Vec<ExprId> = (0..n).map(|i| pool.mul2(shifted[i], v[i])).collect();
+            let half = pool.rational(1, 2);
+            let kin = pool.add(&terms);
+            let kin = pool.mul2(half, kin);
+            terms.clear();
+            let h = pool.sub(kin, l0);
+            let h = pool.simplify_in(h, &is_var);
+            let vel_subst: Subst = (0..n).map(|i| (qd[i], v[i])).collect();
+            let mut eqs = Vec::with_capacity(n);
+            for i in 0..n {
+                let dq = v[i];
+                let dh = pool.diff(h, q[i]);
+                let mut dp_terms = vec![pool.neg(dh)];
+                if let Some(r) = dissipation {
+                    let dr = pool.diff(r, qd[i]);
+                    let dr = pool.substitute(dr, &vel_subst);
+                    dp_terms.push(pool.neg(dr));
+                }
+                let fq = pool.substitute(forces[i], &vel_subst);
+                dp_terms.push(fq);
+                let dp = pool.add(&dp_terms);
+                eqs.push((dq, pool.simplify_in(dp, &is_var)));
+            }
+            (Some(h), Some(v), Some(eqs))
+        } else {
+            verdicts.energy.push(
+                "L is not quadratic in the velocities, so p = ∂L/∂q' cannot be solved for q' in closed form; H is not given.".into(),
+            );
+            (None, None, None)
+        };
+
+        model.pool = pool_owned;
+        Ok(Derivation {
+            model,
+            q,
+            qd,
+            qdd,
+            p,
+            t,
+            kinetic,
+            potential,
+            lagrangian,
+            dissipation,
+            forces,
+            momenta,
+            equations,
+            mass_matrix,
+            forcing,
+            cyclic,
+            conserved,
+            energy_function,
+            hamiltonian,
+            velocities,
+            energy,
+            hamiltonian_is_energy,
+            hamiltonian_conserved,
+            hamilton,
+            explicit_time,
+            verdicts,
+        })
+    }
+
+    /// The pool holding every expression.
+    pub fn pool(&self) -> &Pool {
+        &self.model.pool
+    }
+
+    /// The coordinate names.
+    pub fn coordinate_names(&self) -> Vec<&str> {
+        self.model.coordinates.iter().map(|c| c.name.as_str()).collect()
+    }
+
+    /// True when M is diagonal (each coordinate's acceleration appears in its own equation only).
+    pub fn mass_matrix_is_diagonal(&self) -> bool {
+        let n = self.q.len();
+        (0..n).all(|i| (0..n).all(|j| i == j || self.model.pool.is_zero(self.mass_matrix[i][j])))
+    }
+}
+
+/// T of the particles by the notes' recipe: with x_k(q, t),
+/// T = ½ Σ_k m_k |Σ_i ∂x_k/∂q_i q_i' + ∂x_k/∂t|², assembled from the entries
+/// M_ij = Σ_k m_k ∂x_k/∂q_i · ∂x_k/∂q_j (each simplified while it is small).
+fn particle_kinetic(
+    pool: &mut Pool,
+    model: &crate::model::Model,
+    q: &[ExprId],
+    qd: &[ExprId],
+    t: ExprId,
+    is_var: &dyn Fn(Symbol) -> bool,
+) -> ExprId {
+    let n = q.len();
+    let mut m_entries: Vec<Vec<Vec<ExprId>>> = vec![vec![Vec::new(); n]; n];
+    let mut b_terms: Vec<Vec<ExprId>> = vec![Vec::new(); n];
+    let mut t0_terms = Vec::new();
+    for part in &model.particles {
+        let jac: Vec<Vec<ExprId>> = part.position.iter().map(|&x| q.iter().map(|&qi| pool.diff(x, qi)).collect()).collect();
+        let dxdt: Vec<ExprId> = part.position.iter().map(|&x| pool.diff(x, t)).collect();
+        for i in 0..n {
+            for j in i..n {
+                let dots: Vec<ExprId> = (0..jac.len()).map(|d| pool.mul2(jac[d][i], jac[d][j])).collect();
+                let dot = pool.add(&dots);
+                if !pool.is_zero(dot) {
+                    let term = pool.mul2(part.mass, dot);
+                    m_entries[i][j].push(term);
+                }
+            }
+            let dots: Vec<ExprId> = (0..jac.len()).map(|d| pool.mul2(jac[d][i], dxdt[d])).collect();
+            let dot = pool.add(&dots);
+            if !pool.is_zero(dot) {
+                b_terms[i].push(pool.mul2(part.mass, dot));
+            }
+        }
+        let sq: Vec<ExprId> = dxdt.iter().map(|&s| pool.powi(s, 2)).collect();
+        let s2 = pool.add(&sq);
+        if !pool.is_zero(s2) {
+            t0_terms.push(pool.mul2(part.mass, s2));
+        }
+    }
+    let half = pool.rational(1, 2);
+    let mut terms = Vec::new();
+    for i in 0..n {
+        for j in i..n {
+            let entry = pool.add(&m_entries[i][j]);
+            let entry = pool.simplify_in(entry, is_var);
+            if pool.is_zero(entry) {
+                continue;
+            }
+            // ½ M_ii q_i'^2, and M_ij q_i' q_j' for i < j (the two symmetric halves).
+            let vel = if i == j { pool.powi(qd[i], 2) } else { pool.mul2(qd[i], qd[j]) };
+            let coeff = if i == j { pool.mul2(half, entry) } else { entry };
+            terms.push(pool.mul2(coeff, vel));
+        }
+        let b = pool.add(&b_terms[i]);
+        let b = pool.simplify_in(b, is_var);
+        if !pool.is_zero(b) {
+            terms.push(pool.mul2(b, qd[i]));
+        }
+    }
+    let t0 = pool.add(&t0_terms);
+    let t0 = pool.simplify_in(t0, is_var);
+    terms.push(pool.mul2(half, t0));
+    pool.add(&terms)
+}
+
+/// Solves M v = r symbolically for the Legendre transform, block by block:
+/// coordinates that M couples form a block; 1×1 blocks divide, 2×2 and 3×3
+/// blocks use the adjugate over the (simplified) determinant, and larger
+/// blocks use Gaussian elimination without pivoting (M is positive definite)
+/// whose intermediate results stay shared in the DAG.
+fn solve_symbolic(pool: &mut Pool, m: &[Vec<ExprId>], r: &[ExprId], is_var: &dyn Fn(Symbol) -> bool) -> Vec<ExprId> {
+    let n = r.len();
+    let mut block_of: Vec<usize> = (0..n).collect();
+    fn find(b: &mut [usize], i: usize) -> usize {
+        let mut i = i;
+        while b[i] != i {
+            b[i] = b[b[i]];
+            i = b[i];
+        }
+        i
+    }
+    for i in 0..n {
+        for j in 0..n {
+            if i != j && !pool.is_zero(m[i][j]) {
+                let (a, b) = (find(&mut block_of, i), find(&mut block_of, j));
+                block_of[a] = b;
+            }
+        }
+    }
+    let mut blocks: Vec<Vec<usize>> = Vec::new();
+    let mut root_index: Vec<Option<usize>> = vec![None; n];
+    for i in 0..n {
+        let root = find(&mut block_of, i);
+        match root_index[root] {
+            Some(k) => blocks[k].push(i),
+            None => {
+                root_index[root] = Some(blocks.len());
+                blocks.push(vec![i]);
+            }
+        }
+    }
+    let mut v = vec![pool.zero(); n];
+    for idx in blocks {
+        let k = idx.len();
+        let a: Vec<Vec<ExprId>> = idx.iter().map(|&i| idx.iter().map(|&j| m[i][j]).collect()).collect();
+        let rhs: Vec<ExprId> = idx.iter().map(|&i| r[i]).collect();
+        let sol = match k {
+            1 => vec![pool.div(rhs[0], a[0][0])],
+            2 | 3 => adjugate_solve(pool, &a, &rhs, is_var),
+            _ => elimination_solve(pool, a, rhs),
+        };
+        for (pos, &i) in idx.iter().enumerate() {
+            v[i] = sol[pos];
+        }
+    }
+    v
+}
+
+fn adjugate_solve(pool: &mut Pool, a: &[Vec<ExprId>], r: &[ExprId], is_var: &dyn Fn(Symbol) -> bool) -> Vec<ExprId> {
+    let k = a.len();
+    let minor = |pool: &mut Pool, rows: [usize; 2], cols: [usize; 2]| {
+        let x = pool.mul2(a[rows[0]][cols[0]], a[rows[1]][cols[1]]);
+        let y = pool.mul2(a[rows[0]][cols[1]], a[rows[1]][cols[0]]);
+        pool.sub(x, y)
+    };
+    // adj[i][j] = cofactor C_ji.
+    let mut adj = vec![vec![pool.zero(); k]; k];
+    let det;
+    if k == 2 {
+        adj[0][0] = a[1][1];
+        adj[1][1] = a[0][0];
+        adj[0][1] = pool.neg(a[0][1]);
+        adj[1][0] = pool.neg(a[1][0]);
+        det = minor(pool, [0, 1], [0, 1]);
+    } else {
+        let others = |i: usize| -> [usize; 2] {
+            match i {
+                0 => [1, 2],
+                1 => [0, 2],
+                _ => [0, 1],
+            }
+        };
+        for i in 0..3 {
+            for j in 0..3 {
+                let c = minor(pool, others(j), others(i));
+                adj[i][j] = if (i + j) % 2 == 0 { c } else { pool.neg(c) };
+            }
+        }
+        let terms: Vec<ExprId> = (0..3).map(|j| pool.mul2(a[0][j], adj[j][0])).collect();
+        det = pool.add(&terms);
+    }
+    let det = pool.simplify_in(det, is_var);
+    (0..k)
+        .map(|i| {
+            let terms: Vec<ExprId> = (0..k).map(|j| pool.mul2(adj[i][j], r[j])).collect();
+            let num = pool.add(&terms);
+            let num = pool.simplify_in(num, is_var);
+            pool.div(num, det)
+        })
+        .collect()
+}
+
+fn elimination_solve(pool: &mut Pool, mut a: Vec<Vec<ExprId>>, mut r: Vec<ExprId>) -> Vec<ExprId> {
+    let k = r.len();
+    for col in 0..k {
+        let piv = a[col][col];
+        for row in col + 1..k {
+            if pool.is_zero(a[row][col]) {
+                continue;
+            }
+            let factor = pool.div(a[row][col], piv);
+            for c in col..k {
+                let x = pool.mul2(factor, a[col][c]);
+                a[row][c] = pool.sub(a[row][c], x);
+            }
+            let x = pool.mul2(factor, r[col]);
+            r[row] = pool.sub(r[row], x);
+        }
+    }
+    let mut v = vec![pool.zero(); k];
+    for row in (0..k).rev() {
+        let mut acc = r[row];
+        for c in row + 1..k {
+            let x = pool.mul2(a[row][c], v[c]);
+            acc = pool.sub(acc, x);
+        }
+        v[row] = pool.div(acc, a[row][row]);
+    }
+    v
+}
+
+/// Explains whether h equals T + U₀, the way the notes do: a time-dependent
+/// transformation x(q, t) makes T inhomogeneous in q'; a velocity-dependent
+/// potential adds terms to h.
+#[allow(clippy::too_many_arguments)]
+fn explain_energy(
+    pool: &mut Pool,
+    verdicts: &mut Verdicts,
+    same: bool,
+    kinetic: ExprId,
+    potential: ExprId,
+    u0: ExprId,
+    qd: &[ExprId],
+    t: ExprId,
+    _moves: &dyn Fn(NameId) -> bool,
+) {
+    // T homogeneous of degree 2 in q' ⇔ Σ q' ∂T/∂q' = 2T.
+    let mut terms: Vec<ExprId> = qd
+        .iter()
+        .map(|&v| {
+            let d = pool.diff(kinetic, v);
+            pool.mul2(v, d)
+        })
+        .collect();
+    let two = pool.int(2);
+    let two_t = pool.mul2(two, kinetic);
+    terms.push(pool.neg(two_t));
+    let euler = pool.add(&terms);
+    let homogeneous = probe::is_zero(pool, euler);
+    let velocity_potential = !probe::are_equal(pool, potential, u0);
+    let _ = t;
+    if homogeneous {
+        verdicts.energy.push("T is a homogeneous quadratic function of the velocities (the positions x(q) do not depend on t).".into());
+    } else {
+        verdicts.energy.push("T is not homogeneous quadratic in the velocities: the positions x(q, t) depend on time, so T has terms linear in and free of q'.".into());
+    }
+    if velocity_potential {
+        verdicts.energy.push("U depends on the velocities (a generalized potential); only its velocity-independent part enters the energy.".into());
+    }
+    if same {
+        verdicts.energy.push("so H = Σ q'·p − L equals T + U: H is the energy.".into());
+    } else {
+        verdicts.energy.push("so H = Σ q'·p − L differs from T + U: H is not the energy.".into());
+    }
+}

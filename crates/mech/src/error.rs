@@ -1,0 +1,36 @@
+//! Errors about a model: what is wrong and where in the model file.
+//!
+//! Spans are byte ranges into the model file's text; only the CLI turns them into
+//! `file:line:col` and underlines them.
+
+use std::ops::Range;
+
+/// A problem with a model file, located in its text where possible.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{message}")]
+pub struct ModelError {
+    /// What is wrong and what was expected, as one sentence.
+    pub message: String,
+    /// Where, as a byte range into the model file (None: the file as a whole).
+    pub span: Option<Range<usize>>,
+    /// A hint on how to fix it.
+    pub help: Option<String>,
+}
+
+impl ModelError {
+    /// An error at a span.
+    pub fn at(span: Range<usize>, message: impl Into<String>) -> ModelError {
+        ModelError { message: message.into(), span: Some(span), help: None }
+    }
+
+    /// An error about the file as a whole.
+    pub fn whole(message: impl Into<String>) -> ModelError {
+        ModelError { message: message.into(), span: None, help: None }
+    }
+
+    /// Adds a hint.
+    pub fn with_help(mut self, help: impl Into<String>) -> ModelError {
+        self.help = Some(help.into());
+        self
+    }
+}

@@ -1,0 +1,30 @@
+//! `mech`: the physics of lagrange — model files, the derivation of the
+//! equations of motion, the Hamiltonian, and the reports built from them.
+//!
+//! ```
+//! let text = r#"
+//! coordinates = ["th"]
+//! gravity = "g"
+//! [parameters]
+//! m = 1.0
+//! l = 1.0
+//! g = 9.81
+//! [[particles]]
+//! mass = "m"
+//! position = ["l*sin(th)", "-l*cos(th)"]
+//! "#;
+//! let model = mech::Model::parse(text, &[]).unwrap();
+//! let d = mech::Derivation::new(model).unwrap();
+//! assert_eq!(d.pool().display(d.momenta[0]).to_string(), "l^2*m*th'");
+//! ```
+
+mod derive;
+mod error;
+mod model;
+pub mod probe;
+mod report;
+
+pub use derive::{Conserved, Derivation, Verdicts};
+pub use error::ModelError;
+pub use model::{MAX_FILE_BYTES, Coordinate, InitialValue, Located, Model, Parameter, Particle};
+pub use report::{DeriveReport, HamiltonEquations, NamedExpr};

@@ -1,0 +1,510 @@
+//! Model files: the TOML text a person writes, read into symbols and expressions.
+//!
+//! [`Model::parse`] checks everything a person can get wrong in a model file
+//! (unknown names, duplicated coordinates, parameters that shadow coordinates,
+//! accelerations where only velocities make sense, tables not supported yet) and
+//! reports it with the byte span of the offending text. Nothing downstream
+//! re-reads the text.
+
+use crate::error::ModelError;
+use serde::de::IgnoredAny;
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::ops::Range;
+use sym::{ExprId, ParseErrorKind, ParseOptions, Pool};
+use toml::Spanned;
+
+/// Largest model file read, in bytes (hostile input is bounded).
+pub const MAX_FILE_BYTES: usize = 1 << 20;
+
+/// Names the expression language reserves.
+const RESERVED: &[&str] = &[
+    "t", "pi", "sin", "cos", "tan", "asin", "acos", "atan", "atan2", "sinh", "cosh", "tanh", "exp", "log",
+    "ln", "sqrt", "abs",
+];
+
+/// The symbol rank of parameters: they print first in products (`m*l^2*q''`).
+pub const RANK_PARAMETER: u8 = 0;
+/// The symbol rank of the time.
+pub const RANK_TIME: u8 = 1;
+/// The symbol rank of coordinates, velocities and accelerations.
+pub const RANK_COORDINATE: u8 = 2;
+/// The symbol rank of momenta.
+pub const RANK_MOMENTUM: u8 = 3;
+
+/// A generalized coordinate.
+#[derive(Debug, Clone)]
+pub struct Coordinate {
+    /// Its name (`th`).
+    pub name: String,
+    /// Where it is declared.
+    pub span: Range<usize>,
+}
+
+/// A parameter with its numeric value.
+#[derive(Debug, Clone)]
+pub struct Parameter {
+    /// Its name (`g`).
+    pub name: String,
+    /// Its value (from the file or `--set`).
+    pub value: f64,
+    /// Where it is declared.
+    pub span: Range<usize>,
+}
+
+/// A point mass with a position given in terms of the coordinates and time.
+#[derive(Debug, Clone)]
+pub struct Particle {
+    /// Its mass.
+    pub mass: ExprId,
+    /// Cartesian position, 1 to 3 components, as functions of (q, t).
+    pub position: Vec<ExprId>,
+    /// An extra potential energy of this particle.
+    pub potential: Option<ExprId>,
+    /// Where the particle's table is.
+    pub span: Range<usize>,
+}
+
+/// An expression of the model file with its place in the file.
+#[derive(Debug, Clone)]
+pub struct Located {
+    /// The expression.
+    pub expr: ExprId,
+    /// Where its text is.
+    pub span: Range<usize>,
+}
+
+/// An initial value of a coordinate or velocity.
+#[derive(Debug, Clone)]
+pub struct InitialValue {
+    /// Which coordinate.
+    pub coord: usize,
+    /// 0 for the coordinate, 1 for its velocity.
+    pub order: u8,
+    /// The value, an expression in the parameters.
+    pub value: Located,
+}
+
+/// A parsed model: everything in the file, as symbols and expressions in `pool`.
+#[derive(Debug, Clone)]
+pub struct Model {
+    /// The arena holding every expression of the model and its derivation.
+    pub pool: Pool,
+    /// The model's name.
+    pub name: String,
+    /// Generalized coordinates, in file order.
+    pub coordinates: Vec<Coordinate>,
+    /// Parameters, in file order.
+    pub parameters: Vec<Parameter>,
+    /// Point masses.
+    pub particles: Vec<Particle>,
+    /// Uniform gravity along −y (2-D positions) or −z (3-D).
+    pub gravity: Option<Located>,
+    /// `lagrangian = "..."`.
+    pub lagrangian: Option<Located>,
+    /// `kinetic = "..."`.
+    pub kinetic: Option<Located>,
+    /// `potential = "..."` (may depend on velocities: a generalized potential).
+    pub potential: Option<Located>,
+    /// Rayleigh's dissipation function.
+    pub dissipation: Option<Located>,
+    /// Generalized force per coordinate (`None`: zero).
+    pub forces: Vec<Option<Located>>,
+    /// Initial values from `[initial]`.
+    pub initial: Vec<InitialValue>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawModel {
+    name: Option<String>,
+    coordinates: Option<Spanned<Vec<Spanned<String>>>>,
+    gravity: Option<Spanned<String>>,
+    lagrangian: Option<Spanned<String>>,
+    kinetic: Option<Spanned<String>>,
+    potential: Option<Spanned<String>>,
+    dissipation: Option<Spanned<String>>,
+    #[serde(default)]
+    parameters: BTreeMap<Spanned<String>, Spanned<f64>>,
+    #[serde(default)]
+    particles: Vec<Spanned<RawParticle>>,
+    #[serde(default)]
+    forces: BTreeMap<Spanned<String>, Spanned<String>>,
+    #[serde(default)]
+    initial: BTreeMap<Spanned<String>, Spanned<NumOrText>>,
+    bodies: Option<Spanned<IgnoredAny>>,
+    constraints: Option<Spanned<IgnoredAny>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawParticle {
+    mass: Spanned<NumOrText>,
+    position: Spanned<Vec<Spanned<NumOrText>>>,
+    potential: Option<Spanned<String>>,
+}
+
+#[derive(Deserialize, Clone)]
+#[serde(untagged)]
+enum NumOrText {
+    Num(f64),
+    Text(String),
+}
+
+/// What an expression may refer to, by context.
+#[derive(Clone, Copy, PartialEq)]
+enum Scope {
+    /// Parameters only (masses, gravity, initial values).
+    Parameters,
+    /// Coordinates and time (positions).
+    Configuration,
+    /// Coordinates, velocities and time (energies, forces).
+    State,
+}
+
+impl Scope {
+    fn describe(self) -> &'static str {
+        match self {
+            Scope::Parameters => "parameters",
+            Scope::Configuration => "parameters, coordinates and the time t",
+            Scope::State => "parameters, coordinates, velocities (q') and the time t",
+        }
+    }
+}
+
+/// Reading state: the source text and the names declared so far.
+struct Reader<'a> {
+    source: &'a str,
+    pool: Pool,
+    coordinates: Vec<Coordinate>,
+    parameters: Vec<Parameter>,
+}
+
+impl Reader<'_> {
+    fn is_coordinate(&self, name: &str) -> bool {
+        self.coordinates.iter().any(|c| c.name == name)
+    }
+
+    fn is_parameter(&self, name: &str) -> bool {
+        self.parameters.iter().any(|p| p.name == name)
+    }
+
+    /// Parses the expression text of a TOML string value.
+    fn expr(&mut self, text: &Spanned<String>, scope: Scope, what: &str) -> Result<Located, ModelError> {
+        self.expr_str(text.get_ref(), text.span(), scope, what)
+    }
+
+    fn expr_str(&mut self, text: &str, span: Range<usize>, scope: Scope, what: &str) -> Result<Located, ModelError> {
+        let offset = content_offset(self.source, &span, text);
+        let coordinates: Vec<String> = self.coordinates.iter().map(|c| c.name.clone()).collect();
+        let parameters: Vec<String> = self.parameters.iter().map(|p| p.name.clone()).collect();
+        let known = |name: &str, order: u8| -> bool {
+            if parameters.iter().any(|p| p == name) {
+                return order == 0;
+            }
+            match scope {
+                Scope::Parameters => false,
+                Scope::Configuration => order == 0 && (name == "t" || coordinates.iter().any(|c| c == name)),
+                Scope::State => {
+                    (name == "t" && order == 0) || (order <= 1 && coordinates.iter().any(|c| c == name))
+                }
+            }
+        };
+        let opts = ParseOptions::default().with_known(&known);
+        match self.pool.parse_with(text, &opts) {
+            Ok(expr) => Ok(Located { expr, span }),
+            Err(err) => {
+                let at = match offset {
+                    Some(o) => (o + err.span.start as usize)..(o + (err.span.end as usize).max(err.span.start as usize + 1)),
+                    None => span.clone(),
+                };
+                let mut message = format!("in {what}: {err}");
+                let mut help = None;
+                if let ParseErrorKind::UnknownName { name } = &err.kind {
+                    let base = name.trim_end_matches('\'');
+                    let primes = name.len() - base.len();
+                    if self.is_coordinate(base) || (base == "t") {
+                        message = format!("in {what}: '{name}' is not allowed here");
+                        help = Some(format!(
+                            "{what} may use {}{}",
+                            scope.describe(),
+                            if primes == 2 { "; accelerations never appear in a model" } else { "" }
+                        ));
+                    } else if self.is_parameter(base) {
+                        message = format!("in {what}: parameter '{base}' cannot be differentiated");
+                    } else {
+                        help = Some(format!("{what} may use {}; declare '{base}' under [parameters] or in `coordinates`", scope.describe()));
+                    }
+                }
+                let mut e = ModelError::at(at, message);
+                e.help = help;
+                Err(e)
+            }
+        }
+    }
+
+    fn num_or_expr(&mut self, v: &Spanned<NumOrText>, scope: Scope, what: &str) -> Result<Located, ModelError> {
+        match v.get_ref() {
+            NumOrText::Num(x) => {
+                if !x.is_finite() {
+                    return Err(ModelError::at(v.span(), format!("{what} must be a finite number")));
+                }
+                Ok(Located { expr: number_expr(&mut self.pool, *x), span: v.span() })
+            }
+            NumOrText::Text(s) => self.expr_str(s, v.span(), scope, what),
+        }
+    }
+}
+
+/// A float from the file, kept exact when it is an integer (`2` → 2, `0.5` → 0.5).
+fn number_expr(pool: &mut Pool, x: f64) -> ExprId {
+    if x.fract() == 0.0 && x.abs() < 1e15 {
+        pool.int(x as i64)
+    } else {
+        pool.float(x)
+    }
+}
+
+/// Where the text of a TOML string value starts, if its characters map one to
+/// one onto the file (no escapes); otherwise errors point at the whole value.
+fn content_offset(source: &str, span: &Range<usize>, value: &str) -> Option<usize> {
+    let raw = source.get(span.clone())?;
+    for quote in ["\"\"\"", "'''", "\"", "'"] {
+        if raw.len() >= 2 * quote.len() && raw.starts_with(quote) && raw.ends_with(quote) {
+            let mut start = quote.len();
+            let inner = &raw[start..raw.len() - quote.len()];
+            let inner = if quote.len() == 3 {
+                let trimmed = inner.strip_prefix("\r\n").or_else(|| inner.strip_prefix('\n'));
+                if let Some(t) = trimmed {
+                    start += inner.len() - t.len();
+                    t
+                } else {
+                    inner
+                }
+            } else {
+                inner
+            };
+            return (inner == value).then_some(span.start + start);
+        }
+    }
+    None
+}
+
+fn check_identifier(name: &Spanned<String>, what: &str) -> Result<(), ModelError> {
+    let n = name.get_ref();
+    let mut chars = n.chars();
+    let ok = matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
+        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_');
+    if !ok {
+        return Err(ModelError::at(
+            name.span(),
+            format!("{what} '{n}' is not a valid name: expected letters, digits and '_', starting with a letter"),
+        ));
+    }
+    if RESERVED.contains(&n.as_str()) {
+        return Err(ModelError::at(name.span(), format!("{what} '{n}' uses a reserved name")).with_help(
+            "t is the time, pi the constant; function names cannot be symbols",
+        ));
+    }
+    Ok(())
+}
+
+impl Model {
+    /// Reads a model file's text. `overrides` are `--set name=value` pairs,
+    /// applied to `[parameters]` (an unknown name is an error).
+    pub fn parse(source: &str, overrides: &[(String, f64)]) -> Result<Model, ModelError> {
+        if source.len() > MAX_FILE_BYTES {
+            return Err(ModelError::whole(format!(
+                "the model file is {} bytes; the limit is {MAX_FILE_BYTES}",
+                source.len()
+            )));
+        }
+        let raw: RawModel = toml::from_str(source).map_err(|e| {
+            let message = e.message().trim().to_string();
+            match e.span() {
+                Some(span) => ModelError::at(span, message),
+                None => ModelError::whole(message),
+            }
+        })?;
+        if let Some(b) = &raw.bodies {
+            return Err(ModelError::at(b.span(), "rigid bodies ([[bodies]]) are not supported yet")
+                .with_help("describe the body by point masses in [[particles]], or give its kinetic energy in `kinetic`"));
+        }
+        if let Some(c) = &raw.constraints {
+            return Err(ModelError::at(c.span(), "constraints ([[constraints]]) are not supported yet")
+                .with_help("eliminate the constraint by choosing generalized coordinates that satisfy it"));
+        }
+        let mut r = Reader { source, pool: Pool::default(), coordinates: Vec::new(), parameters: Vec::new() };
+
+        // Coordinates.
+        let coords = raw.coordinates.as_ref().ok_or_else(|| {
+            ModelError::whole("the model has no `coordinates`")
+                .with_help("list the generalized coordinates before the first table, e.g. coordinates = [\"th\"]")
+        })?;
+        if coords.get_ref().is_empty() {
+            return Err(ModelError::at(coords.span(), "`coordinates` is empty: expected at least one name"));
+        }
+        for c in coords.get_ref() {
+            check_identifier(c, "coordinate")?;
+            if let Some(prev) = r.coordinates.iter().find(|p| &p.name == c.get_ref()) {
+                let _ = prev;
+                return Err(ModelError::at(c.span(), format!("coordinate '{}' is listed twice", c.get_ref())));
+            }
+            r.coordinates.push(Coordinate { name: c.get_ref().clone(), span: c.span() });
+        }
+
+        // Parameters, in file order.
+        let mut params: Vec<(&Spanned<String>, &Spanned<f64>)> = raw.parameters.iter().collect();
+        params.sort_by_key(|(k, _)| k.span().start);
+        for (k, v) in params {
+            check_identifier(k, "parameter")?;
+            if r.is_coordinate(k.get_ref()) {
+                return Err(ModelError::at(
+                    k.span(),
+                    format!("parameter '{}' has the name of a coordinate", k.get_ref()),
+                )
+                .with_help("a name is either a coordinate or a parameter; rename one of them"));
+            }
+            if let Some(q) = k.get_ref().strip_prefix("p_") {
+                if r.is_coordinate(q) {
+                    return Err(ModelError::at(
+                        k.span(),
+                        format!("parameter '{}' has the name of the momentum conjugate to '{q}'", k.get_ref()),
+                    ));
+                }
+            }
+            if !v.get_ref().is_finite() {
+                return Err(ModelError::at(v.span(), format!("parameter '{}' must be finite", k.get_ref())));
+            }
+            r.parameters.push(Parameter { name: k.get_ref().clone(), value: *v.get_ref(), span: k.span() });
+        }
+        for (name, value) in overrides {
+            match r.parameters.iter_mut().find(|p| &p.name == name) {
+                Some(p) => p.value = *value,
+                None => {
+                    let known: Vec<&str> = r.parameters.iter().map(|p| p.name.as_str()).collect();
+                    return Err(ModelError::whole(format!("--set {name}: the model has no parameter '{name}'"))
+                        .with_help(format!("its parameters are: {}", known.join(", "))));
+                }
+            }
+        }
+        // Symbol order for printing: parameters, time, coordinates, momenta.
+        for p in &r.parameters {
+            r.pool.set_rank(&p.name, RANK_PARAMETER);
+        }
+        r.pool.set_rank("t", RANK_TIME);
+        for c in &r.coordinates {
+            r.pool.set_rank(&c.name, RANK_COORDINATE);
+            r.pool.set_rank(&format!("p_{}", c.name), RANK_MOMENTUM);
+        }
+
+        // What the system is made of.
+        let gravity = raw.gravity.as_ref().map(|g| r.expr(g, Scope::Parameters, "gravity")).transpose()?;
+        let mut particles = Vec::new();
+        for p in &raw.particles {
+            let mass = r.num_or_expr(&p.get_ref().mass, Scope::Parameters, "the particle's mass")?.expr;
+            let pos = &p.get_ref().position;
+            if pos.get_ref().is_empty() || pos.get_ref().len() > 3 {
+                return Err(ModelError::at(
+                    pos.span(),
+                    format!("a position has 1, 2 or 3 components, not {}", pos.get_ref().len()),
+                ));
+            }
+            let mut position = Vec::new();
+            for x in pos.get_ref() {
+                position.push(r.num_or_expr(x, Scope::Configuration, "the particle's position")?.expr);
+            }
+            let potential = p
+                .get_ref()
+                .potential
+                .as_ref()
+                .map(|u| r.expr(u, Scope::State, "the particle's potential"))
+                .transpose()?
+                .map(|l| l.expr);
+            if gravity.is_some() && position.len() == 1 {
+                return Err(ModelError::at(pos.span(), "gravity needs a vertical axis: give 2-D (x, y) or 3-D (x, y, z) positions"));
+            }
+            particles.push(Particle { mass, position, potential, span: p.span() });
+        }
+        let lagrangian = raw.lagrangian.as_ref().map(|l| r.expr(l, Scope::State, "the Lagrangian")).transpose()?;
+        let kinetic = raw.kinetic.as_ref().map(|l| r.expr(l, Scope::State, "the kinetic energy")).transpose()?;
+        let potential = raw.potential.as_ref().map(|l| r.expr(l, Scope::State, "the potential")).transpose()?;
+        let dissipation = raw
+            .dissipation
+            .as_ref()
+            .map(|l| r.expr(l, Scope::State, "the dissipation function"))
+            .transpose()?;
+        if let Some(l) = &lagrangian {
+            let clash = [raw.kinetic.as_ref(), raw.potential.as_ref()].into_iter().flatten().next();
+            if let Some(c) = clash {
+                return Err(ModelError::at(c.span(), "give either `lagrangian` or `kinetic`/`potential`, not both")
+                    .with_help("L = T - U: the Lagrangian already contains both energies"));
+            }
+            if let Some(p) = raw.particles.first() {
+                let _ = l;
+                return Err(ModelError::at(p.span(), "give either `lagrangian` or [[particles]], not both"));
+            }
+            if let Some(g) = &raw.gravity {
+                return Err(ModelError::at(g.span(), "`gravity` acts on [[particles]]; put the potential in the Lagrangian"));
+            }
+        }
+        if lagrangian.is_none() && kinetic.is_none() && particles.is_empty() {
+            return Err(ModelError::whole("the model has no kinetic energy")
+                .with_help("give [[particles]] with positions, `kinetic` and `potential`, or `lagrangian`"));
+        }
+        if gravity.is_some() && particles.is_empty() {
+            let g = raw.gravity.as_ref().map(|g| g.span()).unwrap_or(0..0);
+            return Err(ModelError::at(g, "`gravity` acts on [[particles]], and the model has none"));
+        }
+
+        // Generalized forces.
+        let mut forces: Vec<Option<Located>> = vec![None; r.coordinates.len()];
+        for (k, v) in &raw.forces {
+            let Some(i) = r.coordinates.iter().position(|c| &c.name == k.get_ref()) else {
+                return Err(ModelError::at(k.span(), format!("[forces] names '{}', which is not a coordinate", k.get_ref())));
+            };
+            forces[i] = Some(r.expr(v, Scope::State, &format!("the force on '{}'", k.get_ref()))?);
+        }
+
+        // Initial values.
+        let mut initial = Vec::new();
+        for (k, v) in &raw.initial {
+            let key = k.get_ref();
+            let base = key.trim_end_matches('\'');
+            let order = (key.len() - base.len()) as u8;
+            let Some(coord) = r.coordinates.iter().position(|c| c.name == base) else {
+                return Err(ModelError::at(k.span(), format!("[initial] names '{key}', which is not a coordinate or a velocity")));
+            };
+            if order > 1 {
+                return Err(ModelError::at(k.span(), format!("[initial] gives '{key}': only coordinates and velocities have initial values")));
+            }
+            let value = r.num_or_expr(v, Scope::Parameters, &format!("the initial value of '{key}'"))?;
+            initial.push(InitialValue { coord, order, value });
+        }
+
+        Ok(Model {
+            pool: r.pool,
+            name: raw.name.unwrap_or_else(|| "unnamed model".into()),
+            coordinates: r.coordinates,
+            parameters: r.parameters,
+            particles,
+            gravity,
+            lagrangian,
+            kinetic,
+            potential,
+            dissipation,
+            forces,
+            initial,
+        })
+    }
+
+    /// The number of degrees of freedom.
+    pub fn n_coords(&self) -> usize {
+        self.coordinates.len()
+    }
+
+    /// The value of a parameter by name.
+    pub fn parameter(&self, name: &str) -> Option<f64> {
+        self.parameters.iter().find(|p| p.name == name).map(|p| p.value)
+    }
+}

@@ -1,0 +1,160 @@
+//! The `lagrange.derive/1` report: a derivation as plain data (strings in the
+//! expression language), ready to serialize as the JSON contract of DESIGN.md.
+//!
+//! Field names are a contract: add fields freely, rename none.
+
+use crate::derive::Derivation;
+use serde::ser::{SerializeMap, Serializer};
+use serde::Serialize;
+use sym::ExprId;
+
+/// A map that keeps its insertion order (coordinates and parameters in file order).
+#[derive(Debug, Clone, Default)]
+pub struct Ordered<V>(pub Vec<(String, V)>);
+
+impl<V: Serialize> Serialize for Ordered<V> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in &self.0 {
+            map.serialize_entry(k, v)?;
+        }
+        map.end()
+    }
+}
+
+impl<V> Ordered<V> {
+    /// The value for a key.
+    pub fn get(&self, key: &str) -> Option<&V> {
+        self.0.iter().find(|(k, _)| k == key).map(|(_, v)| v)
+    }
+}
+
+/// A named expression (a conserved quantity).
+#[derive(Debug, Clone, Serialize)]
+pub struct NamedExpr {
+    /// Its name (`p_th`, `H`).
+    pub name: String,
+    /// The expression in (q, q', t).
+    pub expr: String,
+    /// Why (for people; not part of the contract).
+    pub reason: String,
+}
+
+/// Hamilton's equations for one coordinate.
+#[derive(Debug, Clone, Serialize)]
+pub struct HamiltonEquations {
+    /// dq/dt in (q, p, t).
+    pub dq: String,
+    /// dp/dt in (q, p, t), including dissipation and forces.
+    pub dp: String,
+}
+
+/// The derivation as the JSON contract `lagrange.derive/1`.
+#[derive(Debug, Clone, Serialize)]
+pub struct DeriveReport {
+    /// Always `lagrange.derive/1`.
+    pub format: &'static str,
+    /// The model's name.
+    pub name: String,
+    /// Coordinate names in order.
+    pub coordinates: Vec<String>,
+    /// Parameter values.
+    pub parameters: Ordered<f64>,
+    /// L.
+    pub lagrangian: String,
+    /// T, or null for a Lagrangian-only model.
+    pub kinetic: Option<String>,
+    /// U, or null for a Lagrangian-only model.
+    pub potential: Option<String>,
+    /// R, or null.
+    pub dissipation: Option<String>,
+    /// p_q = ∂L/∂q' per coordinate.
+    pub momenta: Ordered<String>,
+    /// E_q per coordinate.
+    pub equations: Ordered<String>,
+    /// M in E = M q'' − f.
+    pub mass_matrix: Vec<Vec<String>>,
+    /// f in E = M q'' − f.
+    pub forcing: Vec<String>,
+    /// Cyclic coordinates.
+    pub cyclic: Vec<String>,
+    /// Conserved quantities.
+    pub conserved: Vec<NamedExpr>,
+    /// H(q, p, t), or null when L is not quadratic in the velocities.
+    pub hamiltonian: Option<String>,
+    /// T + U₀, or null for a Lagrangian-only model.
+    pub energy: Option<String>,
+    /// Whether H is the energy, or null when unknown.
+    pub hamiltonian_is_energy: Option<bool>,
+    /// Whether H is conserved.
+    pub hamiltonian_conserved: bool,
+    /// Hamilton's equations, or null when H is not given.
+    pub hamilton: Option<Ordered<HamiltonEquations>>,
+    /// The energy function h = Σ q'·p − L in (q, q', t) (extra field).
+    pub energy_function: String,
+    /// q' in terms of (q, p, t) (extra field).
+    pub velocities: Option<Ordered<String>>,
+    /// Whether L depends explicitly on t (extra field).
+    pub explicit_time: bool,
+    /// Explanations of the verdicts, sentence by sentence (extra field).
+    pub explanations: Explanations,
+}
+
+/// The teaching text behind the verdicts.
+#[derive(Debug, Clone, Serialize)]
+pub struct Explanations {
+    /// Why H is or is not the energy.
+    pub energy: Vec<String>,
+    /// Why H is or is not conserved.
+    pub conservation: Vec<String>,
+}
+
+impl DeriveReport {
+    /// Builds the report from a derivation.
+    pub fn new(d: &Derivation) -> DeriveReport {
+        let pool = d.pool();
+        let s = |e: ExprId| pool.display(e).to_string();
+        let names = d.coordinate_names();
+        let by_coord = |v: &[ExprId]| Ordered(names.iter().zip(v).map(|(n, &e)| (n.to_string(), s(e))).collect());
+        DeriveReport {
+            format: "lagrange.derive/1",
+            name: d.model.name.clone(),
+            coordinates: names.iter().map(|n| n.to_string()).collect(),
+            parameters: Ordered(d.model.parameters.iter().map(|p| (p.name.clone(), p.value)).collect()),
+            lagrangian: s(d.lagrangian),
+            kinetic: d.kinetic.map(s),
+            potential: d.potential.map(s),
+            dissipation: d.dissipation.map(s),
+            momenta: by_coord(&d.momenta),
+            equations: by_coord(&d.equations),
+            mass_matrix: d.mass_matrix.iter().map(|row| row.iter().map(|&e| s(e)).collect()).collect(),
+            forcing: d.forcing.iter().map(|&e| s(e)).collect(),
+            cyclic: d.cyclic.iter().map(|&i| names[i].to_string()).collect(),
+            conserved: d
+                .conserved
+                .iter()
+                .map(|c| NamedExpr { name: c.name.clone(), expr: s(c.expr), reason: c.reason.clone() })
+                .collect(),
+            hamiltonian: d.hamiltonian.map(s),
+            energy: d.energy.map(s),
+            hamiltonian_is_energy: d.hamiltonian_is_energy,
+            hamiltonian_conserved: d.hamiltonian_conserved,
+            hamilton: d.hamilton.as_ref().map(|eqs| {
+                Ordered(
+                    names
+                        .iter()
+                        .zip(eqs)
+                        .map(|(n, &(dq, dp))| (n.to_string(), HamiltonEquations { dq: s(dq), dp: s(dp) }))
+                        .collect(),
+                )
+            }),
+            energy_function: s(d.energy_function),
+            velocities: d.velocities.as_ref().map(|v| by_coord(v)),
+            explicit_time: d.explicit_time,
+            explanations: Explanations {
+                energy: d.verdicts.energy.clone(),
+                conservation: d.verdicts.conservation.clone(),
+            },
+        }
+    }
+}

@@ -1,0 +1,783 @@
+//! The expression arena: a hash-consed DAG of nodes addressed by [`ExprId`].
+//!
+//! Every node is stored once in [`Pool`]; building an equal node again returns the
+//! same id, so equality is `==` on ids and common subexpressions are shared for
+//! free. Children always have smaller ids than their parents, which lets
+//! evaluation walk the arena in order without recursion.
+//!
+//! Constructors keep a canonical form (SymPy's "automatic simplification", done
+//! cheaply): sums and products are flattened, numeric parts folded exactly, like
+//! terms and like powers collected, and operands sorted by [`Pool::cmp`]. Entry
+//! points: [`Pool::add`], [`Pool::mul`], [`Pool::pow`], [`Pool::func`].
+
+use crate::number::{Number, Rational};
+use rustc_hash::FxHashMap;
+use std::cmp::Ordering;
+
+/// The id of a node in a [`Pool`].
+#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Debug)]
+pub struct ExprId(u32);
+
+impl ExprId {
+    /// The index of the node in the arena.
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+}
+
+/// The id of an interned name.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Debug)]
+pub struct NameId(u32);
+
+/// A symbol: a name and how many times it is differentiated in time (`q`, `q'`, `q''`).
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub struct Symbol {
+    /// The base name.
+    pub name: NameId,
+    /// The number of primes: 0 for `q`, 1 for `q'`, 2 for `q''`.
+    pub order: u8,
+}
+
+/// The functions of the expression language.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Debug)]
+pub enum Func {
+    /// Sine.
+    Sin,
+    /// Cosine.
+    Cos,
+    /// Tangent.
+    Tan,
+    /// Arc sine.
+    Asin,
+    /// Arc cosine.
+    Acos,
+    /// Arc tangent.
+    Atan,
+    /// Hyperbolic sine.
+    Sinh,
+    /// Hyperbolic cosine.
+    Cosh,
+    /// Hyperbolic tangent.
+    Tanh,
+    /// Exponential.
+    Exp,
+    /// Natural logarithm.
+    Log,
+    /// Absolute value.
+    Abs,
+}
+
+impl Func {
+    /// Every function, for parsers and tests.
+    pub const ALL: [Func; 12] = [
+        Func::Sin,
+        Func::Cos,
+        Func::Tan,
+        Func::Asin,
+        Func::Acos,
+        Func::Atan,
+        Func::Sinh,
+        Func::Cosh,
+        Func::Tanh,
+        Func::Exp,
+        Func::Log,
+        Func::Abs,
+    ];
+
+    /// The name in the expression language.
+    pub fn name(self) -> &'static str {
+        match self {
+            Func::Sin => "sin",
+            Func::Cos => "cos",
+            Func::Tan => "tan",
+            Func::Asin => "asin",
+            Func::Acos => "acos",
+            Func::Atan => "atan",
+            Func::Sinh => "sinh",
+            Func::Cosh => "cosh",
+            Func::Tanh => "tanh",
+            Func::Exp => "exp",
+            Func::Log => "log",
+            Func::Abs => "abs",
+        }
+    }
+
+    /// The function with this name, if any (`sqrt` and `atan2` are not unary functions here).
+    pub fn from_name(name: &str) -> Option<Func> {
+        Func::ALL.into_iter().find(|f| f.name() == name)
+    }
+
+    /// Applies the function to a float.
+    pub fn apply(self, x: f64) -> f64 {
+        match self {
+            Func::Sin => x.sin(),
+            Func::Cos => x.cos(),
+            Func::Tan => x.tan(),
+            Func::Asin => x.asin(),
+            Func::Acos => x.acos(),
+            Func::Atan => x.atan(),
+            Func::Sinh => x.sinh(),
+            Func::Cosh => x.cosh(),
+            Func::Tanh => x.tanh(),
+            Func::Exp => x.exp(),
+            Func::Log => x.ln(),
+            Func::Abs => x.abs(),
+        }
+    }
+}
+
+/// One node of the DAG. Children are ids of earlier nodes.
+#[derive(Clone, PartialEq, Eq, Hash, Debug)]
+pub enum Node {
+    /// A numeric constant.
+    Num(Number),
+    /// The constant π.
+    Pi,
+    /// A symbol (coordinate, velocity, parameter, time, momentum).
+    Sym(Symbol),
+    /// A sum of at least two terms, sorted, at most one numeric term (last).
+    Add(Box<[ExprId]>),
+    /// A product of at least two factors, sorted, at most one numeric factor (first).
+    Mul(Box<[ExprId]>),
+    /// `base ^ exponent`.
+    Pow(ExprId, ExprId),
+    /// A unary function.
+    Func(Func, ExprId),
+    /// `atan2(y, x)`.
+    Atan2(ExprId, ExprId),
+}
+
+/// The arena of expressions. See the module documentation.
+#[derive(Clone, Debug)]
+pub struct Pool {
+    nodes: Vec<Node>,
+    index: FxHashMap<Node, ExprId>,
+    names: Vec<Box<str>>,
+    name_index: FxHashMap<Box<str>, NameId>,
+    name_rank: Vec<u8>,
+    /// Memo of `diff`: (expression, variable) → derivative.
+    pub(crate) diff_cache: FxHashMap<(ExprId, ExprId), ExprId>,
+}
+
+impl Default for Pool {
+    fn default() -> Self {
+        let mut pool = Pool {
+            nodes: Vec::new(),
+            index: FxHashMap::default(),
+            names: Vec::new(),
+            name_index: FxHashMap::default(),
+            name_rank: Vec::new(),
+            diff_cache: FxHashMap::default(),
+        };
+        // Fixed ids for the constants used everywhere.
+        pool.intern(Node::Num(Number::ZERO));
+        pool.intern(Node::Num(Number::ONE));
+        pool.intern(Node::Num(Number::MINUS_ONE));
+        pool
+    }
+}
+
+/// Largest integer power of a sum or of a rational that constructors expand.
+pub(crate) const MAX_FOLD_EXPONENT: i64 = 64;
+
+impl Pool {
+    /// The number of nodes stored.
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// True when no node is stored (never: the constants are preloaded).
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    /// The node behind an id.
+    pub fn node(&self, id: ExprId) -> &Node {
+        &self.nodes[id.index()]
+    }
+
+    fn intern(&mut self, node: Node) -> ExprId {
+        if let Some(&id) = self.index.get(&node) {
+            return id;
+        }
+        debug_assert!(self.children(&node).iter().all(|c| c.index() < self.nodes.len()));
+        let id = ExprId(u32::try_from(self.nodes.len()).expect("more than 2^32 expression nodes"));
+        self.nodes.push(node.clone());
+        self.index.insert(node, id);
+        id
+    }
+
+    /// The children of a node, in order.
+    pub fn children<'a>(&'a self, node: &'a Node) -> Vec<ExprId> {
+        match node {
+            Node::Num(_) | Node::Pi | Node::Sym(_) => Vec::new(),
+            Node::Add(ts) | Node::Mul(ts) => ts.to_vec(),
+            Node::Pow(a, b) | Node::Atan2(a, b) => vec![*a, *b],
+            Node::Func(_, a) => vec![*a],
+        }
+    }
+
+    // ---- names and symbols -------------------------------------------------
+
+    /// Interns a name.
+    pub fn name(&mut self, name: &str) -> NameId {
+        if let Some(&id) = self.name_index.get(name) {
+            return id;
+        }
+        let id = NameId(self.names.len() as u32);
+        self.names.push(name.into());
+        self.name_index.insert(name.into(), id);
+        self.name_rank.push(1);
+        id
+    }
+
+    /// The text of a name.
+    pub fn name_str(&self, name: NameId) -> &str {
+        &self.names[name.0 as usize]
+    }
+
+    /// Looks a name up without interning it.
+    pub fn find_name(&self, name: &str) -> Option<NameId> {
+        self.name_index.get(name).copied()
+    }
+
+    /// Sets where symbols of this name sort in products and sums (lower first;
+    /// default 1). Call it before building expressions that use the name: it
+    /// decides the canonical order, e.g. parameters (rank 0) before coordinates
+    /// (rank 2) so that `m*l^2*q''` reads as the notes write it.
+    pub fn set_rank(&mut self, name: &str, rank: u8) {
+        let id = self.name(name);
+        self.name_rank[id.0 as usize] = rank;
+    }
+
+    /// The symbol `name` differentiated `order` times in time.
+    pub fn var(&mut self, name: &str, order: u8) -> ExprId {
+        let name = self.name(name);
+        self.intern(Node::Sym(Symbol { name, order }))
+    }
+
+    /// The plain symbol `name`.
+    pub fn symbol(&mut self, name: &str) -> ExprId {
+        self.var(name, 0)
+    }
+
+    /// The velocity `name'`.
+    pub fn velocity(&mut self, name: &str) -> ExprId {
+        self.var(name, 1)
+    }
+
+    /// The node of a symbol value.
+    pub fn sym(&mut self, s: Symbol) -> ExprId {
+        self.intern(Node::Sym(s))
+    }
+
+    /// The symbol behind an id, if it is one.
+    pub fn as_symbol(&self, id: ExprId) -> Option<Symbol> {
+        match self.node(id) {
+            Node::Sym(s) => Some(*s),
+            _ => None,
+        }
+    }
+
+    /// The text of a symbol: its name followed by its primes.
+    pub fn symbol_text(&self, s: Symbol) -> String {
+        let mut text = self.name_str(s.name).to_string();
+        for _ in 0..s.order {
+            text.push('\'');
+        }
+        text
+    }
+
+    // ---- constants ------------------------------------------------------------
+
+    /// A numeric constant.
+    pub fn number(&mut self, n: Number) -> ExprId {
+        let n = match n {
+            Number::Float(x) => Number::float(x),
+            r => r,
+        };
+        self.intern(Node::Num(n))
+    }
+
+    /// The integer `n`.
+    pub fn int(&mut self, n: i64) -> ExprId {
+        self.number(Number::Rational(Rational::int(n as i128)))
+    }
+
+    /// The exact fraction `n/d` (`d` must not be zero; zero gives a float NaN-free error value of 0).
+    pub fn rational(&mut self, n: i64, d: i64) -> ExprId {
+        match Rational::new(n as i128, d as i128) {
+            Some(r) => self.number(Number::Rational(r)),
+            None => self.int(0),
+        }
+    }
+
+    /// A floating constant.
+    pub fn float(&mut self, x: f64) -> ExprId {
+        self.number(Number::float(x))
+    }
+
+    /// Zero.
+    pub fn zero(&self) -> ExprId {
+        ExprId(0)
+    }
+
+    /// One.
+    pub fn one(&self) -> ExprId {
+        ExprId(1)
+    }
+
+    /// Minus one.
+    pub fn minus_one(&self) -> ExprId {
+        ExprId(2)
+    }
+
+    /// π.
+    pub fn pi(&mut self) -> ExprId {
+        self.intern(Node::Pi)
+    }
+
+    /// The number behind an id, if it is one.
+    pub fn as_number(&self, id: ExprId) -> Option<Number> {
+        match self.node(id) {
+            Node::Num(n) => Some(*n),
+            _ => None,
+        }
+    }
+
+    /// True when the id is the exact or floating zero.
+    pub fn is_zero(&self, id: ExprId) -> bool {
+        self.as_number(id).is_some_and(|n| n.is_zero())
+    }
+
+    // ---- arithmetic -------------------------------------------------------------
+
+    /// `a + b`.
+    pub fn add2(&mut self, a: ExprId, b: ExprId) -> ExprId {
+        self.add(&[a, b])
+    }
+
+    /// `a - b`.
+    pub fn sub(&mut self, a: ExprId, b: ExprId) -> ExprId {
+        let nb = self.neg(b);
+        self.add(&[a, nb])
+    }
+
+    /// `-a`.
+    pub fn neg(&mut self, a: ExprId) -> ExprId {
+        let m1 = self.minus_one();
+        self.mul(&[m1, a])
+    }
+
+    /// `a * b`.
+    pub fn mul2(&mut self, a: ExprId, b: ExprId) -> ExprId {
+        self.mul(&[a, b])
+    }
+
+    /// `a / b`.
+    pub fn div(&mut self, a: ExprId, b: ExprId) -> ExprId {
+        let m1 = self.minus_one();
+        let inv = self.pow(b, m1);
+        self.mul(&[a, inv])
+    }
+
+    /// `a ^ n` for an integer `n`.
+    pub fn powi(&mut self, a: ExprId, n: i64) -> ExprId {
+        let n = self.int(n);
+        self.pow(a, n)
+    }
+
+    /// `sqrt(a)`, stored as `a^(1/2)`.
+    pub fn sqrt(&mut self, a: ExprId) -> ExprId {
+        let half = self.rational(1, 2);
+        self.pow(a, half)
+    }
+
+    /// Splits a term into its numeric coefficient and the rest (`3*x*y` → `(3, x*y)`).
+    pub fn split_coeff(&mut self, id: ExprId) -> (Number, ExprId) {
+        match self.node(id) {
+            Node::Num(n) => (*n, self.one()),
+            Node::Mul(fs) => {
+                if let Some(n) = self.as_number(fs[0]) {
+                    let rest: Vec<ExprId> = fs[1..].to_vec();
+                    let rest = if rest.len() == 1 { rest[0] } else { self.intern(Node::Mul(rest.into())) };
+                    (n, rest)
+                } else {
+                    (Number::ONE, id)
+                }
+            }
+            _ => (Number::ONE, id),
+        }
+    }
+
+    /// `c * rest` without re-canonicalizing `rest` (it is already canonical).
+    fn scale(&mut self, c: Number, rest: ExprId) -> ExprId {
+        if c.is_zero() {
+            return self.zero();
+        }
+        if c.is_one() {
+            return rest;
+        }
+        if let Node::Num(r) = self.node(rest) {
+            let v = c.mul(*r);
+            return self.number(v);
+        }
+        let mut fs = vec![self.number(c)];
+        match self.node(rest) {
+            Node::Mul(inner) => fs.extend_from_slice(inner),
+            _ => fs.push(rest),
+        }
+        self.intern(Node::Mul(fs.into()))
+    }
+
+    /// The canonical sum of `terms`.
+    pub fn add(&mut self, terms: &[ExprId]) -> ExprId {
+        let mut constant = Number::ZERO;
+        // Coefficient per non-numeric part, in first-seen order.
+        let mut coeffs: FxHashMap<ExprId, usize> = FxHashMap::default();
+        let mut parts: Vec<(ExprId, Number)> = Vec::new();
+        let mut stack: Vec<ExprId> = terms.iter().rev().copied().collect();
+        while let Some(t) = stack.pop() {
+            match self.node(t) {
+                Node::Num(n) => constant = constant.add(*n),
+                Node::Add(ts) => stack.extend(ts.iter().rev().copied()),
+                _ => {
+                    let (c, rest) = self.split_coeff(t);
+                    match coeffs.get(&rest) {
+                        Some(&i) => parts[i].1 = parts[i].1.add(c),
+                        None => {
+                            coeffs.insert(rest, parts.len());
+                            parts.push((rest, c));
+                        }
+                    }
+                }
+            }
+        }
+        let mut out: Vec<ExprId> = Vec::with_capacity(parts.len() + 1);
+        for (rest, c) in parts {
+            if !c.is_zero() {
+                out.push(self.scale(c, rest));
+            }
+        }
+        out.sort_by(|&a, &b| self.cmp_terms(a, b));
+        if !constant.is_zero() || (out.is_empty() && matches!(constant, Number::Float(_))) {
+            out.push(self.number(constant));
+        }
+        match out.len() {
+            0 => self.zero(),
+            1 => out[0],
+            _ => self.intern(Node::Add(out.into())),
+        }
+    }
+
+    /// The canonical product of `factors`.
+    pub fn mul(&mut self, factors: &[ExprId]) -> ExprId {
+        let mut coeff = Number::ONE;
+        // Exponent terms per base, in first-seen order.
+        let mut bases: FxHashMap<ExprId, usize> = FxHashMap::default();
+        let mut parts: Vec<(ExprId, Vec<ExprId>)> = Vec::new();
+        let mut stack: Vec<ExprId> = factors.iter().rev().copied().collect();
+        while let Some(f) = stack.pop() {
+            match self.node(f) {
+                Node::Num(n) => coeff = coeff.mul(*n),
+                Node::Mul(fs) => stack.extend(fs.iter().rev().copied()),
+                _ => {
+                    let (base, exp) = self.base_exp(f);
+                    match bases.get(&base) {
+                        Some(&i) => parts[i].1.push(exp),
+                        None => {
+                            bases.insert(base, parts.len());
+                            parts.push((base, vec![exp]));
+                        }
+                    }
+                }
+            }
+        }
+        if coeff.is_zero() {
+            return self.number(coeff);
+        }
+        let mut out: Vec<ExprId> = Vec::with_capacity(parts.len() + 1);
+        for (base, exps) in parts {
+            let f = if exps.len() == 1 {
+                self.pow(base, exps[0])
+            } else {
+                let e = self.add(&exps);
+                self.pow(base, e)
+            };
+            match self.node(f) {
+                Node::Num(n) => coeff = coeff.mul(*n),
+                Node::Mul(fs) => {
+                    // A power that folded into a product (e.g. (2*x)^2 = 4*x^2).
+                    for &g in fs.iter() {
+                        match self.as_number(g) {
+                            Some(n) => coeff = coeff.mul(n),
+                            None => out.push(g),
+                        }
+                    }
+                }
+                _ => out.push(f),
+            }
+        }
+        if coeff.is_zero() {
+            return self.number(coeff);
+        }
+        // Merge factors that share a base after folding.
+        if out.len() > 1 {
+            let mut seen: FxHashMap<ExprId, ()> = FxHashMap::default();
+            let dup = out.iter().any(|&f| {
+                let b = self.base_exp(f).0;
+                seen.insert(b, ()).is_some()
+            });
+            if dup {
+                let c = self.number(coeff);
+                let mut all = vec![c];
+                all.extend(out);
+                return self.mul(&all);
+            }
+        }
+        // A number times one sum distributes: 2*(x + y) = 2*x + 2*y, so that
+        // -(a - b) is b - a and negation never nests.
+        if out.len() == 1 && !coeff.is_one() {
+            if let Node::Add(ts) = self.node(out[0]).clone() {
+                let c = self.number(coeff);
+                let scaled: Vec<ExprId> = ts.iter().map(|&t| self.mul2(c, t)).collect();
+                return self.add(&scaled);
+            }
+        }
+        out.sort_by(|&a, &b| self.cmp(a, b));
+        if !coeff.is_one() || out.is_empty() {
+            if out.is_empty() {
+                return self.number(coeff);
+            }
+            out.insert(0, self.number(coeff));
+        }
+        match out.len() {
+            1 => out[0],
+            _ => self.intern(Node::Mul(out.into())),
+        }
+    }
+
+    /// Splits a factor into base and exponent (`x^2` → `(x, 2)`, `x` → `(x, 1)`).
+    pub fn base_exp(&self, id: ExprId) -> (ExprId, ExprId) {
+        match self.node(id) {
+            Node::Pow(b, e) => (*b, *e),
+            _ => (id, self.one()),
+        }
+    }
+
+    /// The canonical power `base ^ exp`.
+    pub fn pow(&mut self, base: ExprId, exp: ExprId) -> ExprId {
+        let e_num = self.as_number(exp);
+        if let Some(e) = e_num {
+            if e.is_zero() {
+                return self.one();
+            }
+            if e.is_one() {
+                return base;
+            }
+        }
+        match (self.node(base).clone(), e_num) {
+            (Node::Num(b), Some(e)) => {
+                if let Some(v) = fold_number_pow(b, e) {
+                    return self.number(v);
+                }
+            }
+            (Node::Num(b), None) if b.is_one() => return self.one(),
+            // (x^a)^n = x^(a*n) for integer n.
+            (Node::Pow(b, a), Some(Number::Rational(n))) if n.is_integer() => {
+                let ae = self.mul2(a, exp);
+                return self.pow(b, ae);
+            }
+            // (x^a)^r = x^(a*r) when a is an odd integer... keep it simple and
+            // exact: only (x^(2k))^(1/2) is |x|^k, which we do not rewrite.
+            (Node::Mul(fs), Some(Number::Rational(n))) if n.is_integer() => {
+                let parts: Vec<ExprId> = fs.iter().map(|&f| self.pow(f, exp)).collect();
+                return self.mul(&parts);
+            }
+            _ => {}
+        }
+        if self.is_zero(base) {
+            if let Some(e) = e_num {
+                if !e.is_negative() {
+                    return self.zero();
+                }
+            }
+        }
+        self.intern(Node::Pow(base, exp))
+    }
+
+    /// `f(arg)`, with exact values folded (`sin(0) = 0`) and parity applied
+    /// (`cos(-x) = cos(x)`, `sin(-x) = -sin(x)`).
+    pub fn func(&mut self, f: Func, arg: ExprId) -> ExprId {
+        if let Some(n) = self.as_number(arg) {
+            if n.is_zero() {
+                match f {
+                    Func::Sin | Func::Tan | Func::Asin | Func::Atan | Func::Sinh | Func::Tanh | Func::Abs => {
+                        return self.zero()
+                    }
+                    Func::Cos | Func::Cosh | Func::Exp => return self.one(),
+                    Func::Acos | Func::Log => {}
+                }
+            }
+            if f == Func::Log && n.is_one() {
+                return self.zero();
+            }
+            if f == Func::Abs {
+                return self.number(n.abs());
+            }
+            if let Number::Float(x) = n {
+                let v = f.apply(x);
+                if v.is_finite() {
+                    return self.float(v);
+                }
+            }
+        }
+        if self.is_negated(arg) {
+            let pos = self.neg(arg);
+            debug_assert!(!self.is_negated(pos), "negation must flip the sign");
+            match f {
+                Func::Cos | Func::Cosh | Func::Abs => return self.func(f, pos),
+                Func::Sin | Func::Tan | Func::Asin | Func::Atan | Func::Sinh | Func::Tanh => {
+                    let v = self.func(f, pos);
+                    return self.neg(v);
+                }
+                _ => {}
+            }
+        }
+        if f == Func::Log {
+            if let Node::Func(Func::Exp, x) = self.node(arg) {
+                return *x;
+            }
+        }
+        self.intern(Node::Func(f, arg))
+    }
+
+    /// `atan2(y, x)`.
+    pub fn atan2(&mut self, y: ExprId, x: ExprId) -> ExprId {
+        if let (Some(Number::Float(a)), Some(Number::Float(b))) = (self.as_number(y), self.as_number(x)) {
+            return self.float(a.atan2(b));
+        }
+        self.intern(Node::Atan2(y, x))
+    }
+
+    /// True when the expression reads with a leading minus (negative coefficient,
+    /// or a sum whose first term does), so that `-e` is the nicer form.
+    pub fn is_negated(&self, id: ExprId) -> bool {
+        match self.node(id) {
+            Node::Num(n) => n.is_negative(),
+            Node::Mul(fs) => self.as_number(fs[0]).is_some_and(|n| n.is_negative()),
+            Node::Add(ts) => self.is_negated(ts[0]),
+            _ => false,
+        }
+    }
+
+    // ---- canonical order ----------------------------------------------------------
+
+    fn class(&self, id: ExprId) -> u8 {
+        match self.node(id) {
+            Node::Num(_) => 0,
+            Node::Pi => 1,
+            Node::Sym(_) => 2,
+            Node::Func(..) | Node::Atan2(..) => 3,
+            Node::Add(_) => 4,
+            Node::Mul(_) => 5,
+            Node::Pow(..) => 6,
+        }
+    }
+
+    /// The total order that sorts factors of products: numbers, then symbols by
+    /// rank, derivative order and name, then functions, then sums. Powers sort
+    /// by their base, then by exponent.
+    pub fn cmp(&self, a: ExprId, b: ExprId) -> Ordering {
+        if a == b {
+            return Ordering::Equal;
+        }
+        let (ba, ea) = self.base_exp(a);
+        let (bb, eb) = self.base_exp(b);
+        if ba != bb {
+            return self.cmp_base(ba, bb);
+        }
+        self.cmp(ea, eb)
+    }
+
+    fn cmp_base(&self, a: ExprId, b: ExprId) -> Ordering {
+        if a == b {
+            return Ordering::Equal;
+        }
+        let (ca, cb) = (self.class(a), self.class(b));
+        if ca != cb {
+            return ca.cmp(&cb);
+        }
+        match (self.node(a), self.node(b)) {
+            (Node::Num(x), Node::Num(y)) => x.to_f64().total_cmp(&y.to_f64()),
+            (Node::Sym(x), Node::Sym(y)) => {
+                let rank = |s: &Symbol| self.name_rank[s.name.0 as usize];
+                rank(x)
+                    .cmp(&rank(y))
+                    .then(self.name_str(x.name).cmp(self.name_str(y.name)))
+                    .then(x.order.cmp(&y.order))
+            }
+            (Node::Func(f, x), Node::Func(g, y)) => f.cmp(g).then_with(|| self.cmp(*x, *y)),
+            (Node::Func(..), Node::Atan2(..)) => Ordering::Less,
+            (Node::Atan2(..), Node::Func(..)) => Ordering::Greater,
+            (Node::Atan2(y1, x1), Node::Atan2(y2, x2)) => self.cmp(*y1, *y2).then_with(|| self.cmp(*x1, *x2)),
+            (Node::Add(xs), Node::Add(ys)) | (Node::Mul(xs), Node::Mul(ys)) => {
+                for (x, y) in xs.iter().zip(ys.iter()) {
+                    let o = self.cmp(*x, *y);
+                    if o != Ordering::Equal {
+                        return o;
+                    }
+                }
+                xs.len().cmp(&ys.len())
+            }
+            _ => a.cmp(&b),
+        }
+    }
+
+    /// The order of terms in a sum: by their non-numeric factors compared from
+    /// the most significant (last) one, so that terms in the same coordinates sit
+    /// together; the constant last.
+    fn cmp_terms(&self, a: ExprId, b: ExprId) -> Ordering {
+        let xs = self.term_factors(a);
+        let ys = self.term_factors(b);
+        for (x, y) in xs.iter().rev().zip(ys.iter().rev()) {
+            let o = self.cmp(*x, *y);
+            if o != Ordering::Equal {
+                return o;
+            }
+        }
+        xs.len().cmp(&ys.len()).then(a.cmp(&b))
+    }
+
+    /// The non-numeric factors of a term.
+    fn term_factors(&self, id: ExprId) -> &[ExprId] {
+        match self.node(id) {
+            Node::Mul(fs) if self.as_number(fs[0]).is_some() => &fs[1..],
+            Node::Mul(fs) => fs,
+            _ => std::slice::from_ref(self.index.get(self.node(id)).expect("interned")),
+        }
+    }
+}
+
+/// Folds `b^e` for numbers when the result is exact or both are floats.
+fn fold_number_pow(b: Number, e: Number) -> Option<Number> {
+    match (b, e) {
+        (Number::Rational(b), Number::Rational(e)) => {
+            if e.is_integer() {
+                let n = i64::try_from(e.numer()).ok()?;
+                if n.unsigned_abs() > 4 * MAX_FOLD_EXPONENT as u64 {
+                    return None;
+                }
+                b.pow(n).map(Number::Rational)
+            } else {
+                // Exact roots only: 4^(1/2) = 2, 8^(2/3) = 4.
+                let root = b.exact_root(u32::try_from(e.denom()).ok()?)?;
+                root.pow(i64::try_from(e.numer()).ok()?).map(Number::Rational)
+            }
+        }
+        _ => {
+            let v = b.to_f64().powf(e.to_f64());
+            v.is_finite().then(|| Number::float(v))
+        }
+    }
+}

@@ -1,0 +1,29 @@
+//! `sym`: the expression kernel of lagrange.
+//!
+//! Expressions live in a [`Pool`], a hash-consed DAG: each distinct subexpression
+//! is stored once and named by an [`ExprId`]. The pool parses the expression
+//! language, prints it back (text that parses to the same expression, and LaTeX),
+//! differentiates, substitutes, simplifies, and evaluates many expressions at once
+//! over their shared subexpressions with a [`Tape`].
+//!
+//! ```
+//! let mut pool = sym::Pool::default();
+//! let lag = pool.parse("m*l^2*q'^2/2 + m*g*l*cos(q)").unwrap();
+//! let q_dot = pool.velocity("q");
+//! let p_q = pool.diff(lag, q_dot);
+//! assert_eq!(pool.display(p_q).to_string(), "l^2*m*q'");
+//! ```
+
+mod diff;
+mod eval;
+mod expr;
+mod number;
+mod parse;
+mod print;
+mod simplify;
+
+pub use eval::{EvalError, Tape};
+pub use expr::{ExprId, Func, NameId, Node, Pool, Symbol};
+pub use number::{Number, Rational};
+pub use parse::{Limits, ParseError, ParseErrorKind, ParseOptions, Span};
+pub use print::{Display, Latex};

@@ -1,0 +1,631 @@
+//! The parser of the expression language: text in, [`ExprId`] out, errors with byte spans.
+//!
+//! Enter with [`Pool::parse`] or, to check names and set limits, [`Pool::parse_with`]
+//! and [`ParseOptions`]. The parser is hand-written recursive descent over a
+//! one-token lookahead lexer; every recursion (parentheses, function calls, unary
+//! signs, exponents) goes through one depth counter bounded by
+//! [`Limits::max_depth`], so no input can overflow the stack.
+//!
+//! Grammar, loosest binding first:
+//!
+//! ```text
+//! sum      = product (('+' | '-') product)*
+//! product  = unary (('*' | '/') unary)*
+//! unary    = ('-' | '+') unary | power
+//! power    = atom (('^' | '**') exponent)?          right-associative
+//! exponent = ('-' | '+') exponent | power            so 2^-1 and x^-y^2 read naturally
+//! atom     = number | name '\''{0,2} | 'pi' | function '(' sum (',' sum)* ')' | '(' sum ')'
+//! ```
+//!
+//! An integer literal is an exact [`Rational`](crate::Rational); one that does not
+//! fit in `i128` is [`ParseErrorKind::NumberOutOfRange`] rather than a silently
+//! rounded float. A literal with `.` or an exponent is a float. `1/2` is exact
+//! because the constructors fold it. Implicit multiplication (`2x`) is an error.
+//! On error the pool may keep nodes built before the error; they are harmless.
+
+use crate::expr::{ExprId, Func, Pool};
+use crate::number::{Number, Rational};
+
+/// A byte range `start..end` in the parsed text.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
+pub struct Span {
+    /// The first byte.
+    pub start: u32,
+    /// One past the last byte.
+    pub end: u32,
+}
+
+impl Span {
+    /// The span `start..end`, saturated to `u32`.
+    pub fn new(start: usize, end: usize) -> Span {
+        let clamp = |v: usize| u32::try_from(v).unwrap_or(u32::MAX);
+        Span { start: clamp(start), end: clamp(end) }
+    }
+
+    /// The range, for slicing the text.
+    pub fn range(self) -> std::ops::Range<usize> {
+        self.start as usize..self.end as usize
+    }
+}
+
+/// A parse error: what went wrong and where.
+#[derive(Clone, PartialEq, Eq, Debug, thiserror::Error)]
+#[error("{kind}")]
+pub struct ParseError {
+    /// What went wrong.
+    pub kind: ParseErrorKind,
+    /// Where, in bytes of the parsed text.
+    pub span: Span,
+}
+
+/// What went wrong in a parse.
+#[derive(Clone, PartialEq, Eq, Debug, thiserror::Error)]
+pub enum ParseErrorKind {
+    /// Something else stood where `what` was required.
+    #[error("expected {what}, found {found}")]
+    Expected {
+        /// What the grammar needed here, e.g. "an expression after '+'".
+        what: &'static str,
+        /// What was there instead, e.g. "end of input" or "'x'".
+        found: String,
+    },
+    /// A character that no token starts with.
+    #[error("unexpected character '{ch}'")]
+    UnexpectedChar {
+        /// The character.
+        ch: char,
+    },
+    /// A symbol the caller's `known` check rejected.
+    #[error("unknown name '{name}'")]
+    UnknownName {
+        /// The name with its primes, e.g. `q'`.
+        name: String,
+    },
+    /// A name followed by `(` that is not a function of the language.
+    #[error("unknown function '{name}'")]
+    UnknownFunction {
+        /// The name.
+        name: String,
+    },
+    /// A function called with the wrong number of arguments.
+    #[error("function '{name}' takes {expected} argument{}, found {found}", if *expected == 1 { "" } else { "s" })]
+    WrongArgCount {
+        /// The function name as written.
+        name: &'static str,
+        /// The number it takes.
+        expected: usize,
+        /// The number given.
+        found: usize,
+    },
+    /// A function name not followed by `(`.
+    #[error("function '{name}' needs its argument in parentheses, as in {name}(x)")]
+    MissingCall {
+        /// The function name as written.
+        name: &'static str,
+    },
+    /// More than two primes (`q'''`): only velocities and accelerations exist.
+    #[error("at most two primes are allowed (q' is a velocity, q'' an acceleration)")]
+    TooManyPrimes,
+    /// Primes after the constant `pi`.
+    #[error("'pi' is a constant and has no time derivative")]
+    PrimedConstant,
+    /// A `(` without its `)`.
+    #[error("unclosed parenthesis")]
+    UnclosedParen,
+    /// A `)` without its `(`.
+    #[error("unexpected ')'")]
+    UnmatchedParen,
+    /// An integer that does not fit in `i128`, or a float that overflows `f64`.
+    #[error("number out of range")]
+    NumberOutOfRange,
+    /// Nesting deeper than [`Limits::max_depth`].
+    #[error("nesting deeper than {limit} levels")]
+    TooDeep {
+        /// The limit.
+        limit: usize,
+    },
+    /// Text longer than [`Limits::max_len`].
+    #[error("expression longer than {limit} bytes")]
+    TooLong {
+        /// The limit.
+        limit: usize,
+    },
+    /// The parse would add more than [`Limits::max_nodes`] nodes to the pool.
+    #[error("expression has more than {limit} nodes")]
+    TooManyNodes {
+        /// The limit.
+        limit: usize,
+    },
+}
+
+/// Bounds on what one parse may cost. They keep hostile or mistaken input
+/// (a pasted file, 10 000 parentheses) from exhausting memory or the stack.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Limits {
+    /// Longest accepted text in bytes. Default 100 000: a hundred times the
+    /// longest Lagrangian of the notes.
+    pub max_len: usize,
+    /// Deepest nesting of parentheses, function calls, unary signs and
+    /// exponents. Default 64: hand-written physics rarely nests past 10, and 64
+    /// levels of recursion fit easily on any thread's stack.
+    pub max_depth: usize,
+    /// Most nodes one parse may add to the pool. Default 1 000 000, a guard
+    /// against canonicalization blow-ups rather than a limit users should meet.
+    pub max_nodes: usize,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits { max_len: 100_000, max_depth: 64, max_nodes: 1_000_000 }
+    }
+}
+
+/// How to parse: which symbols exist, and the [`Limits`].
+#[derive(Clone, Copy, Default)]
+pub struct ParseOptions<'a> {
+    /// When set, every symbol (base name, number of primes) must pass this
+    /// check, or the parse fails with [`ParseErrorKind::UnknownName`]. `pi` and
+    /// function names are not symbols and are never checked; `t` is a symbol.
+    pub known: Option<&'a dyn Fn(&str, u8) -> bool>,
+    /// Bounds on the parse.
+    pub limits: Limits,
+}
+
+impl std::fmt::Debug for ParseOptions<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ParseOptions")
+            .field("known", &self.known.map(|_| "Fn(&str, u8) -> bool"))
+            .field("limits", &self.limits)
+            .finish()
+    }
+}
+
+impl<'a> ParseOptions<'a> {
+    /// Accept only symbols for which `known(name, primes)` holds.
+    pub fn with_known(mut self, known: &'a dyn Fn(&str, u8) -> bool) -> Self {
+        self.known = Some(known);
+        self
+    }
+
+    /// Use these limits.
+    pub fn with_limits(mut self, limits: Limits) -> Self {
+        self.limits = limits;
+        self
+    }
+}
+
+impl Pool {
+    /// Parses `text` with default options (any name is a symbol).
+    pub fn parse(&mut self, text: &str) -> Result<ExprId, ParseError> {
+        self.parse_with(text, &ParseOptions::default())
+    }
+
+    /// Parses `text`, checking names and limits as `opts` says.
+    pub fn parse_with(&mut self, text: &str, opts: &ParseOptions) -> Result<ExprId, ParseError> {
+        if text.len() > opts.limits.max_len {
+            let kind = ParseErrorKind::TooLong { limit: opts.limits.max_len };
+            return Err(ParseError { kind, span: Span::new(opts.limits.max_len, text.len()) });
+        }
+        let start_len = self.len();
+        let mut p = Parser { pool: self, text, opts, pos: 0, tok: Token::START, prev: Tok::End, depth: 0, start_len };
+        p.bump()?;
+        let e = p.sum()?;
+        match p.tok.kind {
+            Tok::End => Ok(e),
+            Tok::RParen => Err(p.error(ParseErrorKind::UnmatchedParen, p.tok.span())),
+            _ => Err(p.expected("an operator")),
+        }
+    }
+}
+
+/// The kinds of tokens.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Tok {
+    Num,
+    /// A name; `name_end` is where the primes start.
+    Ident {
+        name_end: usize,
+    },
+    Plus,
+    Minus,
+    Star,
+    Slash,
+    Caret,
+    LParen,
+    RParen,
+    Comma,
+    End,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Token {
+    kind: Tok,
+    start: usize,
+    end: usize,
+}
+
+impl Token {
+    const START: Token = Token { kind: Tok::End, start: 0, end: 0 };
+
+    fn span(self) -> Span {
+        Span::new(self.start, self.end)
+    }
+}
+
+/// The functions callable by name: the unary ones, `sqrt`, `atan2`, `ln`.
+#[derive(Clone, Copy)]
+enum Callee {
+    Unary(Func),
+    Sqrt,
+    Atan2,
+}
+
+impl Callee {
+    fn from_name(name: &str) -> Option<(Callee, &'static str)> {
+        match name {
+            "sqrt" => Some((Callee::Sqrt, "sqrt")),
+            "atan2" => Some((Callee::Atan2, "atan2")),
+            "ln" => Some((Callee::Unary(Func::Log), "ln")),
+            _ => Func::from_name(name).map(|f| (Callee::Unary(f), f.name())),
+        }
+    }
+
+    fn arity(self) -> usize {
+        match self {
+            Callee::Atan2 => 2,
+            Callee::Unary(_) | Callee::Sqrt => 1,
+        }
+    }
+}
+
+struct Parser<'p, 't, 'o> {
+    pool: &'p mut Pool,
+    text: &'t str,
+    opts: &'o ParseOptions<'o>,
+    /// Where the lexer continues.
+    pos: usize,
+    /// The lookahead token.
+    tok: Token,
+    /// The kind of the token consumed last, for "expected ... after '+'".
+    prev: Tok,
+    depth: usize,
+    start_len: usize,
+}
+
+type PResult<T> = Result<T, ParseError>;
+
+impl Parser<'_, '_, '_> {
+    // ---- errors ---------------------------------------------------------------
+
+    fn error(&self, kind: ParseErrorKind, span: Span) -> ParseError {
+        ParseError { kind, span }
+    }
+
+    /// "expected `what`, found <the lookahead>" at the lookahead.
+    fn expected(&self, what: &'static str) -> ParseError {
+        let found = match self.tok.kind {
+            Tok::End => "end of input".to_string(),
+            _ => {
+                let s = &self.text[self.tok.start..self.tok.end];
+                match s.char_indices().nth(24) {
+                    Some((cut, _)) => format!("'{}...'", &s[..cut]),
+                    None => format!("'{s}'"),
+                }
+            }
+        };
+        self.error(ParseErrorKind::Expected { what, found }, self.tok.span())
+    }
+
+    /// Enters one nesting level, or fails at the lookahead.
+    fn enter(&mut self) -> PResult<()> {
+        if self.depth >= self.opts.limits.max_depth {
+            let kind = ParseErrorKind::TooDeep { limit: self.opts.limits.max_depth };
+            return Err(self.error(kind, self.tok.span()));
+        }
+        self.depth += 1;
+        Ok(())
+    }
+
+    fn leave(&mut self) {
+        self.depth -= 1;
+    }
+
+    /// Fails when the parse has grown the pool past the node limit.
+    fn check_nodes(&self, e: ExprId, span: Span) -> PResult<ExprId> {
+        let limit = self.opts.limits.max_nodes;
+        if self.pool.len().saturating_sub(self.start_len) > limit {
+            return Err(self.error(ParseErrorKind::TooManyNodes { limit }, span));
+        }
+        Ok(e)
+    }
+
+    // ---- lexer ------------------------------------------------------------------
+
+    /// Consumes the lookahead and lexes the next token.
+    fn bump(&mut self) -> PResult<()> {
+        self.prev = self.tok.kind;
+        let bytes = self.text.as_bytes();
+        while let Some(c) = self.text[self.pos..].chars().next() {
+            if !c.is_whitespace() {
+                break;
+            }
+            self.pos += c.len_utf8();
+        }
+        let start = self.pos;
+        let Some(&b) = bytes.get(start) else {
+            self.tok = Token { kind: Tok::End, start, end: start };
+            return Ok(());
+        };
+        let single = |kind| (kind, start + 1);
+        let (kind, end) = match b {
+            b'+' => single(Tok::Plus),
+            b'-' => single(Tok::Minus),
+            b'*' if bytes.get(start + 1) == Some(&b'*') => (Tok::Caret, start + 2),
+            b'*' => single(Tok::Star),
+            b'/' => single(Tok::Slash),
+            b'^' => single(Tok::Caret),
+            b'(' => single(Tok::LParen),
+            b')' => single(Tok::RParen),
+            b',' => single(Tok::Comma),
+            b'0'..=b'9' | b'.' => (Tok::Num, self.number_end(start)),
+            b'a'..=b'z' | b'A'..=b'Z' | b'_' => {
+                let mut name_end = start + 1;
+                while bytes.get(name_end).is_some_and(|c| c.is_ascii_alphanumeric() || *c == b'_') {
+                    name_end += 1;
+                }
+                let mut end = name_end;
+                while bytes.get(end) == Some(&b'\'') {
+                    end += 1;
+                }
+                if end - name_end > 2 {
+                    return Err(self.error(ParseErrorKind::TooManyPrimes, Span::new(start, end)));
+                }
+                (Tok::Ident { name_end }, end)
+            }
+            _ => {
+                let ch = self.text[start..].chars().next().unwrap_or('\u{fffd}');
+                let span = Span::new(start, start + ch.len_utf8());
+                return Err(self.error(ParseErrorKind::UnexpectedChar { ch }, span));
+            }
+        };
+        self.tok = Token { kind, start, end };
+        self.pos = end;
+        Ok(())
+    }
+
+    /// The end of the number literal starting at `start`: digits, an optional
+    /// fraction, an optional exponent (only when digits follow the `e`).
+    fn number_end(&self, start: usize) -> usize {
+        let bytes = self.text.as_bytes();
+        let digits = |mut i: usize| {
+            while bytes.get(i).is_some_and(u8::is_ascii_digit) {
+                i += 1;
+            }
+            i
+        };
+        let mut end = digits(start);
+        if bytes.get(end) == Some(&b'.') {
+            end = digits(end + 1);
+        }
+        if matches!(bytes.get(end), Some(b'e' | b'E')) {
+            let mut exp = end + 1;
+            if matches!(bytes.get(exp), Some(b'+' | b'-')) {
+                exp += 1;
+            }
+            if bytes.get(exp).is_some_and(u8::is_ascii_digit) {
+                end = digits(exp);
+            }
+        }
+        end
+    }
+
+    // ---- grammar -------------------------------------------------------------------
+
+    fn sum(&mut self) -> PResult<ExprId> {
+        let start = self.tok.start;
+        let first = self.product()?;
+        let mut terms = vec![first];
+        loop {
+            let negate = match self.tok.kind {
+                Tok::Plus => false,
+                Tok::Minus => true,
+                _ => break,
+            };
+            self.bump()?;
+            let t = self.product()?;
+            terms.push(if negate { self.pool.neg(t) } else { t });
+        }
+        if terms.len() == 1 {
+            return Ok(first);
+        }
+        let e = self.pool.add(&terms);
+        self.check_nodes(e, Span::new(start, self.tok.start))
+    }
+
+    fn product(&mut self) -> PResult<ExprId> {
+        let start = self.tok.start;
+        let first = self.unary()?;
+        let mut factors = vec![first];
+        loop {
+            let divide = match self.tok.kind {
+                Tok::Star => false,
+                Tok::Slash => true,
+                _ => break,
+            };
+            self.bump()?;
+            let f = self.unary()?;
+            factors.push(if divide {
+                let m1 = self.pool.minus_one();
+                self.pool.pow(f, m1)
+            } else {
+                f
+            });
+        }
+        if factors.len() == 1 {
+            return Ok(first);
+        }
+        let e = self.pool.mul(&factors);
+        self.check_nodes(e, Span::new(start, self.tok.start))
+    }
+
+    fn unary(&mut self) -> PResult<ExprId> {
+        self.signed(Self::power)
+    }
+
+    fn exponent(&mut self) -> PResult<ExprId> {
+        self.signed(Self::power)
+    }
+
+    /// Leading signs, then `operand`.
+    fn signed(&mut self, operand: fn(&mut Self) -> PResult<ExprId>) -> PResult<ExprId> {
+        let negate = match self.tok.kind {
+            Tok::Minus => true,
+            Tok::Plus => false,
+            _ => return operand(self),
+        };
+        let start = self.tok.start;
+        self.enter()?;
+        self.bump()?;
+        let e = self.signed(operand)?;
+        self.leave();
+        if !negate {
+            return Ok(e);
+        }
+        let e = self.pool.neg(e);
+        self.check_nodes(e, Span::new(start, self.tok.start))
+    }
+
+    fn power(&mut self) -> PResult<ExprId> {
+        let start = self.tok.start;
+        let base = self.atom()?;
+        if self.tok.kind != Tok::Caret {
+            return Ok(base);
+        }
+        self.enter()?;
+        self.bump()?;
+        let exp = self.exponent()?;
+        self.leave();
+        let e = self.pool.pow(base, exp);
+        self.check_nodes(e, Span::new(start, self.tok.start))
+    }
+
+    fn atom(&mut self) -> PResult<ExprId> {
+        let tok = self.tok;
+        match tok.kind {
+            Tok::Num => {
+                let e = self.number(tok)?;
+                self.bump()?;
+                self.check_nodes(e, tok.span())
+            }
+            Tok::Ident { name_end } => self.name(tok, name_end),
+            Tok::LParen => {
+                self.enter()?;
+                self.bump()?;
+                let e = self.sum()?;
+                match self.tok.kind {
+                    Tok::RParen => self.bump()?,
+                    Tok::End => return Err(self.error(ParseErrorKind::UnclosedParen, tok.span())),
+                    _ => return Err(self.expected("an operator or ')'")),
+                }
+                self.leave();
+                Ok(e)
+            }
+            _ => Err(self.expected(match self.prev {
+                Tok::Plus => "an expression after '+'",
+                Tok::Minus => "an expression after '-'",
+                Tok::Star => "an expression after '*'",
+                Tok::Slash => "an expression after '/'",
+                Tok::Caret => "an exponent after '^'",
+                Tok::LParen => "an expression after '('",
+                Tok::Comma => "an argument after ','",
+                Tok::Num | Tok::Ident { .. } | Tok::RParen | Tok::End => "an expression",
+            })),
+        }
+    }
+
+    fn number(&mut self, tok: Token) -> PResult<ExprId> {
+        let s = &self.text[tok.start..tok.end];
+        let out_of_range = || self.error(ParseErrorKind::NumberOutOfRange, tok.span());
+        if s == "." {
+            return Err(self.expected("a number"));
+        }
+        let n = if s.bytes().all(|b| b.is_ascii_digit()) {
+            let n: i128 = s.parse().map_err(|_| out_of_range())?;
+            Number::Rational(Rational::int(n))
+        } else {
+            let x: f64 = s.parse().map_err(|_| self.expected("a number"))?;
+            if !x.is_finite() {
+                return Err(out_of_range());
+            }
+            Number::float(x)
+        };
+        Ok(self.pool.number(n))
+    }
+
+    /// A name: `pi`, a function call, or a symbol.
+    fn name(&mut self, tok: Token, name_end: usize) -> PResult<ExprId> {
+        let name = &self.text[tok.start..name_end];
+        let primes = (tok.end - name_end) as u8;
+        if name == "pi" {
+            if primes > 0 {
+                return Err(self.error(ParseErrorKind::PrimedConstant, tok.span()));
+            }
+            self.bump()?;
+            return Ok(self.pool.pi());
+        }
+        if primes == 0 {
+            if let Some((callee, fname)) = Callee::from_name(name) {
+                self.bump()?;
+                if self.tok.kind != Tok::LParen {
+                    return Err(self.error(ParseErrorKind::MissingCall { name: fname }, tok.span()));
+                }
+                return self.call(tok, callee, fname);
+            }
+        }
+        self.bump()?;
+        if self.tok.kind == Tok::LParen && primes == 0 {
+            let name = name.to_string();
+            return Err(self.error(ParseErrorKind::UnknownFunction { name }, tok.span()));
+        }
+        if let Some(known) = self.opts.known {
+            if !known(name, primes) {
+                let name = self.text[tok.start..tok.end].to_string();
+                return Err(self.error(ParseErrorKind::UnknownName { name }, tok.span()));
+            }
+        }
+        let e = self.pool.var(name, primes);
+        self.check_nodes(e, tok.span())
+    }
+
+    /// The arguments of a call; the lookahead is its `(`.
+    fn call(&mut self, name_tok: Token, callee: Callee, fname: &'static str) -> PResult<ExprId> {
+        let open = self.tok;
+        self.enter()?;
+        self.bump()?;
+        let mut args = vec![self.sum()?];
+        loop {
+            match self.tok.kind {
+                Tok::Comma => {
+                    self.bump()?;
+                    args.push(self.sum()?);
+                }
+                Tok::RParen => break,
+                Tok::End => return Err(self.error(ParseErrorKind::UnclosedParen, open.span())),
+                _ => return Err(self.expected("an operator, ',' or ')'")),
+            }
+        }
+        let span = Span::new(name_tok.start, self.tok.end);
+        self.bump()?;
+        self.leave();
+        if args.len() != callee.arity() {
+            let kind = ParseErrorKind::WrongArgCount { name: fname, expected: callee.arity(), found: args.len() };
+            return Err(self.error(kind, span));
+        }
+        let e = match callee {
+            Callee::Unary(f) => self.pool.func(f, args[0]),
+            Callee::Sqrt => self.pool.sqrt(args[0]),
+            Callee::Atan2 => self.pool.atan2(args[0], args[1]),
+        };
+        self.check_nodes(e, span)
+    }
+}

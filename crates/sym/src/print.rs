@@ -1,0 +1,650 @@
+//! Printers: the expression language (text that parses back to the same id) and LaTeX.
+//!
+//! Enter with [`Pool::display`] or [`Pool::latex`]; both return a value that
+//! implements [`std::fmt::Display`], so `pool.display(e).to_string()` or
+//! `format!("{}", pool.latex(e))`.
+//!
+//! Both printers read the canonical form the same way: a product is a sign, a
+//! numeric coefficient `p/q`, the factors above the fraction bar and the
+//! factors below it (powers with a negative exponent), so `m*l^2*q'^2/2`,
+//! `-g*sin(q)/l` and `x/(2*y)` come out as people write them. Each printer
+//! builds the text of a node bottom-up together with the precedence of its
+//! outermost operator, and the parent adds the parentheses that precedence
+//! requires, and no more.
+//!
+//! The text printer is checked by a property test: parsing its output gives
+//! back the same [`ExprId`]. Symbols whose names are not names of the language
+//! (a symbol called `pi` or `sin`, or `"x y"`, built directly through
+//! [`Pool::symbol`]) print as they are and cannot round-trip.
+
+use crate::expr::{ExprId, Func, Node, Pool, Symbol};
+use crate::number::{Number, Rational};
+use std::fmt;
+
+/// An expression printed in the expression language; see [`Pool::display`].
+#[derive(Clone, Copy)]
+pub struct Display<'a> {
+    pool: &'a Pool,
+    id: ExprId,
+}
+
+/// An expression printed as LaTeX math; see [`Pool::latex`].
+#[derive(Clone, Copy)]
+pub struct Latex<'a> {
+    pool: &'a Pool,
+    id: ExprId,
+}
+
+impl Pool {
+    /// The expression in the expression language, with minimal parentheses.
+    /// Parsing the text gives back `id`.
+    pub fn display(&self, id: ExprId) -> Display<'_> {
+        Display { pool: self, id }
+    }
+
+    /// The expression as LaTeX math (no surrounding `$`): `\frac`, `\sqrt`,
+    /// `\dot{\theta}` for velocities, Greek letters for Greek names.
+    pub fn latex(&self, id: ExprId) -> Latex<'_> {
+        Latex { pool: self, id }
+    }
+}
+
+impl fmt::Display for Display<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&Text { pool: self.pool }.expr(self.id).text)
+    }
+}
+
+impl fmt::Debug for Display<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fmt::Display::fmt(self, f)
+    }
+}
+
+impl fmt::Display for Latex<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&Tex { pool: self.pool }.expr(self.id).text)
+    }
+}
+
+impl fmt::Debug for Latex<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fmt::Display::fmt(self, f)
+    }
+}
+
+// ---- reading the canonical form ----------------------------------------------
+
+/// How tightly printed text binds, loosest first.
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Debug)]
+enum Prec {
+    /// `a + b`.
+    Sum,
+    /// A leading minus: `-x`, `-2*y`.
+    Neg,
+    /// `a*b`, `a/b`, `1/2`.
+    Product,
+    /// `a^b`.
+    Power,
+    /// Names, numbers, calls, parenthesized text.
+    Atom,
+}
+
+/// Printed text and the precedence of its outermost operator.
+struct Piece {
+    text: String,
+    prec: Prec,
+}
+
+impl Piece {
+    fn new(text: impl Into<String>, prec: Prec) -> Piece {
+        Piece { text: text.into(), prec }
+    }
+}
+
+/// A positive exponent to print: a node, a number, or a product with a
+/// coefficient (the negation of a negative exponent, which the printer cannot
+/// build because it only reads the pool).
+#[derive(Clone, Copy)]
+enum Exp<'a> {
+    Id(ExprId),
+    Num(Number),
+    Mul(Number, &'a [ExprId]),
+}
+
+/// A negative number or a product with a negative coefficient, split into the
+/// absolute coefficient and the other factors: `-3*x` is `(3, [x])`.
+fn negated(pool: &Pool, id: ExprId) -> Option<(Number, &[ExprId])> {
+    match pool.node(id) {
+        Node::Num(n) if n.is_negative() => Some((abs(*n), &[])),
+        Node::Mul(fs) => match pool.as_number(fs[0]) {
+            Some(c) if c.is_negative() => Some((abs(c), &fs[1..])),
+            _ => None,
+        },
+        _ => None,
+    }
+}
+
+/// A product split into its coefficient and the other factors.
+fn coeff_factors(pool: &Pool, fs: &[ExprId]) -> (Number, usize) {
+    match pool.as_number(fs[0]) {
+        Some(c) => (c, 1),
+        None => (Number::ONE, 0),
+    }
+}
+
+/// The absolute value without leaving exact arithmetic (`Number::abs` of
+/// `i128::MIN` would fall back to a float).
+fn abs(n: Number) -> Number {
+    match n {
+        Number::Rational(r) if r.is_negative() => match r.neg() {
+            Some(r) => Number::Rational(r),
+            None => n,
+        },
+        Number::Float(x) => Number::float(x.abs()),
+        r => r,
+    }
+}
+
+/// If `id` is a power printed below a fraction bar, its base and the positive
+/// exponent: `x^-2` is `(x, 2)`, `x^(-y)` is `(x, y)`.
+///
+/// A power of a number qualifies only when the base is a nonzero rational and
+/// the exponent rational, because only then does the positive power fold
+/// exactly when the negative one does (`0^-1` stays as it is, `0^1` is `0`).
+fn below_bar(pool: &Pool, id: ExprId) -> Option<(ExprId, Exp<'_>)> {
+    let Node::Pow(base, exp) = pool.node(id) else {
+        return None;
+    };
+    let base_num = pool.as_number(*base);
+    match pool.node(*exp) {
+        Node::Num(e) if e.is_negative() => {
+            let ok = match (base_num, e) {
+                (None, _) => true,
+                (Some(Number::Rational(b)), Number::Rational(_)) => !b.is_zero(),
+                _ => false,
+            };
+            let pos = abs(*e);
+            let same_kind = matches!((e, pos), (Number::Rational(_), Number::Rational(_)) | (Number::Float(_), Number::Float(_)));
+            (ok && same_kind).then_some((*base, Exp::Num(pos)))
+        }
+        Node::Mul(fs) => match pool.as_number(fs[0]) {
+            Some(c) if c.is_negative() => {
+                let pos = abs(c);
+                let same_kind = matches!((c, pos), (Number::Rational(_), Number::Rational(_)) | (Number::Float(_), Number::Float(_)));
+                same_kind.then_some((*base, Exp::Mul(pos, &fs[1..])))
+            }
+            _ => None,
+        },
+        _ => None,
+    }
+}
+
+/// The numeric value of an exponent, if it is a number.
+fn exp_number(pool: &Pool, exp: Exp<'_>) -> Option<Number> {
+    match exp {
+        Exp::Id(e) => pool.as_number(e),
+        Exp::Num(n) => Some(n),
+        Exp::Mul(..) => None,
+    }
+}
+
+fn is_rational(n: Option<Number>, num: i128, den: i128) -> bool {
+    matches!(n, Some(Number::Rational(r)) if Rational::new(num, den) == Some(r))
+}
+
+/// The integer `n` such that the exponent is `1/n`, for `n >= 2`.
+fn root_index(n: Option<Number>) -> Option<i128> {
+    match n {
+        Some(Number::Rational(r)) if r.numer() == 1 && r.denom() >= 2 => Some(r.denom()),
+        _ => None,
+    }
+}
+
+/// A product split around the fraction bar.
+struct Fraction<'a> {
+    /// `|coefficient|` when it is a float.
+    float: Option<f64>,
+    /// Numerator of an exact `|coefficient|`.
+    p: i128,
+    /// Denominator of an exact coefficient.
+    q: i128,
+    above: Vec<ExprId>,
+    /// Bases and positive exponents of the factors below the bar.
+    below: Vec<(ExprId, Exp<'a>)>,
+}
+
+fn fraction<'a>(pool: &'a Pool, coeff: Number, factors: &'a [ExprId]) -> Fraction<'a> {
+    let (float, p, q) = match coeff {
+        Number::Rational(r) => (None, r.numer(), r.denom()),
+        Number::Float(x) => (Some(x), 1, 1),
+    };
+    let mut above = Vec::new();
+    let mut below = Vec::new();
+    for &f in factors {
+        match below_bar(pool, f) {
+            Some(b) => below.push(b),
+            None => above.push(f),
+        }
+    }
+    Fraction { float, p, q, above, below }
+}
+
+fn paren(p: Piece, min: Prec) -> String {
+    if p.prec < min {
+        format!("({})", p.text)
+    } else {
+        p.text
+    }
+}
+
+// ---- the expression language -------------------------------------------------
+
+struct Text<'a> {
+    pool: &'a Pool,
+}
+
+impl<'a> Text<'a> {
+    fn expr(&self, id: ExprId) -> Piece {
+        let pool = self.pool;
+        match pool.node(id) {
+            Node::Num(n) => self.num(*n),
+            Node::Pi => Piece::new("pi", Prec::Atom),
+            Node::Sym(s) => Piece::new(pool.symbol_text(*s), Prec::Atom),
+            Node::Func(f, a) => Piece::new(format!("{}({})", f.name(), self.expr(*a).text), Prec::Atom),
+            Node::Atan2(y, x) => {
+                Piece::new(format!("atan2({}, {})", self.expr(*y).text, self.expr(*x).text), Prec::Atom)
+            }
+            Node::Add(ts) => self.sum(ts),
+            Node::Mul(fs) => {
+                let (c, skip) = coeff_factors(pool, fs);
+                self.product(c.is_negative(), abs(c), &fs[skip..])
+            }
+            Node::Pow(b, e) => match below_bar(pool, id) {
+                Some(_) => self.product(false, Number::ONE, &[id]),
+                None => self.power(*b, Exp::Id(*e)),
+            },
+        }
+    }
+
+    fn num(&self, n: Number) -> Piece {
+        let a = self.num_abs(abs(n));
+        if n.is_negative() {
+            Piece::new(format!("-{}", a.text), Prec::Neg)
+        } else {
+            a
+        }
+    }
+
+    /// A number that is not negative.
+    fn num_abs(&self, n: Number) -> Piece {
+        match n {
+            Number::Rational(r) if r.is_integer() => Piece::new(r.to_string(), Prec::Atom),
+            Number::Rational(r) => Piece::new(r.to_string(), Prec::Product),
+            Number::Float(_) => Piece::new(n.to_string(), Prec::Atom),
+        }
+    }
+
+    fn sum(&self, ts: &[ExprId]) -> Piece {
+        let mut out = String::new();
+        for (i, &t) in ts.iter().enumerate() {
+            let neg = negated(self.pool, t);
+            let sep = match (i, neg.is_some()) {
+                (0, false) => "",
+                (0, true) => "-",
+                (_, false) => " + ",
+                (_, true) => " - ",
+            };
+            out.push_str(sep);
+            if let Some((c, fs)) = neg {
+                out.push_str(&paren(self.product(false, c, fs), Prec::Product));
+            } else {
+                out.push_str(&paren(self.expr(t), Prec::Neg));
+            }
+        }
+        Piece::new(out, Prec::Sum)
+    }
+
+    /// `±coeff * factors`, with the factors that have negative exponents below a bar.
+    fn product(&self, negative: bool, coeff: Number, factors: &[ExprId]) -> Piece {
+        if negative {
+            let p = self.product(false, coeff, factors);
+            return Piece::new(format!("-{}", paren(p, Prec::Product)), Prec::Neg);
+        }
+        if factors.is_empty() {
+            return self.num_abs(coeff);
+        }
+        if coeff.is_one() && factors.len() == 1 && below_bar(self.pool, factors[0]).is_none() {
+            return self.expr(factors[0]);
+        }
+        let fr = fraction(self.pool, coeff, factors);
+        let mut above: Vec<String> = Vec::new();
+        if let Some(x) = fr.float {
+            above.push(Number::float(x).to_string());
+        } else if fr.p != 1 {
+            above.push(fr.p.to_string());
+        }
+        for &f in &fr.above {
+            above.push(paren(self.expr(f), Prec::Power));
+        }
+        let mut below: Vec<String> = Vec::new();
+        if fr.q != 1 {
+            below.push(fr.q.to_string());
+        }
+        for &(b, e) in &fr.below {
+            below.push(paren(self.power(b, e), Prec::Power));
+        }
+        let mut out = if above.is_empty() { "1".to_string() } else { above.join("*") };
+        match below.len() {
+            0 => {}
+            1 => {
+                out.push('/');
+                out.push_str(&below[0]);
+            }
+            _ => {
+                out.push_str("/(");
+                out.push_str(&below.join("*"));
+                out.push(')');
+            }
+        }
+        Piece::new(out, Prec::Product)
+    }
+
+    /// `base ^ exp` for an exponent that prints without a leading minus
+    /// (or a negative one on a numeric base, as `2^(-300)`).
+    fn power(&self, base: ExprId, exp: Exp<'_>) -> Piece {
+        let n = exp_number(self.pool, exp);
+        if is_rational(n, 1, 1) {
+            return self.expr(base);
+        }
+        if is_rational(n, 1, 2) {
+            return Piece::new(format!("sqrt({})", self.expr(base).text), Prec::Atom);
+        }
+        let b = paren(self.expr(base), Prec::Atom);
+        let e = match exp {
+            Exp::Id(e) => self.expr(e),
+            Exp::Num(n) => self.num(n),
+            Exp::Mul(c, fs) => self.product(false, c, fs),
+        };
+        Piece::new(format!("{b}^{}", paren(e, Prec::Power)), Prec::Power)
+    }
+
+}
+
+// ---- LaTeX ----------------------------------------------------------------------
+
+struct Tex<'a> {
+    pool: &'a Pool,
+}
+
+fn tex_paren(p: Piece, min: Prec) -> String {
+    if p.prec < min {
+        format!("\\left({}\\right)", p.text)
+    } else {
+        p.text
+    }
+}
+
+/// Joins factors by juxtaposition, with `\cdot` before a factor that starts
+/// with a digit (so `2 \cdot 3^{x}` does not read as `23^x`).
+fn juxtapose(parts: &[String]) -> String {
+    let mut out = String::new();
+    for (i, part) in parts.iter().enumerate() {
+        if i > 0 {
+            let digit = part.starts_with(|c: char| c.is_ascii_digit());
+            out.push_str(if digit { " \\cdot " } else { " " });
+        }
+        out.push_str(part);
+    }
+    out
+}
+
+impl<'a> Tex<'a> {
+    fn expr(&self, id: ExprId) -> Piece {
+        let pool = self.pool;
+        match pool.node(id) {
+            Node::Num(n) => self.num(*n),
+            Node::Pi => Piece::new("\\pi", Prec::Atom),
+            Node::Sym(s) => Piece::new(self.symbol(*s), Prec::Atom),
+            Node::Func(f, a) => self.func(*f, *a, None),
+            Node::Atan2(y, x) => Piece::new(
+                format!("\\operatorname{{atan_{{2}}}}{{\\left({}, {} \\right)}}", self.expr(*y).text, self.expr(*x).text),
+                Prec::Atom,
+            ),
+            Node::Add(ts) => self.sum(ts),
+            Node::Mul(fs) => {
+                let (c, skip) = coeff_factors(pool, fs);
+                self.product(c.is_negative(), abs(c), &fs[skip..])
+            }
+            Node::Pow(b, e) => match below_bar(pool, id) {
+                Some(_) => self.product(false, Number::ONE, &[id]),
+                None => self.power(*b, Exp::Id(*e)),
+            },
+        }
+    }
+
+    fn symbol(&self, s: Symbol) -> String {
+        let (base, sub) = tex_name(self.pool.name_str(s.name));
+        let base = match s.order {
+            0 => base,
+            1 => format!("\\dot{{{base}}}"),
+            2 => format!("\\ddot{{{base}}}"),
+            n => format!("{base}^{{({n})}}"),
+        };
+        match sub {
+            Some(sub) => format!("{base}_{{{sub}}}"),
+            None => base,
+        }
+    }
+
+    /// `f(a)`, or `f^{n}(a)` when `power` is given (`\sin^{2}{\left(q \right)}`).
+    fn func(&self, f: Func, a: ExprId, power: Option<&str>) -> Piece {
+        let arg = self.expr(a).text;
+        let name = match f {
+            Func::Exp => return Piece::new(format!("e^{{{arg}}}"), Prec::Power),
+            Func::Abs => return Piece::new(format!("\\left|{arg}\\right|"), Prec::Atom),
+            Func::Sin => "\\sin",
+            Func::Cos => "\\cos",
+            Func::Tan => "\\tan",
+            Func::Asin => "\\arcsin",
+            Func::Acos => "\\arccos",
+            Func::Atan => "\\arctan",
+            Func::Sinh => "\\sinh",
+            Func::Cosh => "\\cosh",
+            Func::Tanh => "\\tanh",
+            Func::Log => "\\log",
+        };
+        let power = power.map(|p| format!("^{{{p}}}")).unwrap_or_default();
+        Piece::new(format!("{name}{power}{{\\left({arg} \\right)}}"), Prec::Atom)
+    }
+
+    fn num(&self, n: Number) -> Piece {
+        let a = self.num_abs(abs(n));
+        if n.is_negative() {
+            Piece::new(format!("-{}", a.text), Prec::Neg)
+        } else {
+            a
+        }
+    }
+
+    fn num_abs(&self, n: Number) -> Piece {
+        match n {
+            Number::Rational(r) if r.is_integer() => Piece::new(r.to_string(), Prec::Atom),
+            Number::Rational(r) => {
+                Piece::new(format!("\\frac{{{}}}{{{}}}", r.numer().unsigned_abs(), r.denom()), Prec::Product)
+            }
+            Number::Float(_) => tex_float(&n.to_string()),
+        }
+    }
+
+    fn sum(&self, ts: &[ExprId]) -> Piece {
+        let mut out = String::new();
+        for (i, &t) in ts.iter().enumerate() {
+            let neg = negated(self.pool, t);
+            out.push_str(match (i, neg.is_some()) {
+                (0, false) => "",
+                (0, true) => "- ",
+                (_, false) => " + ",
+                (_, true) => " - ",
+            });
+            if let Some((c, fs)) = neg {
+                out.push_str(&tex_paren(self.product(false, c, fs), Prec::Product));
+            } else {
+                out.push_str(&tex_paren(self.expr(t), Prec::Neg));
+            }
+        }
+        Piece::new(out, Prec::Sum)
+    }
+
+    fn product(&self, negative: bool, coeff: Number, factors: &[ExprId]) -> Piece {
+        if negative {
+            let p = self.product(false, coeff, factors);
+            return Piece::new(format!("- {}", tex_paren(p, Prec::Product)), Prec::Neg);
+        }
+        if factors.is_empty() {
+            return self.num_abs(coeff);
+        }
+        if coeff.is_one() && factors.len() == 1 && below_bar(self.pool, factors[0]).is_none() {
+            return self.expr(factors[0]);
+        }
+        let fr = fraction(self.pool, coeff, factors);
+        let mut above: Vec<String> = Vec::new();
+        if let Some(x) = fr.float {
+            above.push(tex_float(&Number::float(x).to_string()).text);
+        } else if fr.p != 1 {
+            above.push(fr.p.to_string());
+        }
+        for &f in &fr.above {
+            above.push(tex_paren(self.expr(f), Prec::Power));
+        }
+        let mut below: Vec<String> = Vec::new();
+        if fr.q != 1 {
+            below.push(fr.q.to_string());
+        }
+        for &(b, e) in &fr.below {
+            let p = self.power(b, e);
+            // A lone denominator needs no parentheses inside \frac.
+            below.push(if fr.below.len() == 1 && fr.q == 1 { p.text } else { tex_paren(p, Prec::Power) });
+        }
+        let above = if above.is_empty() { "1".to_string() } else { juxtapose(&above) };
+        if below.is_empty() {
+            return Piece::new(above, Prec::Product);
+        }
+        let below = match below.len() {
+            1 => below.swap_remove(0),
+            _ => juxtapose(&below),
+        };
+        Piece::new(format!("\\frac{{{above}}}{{{below}}}"), Prec::Product)
+    }
+
+    fn power(&self, base: ExprId, exp: Exp<'_>) -> Piece {
+        let n = exp_number(self.pool, exp);
+        if is_rational(n, 1, 1) {
+            return self.expr(base);
+        }
+        if is_rational(n, 1, 2) {
+            return Piece::new(format!("\\sqrt{{{}}}", self.expr(base).text), Prec::Atom);
+        }
+        if let Some(k) = root_index(n) {
+            return Piece::new(format!("\\sqrt[{k}]{{{}}}", self.expr(base).text), Prec::Atom);
+        }
+        let e = match exp {
+            Exp::Id(e) => self.expr(e),
+            Exp::Num(n) => self.num(n),
+            Exp::Mul(c, fs) => self.product(false, c, fs),
+        };
+        // sin(q)^2 reads as \sin^{2}(q) when the exponent is a positive integer.
+        if let (Node::Func(f, a), Some(Number::Rational(r))) = (self.pool.node(base), n) {
+            if r.is_integer() && !r.is_negative() && !matches!(f, Func::Exp | Func::Abs) {
+                return self.func(*f, *a, Some(&e.text));
+            }
+        }
+        let b = self.expr(base);
+        let b = match self.pool.node(base) {
+            Node::Pow(..) if b.prec == Prec::Atom => b.text,
+            Node::Pow(..) => format!("\\left({}\\right)", b.text),
+            _ => tex_paren(b, Prec::Atom),
+        };
+        Piece::new(format!("{b}^{{{}}}", e.text), Prec::Power)
+    }
+}
+
+/// A float in LaTeX: `1.5e-7` becomes `1.5 \cdot 10^{-7}`.
+fn tex_float(text: &str) -> Piece {
+    match text.split_once('e') {
+        Some(("1", exp)) => Piece::new(format!("10^{{{exp}}}"), Prec::Power),
+        Some((mantissa, exp)) => Piece::new(format!("{mantissa} \\cdot 10^{{{exp}}}"), Prec::Product),
+        None => Piece::new(text, Prec::Atom),
+    }
+}
+
+/// The LaTeX of a name, split into the base and an optional subscript:
+/// `th1` is `(\theta, 1)`, `p_th` is `(p, \theta)`, `omega` is `(\omega, None)`.
+fn tex_name(name: &str) -> (String, Option<String>) {
+    if let Some((head, tail)) = name.split_once('_') {
+        if !head.is_empty() && !tail.is_empty() {
+            let (b, s) = tex_name(tail);
+            let sub = match s {
+                Some(s) => format!("{b}_{{{s}}}"),
+                None => b,
+            };
+            return (tex_word(head), Some(sub));
+        }
+    }
+    let stem = name.trim_end_matches(|c: char| c.is_ascii_digit());
+    if !stem.is_empty() && stem.len() < name.len() {
+        return (tex_word(stem), Some(name[stem.len()..].to_string()));
+    }
+    (tex_word(name), None)
+}
+
+/// A name without subscript: a Greek letter, a single letter, or upright text.
+fn tex_word(word: &str) -> String {
+    if let Some(greek) = greek(word) {
+        return greek.to_string();
+    }
+    if word.chars().count() == 1 {
+        return word.replace('_', "\\_");
+    }
+    format!("\\mathrm{{{}}}", word.replace('_', "\\_"))
+}
+
+fn greek(word: &str) -> Option<&'static str> {
+    Some(match word {
+        "alpha" | "al" => "\\alpha",
+        "beta" | "be" => "\\beta",
+        "gamma" | "ga" => "\\gamma",
+        "delta" => "\\delta",
+        "epsilon" | "eps" => "\\epsilon",
+        "zeta" => "\\zeta",
+        "eta" => "\\eta",
+        "theta" | "th" => "\\theta",
+        "iota" => "\\iota",
+        "kappa" => "\\kappa",
+        "lambda" | "lam" => "\\lambda",
+        "mu" => "\\mu",
+        "nu" => "\\nu",
+        "xi" => "\\xi",
+        "pi" => "\\pi",
+        "rho" => "\\rho",
+        "sigma" => "\\sigma",
+        "tau" => "\\tau",
+        "upsilon" => "\\upsilon",
+        "phi" | "ph" => "\\phi",
+        "chi" => "\\chi",
+        "psi" => "\\psi",
+        "omega" | "om" => "\\omega",
+        "Gamma" => "\\Gamma",
+        "Delta" => "\\Delta",
+        "Theta" => "\\Theta",
+        "Lambda" => "\\Lambda",
+        "Xi" => "\\Xi",
+        "Pi" => "\\Pi",
+        "Sigma" => "\\Sigma",
+        "Upsilon" => "\\Upsilon",
+        "Phi" => "\\Phi",
+        "Psi" => "\\Psi",
+        "Omega" => "\\Omega",
+        _ => return None,
+    })
+}

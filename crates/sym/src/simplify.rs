@@ -1,0 +1,488 @@
+//! Simplification beyond the constructors' canonical form: expansion,
+//! trigonometric combination, factoring common terms, and collecting in a set
+//! of variables.
+//!
+//! Entry points: [`Pool::simplify`] (generic) and [`Pool::simplify_in`] (collect
+//! the coefficients of the given variables, as the notes write equations of
+//! motion: `(mA + mB)*lA^2*a'' + …`). Both keep the shorter of the input and the
+//! rewritten form, so simplification never makes an expression longer, and every
+//! rewrite is an identity (the property tests check values at random points).
+
+use crate::expr::{ExprId, Func, Node, Pool, Symbol};
+use crate::number::{Number, Rational};
+use rustc_hash::{FxHashMap, FxHashSet};
+
+/// Most terms an expansion may produce before it gives up and keeps the product.
+const MAX_EXPANDED_TERMS: usize = 4096;
+/// Largest power of a sum that is expanded.
+const MAX_EXPANDED_POWER: i128 = 12;
+
+impl Pool {
+    /// Rebuilds `e` bottom-up, applying `f` to every rebuilt node.
+    fn rewrite(&mut self, e: ExprId, f: &mut dyn FnMut(&mut Pool, ExprId) -> ExprId) -> ExprId {
+        let mut done: FxHashMap<ExprId, ExprId> = FxHashMap::default();
+        for id in self.reachable(&[e]) {
+            let rebuilt = match self.node(id).clone() {
+                Node::Num(_) | Node::Pi | Node::Sym(_) => id,
+                Node::Add(ts) => {
+                    let ts: Vec<ExprId> = ts.iter().map(|t| done[t]).collect();
+                    self.add(&ts)
+                }
+                Node::Mul(fs) => {
+                    let fs: Vec<ExprId> = fs.iter().map(|t| done[t]).collect();
+                    self.mul(&fs)
+                }
+                Node::Pow(b, p) => self.pow(done[&b], done[&p]),
+                Node::Func(g, u) => self.func(g, done[&u]),
+                Node::Atan2(y, x) => self.atan2(done[&y], done[&x]),
+            };
+            let out = f(self, rebuilt);
+            done.insert(id, out);
+        }
+        done[&e]
+    }
+
+    /// The terms of a sum (a non-sum is one term).
+    pub fn terms(&self, e: ExprId) -> Vec<ExprId> {
+        match self.node(e) {
+            Node::Add(ts) => ts.to_vec(),
+            _ => vec![e],
+        }
+    }
+
+    /// The factors of a product (a non-product is one factor).
+    pub fn factors(&self, e: ExprId) -> Vec<ExprId> {
+        match self.node(e) {
+            Node::Mul(fs) => fs.to_vec(),
+            _ => vec![e],
+        }
+    }
+
+    /// Distributes products over sums and expands small integer powers of sums,
+    /// within a budget of terms (beyond it the product is kept as it is).
+    pub fn expand(&mut self, e: ExprId) -> ExprId {
+        self.rewrite(e, &mut |pool, id| pool.expand_node(id))
+    }
+
+    fn expand_node(&mut self, id: ExprId) -> ExprId {
+        match self.node(id).clone() {
+            Node::Mul(fs) => {
+                if !fs.iter().any(|&f| matches!(self.node(f), Node::Add(_))) {
+                    return id;
+                }
+                let mut acc: Vec<ExprId> = vec![self.one()];
+                for f in fs.iter() {
+                    let ts = self.terms(*f);
+                    if acc.len() * ts.len() > MAX_EXPANDED_TERMS {
+                        return id;
+                    }
+                    let mut next = Vec::with_capacity(acc.len() * ts.len());
+                    for &a in &acc {
+                        for &t in &ts {
+                            next.push(self.mul2(a, t));
+                        }
+                    }
+                    acc = next;
+                }
+                self.add(&acc)
+            }
+            Node::Pow(b, p) => {
+                let n = match self.as_number(p) {
+                    Some(Number::Rational(r)) if r.is_integer() && r.numer() > 1 => r.numer(),
+                    _ => return id,
+                };
+                if n > MAX_EXPANDED_POWER || !matches!(self.node(b), Node::Add(_)) {
+                    return id;
+                }
+                let ts = self.terms(b);
+                let mut acc = ts.clone();
+                for _ in 1..n {
+                    if acc.len() * ts.len() > MAX_EXPANDED_TERMS {
+                        return id;
+                    }
+                    let mut next = Vec::with_capacity(acc.len() * ts.len());
+                    for &a in &acc {
+                        for &t in &ts {
+                            next.push(self.mul2(a, t));
+                        }
+                    }
+                    let sum = self.add(&next);
+                    acc = self.terms(sum);
+                }
+                self.add(&acc)
+            }
+            _ => id,
+        }
+    }
+
+    /// Combines trigonometric terms of every sum in `e`:
+    /// `c·R·sin²u + c·R·cos²u → c·R`, `c·R − c·R·sin²u → c·R·cos²u`,
+    /// `cos u·cos v ± sin u·sin v → cos(u ∓ v)`, `sin u·cos v ± cos u·sin v → sin(u ± v)`.
+    pub fn combine_trig(&mut self, e: ExprId) -> ExprId {
+        self.rewrite(e, &mut |pool, id| match pool.node(id) {
+            Node::Add(_) => pool.combine_trig_sum(id),
+            _ => id,
+        })
+    }
+
+    fn combine_trig_sum(&mut self, sum: ExprId) -> ExprId {
+        let mut terms = self.terms(sum);
+        'again: loop {
+            let set: FxHashMap<ExprId, usize> = terms.iter().enumerate().map(|(i, &t)| (t, i)).collect();
+            for i in 0..terms.len() {
+                let term = terms[i];
+                for f in self.factors(term) {
+                    let (base, exp) = self.base_exp(f);
+                    let Node::Func(g, u) = *self.node(base) else { continue };
+                    if !matches!(g, Func::Sin | Func::Cos) {
+                        continue;
+                    }
+                    let other = if g == Func::Sin { Func::Cos } else { Func::Sin };
+                    // Pythagorean identities, for a square (or higher power).
+                    if self.as_number(exp).is_some_and(|n| n.to_f64() >= 2.0) {
+                        let sq = self.powi(base, -2);
+                        let rest = self.mul2(term, sq);
+                        let ob = self.func(other, u);
+                        let osq = self.powi(ob, 2);
+                        let partner = self.mul2(rest, osq);
+                        if let Some(&j) = set.get(&partner) {
+                            if j != i {
+                                terms = replace_pair(&terms, i, j, rest);
+                                continue 'again;
+                            }
+                        }
+                        let neg_rest = self.neg(rest);
+                        if let Some(&j) = set.get(&neg_rest) {
+                            // c·R·sin² − c·R = −c·R·cos²
+                            let v = self.mul2(neg_rest, osq);
+                            terms = replace_pair(&terms, i, j, v);
+                            continue 'again;
+                        }
+                    }
+                    // Angle sums, for factors of exponent one.
+                    if exp != self.one() {
+                        continue;
+                    }
+                    for f2 in self.factors(term) {
+                        let Node::Func(Func::Cos, v) = *self.node(f2) else { continue };
+                        if v == u || f2 == f {
+                            continue;
+                        }
+                        let inv = self.mul2(f, f2);
+                        let inv = self.powi(inv, -1);
+                        let rest = self.mul2(term, inv);
+                        let su = self.func(other, u);
+                        let sv = self.func(Func::Sin, v);
+                        let partner = self.mul(&[rest, su, sv]);
+                        let neg_partner = self.neg(partner);
+                        // g = cos: cos u cos v + sin u sin v = cos(u − v)
+                        // g = sin: sin u cos v + cos u sin v = sin(u + v)
+                        let (plus_arg, minus_arg) = if g == Func::Cos {
+                            (self.sub(u, v), self.add2(u, v))
+                        } else {
+                            (self.add2(u, v), self.sub(u, v))
+                        };
+                        for (candidate, arg) in [(partner, plus_arg), (neg_partner, minus_arg)] {
+                            if let Some(&j) = set.get(&candidate) {
+                                if j != i {
+                                    let c = self.func(g, arg);
+                                    let v = self.mul2(rest, c);
+                                    terms = replace_pair(&terms, i, j, v);
+                                    continue 'again;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            break;
+        }
+        self.add(&terms)
+    }
+
+    /// Pulls the factors common to every term of each sum out of it
+    /// (`a*x^2 + a*x*y → a*x*(x + y)`), including a common rational content.
+    pub fn factor_terms(&mut self, e: ExprId) -> ExprId {
+        self.rewrite(e, &mut |pool, id| match pool.node(id) {
+            Node::Add(_) => pool.factor_sum(id),
+            _ => id,
+        })
+    }
+
+    fn factor_sum(&mut self, sum: ExprId) -> ExprId {
+        // A purely numeric content distributes back (2*(x + y) is 2*x + 2*y
+        // in canonical form), so only symbolic common factors stay outside.
+        let parts = self.factor_sum_parts(sum);
+        self.mul(&parts)
+    }
+
+    /// The factors common to every term of `sum` followed by the reduced sum
+    /// (just `[sum]` when nothing is common).
+    fn factor_sum_parts(&mut self, sum: ExprId) -> Vec<ExprId> {
+        let terms = self.terms(sum);
+        if terms.len() < 2 {
+            return vec![sum];
+        }
+        // Rational content: gcd of numerators over lcm of denominators.
+        let mut content: Option<Rational> = None;
+        let mut exact = true;
+        for &t in &terms {
+            match self.split_coeff(t).0 {
+                Number::Rational(r) => {
+                    content = Some(match content {
+                        None => Rational::new(r.numer().abs(), r.denom()).unwrap_or(Rational::ONE),
+                        Some(c) => rational_gcd(c, r),
+                    })
+                }
+                Number::Float(_) => exact = false,
+            }
+        }
+        let content = if exact { content.unwrap_or(Rational::ONE) } else { Rational::ONE };
+        // Common bases with the smallest numeric exponent.
+        let mut common: Option<FxHashMap<ExprId, Rational>> = None;
+        for &t in &terms {
+            let mut here: FxHashMap<ExprId, Rational> = FxHashMap::default();
+            for f in self.factors(t) {
+                if self.as_number(f).is_some() {
+                    continue;
+                }
+                let (b, p) = self.base_exp(f);
+                if let Some(Number::Rational(r)) = self.as_number(p) {
+                    here.insert(b, r);
+                }
+            }
+            common = Some(match common {
+                None => here,
+                Some(prev) => prev
+                    .into_iter()
+                    .filter_map(|(b, r)| {
+                        let r2 = *here.get(&b)?;
+                        // Only pull out powers with the same sign of exponent.
+                        if r.is_negative() != r2.is_negative() {
+                            return None;
+                        }
+                        Some((b, if r.is_negative() { r.max(r2) } else { r.min(r2) }))
+                    })
+                    .collect(),
+            });
+        }
+        let common = common.unwrap_or_default();
+        if common.is_empty() && content.is_one() && !self.is_negated(sum) {
+            return vec![sum];
+        }
+        let mut factors: Vec<ExprId> = vec![self.number(Number::Rational(content))];
+        let mut bases: Vec<(ExprId, Rational)> = common.into_iter().collect();
+        bases.sort_by(|a, b| self.cmp(a.0, b.0));
+        for (b, r) in bases {
+            let p = self.number(Number::Rational(r));
+            factors.push(self.pow(b, p));
+        }
+        let g = self.mul(&factors);
+        let ginv = self.powi(g, -1);
+        let reduced: Vec<ExprId> = terms.iter().map(|&t| self.mul2(t, ginv)).collect();
+        let mut inner = self.add(&reduced);
+        // Pull a leading minus out: -g*(a + b), not g*(-a - b).
+        if self.is_negated(inner) {
+            inner = self.neg(inner);
+            factors[0] = self.number(Number::Rational(content.neg().unwrap_or(content)));
+        }
+        factors.push(inner);
+        factors
+    }
+
+    /// Groups the terms of `e` (a sum) by their dependence on the variables
+    /// (symbols for which `is_var` holds) and factors each group's coefficient:
+    /// `lA^2*mA*a'^2/2 + lA^2*mB*a'^2/2 → lA^2*(mA + mB)*a'^2/2`.
+    pub fn collect(&mut self, e: ExprId, is_var: &dyn Fn(Symbol) -> bool) -> ExprId {
+        let terms = self.terms(e);
+        if terms.len() < 2 {
+            return e;
+        }
+        let var_nodes: FxHashSet<ExprId> = self
+            .reachable(&[e])
+            .into_iter()
+            .filter(|&id| self.as_symbol(id).is_some_and(is_var))
+            .collect();
+        let mut groups: Vec<(ExprId, Vec<ExprId>)> = Vec::new();
+        let mut index: FxHashMap<ExprId, usize> = FxHashMap::default();
+        for t in terms {
+            let mut var_part = Vec::new();
+            let mut coeff = Vec::new();
+            for f in self.factors(t) {
+                if self.reachable(&[f]).iter().any(|n| var_nodes.contains(n)) {
+                    var_part.push(f);
+                } else {
+                    coeff.push(f);
+                }
+            }
+            let key = self.mul(&var_part);
+            let c = self.mul(&coeff);
+            match index.get(&key) {
+                Some(&i) => groups[i].1.push(c),
+                None => {
+                    index.insert(key, groups.len());
+                    groups.push((key, vec![c]));
+                }
+            }
+        }
+        let mut out = Vec::with_capacity(groups.len());
+        for (key, cs) in groups {
+            let c = self.add(&cs);
+            let mut parts = self.factor_sum_parts(c);
+            parts.push(key);
+            out.push(self.mul(&parts));
+        }
+        self.add(&out)
+    }
+
+    /// Expands, combines trigonometric terms and factors common terms, and
+    /// returns the shorter of that and `e`.
+    pub fn simplify(&mut self, e: ExprId) -> ExprId {
+        let x = self.expand(e);
+        let x = self.combine_trig(x);
+        let x = self.factor_terms(x);
+        self.shorter(e, x)
+    }
+
+    /// Like [`Pool::simplify`], but collects the coefficients of the variables
+    /// (symbols for which `is_var` holds) instead of factoring whole sums.
+    pub fn simplify_in(&mut self, e: ExprId, is_var: &dyn Fn(Symbol) -> bool) -> ExprId {
+        let expanded = self.expand(e);
+        let trig = self.combine_trig(expanded);
+        let collected = self.collect(trig, is_var);
+        let mut best = e;
+        for candidate in [self.factor_terms(e), collected, self.factor_terms(collected), self.factor_terms(trig)] {
+            best = self.shorter(best, candidate);
+        }
+        best
+    }
+
+    /// The shorter of two equal expressions, preferring the first on a tie.
+    fn shorter(&self, a: ExprId, b: ExprId) -> ExprId {
+        if self.tree_size(b) < self.tree_size(a) {
+            b
+        } else {
+            a
+        }
+    }
+}
+
+fn replace_pair(terms: &[ExprId], i: usize, j: usize, with: ExprId) -> Vec<ExprId> {
+    let mut out: Vec<ExprId> = terms
+        .iter()
+        .enumerate()
+        .filter(|&(k, _)| k != i && k != j)
+        .map(|(_, &t)| t)
+        .collect();
+    out.push(with);
+    out
+}
+
+fn int_gcd(mut a: i128, mut b: i128) -> i128 {
+    a = a.abs();
+    b = b.abs();
+    while b != 0 {
+        (a, b) = (b, a % b);
+    }
+    a
+}
+
+/// gcd of two rationals: gcd of numerators over lcm of denominators (positive).
+fn rational_gcd(a: Rational, b: Rational) -> Rational {
+    let n = int_gcd(a.numer(), b.numer());
+    let g = int_gcd(a.denom(), b.denom()).max(1);
+    let lcm = (a.denom() / g).checked_mul(b.denom());
+    match lcm.and_then(|l| Rational::new(n, l)) {
+        Some(r) if !r.is_zero() => r,
+        _ => Rational::ONE,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pool_with(names: &[&str]) -> (Pool, Vec<ExprId>) {
+        let mut p = Pool::default();
+        let ids = names.iter().map(|n| p.symbol(n)).collect();
+        (p, ids)
+    }
+
+    #[test]
+    fn pythagoras_in_kinetic_energy() {
+        let (mut p, v) = pool_with(&["l", "q"]);
+        let (l, q) = (v[0], v[1]);
+        let qd = p.velocity("q");
+        let c = p.func(Func::Cos, q);
+        let s = p.func(Func::Sin, q);
+        let xd = p.mul(&[l, c, qd]);
+        let yd = p.mul(&[l, s, qd]);
+        let x2 = p.powi(xd, 2);
+        let y2 = p.powi(yd, 2);
+        let sum = p.add2(x2, y2);
+        let got = p.simplify(sum);
+        let l2 = p.powi(l, 2);
+        let qd2 = p.powi(qd, 2);
+        assert_eq!(got, p.mul2(l2, qd2));
+    }
+
+    #[test]
+    fn angle_difference() {
+        let (mut p, v) = pool_with(&["a", "b"]);
+        let (a, b) = (v[0], v[1]);
+        let ca = p.func(Func::Cos, a);
+        let cb = p.func(Func::Cos, b);
+        let sa = p.func(Func::Sin, a);
+        let sb = p.func(Func::Sin, b);
+        let t1 = p.mul2(ca, cb);
+        let t2 = p.mul2(sa, sb);
+        let e = p.add2(t1, t2);
+        let got = p.simplify(e);
+        let d = p.sub(a, b);
+        assert_eq!(got, p.func(Func::Cos, d));
+        let e2 = {
+            let x = p.mul2(sa, cb);
+            let y = p.mul2(ca, sb);
+            p.sub(x, y)
+        };
+        let got2 = p.simplify(e2);
+        assert_eq!(got2, p.func(Func::Sin, d));
+    }
+
+    #[test]
+    fn expansion_and_factoring() {
+        let (mut p, v) = pool_with(&["x", "y"]);
+        let (x, y) = (v[0], v[1]);
+        let s = p.add2(x, y);
+        let sq = p.powi(s, 2);
+        let e = p.expand(sq);
+        assert_eq!(p.terms(e).len(), 3);
+        let two = p.int(2);
+        let t = p.mul(&[two, x, y]);
+        let x2 = p.powi(x, 2);
+        let f = p.add2(t, x2);
+        let got = p.factor_terms(f);
+        let two_y = p.mul2(two, y);
+        let inner = p.add2(x, two_y);
+        assert_eq!(got, p.mul2(x, inner));
+    }
+
+    #[test]
+    fn collect_groups_parameter_coefficients() {
+        let mut p = Pool::default();
+        p.set_rank("a", 2);
+        let (ma, mb, a) = (p.symbol("mA"), p.symbol("mB"), p.symbol("a"));
+        let ad = p.velocity("a");
+        let ad2 = p.powi(ad, 2);
+        let t1 = p.mul2(ma, ad2);
+        let t2 = p.mul2(mb, ad2);
+        let t3 = p.mul2(ma, a);
+        let e = p.add(&[t1, t2, t3]);
+        let aname = p.name("a");
+        let got = p.collect(e, &|s| s.name == aname);
+        let m = p.add2(ma, mb);
+        let g1 = p.mul2(m, ad2);
+        let expect = p.add2(g1, t3);
+        assert_eq!(got, expect);
+    }
+}
