@@ -7,12 +7,7 @@ use std::path::Path;
 /// Why the program stops without a result.
 pub enum Failure {
     /// Bad input: a message, optionally located in a source text.
-    Input {
-        file: String,
-        message: String,
-        located: Option<(String, std::ops::Range<usize>)>,
-        help: Option<String>,
-    },
+    Input { file: String, message: String, located: Option<(String, std::ops::Range<usize>)>, help: Option<String> },
     /// A run that failed midway.
     Run { message: String },
 }

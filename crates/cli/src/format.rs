@@ -13,13 +13,7 @@ pub fn text(d: &Derivation) -> String {
     let n = names.len();
     let mut o = String::new();
     let _ = writeln!(o, "{}", d.model.name);
-    let _ = writeln!(
-        o,
-        "{} degree{} of freedom: {}",
-        n,
-        if n == 1 { "" } else { "s" },
-        names.join(", ")
-    );
+    let _ = writeln!(o, "{} degree{} of freedom: {}", n, if n == 1 { "" } else { "s" }, names.join(", "));
     if !d.model.parameters.is_empty() {
         let ps: Vec<String> = d.model.parameters.iter().map(|p| format!("{} = {}", p.name, p.value)).collect();
         let _ = writeln!(o, "parameters: {}", ps.join(", "));
@@ -46,9 +40,12 @@ pub fn text(d: &Derivation) -> String {
         let _ = writeln!(o, "  p_{} = {}", names[i], s(d.momenta[i]));
     }
 
-    let _ = writeln!(o, "\nEuler–Lagrange equations  d/dt ∂L/∂q' − ∂L/∂q{}{} = 0", 
+    let _ = writeln!(
+        o,
+        "\nEuler–Lagrange equations  d/dt ∂L/∂q' − ∂L/∂q{}{} = 0",
         if d.dissipation.is_some() { " + ∂R/∂q'" } else { "" },
-        if d.forces.iter().any(|f| !pool.is_zero(*f)) { " − Q" } else { "" });
+        if d.forces.iter().any(|f| !pool.is_zero(*f)) { " − Q" } else { "" }
+    );
     for i in 0..n {
         let _ = writeln!(o, "  {}:  {} = 0", names[i], s(d.equations[i]));
     }
@@ -84,11 +81,7 @@ pub fn text(d: &Derivation) -> String {
                 names[i],
                 names[i],
                 s(d.momenta[i]),
-                if conserved {
-                    "is conserved"
-                } else {
-                    "would be conserved, but dissipation or a force acts on it"
-                }
+                if conserved { "is conserved" } else { "would be conserved, but dissipation or a force acts on it" }
             );
         }
     }
@@ -114,18 +107,21 @@ pub fn text(d: &Derivation) -> String {
     for line in &d.verdicts.energy {
         let _ = writeln!(o, "    {line}");
     }
-    let _ = writeln!(
-        o,
-        "  H is {}conserved:",
-        if d.hamiltonian_conserved { "" } else { "not " }
-    );
+    let _ = writeln!(o, "  H is {}conserved:", if d.hamiltonian_conserved { "" } else { "not " });
     for line in &d.verdicts.conservation {
         let _ = writeln!(o, "    {line}");
     }
 
     if let Some(eqs) = &d.hamilton {
-        let _ = writeln!(o, "\nHamilton's equations  q' = ∂H/∂p,  p' = −∂H/∂q{}", 
-            if d.dissipation.is_some() || d.forces.iter().any(|f| !pool.is_zero(*f)) { " − ∂R/∂q' + Q" } else { "" });
+        let _ = writeln!(
+            o,
+            "\nHamilton's equations  q' = ∂H/∂p,  p' = −∂H/∂q{}",
+            if d.dissipation.is_some() || d.forces.iter().any(|f| !pool.is_zero(*f)) {
+                " − ∂R/∂q' + Q"
+            } else {
+                ""
+            }
+        );
         for (i, &(dq, dp)) in eqs.iter().enumerate() {
             let _ = writeln!(o, "  {}' = {}", names[i], s(dq));
             let _ = writeln!(o, "  p_{}' = {}", names[i], s(dp));

@@ -49,9 +49,7 @@ enum Format {
 }
 
 fn parse_set(s: &str) -> Result<(String, f64), String> {
-    let (name, value) = s
-        .split_once('=')
-        .ok_or_else(|| format!("expected NAME=VALUE, found '{s}'"))?;
+    let (name, value) = s.split_once('=').ok_or_else(|| format!("expected NAME=VALUE, found '{s}'"))?;
     let value: f64 = value
         .trim()
         .parse()
@@ -96,7 +94,8 @@ fn derive(path: &Path, format: Format, set: &[(String, f64)]) -> Result<(), Fail
     let text = match format {
         Format::Json => {
             let report = mech::DeriveReport::new(&derivation);
-            let mut s = serde_json::to_string_pretty(&report).map_err(|e| Failure::run(format!("cannot write JSON: {e}")))?;
+            let mut s =
+                serde_json::to_string_pretty(&report).map_err(|e| Failure::run(format!("cannot write JSON: {e}")))?;
             s.push('\n');
             s
         }

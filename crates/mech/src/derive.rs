@@ -123,7 +123,6 @@ impl Derivation {
         debug_assert!(names.iter().all(|c| pool.find_name(c).is_some()));
         let _ = RANK_COORDINATE;
         let is_var = |s: Symbol| vars.is_var(s);
-        let moves = |name: NameId| vars.names.contains(&name);
 
         // T and U from particles, kinetic and potential; or L itself.
         let (kinetic, potential) = if model.lagrangian.is_some() {
@@ -176,31 +175,45 @@ impl Derivation {
                 pool.simplify_in(d, &is_var)
             })
             .collect();
+        // M_ij = ∂p_i/∂q_j' and f_i = −(E_i at q'' = 0), each simplified while
+        // small; E_i = Σ M_ij q_j'' − f_i is assembled from them, so the long
+        // equations are never expanded as a whole.
+        let mut mass_matrix = vec![vec![pool.zero(); n]; n];
+        let mut forcing = Vec::with_capacity(n);
         let mut equations = Vec::with_capacity(n);
         let mut dl_dq = Vec::with_capacity(n);
         for i in 0..n {
-            let dtp = pool.time_derivative(momenta[i], Some(t), &moves);
+            for j in 0..n {
+                mass_matrix[i][j] = if j < i {
+                    mass_matrix[j][i]
+                } else {
+                    let m = pool.diff(momenta[i], qd[j]);
+                    pool.simplify_in(m, &is_var)
+                };
+            }
+            // d/dt p_i without its q'' terms: Σ ∂p_i/∂q_k q_k' + ∂p_i/∂t.
+            let mut terms: Vec<ExprId> = Vec::with_capacity(n + 4);
+            for k in 0..n {
+                let d = pool.diff(momenta[i], q[k]);
+                if !pool.is_zero(d) {
+                    terms.push(pool.mul2(d, qd[k]));
+                }
+            }
+            terms.push(pool.diff(momenta[i], t));
             let dl = pool.diff(lagrangian, q[i]);
             dl_dq.push(dl);
-            let mut terms = vec![dtp, pool.neg(dl)];
+            terms.push(pool.neg(dl));
             if let Some(r) = dissipation {
                 terms.push(pool.diff(r, qd[i]));
             }
             terms.push(pool.neg(forces[i]));
-            let e = pool.add(&terms);
-            equations.push(pool.simplify_in(e, &is_var));
-        }
-        let zero_acc: Subst = qdd.iter().map(|&a| (a, pool.zero())).collect();
-        let mut mass_matrix = vec![vec![pool.zero(); n]; n];
-        let mut forcing = Vec::with_capacity(n);
-        for i in 0..n {
-            for j in 0..n {
-                let m = pool.diff(equations[i], qdd[j]);
-                mass_matrix[i][j] = pool.simplify_in(m, &is_var);
-            }
-            let rest = pool.substitute(equations[i], &zero_acc);
+            let rest = pool.add(&terms);
             let f = pool.neg(rest);
-            forcing.push(pool.simplify_in(f, &is_var));
+            let f = simplify_bounded(pool, f, &is_var);
+            forcing.push(f);
+            let mut e_terms: Vec<ExprId> = (0..n).map(|j| pool.mul2(mass_matrix[i][j], qdd[j])).collect();
+            e_terms.push(pool.neg(f));
+            equations.push(pool.add(&e_terms));
         }
         if probe::is_singular(pool, &mass_matrix) {
             let span = model
@@ -209,7 +222,8 @@ impl Derivation {
                 .or(model.kinetic.as_ref())
                 .map(|l| l.span.clone())
                 .or_else(|| model.particles.first().map(|p| p.span.clone()));
-            let message = "the mass matrix ∂²L/∂q'∂q' is singular: the equations of motion do not determine every acceleration";
+            let message =
+                "the mass matrix ∂²L/∂q'∂q' is singular: the equations of motion do not determine every acceleration";
             let help = "each coordinate needs its own kinetic energy; a coordinate whose velocity never appears, or two that only appear as one combination, leave the motion undetermined";
             return Err(ModelError { message: message.into(), span, help: Some(help.into()) });
         }
@@ -231,7 +245,10 @@ impl Derivation {
                 conserved.push(Conserved {
                     name: format!("p_{}", names[i]),
                     expr: momenta[i],
-                    reason: format!("'{}' is cyclic: L does not depend on it, so p_{} = ∂L/∂{}' is constant", names[i], names[i], names[i]),
+                    reason: format!(
+                        "'{}' is cyclic: L does not depend on it, so p_{} = ∂L/∂{}' is constant",
+                        names[i], names[i], names[i]
+                    ),
                 });
             }
         }
@@ -255,13 +272,15 @@ impl Derivation {
         }
         if !forced.is_empty() {
             let list: Vec<&str> = forced.iter().map(|&i| names[i].as_str()).collect();
-            verdicts.conservation.push(format!(
-                "generalized forces act on {}: they do work dH/dt = Σ Q·q'.",
-                list.join(", ")
-            ));
+            verdicts
+                .conservation
+                .push(format!("generalized forces act on {}: they do work dH/dt = Σ Q·q'.", list.join(", ")));
         }
         if hamiltonian_conserved {
-            verdicts.conservation.push("L does not depend explicitly on t, and no dissipation or generalized force acts: dH/dt = −∂L/∂t = 0.".into());
+            verdicts.conservation.push(
+                "L does not depend explicitly on t, and no dissipation or generalized force acts: dH/dt = −∂L/∂t = 0."
+                    .into(),
+            );
         }
         let (energy, hamiltonian_is_energy) = match (kinetic, potential) {
             (Some(tt), Some(uu)) => {
@@ -270,11 +289,13 @@ impl Derivation {
                 let e = pool.add2(tt, u0);
                 let e = pool.simplify_in(e, &is_var);
                 let same = probe::are_equal(pool, energy_function, e);
-                explain_energy(pool, &mut verdicts, same, tt, uu, u0, &qd, t, &moves);
+                explain_energy(pool, &mut verdicts, same, tt, uu, u0, &qd);
                 (Some(e), Some(same))
             }
             _ => {
-                verdicts.energy.push("the model gives only L, so T and U (and hence the energy) are not known separately.".into());
+                verdicts
+                    .energy
+                    .push("the model gives only L, so T and U (and hence the energy) are not known separately.".into());
                 (None, None)
             }
         };
@@ -295,41 +316,24 @@ impl Derivation {
             .iter()
             .flatten()
             .all(|&m| qd.iter().all(|&v| pool.free_of(m, v)) && qdd.iter().all(|&a| pool.free_of(m, a)));
-        let (hamiltonian, velocities, hamilton) = if quadratic {
-            let zero_vel: Subst = qd.iter().map(|&v| (v, pool.zero())).collect();
-            let b: Vec<ExprId> = momenta.iter().map(|&pi| pool.substitute(pi, &zero_vel)).collect();
-            let l0 = pool.substitute(lagrangian, &zero_vel);
-            let shifted: Vec<ExprId> = (0..n).map(|i| pool.sub(p[i], b[i])).collect();
-            let v = solve_symbolic(pool, &mass_matrix, &shifted, &is_var);
-            let mut terms: Vec<ExprId> = (0..n).map(|i| pool.mul2(shifted[i], v[i])).collect();
-            let half = pool.rational(1, 2);
-            let kin = pool.add(&terms);
-            let kin = pool.mul2(half, kin);
-            terms.clear();
-            let h = pool.sub(kin, l0);
-            let h = pool.simplify_in(h, &is_var);
-            let vel_subst: Subst = (0..n).map(|i| (qd[i], v[i])).collect();
-            let mut eqs = Vec::with_capacity(n);
-            for i in 0..n {
-                let dq = v[i];
-                let dh = pool.diff(h, q[i]);
-                let mut dp_terms = vec![pool.neg(dh)];
-                if let Some(r) = dissipation {
-                    let dr = pool.diff(r, qd[i]);
-                    let dr = pool.substitute(dr, &vel_subst);
-                    dp_terms.push(pool.neg(dr));
-                }
-                let fq = pool.substitute(forces[i], &vel_subst);
-                dp_terms.push(fq);
-                let dp = pool.add(&dp_terms);
-                eqs.push((dq, pool.simplify_in(dp, &is_var)));
-            }
-            (Some(h), Some(v), Some(eqs))
-        } else {
+        let (hamiltonian, velocities, hamilton) = if !quadratic {
             verdicts.energy.push(
                 "L is not quadratic in the velocities, so p = ∂L/∂q' cannot be solved for q' in closed form; H is not given.".into(),
             );
             (None, None, None)
+        } else {
+            let sys =
+                System { q: &q, qd: &qd, p: &p, lagrangian, dissipation, forces: &forces, mass_matrix: &mass_matrix };
+            match legendre(pool, &sys, &momenta, &is_var) {
+                Some((h, v, eqs)) => (Some(h), Some(v), Some(eqs)),
+                None => {
+                    verdicts.energy.push(format!(
+                        "M couples {} coordinates densely: H = ½(p − b)ᵀM⁻¹(p − b) − L₀ written out would be too long to print, so H and Hamilton's equations are left to numerics (M is never inverted symbolically).",
+                        largest_block(pool, &mass_matrix)
+                    ));
+                    (None, None, None)
+                }
+            }
         };
 
         model.pool = pool_owned;
@@ -380,6 +384,81 @@ impl Derivation {
     }
 }
 
+/// The parts of a derivation the Legendre transform reads.
+struct System<'a> {
+    q: &'a [ExprId],
+    qd: &'a [ExprId],
+    p: &'a [ExprId],
+    lagrangian: ExprId,
+    dissipation: Option<ExprId>,
+    forces: &'a [ExprId],
+    mass_matrix: &'a [Vec<ExprId>],
+}
+
+/// H(q, p, t), q'(q, p, t) and Hamilton's equations, for L quadratic in the
+/// velocities: L = ½q'ᵀMq' + bᵀq' + L₀ gives H = ½(p − b)ᵀM⁻¹(p − b) − L₀.
+/// None when the result would be too long to print.
+type Legendre = (ExprId, Vec<ExprId>, Vec<(ExprId, ExprId)>);
+
+fn legendre(pool: &mut Pool, s: &System, momenta: &[ExprId], is_var: &dyn Fn(Symbol) -> bool) -> Option<Legendre> {
+    let n = s.q.len();
+    let zero_vel: Subst = s.qd.iter().map(|&v| (v, pool.zero())).collect();
+    let b: Vec<ExprId> = momenta.iter().map(|&pi| pool.substitute(pi, &zero_vel)).collect();
+    let l0 = pool.substitute(s.lagrangian, &zero_vel);
+    let shifted: Vec<ExprId> = (0..n).map(|i| pool.sub(s.p[i], b[i])).collect();
+    let v = solve_symbolic(pool, s.mass_matrix, &shifted, is_var);
+    if v.iter().any(|&x| pool.tree_size(x) > MAX_PRINTED_TREE) {
+        return None;
+    }
+    let terms: Vec<ExprId> = (0..n).map(|i| pool.mul2(shifted[i], v[i])).collect();
+    let half = pool.rational(1, 2);
+    let kin = pool.add(&terms);
+    let kin = pool.mul2(half, kin);
+    let h = pool.sub(kin, l0);
+    let h = simplify_bounded(pool, h, is_var);
+    let vel_subst: Subst = (0..n).map(|i| (s.qd[i], v[i])).collect();
+    let mut eqs = Vec::with_capacity(n);
+    for i in 0..n {
+        let dh = pool.diff(h, s.q[i]);
+        let mut dp_terms = vec![pool.neg(dh)];
+        if let Some(r) = s.dissipation {
+            let dr = pool.diff(r, s.qd[i]);
+            let dr = pool.substitute(dr, &vel_subst);
+            dp_terms.push(pool.neg(dr));
+        }
+        let fq = pool.substitute(s.forces[i], &vel_subst);
+        dp_terms.push(fq);
+        let dp = pool.add(&dp_terms);
+        let dp = simplify_bounded(pool, dp, is_var);
+        if pool.tree_size(dp) > MAX_PRINTED_TREE {
+            return None;
+        }
+        eqs.push((v[i], dp));
+    }
+    Some((h, v, eqs))
+}
+
+/// Largest tree size of an expression that is simplified (beyond it, expansion
+/// would cost more than it saves).
+const MAX_SIMPLIFIED_TREE: u64 = 1500;
+
+/// Largest tree size of Hamilton's equations that is reported symbolically.
+const MAX_PRINTED_TREE: u64 = 20_000;
+
+/// Simplifies expressions of moderate size and keeps large ones as they are.
+fn simplify_bounded(pool: &mut Pool, e: ExprId, is_var: &dyn Fn(Symbol) -> bool) -> ExprId {
+    if pool.tree_size(e) > MAX_SIMPLIFIED_TREE {
+        e
+    } else {
+        pool.simplify_in(e, is_var)
+    }
+}
+
+/// The size of the largest block of coordinates coupled by M.
+fn largest_block(pool: &Pool, m: &[Vec<ExprId>]) -> usize {
+    blocks(pool, m).iter().map(Vec::len).max().unwrap_or(0)
+}
+
 /// T of the particles by the notes' recipe: with x_k(q, t),
 /// T = ½ Σ_k m_k |Σ_i ∂x_k/∂q_i q_i' + ∂x_k/∂t|², assembled from the entries
 /// M_ij = Σ_k m_k ∂x_k/∂q_i · ∂x_k/∂q_j (each simplified while it is small).
@@ -396,7 +475,8 @@ fn particle_kinetic(
     let mut b_terms: Vec<Vec<ExprId>> = vec![Vec::new(); n];
     let mut t0_terms = Vec::new();
     for part in &model.particles {
-        let jac: Vec<Vec<ExprId>> = part.position.iter().map(|&x| q.iter().map(|&qi| pool.diff(x, qi)).collect()).collect();
+        let jac: Vec<Vec<ExprId>> =
+            part.position.iter().map(|&x| q.iter().map(|&qi| pool.diff(x, qi)).collect()).collect();
         let dxdt: Vec<ExprId> = part.position.iter().map(|&x| pool.diff(x, t)).collect();
         for i in 0..n {
             for j in i..n {
@@ -452,6 +532,27 @@ fn particle_kinetic(
 /// whose intermediate results stay shared in the DAG.
 fn solve_symbolic(pool: &mut Pool, m: &[Vec<ExprId>], r: &[ExprId], is_var: &dyn Fn(Symbol) -> bool) -> Vec<ExprId> {
     let n = r.len();
+    let mut v = vec![pool.zero(); n];
+    for idx in blocks(pool, m) {
+        let k = idx.len();
+        let a: Vec<Vec<ExprId>> = idx.iter().map(|&i| idx.iter().map(|&j| m[i][j]).collect()).collect();
+        let rhs: Vec<ExprId> = idx.iter().map(|&i| r[i]).collect();
+        let sol = match k {
+            1 => vec![pool.div(rhs[0], a[0][0])],
+            2 | 3 => adjugate_solve(pool, &a, &rhs, is_var),
+            _ => elimination_solve(pool, a, rhs),
+        };
+        for (pos, &i) in idx.iter().enumerate() {
+            v[i] = sol[pos];
+        }
+    }
+    v
+}
+
+/// The groups of coordinates that M couples (connected components of its
+/// nonzero pattern), each in ascending order.
+fn blocks(pool: &Pool, m: &[Vec<ExprId>]) -> Vec<Vec<usize>> {
+    let n = m.len();
     let mut block_of: Vec<usize> = (0..n).collect();
     fn find(b: &mut [usize], i: usize) -> usize {
         let mut i = i;
@@ -481,21 +582,7 @@ fn solve_symbolic(pool: &mut Pool, m: &[Vec<ExprId>], r: &[ExprId], is_var: &dyn
             }
         }
     }
-    let mut v = vec![pool.zero(); n];
-    for idx in blocks {
-        let k = idx.len();
-        let a: Vec<Vec<ExprId>> = idx.iter().map(|&i| idx.iter().map(|&j| m[i][j]).collect()).collect();
-        let rhs: Vec<ExprId> = idx.iter().map(|&i| r[i]).collect();
-        let sol = match k {
-            1 => vec![pool.div(rhs[0], a[0][0])],
-            2 | 3 => adjugate_solve(pool, &a, &rhs, is_var),
-            _ => elimination_solve(pool, a, rhs),
-        };
-        for (pos, &i) in idx.iter().enumerate() {
-            v[i] = sol[pos];
-        }
-    }
-    v
+    blocks
 }
 
 fn adjugate_solve(pool: &mut Pool, a: &[Vec<ExprId>], r: &[ExprId], is_var: &dyn Fn(Symbol) -> bool) -> Vec<ExprId> {
@@ -574,7 +661,6 @@ fn elimination_solve(pool: &mut Pool, mut a: Vec<Vec<ExprId>>, mut r: Vec<ExprId
 /// Explains whether h equals T + U₀, the way the notes do: a time-dependent
 /// transformation x(q, t) makes T inhomogeneous in q'; a velocity-dependent
 /// potential adds terms to h.
-#[allow(clippy::too_many_arguments)]
 fn explain_energy(
     pool: &mut Pool,
     verdicts: &mut Verdicts,
@@ -583,8 +669,6 @@ fn explain_energy(
     potential: ExprId,
     u0: ExprId,
     qd: &[ExprId],
-    t: ExprId,
-    _moves: &dyn Fn(NameId) -> bool,
 ) {
     // T homogeneous of degree 2 in q' ⇔ Σ q' ∂T/∂q' = 2T.
     let mut terms: Vec<ExprId> = qd
@@ -600,9 +684,10 @@ fn explain_energy(
     let euler = pool.add(&terms);
     let homogeneous = probe::is_zero(pool, euler);
     let velocity_potential = !probe::are_equal(pool, potential, u0);
-    let _ = t;
     if homogeneous {
-        verdicts.energy.push("T is a homogeneous quadratic function of the velocities (the positions x(q) do not depend on t).".into());
+        verdicts.energy.push(
+            "T is a homogeneous quadratic function of the velocities (the positions x(q) do not depend on t).".into(),
+        );
     } else {
         verdicts.energy.push("T is not homogeneous quadratic in the velocities: the positions x(q, t) depend on time, so T has terms linear in and free of q'.".into());
     }

@@ -26,5 +26,5 @@ mod report;
 
 pub use derive::{Conserved, Derivation, Verdicts};
 pub use error::ModelError;
-pub use model::{MAX_FILE_BYTES, Coordinate, InitialValue, Located, Model, Parameter, Particle};
+pub use model::{Coordinate, InitialValue, Located, Model, Parameter, Particle, MAX_FILE_BYTES};
 pub use report::{DeriveReport, HamiltonEquations, NamedExpr};

@@ -19,8 +19,8 @@ pub const MAX_FILE_BYTES: usize = 1 << 20;
 
 /// Names the expression language reserves.
 const RESERVED: &[&str] = &[
-    "t", "pi", "sin", "cos", "tan", "asin", "acos", "atan", "atan2", "sinh", "cosh", "tanh", "exp", "log",
-    "ln", "sqrt", "abs",
+    "t", "pi", "sin", "cos", "tan", "asin", "acos", "atan", "atan2", "sinh", "cosh", "tanh", "exp", "log", "ln",
+    "sqrt", "abs",
 ];
 
 /// The symbol rank of parameters: they print first in products (`m*l^2*q''`).
@@ -205,9 +205,7 @@ impl Reader<'_> {
             match scope {
                 Scope::Parameters => false,
                 Scope::Configuration => order == 0 && (name == "t" || coordinates.iter().any(|c| c == name)),
-                Scope::State => {
-                    (name == "t" && order == 0) || (order <= 1 && coordinates.iter().any(|c| c == name))
-                }
+                Scope::State => (name == "t" && order == 0) || (order <= 1 && coordinates.iter().any(|c| c == name)),
             }
         };
         let opts = ParseOptions::default().with_known(&known);
@@ -215,7 +213,9 @@ impl Reader<'_> {
             Ok(expr) => Ok(Located { expr, span }),
             Err(err) => {
                 let at = match offset {
-                    Some(o) => (o + err.span.start as usize)..(o + (err.span.end as usize).max(err.span.start as usize + 1)),
+                    Some(o) => {
+                        (o + err.span.start as usize)..(o + (err.span.end as usize).max(err.span.start as usize + 1))
+                    }
                     None => span.clone(),
                 };
                 let mut message = format!("in {what}: {err}");
@@ -233,7 +233,10 @@ impl Reader<'_> {
                     } else if self.is_parameter(base) {
                         message = format!("in {what}: parameter '{base}' cannot be differentiated");
                     } else {
-                        help = Some(format!("{what} may use {}; declare '{base}' under [parameters] or in `coordinates`", scope.describe()));
+                        help = Some(format!(
+                            "{what} may use {}; declare '{base}' under [parameters] or in `coordinates`",
+                            scope.describe()
+                        ));
                     }
                 }
                 let mut e = ModelError::at(at, message);
@@ -302,9 +305,8 @@ fn check_identifier(name: &Spanned<String>, what: &str) -> Result<(), ModelError
         ));
     }
     if RESERVED.contains(&n.as_str()) {
-        return Err(ModelError::at(name.span(), format!("{what} '{n}' uses a reserved name")).with_help(
-            "t is the time, pi the constant; function names cannot be symbols",
-        ));
+        return Err(ModelError::at(name.span(), format!("{what} '{n}' uses a reserved name"))
+            .with_help("t is the time, pi the constant; function names cannot be symbols"));
     }
     Ok(())
 }
@@ -327,8 +329,9 @@ impl Model {
             }
         })?;
         if let Some(b) = &raw.bodies {
-            return Err(ModelError::at(b.span(), "rigid bodies ([[bodies]]) are not supported yet")
-                .with_help("describe the body by point masses in [[particles]], or give its kinetic energy in `kinetic`"));
+            return Err(ModelError::at(b.span(), "rigid bodies ([[bodies]]) are not supported yet").with_help(
+                "describe the body by point masses in [[particles]], or give its kinetic energy in `kinetic`",
+            ));
         }
         if let Some(c) = &raw.constraints {
             return Err(ModelError::at(c.span(), "constraints ([[constraints]]) are not supported yet")
@@ -422,18 +425,18 @@ impl Model {
                 .transpose()?
                 .map(|l| l.expr);
             if gravity.is_some() && position.len() == 1 {
-                return Err(ModelError::at(pos.span(), "gravity needs a vertical axis: give 2-D (x, y) or 3-D (x, y, z) positions"));
+                return Err(ModelError::at(
+                    pos.span(),
+                    "gravity needs a vertical axis: give 2-D (x, y) or 3-D (x, y, z) positions",
+                ));
             }
             particles.push(Particle { mass, position, potential, span: p.span() });
         }
         let lagrangian = raw.lagrangian.as_ref().map(|l| r.expr(l, Scope::State, "the Lagrangian")).transpose()?;
         let kinetic = raw.kinetic.as_ref().map(|l| r.expr(l, Scope::State, "the kinetic energy")).transpose()?;
         let potential = raw.potential.as_ref().map(|l| r.expr(l, Scope::State, "the potential")).transpose()?;
-        let dissipation = raw
-            .dissipation
-            .as_ref()
-            .map(|l| r.expr(l, Scope::State, "the dissipation function"))
-            .transpose()?;
+        let dissipation =
+            raw.dissipation.as_ref().map(|l| r.expr(l, Scope::State, "the dissipation function")).transpose()?;
         if let Some(l) = &lagrangian {
             let clash = [raw.kinetic.as_ref(), raw.potential.as_ref()].into_iter().flatten().next();
             if let Some(c) = clash {
@@ -445,7 +448,10 @@ impl Model {
                 return Err(ModelError::at(p.span(), "give either `lagrangian` or [[particles]], not both"));
             }
             if let Some(g) = &raw.gravity {
-                return Err(ModelError::at(g.span(), "`gravity` acts on [[particles]]; put the potential in the Lagrangian"));
+                return Err(ModelError::at(
+                    g.span(),
+                    "`gravity` acts on [[particles]]; put the potential in the Lagrangian",
+                ));
             }
         }
         if lagrangian.is_none() && kinetic.is_none() && particles.is_empty() {
@@ -461,7 +467,10 @@ impl Model {
         let mut forces: Vec<Option<Located>> = vec![None; r.coordinates.len()];
         for (k, v) in &raw.forces {
             let Some(i) = r.coordinates.iter().position(|c| &c.name == k.get_ref()) else {
-                return Err(ModelError::at(k.span(), format!("[forces] names '{}', which is not a coordinate", k.get_ref())));
+                return Err(ModelError::at(
+                    k.span(),
+                    format!("[forces] names '{}', which is not a coordinate", k.get_ref()),
+                ));
             };
             forces[i] = Some(r.expr(v, Scope::State, &format!("the force on '{}'", k.get_ref()))?);
         }
@@ -473,10 +482,16 @@ impl Model {
             let base = key.trim_end_matches('\'');
             let order = (key.len() - base.len()) as u8;
             let Some(coord) = r.coordinates.iter().position(|c| c.name == base) else {
-                return Err(ModelError::at(k.span(), format!("[initial] names '{key}', which is not a coordinate or a velocity")));
+                return Err(ModelError::at(
+                    k.span(),
+                    format!("[initial] names '{key}', which is not a coordinate or a velocity"),
+                ));
             };
             if order > 1 {
-                return Err(ModelError::at(k.span(), format!("[initial] gives '{key}': only coordinates and velocities have initial values")));
+                return Err(ModelError::at(
+                    k.span(),
+                    format!("[initial] gives '{key}': only coordinates and velocities have initial values"),
+                ));
             }
             let value = r.num_or_expr(v, Scope::Parameters, &format!("the initial value of '{key}'"))?;
             initial.push(InitialValue { coord, order, value });

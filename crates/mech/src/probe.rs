@@ -39,15 +39,10 @@ impl Rng {
 /// Random points for every symbol of some expressions: values in [0.3, 1.7]
 /// (positive, so that masses, lengths and square roots stay in their domains).
 pub fn random_points(pool: &Pool, roots: &[ExprId], n_points: usize, seed: u64) -> (Vec<ExprId>, Vec<Vec<f64>>) {
-    let symbols: Vec<ExprId> = pool
-        .reachable(roots)
-        .into_iter()
-        .filter(|&id| matches!(pool.node(id), Node::Sym(_)))
-        .collect();
+    let symbols: Vec<ExprId> =
+        pool.reachable(roots).into_iter().filter(|&id| matches!(pool.node(id), Node::Sym(_))).collect();
     let mut rng = Rng::new(seed);
-    let points = (0..n_points)
-        .map(|_| symbols.iter().map(|_| rng.range(0.3, 1.7)).collect())
-        .collect();
+    let points = (0..n_points).map(|_| symbols.iter().map(|_| rng.range(0.3, 1.7)).collect()).collect();
     (symbols, points)
 }
 

@@ -174,16 +174,8 @@ impl Pool {
 
     /// The symbols occurring in `e`, in canonical order.
     pub fn symbols(&self, e: ExprId) -> Vec<Symbol> {
-        let mut out: Vec<Symbol> = self
-            .reachable(&[e])
-            .into_iter()
-            .filter_map(|id| self.as_symbol(id))
-            .collect();
-        out.sort_by(|a, b| {
-            self.name_str(a.name)
-                .cmp(self.name_str(b.name))
-                .then(a.order.cmp(&b.order))
-        });
+        let mut out: Vec<Symbol> = self.reachable(&[e]).into_iter().filter_map(|id| self.as_symbol(id)).collect();
+        out.sort_by(|a, b| self.name_str(a.name).cmp(self.name_str(b.name)).then(a.order.cmp(&b.order)));
         out
     }
 
@@ -195,16 +187,6 @@ impl Pool {
     /// The number of distinct nodes of `e` (its size as a DAG).
     pub fn size(&self, e: ExprId) -> usize {
         self.reachable(&[e]).len()
-    }
-
-    /// The size of `e` written out as a tree (how long its printed form is, roughly).
-    pub fn tree_size(&self, e: ExprId) -> usize {
-        let mut memo: FxHashMap<ExprId, usize> = FxHashMap::default();
-        for id in self.reachable(&[e]) {
-            let s = 1 + self.children(self.node(id)).iter().map(|c| memo[c]).sum::<usize>();
-            memo.insert(id, s);
-        }
-        memo[&e]
     }
 
     /// Replaces every occurrence of the keys of `map` in `e` by their values and

@@ -306,11 +306,8 @@ impl Pool {
     /// Evaluates `e`, asking `env` for the value of each symbol by its text
     /// (`q`, `q'`, `p_q`, `t`, parameter names).
     pub fn eval(&self, e: ExprId, env: &dyn Fn(&str) -> Option<f64>) -> Result<f64, EvalError> {
-        let inputs: Vec<ExprId> = self
-            .reachable(&[e])
-            .into_iter()
-            .filter(|&id| matches!(self.node(id), Node::Sym(_)))
-            .collect();
+        let inputs: Vec<ExprId> =
+            self.reachable(&[e]).into_iter().filter(|&id| matches!(self.node(id), Node::Sym(_))).collect();
         let mut values = Vec::with_capacity(inputs.len());
         for &i in &inputs {
             let name = self.symbol_text(self.as_symbol(i).expect("filtered to symbols"));

@@ -155,8 +155,12 @@ pub struct Pool {
     names: Vec<Box<str>>,
     name_index: FxHashMap<Box<str>, NameId>,
     name_rank: Vec<u8>,
+    /// Tree size of each node (the node counted with all its repetitions).
+    tree_sizes: Vec<u64>,
     /// Memo of `diff`: (expression, variable) → derivative.
     pub(crate) diff_cache: FxHashMap<(ExprId, ExprId), ExprId>,
+    /// Memos of the rewrites of `simplify` (each a pure function of the id).
+    pub(crate) rewrite_cache: FxHashMap<(u8, ExprId), ExprId>,
 }
 
 impl Default for Pool {
@@ -167,7 +171,9 @@ impl Default for Pool {
             names: Vec::new(),
             name_index: FxHashMap::default(),
             name_rank: Vec::new(),
+            tree_sizes: Vec::new(),
             diff_cache: FxHashMap::default(),
+            rewrite_cache: FxHashMap::default(),
         };
         // Fixed ids for the constants used everywhere.
         pool.intern(Node::Num(Number::ZERO));
@@ -176,6 +182,9 @@ impl Default for Pool {
         pool
     }
 }
+
+/// Below this many operands, sums and products find like terms by a linear scan.
+const SMALL: usize = 16;
 
 /// Largest integer power of a sum or of a rational that constructors expand.
 pub(crate) const MAX_FOLD_EXPONENT: i64 = 64;
@@ -200,11 +209,23 @@ impl Pool {
         if let Some(&id) = self.index.get(&node) {
             return id;
         }
-        debug_assert!(self.children(&node).iter().all(|c| c.index() < self.nodes.len()));
         let id = ExprId(u32::try_from(self.nodes.len()).expect("more than 2^32 expression nodes"));
+        let sz = |c: &ExprId| self.tree_sizes[c.index()];
+        let size = 1u64.saturating_add(match &node {
+            Node::Num(_) | Node::Pi | Node::Sym(_) => 0,
+            Node::Add(ts) | Node::Mul(ts) => ts.iter().map(sz).fold(0u64, u64::saturating_add),
+            Node::Pow(a, b) | Node::Atan2(a, b) => sz(a).saturating_add(sz(b)),
+            Node::Func(_, a) => sz(a),
+        });
+        self.tree_sizes.push(size);
         self.nodes.push(node.clone());
         self.index.insert(node, id);
         id
+    }
+
+    /// The size of `e` written out as a tree (how long its printed form is, roughly).
+    pub fn tree_size(&self, e: ExprId) -> u64 {
+        self.tree_sizes[e.index()]
     }
 
     /// The children of a node, in order.
@@ -419,7 +440,7 @@ impl Pool {
             return rest;
         }
         if let Node::Num(r) = self.node(rest) {
-            let v = c.mul(*r);
+            let v = c.times(*r);
             return self.number(v);
         }
         let mut fs = vec![self.number(c)];
@@ -433,20 +454,31 @@ impl Pool {
     /// The canonical sum of `terms`.
     pub fn add(&mut self, terms: &[ExprId]) -> ExprId {
         let mut constant = Number::ZERO;
-        // Coefficient per non-numeric part, in first-seen order.
+        // Coefficient per non-numeric part, in first-seen order; small sums
+        // (the common case) look parts up by a linear scan.
         let mut coeffs: FxHashMap<ExprId, usize> = FxHashMap::default();
         let mut parts: Vec<(ExprId, Number)> = Vec::new();
         let mut stack: Vec<ExprId> = terms.iter().rev().copied().collect();
         while let Some(t) = stack.pop() {
             match self.node(t) {
-                Node::Num(n) => constant = constant.add(*n),
+                Node::Num(n) => constant = constant.plus(*n),
                 Node::Add(ts) => stack.extend(ts.iter().rev().copied()),
                 _ => {
                     let (c, rest) = self.split_coeff(t);
-                    match coeffs.get(&rest) {
-                        Some(&i) => parts[i].1 = parts[i].1.add(c),
+                    let found = if parts.len() <= SMALL {
+                        parts.iter().position(|p| p.0 == rest)
+                    } else {
+                        if coeffs.is_empty() {
+                            coeffs.extend(parts.iter().enumerate().map(|(i, p)| (p.0, i)));
+                        }
+                        coeffs.get(&rest).copied()
+                    };
+                    match found {
+                        Some(i) => parts[i].1 = parts[i].1.plus(c),
                         None => {
-                            coeffs.insert(rest, parts.len());
+                            if !coeffs.is_empty() {
+                                coeffs.insert(rest, parts.len());
+                            }
                             parts.push((rest, c));
                         }
                     }
@@ -474,21 +506,17 @@ impl Pool {
     pub fn mul(&mut self, factors: &[ExprId]) -> ExprId {
         let mut coeff = Number::ONE;
         // Exponent terms per base, in first-seen order.
-        let mut bases: FxHashMap<ExprId, usize> = FxHashMap::default();
         let mut parts: Vec<(ExprId, Vec<ExprId>)> = Vec::new();
         let mut stack: Vec<ExprId> = factors.iter().rev().copied().collect();
         while let Some(f) = stack.pop() {
             match self.node(f) {
-                Node::Num(n) => coeff = coeff.mul(*n),
+                Node::Num(n) => coeff = coeff.times(*n),
                 Node::Mul(fs) => stack.extend(fs.iter().rev().copied()),
                 _ => {
                     let (base, exp) = self.base_exp(f);
-                    match bases.get(&base) {
-                        Some(&i) => parts[i].1.push(exp),
-                        None => {
-                            bases.insert(base, parts.len());
-                            parts.push((base, vec![exp]));
-                        }
+                    match parts.iter().position(|p| p.0 == base) {
+                        Some(i) => parts[i].1.push(exp),
+                        None => parts.push((base, vec![exp])),
                     }
                 }
             }
@@ -505,12 +533,12 @@ impl Pool {
                 self.pow(base, e)
             };
             match self.node(f) {
-                Node::Num(n) => coeff = coeff.mul(*n),
+                Node::Num(n) => coeff = coeff.times(*n),
                 Node::Mul(fs) => {
                     // A power that folded into a product (e.g. (2*x)^2 = 4*x^2).
                     for &g in fs.iter() {
                         match self.as_number(g) {
-                            Some(n) => coeff = coeff.mul(n),
+                            Some(n) => coeff = coeff.times(n),
                             None => out.push(g),
                         }
                     }
@@ -523,11 +551,8 @@ impl Pool {
         }
         // Merge factors that share a base after folding.
         if out.len() > 1 {
-            let mut seen: FxHashMap<ExprId, ()> = FxHashMap::default();
-            let dup = out.iter().any(|&f| {
-                let b = self.base_exp(f).0;
-                seen.insert(b, ()).is_some()
-            });
+            let bases: Vec<ExprId> = out.iter().map(|&f| self.base_exp(f).0).collect();
+            let dup = (1..bases.len()).any(|i| bases[..i].contains(&bases[i]));
             if dup {
                 let c = self.number(coeff);
                 let mut all = vec![c];
@@ -712,10 +737,7 @@ impl Pool {
             (Node::Num(x), Node::Num(y)) => x.to_f64().total_cmp(&y.to_f64()),
             (Node::Sym(x), Node::Sym(y)) => {
                 let rank = |s: &Symbol| self.name_rank[s.name.0 as usize];
-                rank(x)
-                    .cmp(&rank(y))
-                    .then(self.name_str(x.name).cmp(self.name_str(y.name)))
-                    .then(x.order.cmp(&y.order))
+                rank(x).cmp(&rank(y)).then(self.name_str(x.name).cmp(self.name_str(y.name))).then(x.order.cmp(&y.order))
             }
             (Node::Func(f, x), Node::Func(g, y)) => f.cmp(g).then_with(|| self.cmp(*x, *y)),
             (Node::Func(..), Node::Atan2(..)) => Ordering::Less,

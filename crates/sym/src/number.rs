@@ -16,15 +16,15 @@ pub struct Rational {
     den: i128,
 }
 
-fn gcd(mut a: i128, mut b: i128) -> i128 {
-    a = a.abs();
-    b = b.abs();
+/// gcd of the magnitudes; `None` when it does not fit an i128 (only for i128::MIN).
+fn gcd(a: i128, b: i128) -> Option<i128> {
+    let (mut a, mut b) = (a.unsigned_abs(), b.unsigned_abs());
     while b != 0 {
         let r = a % b;
         a = b;
         b = r;
     }
-    a
+    i128::try_from(a).ok()
 }
 
 impl Rational {
@@ -40,7 +40,7 @@ impl Rational {
         if den == 0 {
             return None;
         }
-        let g = gcd(num, den).max(1);
+        let g = gcd(num, den)?.max(1);
         let (mut n, mut d) = (num / g, den / g);
         if d < 0 {
             n = n.checked_neg()?;
@@ -90,24 +90,24 @@ impl Rational {
     }
 
     /// Checked sum.
-    pub fn add(self, o: Rational) -> Option<Rational> {
-        let g = gcd(self.den, o.den);
+    pub fn checked_add(self, o: Rational) -> Option<Rational> {
+        let g = gcd(self.den, o.den)?;
         let a = self.num.checked_mul(o.den / g)?;
         let b = o.num.checked_mul(self.den / g)?;
         Rational::new(a.checked_add(b)?, self.den.checked_mul(o.den / g)?)
     }
 
     /// Checked product.
-    pub fn mul(self, o: Rational) -> Option<Rational> {
-        let g1 = gcd(self.num, o.den).max(1);
-        let g2 = gcd(o.num, self.den).max(1);
+    pub fn checked_mul(self, o: Rational) -> Option<Rational> {
+        let g1 = gcd(self.num, o.den)?.max(1);
+        let g2 = gcd(o.num, self.den)?.max(1);
         let n = (self.num / g1).checked_mul(o.num / g2)?;
         let d = (self.den / g2).checked_mul(o.den / g1)?;
         Rational::new(n, d)
     }
 
     /// Checked negation.
-    pub fn neg(self) -> Option<Rational> {
+    pub fn checked_neg(self) -> Option<Rational> {
         Some(Rational { num: self.num.checked_neg()?, den: self.den })
     }
 
@@ -125,14 +125,18 @@ impl Rational {
 
     /// The exact root `self^(1/n)` when it is rational (`4^(1/2) = 2`).
     pub fn exact_root(self, n: u32) -> Option<Rational> {
-        if n == 0 || (self.num < 0 && n % 2 == 0) {
+        if n == 0 || (self.num < 0 && n.is_multiple_of(2)) {
             return None;
         }
         let root = |v: i128| -> Option<i128> {
             let guess = (v.unsigned_abs() as f64).powf(1.0 / n as f64).round() as i128;
-            (guess.saturating_sub(1)..=guess + 1)
-                .find(|c| c.checked_pow(n) == Some(v.abs()))
-                .map(|c| if v < 0 { -c } else { c })
+            (guess.saturating_sub(1)..=guess + 1).find(|c| c.checked_pow(n) == Some(v.abs())).map(|c| {
+                if v < 0 {
+                    -c
+                } else {
+                    c
+                }
+            })
         };
         Rational::new(root(self.num)?, root(self.den)?)
     }
@@ -238,36 +242,34 @@ impl Number {
     }
 
     /// Sum: exact when both are exact and it fits, float otherwise.
-    pub fn add(self, o: Number) -> Number {
+    pub fn plus(self, o: Number) -> Number {
         match (self, o) {
-            (Number::Rational(a), Number::Rational(b)) => a
-                .add(b)
-                .map(Number::Rational)
-                .unwrap_or_else(|| Number::float(a.to_f64() + b.to_f64())),
+            (Number::Rational(a), Number::Rational(b)) => {
+                a.checked_add(b).map(Number::Rational).unwrap_or_else(|| Number::float(a.to_f64() + b.to_f64()))
+            }
             _ => Number::float(self.to_f64() + o.to_f64()),
         }
     }
 
     /// Product: exact when both are exact and it fits, float otherwise.
-    pub fn mul(self, o: Number) -> Number {
+    pub fn times(self, o: Number) -> Number {
         match (self, o) {
-            (Number::Rational(a), Number::Rational(b)) => a
-                .mul(b)
-                .map(Number::Rational)
-                .unwrap_or_else(|| Number::float(a.to_f64() * b.to_f64())),
+            (Number::Rational(a), Number::Rational(b)) => {
+                a.checked_mul(b).map(Number::Rational).unwrap_or_else(|| Number::float(a.to_f64() * b.to_f64()))
+            }
             _ => Number::float(self.to_f64() * o.to_f64()),
         }
     }
 
     /// Negation.
-    pub fn neg(self) -> Number {
-        self.mul(Number::MINUS_ONE)
+    pub fn negated(self) -> Number {
+        self.times(Number::MINUS_ONE)
     }
 
     /// Absolute value.
     pub fn abs(self) -> Number {
         if self.is_negative() {
-            self.neg()
+            self.negated()
         } else {
             self
         }
@@ -297,8 +299,8 @@ mod tests {
         let half = Rational::new(1, 2).unwrap();
         let third = Rational::new(2, 6).unwrap();
         assert_eq!(third, Rational::new(1, 3).unwrap());
-        assert_eq!(half.add(third).unwrap(), Rational::new(5, 6).unwrap());
-        assert_eq!(half.mul(third).unwrap(), Rational::new(1, 6).unwrap());
+        assert_eq!(half.checked_add(third).unwrap(), Rational::new(5, 6).unwrap());
+        assert_eq!(half.checked_mul(third).unwrap(), Rational::new(1, 6).unwrap());
         assert_eq!(Rational::new(3, -6).unwrap(), Rational::new(-1, 2).unwrap());
         assert_eq!(Rational::new(2, 3).unwrap().pow(-2).unwrap(), Rational::new(9, 4).unwrap());
         assert_eq!(Rational::new(9, 4).unwrap().exact_root(2), Rational::new(3, 2));
@@ -310,9 +312,9 @@ mod tests {
     #[test]
     fn overflow_is_reported_not_wrapped() {
         let big = Rational::int(i128::MAX / 2);
-        assert!(big.mul(Rational::int(3)).is_none());
+        assert!(big.checked_mul(Rational::int(3)).is_none());
         assert!(Rational::int(2).pow(200).is_none());
-        let n = Number::Rational(big).mul(Number::Rational(Rational::int(3)));
+        let n = Number::Rational(big).times(Number::Rational(Rational::int(3)));
         assert!(matches!(n, Number::Float(_)));
     }
 }

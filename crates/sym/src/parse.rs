@@ -10,7 +10,7 @@
 //!
 //! ```text
 //! sum      = product (('+' | '-') product)*
-//! product  = unary (('*' | '/') unary)*
+//! product  = ('-' | '+')* power (('*' | '/') unary)*   a leading sign negates the whole product
 //! unary    = ('-' | '+') unary | power
 //! power    = atom (('^' | '**') exponent)?          right-associative
 //! exponent = ('-' | '+') exponent | power            so 2^-1 and x^-y^2 read naturally
@@ -166,6 +166,8 @@ pub struct ParseOptions<'a> {
     /// When set, every symbol (base name, number of primes) must pass this
     /// check, or the parse fails with [`ParseErrorKind::UnknownName`]. `pi` and
     /// function names are not symbols and are never checked; `t` is a symbol.
+    // The signature says what the check receives; an alias would hide it.
+    #[allow(clippy::type_complexity)]
     pub known: Option<&'a dyn Fn(&str, u8) -> bool>,
     /// Bounds on the parse.
     pub limits: Limits,
@@ -442,9 +444,20 @@ impl Parser<'_, '_, '_> {
         self.check_nodes(e, Span::new(start, self.tok.start))
     }
 
+    /// A product. Its leading signs apply to the whole product, which is built
+    /// in one call: `-(x + y)/x` is `mul(-1, x + y, 1/x)`, the form the printer
+    /// writes that way (a number times a lone sum would distribute first).
     fn product(&mut self) -> PResult<ExprId> {
         let start = self.tok.start;
-        let first = self.unary()?;
+        let mut negative = false;
+        let mut levels = 0;
+        while let Tok::Minus | Tok::Plus = self.tok.kind {
+            self.enter()?;
+            levels += 1;
+            negative ^= self.tok.kind == Tok::Minus;
+            self.bump()?;
+        }
+        let first = self.power()?;
         let mut factors = vec![first];
         loop {
             let divide = match self.tok.kind {
@@ -460,6 +473,10 @@ impl Parser<'_, '_, '_> {
             } else {
                 f
             });
+        }
+        self.depth -= levels;
+        if negative {
+            factors.insert(0, self.pool.minus_one());
         }
         if factors.len() == 1 {
             return Ok(first);
@@ -627,5 +644,168 @@ impl Parser<'_, '_, '_> {
             Callee::Atan2 => self.pool.atan2(args[0], args[1]),
         };
         self.check_nodes(e, span)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Parses `input` and prints it back.
+    #[track_caller]
+    fn check(input: &str, expect: &str) {
+        let mut pool = Pool::default();
+        let e = pool.parse(input).unwrap_or_else(|err| panic!("{input:?}: {err}"));
+        assert_eq!(pool.display(e).to_string(), expect, "{input:?}");
+    }
+
+    /// Fails to parse `input` with message `expect`, pointing at the text `at`
+    /// (the first occurrence of `at` in `input`, or the end when it is empty).
+    #[track_caller]
+    fn check_err(input: &str, expect: &str, at: &str) {
+        let mut pool = Pool::default();
+        let err = pool.parse(input).expect_err(input);
+        assert_eq!(err.to_string(), expect, "{input:?}");
+        let start = if at.is_empty() { input.len() } else { input.find(at).expect("`at` occurs in the input") };
+        assert_eq!(err.span, Span::new(start, start + at.len()), "{input:?}: {err}");
+    }
+
+    #[test]
+    fn grammar() {
+        check("1/2", "1/2");
+        check("2", "2");
+        check("0.5", "0.5");
+        check(".5", "0.5");
+        check("1e-3", "0.001");
+        check("2.5E+2", "250.0");
+        check("-x^2", "-x^2");
+        check("(-x)^2", "x^2");
+        check("2^-1", "1/2");
+        check("x^-y^2", "1/x^y^2");
+        check("x^y^z", "x^y^z");
+        check("(x^y)^z", "(x^y)^z");
+        check("x**2", "x^2");
+        check("x**-1", "1/x");
+        check("a - b - c", "a - b - c");
+        check("a/b/c", "a/(b*c)");
+        check("a/(b/c)", "a*c/b");
+        check("--x", "x");
+        check("+x", "x");
+        check("x*-y", "-x*y");
+        check("q' + q''", "q' + q''");
+        check("p_q + t", "p_q + t");
+        check("pi", "pi");
+        check("ln(x)", "log(x)");
+        check("sqrt(x)", "sqrt(x)");
+        check("atan2(y, x)", "atan2(y, x)");
+        check("  sin ( x )\n", "sin(x)");
+        check("-(x + y)/x", "-(x + y)/x");
+    }
+
+    #[test]
+    fn errors_say_what_was_expected_and_where() {
+        check_err("", "expected an expression, found end of input", "");
+        check_err("x +", "expected an expression after '+', found end of input", "");
+        check_err("x + * y", "expected an expression after '+', found '*'", "*");
+        check_err("2x", "expected an operator, found 'x'", "x");
+        check_err("2 x", "expected an operator, found 'x'", "x");
+        check_err("(x", "unclosed parenthesis", "(");
+        check_err("sin(x", "unclosed parenthesis", "(");
+        check_err("x)", "unexpected ')'", ")");
+        check_err("()", "expected an expression after '(', found ')'", ")");
+        check_err("(2 x)", "expected an operator or ')', found 'x'", "x");
+        check_err("x^", "expected an exponent after '^', found end of input", "");
+        check_err("foo(x)", "unknown function 'foo'", "foo");
+        check_err("sin(x, y)", "function 'sin' takes 1 argument, found 2", "sin(x, y)");
+        check_err("atan2(x)", "function 'atan2' takes 2 arguments, found 1", "atan2(x)");
+        check_err("sqrt x", "function 'sqrt' needs its argument in parentheses, as in sqrt(x)", "sqrt");
+        check_err("q'''", "at most two primes are allowed (q' is a velocity, q'' an acceleration)", "q'''");
+        check_err("pi'", "'pi' is a constant and has no time derivative", "pi'");
+        check_err("x + é", "unexpected character 'é'", "é");
+        check_err("x # y", "unexpected character '#'", "#");
+        check_err("' x", "unexpected character '''", "'");
+        check_err("1e999", "number out of range", "1e999");
+        check_err(
+            "1 + 170141183460469231731687303715884105728",
+            "number out of range",
+            "170141183460469231731687303715884105728",
+        );
+        check_err("x.", "expected an operator, found '.'", ".");
+        check_err("2.5.3", "expected an operator, found '.3'", ".3");
+        check_err("f(x", "unknown function 'f'", "f");
+    }
+
+    #[test]
+    fn known_names_are_checked_with_their_primes() {
+        let known = |name: &str, primes: u8| matches!((name, primes), ("q", 0..=2) | ("m" | "t", 0));
+        let opts = ParseOptions::default().with_known(&known);
+        let mut pool = Pool::default();
+        assert!(pool.parse_with("m*q'' + sin(q) + pi*t", &opts).is_ok());
+        let err = pool.parse_with("m*q' + x", &opts).unwrap_err();
+        assert_eq!((err.to_string(), err.span), ("unknown name 'x'".to_string(), Span::new(7, 8)));
+        let err = pool.parse_with("m' + q", &opts).unwrap_err();
+        assert_eq!((err.to_string(), err.span), ("unknown name 'm''".to_string(), Span::new(0, 2)));
+    }
+
+    #[test]
+    fn nesting_is_bounded_without_overflowing_the_stack() {
+        let limit = Limits::default().max_depth;
+        let deep = |open: &str, close: &str, n: usize| format!("{}x{}", open.repeat(n), close.repeat(n));
+        let mut pool = Pool::default();
+        assert!(pool.parse(&deep("(", ")", limit)).is_ok());
+        for text in [
+            deep("(", ")", limit + 1),
+            deep("(", ")", 10_000),
+            deep("(", "", 10_000),
+            deep("-", "", 10_000),
+            deep("- ", "", 10_000),
+            deep("x^", "", 10_000),
+            deep("2^-", "", 10_000),
+            deep("sin(", ")", 10_000),
+            deep("atan2(1, ", ")", 5_000),
+        ] {
+            let err = pool.parse(&text).unwrap_err();
+            assert_eq!(err.kind, ParseErrorKind::TooDeep { limit }, "{}", &text[..20]);
+        }
+        let err = pool.parse(&deep("(", ")", 65)).unwrap_err();
+        assert_eq!(err.span, Span::new(64, 65));
+    }
+
+    #[test]
+    fn limits_are_configurable() {
+        let mut pool = Pool::default();
+        let long = "x + ".repeat(30_000) + "x";
+        let err = pool.parse(&long).unwrap_err();
+        assert_eq!(err.kind, ParseErrorKind::TooLong { limit: 100_000 });
+        let big = Limits { max_len: 200_000, ..Limits::default() };
+        assert!(pool.parse_with(&long, &ParseOptions::default().with_limits(big)).is_ok());
+
+        let shallow = ParseOptions::default().with_limits(Limits { max_depth: 2, ..Limits::default() });
+        assert!(pool.parse_with("((x))", &shallow).is_ok());
+        assert!(pool.parse_with("(((x)))", &shallow).is_err());
+
+        let small = ParseOptions::default().with_limits(Limits { max_nodes: 5, ..Limits::default() });
+        let mut fresh = Pool::default();
+        let err = fresh.parse_with("a + b + c + d + e + f", &small).unwrap_err();
+        assert_eq!(err.kind, ParseErrorKind::TooManyNodes { limit: 5 });
+    }
+
+    #[test]
+    fn long_flat_sums_and_products_parse_quickly() {
+        // Chains are collected and canonicalized once, not one operator at a time.
+        let mut pool = Pool::default();
+        let sum: Vec<String> = (0..5_000).map(|i| format!("x{i}")).collect();
+        let e = pool.parse(&sum.join(" + ")).unwrap();
+        assert!(matches!(pool.node(e), crate::Node::Add(ts) if ts.len() == 5_000));
+        let e = pool.parse(&sum.join("*")).unwrap();
+        assert!(matches!(pool.node(e), crate::Node::Mul(fs) if fs.len() == 5_000));
+    }
+
+    #[test]
+    fn overflowing_powers_do_not_panic() {
+        let mut pool = Pool::default();
+        for text in ["(-2)^127", "x/(-2)^127", "(-1/2)^127", "2^127", "(-2)^128", "1e300*1e300"] {
+            let _ = pool.parse(text);
+        }
     }
 }

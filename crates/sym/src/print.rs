@@ -137,7 +137,7 @@ fn coeff_factors(pool: &Pool, fs: &[ExprId]) -> (Number, usize) {
 /// `i128::MIN` would fall back to a float).
 fn abs(n: Number) -> Number {
     match n {
-        Number::Rational(r) if r.is_negative() => match r.neg() {
+        Number::Rational(r) if r.is_negative() => match r.checked_neg() {
             Some(r) => Number::Rational(r),
             None => n,
         },
@@ -165,13 +165,17 @@ fn below_bar(pool: &Pool, id: ExprId) -> Option<(ExprId, Exp<'_>)> {
                 _ => false,
             };
             let pos = abs(*e);
-            let same_kind = matches!((e, pos), (Number::Rational(_), Number::Rational(_)) | (Number::Float(_), Number::Float(_)));
+            let same_kind =
+                matches!((e, pos), (Number::Rational(_), Number::Rational(_)) | (Number::Float(_), Number::Float(_)));
             (ok && same_kind).then_some((*base, Exp::Num(pos)))
         }
         Node::Mul(fs) => match pool.as_number(fs[0]) {
             Some(c) if c.is_negative() => {
                 let pos = abs(c);
-                let same_kind = matches!((c, pos), (Number::Rational(_), Number::Rational(_)) | (Number::Float(_), Number::Float(_)));
+                let same_kind = matches!(
+                    (c, pos),
+                    (Number::Rational(_), Number::Rational(_)) | (Number::Float(_), Number::Float(_))
+                );
                 same_kind.then_some((*base, Exp::Mul(pos, &fs[1..])))
             }
             _ => None,
@@ -335,9 +339,20 @@ impl<'a> Text<'a> {
             below.push(paren(self.power(b, e), Prec::Power));
         }
         let mut out = if above.is_empty() { "1".to_string() } else { above.join("*") };
+        // `2*(x - 1)` would parse as `2*x - 2` (a number times one sum
+        // distributes), so a lone sum below the bar keeps its number apart.
+        let lone_sum = fr.q != 1
+            && matches!(fr.below[..], [(b, e)] if is_rational(exp_number(self.pool, e), 1, 1)
+            && matches!(self.pool.node(b), Node::Add(_)));
         match below.len() {
             0 => {}
             1 => {
+                out.push('/');
+                out.push_str(&below[0]);
+            }
+            _ if lone_sum => {
+                out.push('/');
+                out.push_str(&below[1]);
                 out.push('/');
                 out.push_str(&below[0]);
             }
@@ -368,7 +383,6 @@ impl<'a> Text<'a> {
         };
         Piece::new(format!("{b}^{}", paren(e, Prec::Power)), Prec::Power)
     }
-
 }
 
 // ---- LaTeX ----------------------------------------------------------------------
@@ -408,7 +422,7 @@ impl<'a> Tex<'a> {
             Node::Sym(s) => Piece::new(self.symbol(*s), Prec::Atom),
             Node::Func(f, a) => self.func(*f, *a, None),
             Node::Atan2(y, x) => Piece::new(
-                format!("\\operatorname{{atan_{{2}}}}{{\\left({}, {} \\right)}}", self.expr(*y).text, self.expr(*x).text),
+                format!("\\operatorname{{atan2}}{{\\left({}, {} \\right)}}", self.expr(*y).text, self.expr(*x).text),
                 Prec::Atom,
             ),
             Node::Add(ts) => self.sum(ts),
@@ -514,8 +528,11 @@ impl<'a> Tex<'a> {
         } else if fr.p != 1 {
             above.push(fr.p.to_string());
         }
+        let lone = above.is_empty() && fr.above.len() == 1 && !fr.below.is_empty();
         for &f in &fr.above {
-            above.push(tex_paren(self.expr(f), Prec::Power));
+            // A lone numerator needs no parentheses inside \frac.
+            let p = self.expr(f);
+            above.push(if lone { p.text } else { tex_paren(p, Prec::Power) });
         }
         let mut below: Vec<String> = Vec::new();
         if fr.q != 1 {
@@ -647,4 +664,101 @@ fn greek(word: &str) -> Option<&'static str> {
         "Omega" => "\\Omega",
         _ => return None,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Parses `input`, prints it, and checks that the text parses back to the same id.
+    #[track_caller]
+    fn check(input: &str, expect: &str) {
+        let mut pool = Pool::default();
+        let e = pool.parse(input).unwrap_or_else(|err| panic!("{input:?}: {err}"));
+        let text = pool.display(e).to_string();
+        assert_eq!(text, expect, "{input:?}");
+        assert_eq!(pool.parse(&text), Ok(e), "{input:?} printed as {text:?} does not parse back");
+    }
+
+    /// Parses `input` and prints it as LaTeX.
+    #[track_caller]
+    fn check_latex(input: &str, expect: &str) {
+        let mut pool = Pool::default();
+        let e = pool.parse(input).unwrap_or_else(|err| panic!("{input:?}: {err}"));
+        assert_eq!(pool.latex(e).to_string(), expect, "{input:?}");
+    }
+
+    #[test]
+    fn text() {
+        check("m*l^2*q'^2/2 + m*g*l*cos(q)", "l^2*m*q'^2/2 + g*l*m*cos(q)");
+        check("-g*sin(q)/l", "-g*sin(q)/l");
+        check("x*y^-1", "x/y");
+        check("x^-2", "1/x^2");
+        check("x^(1/2)", "sqrt(x)");
+        check("x^(-1/2)", "1/sqrt(x)");
+        check("x^(2/3)", "x^(2/3)");
+        check("x^(-3/2)", "1/x^(3/2)");
+        check("(-1)^x", "(-1)^x");
+        check("(-2)*x", "-2*x");
+        check("(-2)^x", "(-2)^x");
+        check("(1/2)^x", "(1/2)^x");
+        check("2^(1/2)", "sqrt(2)");
+        check("(-2)^(1/2)", "sqrt(-2)");
+        check("(-2)^(1/3)", "(-2)^(1/3)");
+        check("(x^2)^y", "(x^2)^y");
+        check("sqrt(x)^y", "sqrt(x)^y");
+        check("x^y^z", "x^y^z");
+        check("1e300", "1e300");
+        check("-0.5", "-0.5");
+        check("-0.5*x", "-0.5*x");
+        check("1.0*x", "1.0*x");
+        check("0.5^x", "0.5^x");
+        check("1/(a + b)", "1/(a + b)");
+        check("1/(a*b)", "1/(a*b)");
+        check("a/(b*c)", "a/(b*c)");
+        check("x/2", "x/2");
+        check("x - 1/2", "x - 1/2");
+        check("3/(2*x)", "3/(2*x)");
+        check("-1/x", "-1/x");
+        check("x/(2*(x + y)*z)", "x/(2*z*(x + y))");
+        check("(a + b)^-1/2", "1/(a + b)/2");
+        check("-(x + y)/x", "-(x + y)/x");
+        check("a - (x + y)/x", "a - (x + y)/x");
+        check("2^(-x)", "1/2^x");
+        check("x/sqrt(2)", "x/sqrt(2)");
+        check("2^-300*x", "x/2^300");
+        check("0^-1*x", "0^(-1)*x");
+        check("x/0.0", "0.0^(-1)*x");
+        check("exp(-x)", "exp(-x)");
+        check("a - b + 2*c - 3", "a - b + 2*c - 3");
+        check("atan2(y, -x)", "atan2(y, -x)");
+        check("abs(x)*sign", "sign*abs(x)");
+        check("t*p_q^2", "p_q^2*t");
+    }
+
+    #[test]
+    fn latex() {
+        check_latex("m*l^2*q'^2/2", "\\frac{l^{2} m \\dot{q}^{2}}{2}");
+        check_latex("-g*sin(q)/l", "- \\frac{g \\sin{\\left(q \\right)}}{l}");
+        check_latex("th1''", "\\ddot{\\theta}_{1}");
+        check_latex("th1'^2*sin(th1 - th2)", "\\dot{\\theta}_{1}^{2} \\sin{\\left(\\theta_{1} - \\theta_{2} \\right)}");
+        check_latex("p_th^2/(2*m*l^2)", "\\frac{p_{\\theta}^{2}}{2 l^{2} m}");
+        check_latex("omega*Omega*lam", "\\Omega \\lambda \\omega");
+        check_latex("al + be + ga + ph + om", "\\alpha + \\beta + \\gamma + \\omega + \\phi");
+        check_latex("mass*x_A", "\\mathrm{mass} x_{A}");
+        check_latex("1/sqrt(x^2 + 1)", "\\frac{1}{\\sqrt{x^{2} + 1}}");
+        check_latex("(x + y)/z", "\\frac{x + y}{z}");
+        check_latex("x^(1/3)", "\\sqrt[3]{x}");
+        check_latex("x^(2/3)", "x^{\\frac{2}{3}}");
+        check_latex("sin(q)^2", "\\sin^{2}{\\left(q \\right)}");
+        check_latex("exp(-x)", "e^{- x}");
+        check_latex("abs(x)", "\\left|x\\right|");
+        check_latex("atan2(y, x)", "\\operatorname{atan2}{\\left(y, x \\right)}");
+        check_latex("2*3^x", "2 \\cdot 3^{x}");
+        check_latex("(a + b)^2*c", "c \\left(a + b\\right)^{2}");
+        check_latex("1.5e-7*x", "1.5 \\cdot 10^{-7} x");
+        check_latex("pi*r^2", "\\pi r^{2}");
+        check_latex("(-1)^n", "\\left(-1\\right)^{n}");
+        check_latex("x - 1/2", "x - \\frac{1}{2}");
+    }
 }

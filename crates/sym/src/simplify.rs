@@ -10,38 +10,19 @@
 
 use crate::expr::{ExprId, Func, Node, Pool, Symbol};
 use crate::number::{Number, Rational};
-use rustc_hash::{FxHashMap, FxHashSet};
+use rustc_hash::FxHashMap;
 
 /// Most terms an expansion may produce before it gives up and keeps the product.
 const MAX_EXPANDED_TERMS: usize = 4096;
+/// Cache keys of the memoized rewrites.
+const EXPAND: u8 = 0;
+const TRIG: u8 = 1;
+const FACTOR: u8 = 2;
+
 /// Largest power of a sum that is expanded.
 const MAX_EXPANDED_POWER: i128 = 12;
 
 impl Pool {
-    /// Rebuilds `e` bottom-up, applying `f` to every rebuilt node.
-    fn rewrite(&mut self, e: ExprId, f: &mut dyn FnMut(&mut Pool, ExprId) -> ExprId) -> ExprId {
-        let mut done: FxHashMap<ExprId, ExprId> = FxHashMap::default();
-        for id in self.reachable(&[e]) {
-            let rebuilt = match self.node(id).clone() {
-                Node::Num(_) | Node::Pi | Node::Sym(_) => id,
-                Node::Add(ts) => {
-                    let ts: Vec<ExprId> = ts.iter().map(|t| done[t]).collect();
-                    self.add(&ts)
-                }
-                Node::Mul(fs) => {
-                    let fs: Vec<ExprId> = fs.iter().map(|t| done[t]).collect();
-                    self.mul(&fs)
-                }
-                Node::Pow(b, p) => self.pow(done[&b], done[&p]),
-                Node::Func(g, u) => self.func(g, done[&u]),
-                Node::Atan2(y, x) => self.atan2(done[&y], done[&x]),
-            };
-            let out = f(self, rebuilt);
-            done.insert(id, out);
-        }
-        done[&e]
-    }
-
     /// The terms of a sum (a non-sum is one term).
     pub fn terms(&self, e: ExprId) -> Vec<ExprId> {
         match self.node(e) {
@@ -61,7 +42,37 @@ impl Pool {
     /// Distributes products over sums and expands small integer powers of sums,
     /// within a budget of terms (beyond it the product is kept as it is).
     pub fn expand(&mut self, e: ExprId) -> ExprId {
-        self.rewrite(e, &mut |pool, id| pool.expand_node(id))
+        self.cached(EXPAND, e, &mut |pool, id| pool.expand_node(id))
+    }
+
+    /// `rewrite` memoized per node: a rewrite is a pure function of the id, so
+    /// the many overlapping expressions of a derivation share the work.
+    fn cached(&mut self, kind: u8, e: ExprId, f: &mut dyn FnMut(&mut Pool, ExprId) -> ExprId) -> ExprId {
+        let mut done: FxHashMap<ExprId, ExprId> = FxHashMap::default();
+        for id in self.reachable(&[e]) {
+            if let Some(&r) = self.rewrite_cache.get(&(kind, id)) {
+                done.insert(id, r);
+                continue;
+            }
+            let rebuilt = match self.node(id).clone() {
+                Node::Num(_) | Node::Pi | Node::Sym(_) => id,
+                Node::Add(ts) => {
+                    let ts: Vec<ExprId> = ts.iter().map(|t| done[t]).collect();
+                    self.add(&ts)
+                }
+                Node::Mul(fs) => {
+                    let fs: Vec<ExprId> = fs.iter().map(|t| done[t]).collect();
+                    self.mul(&fs)
+                }
+                Node::Pow(b, p) => self.pow(done[&b], done[&p]),
+                Node::Func(g, u) => self.func(g, done[&u]),
+                Node::Atan2(y, x) => self.atan2(done[&y], done[&x]),
+            };
+            let out = f(self, rebuilt);
+            self.rewrite_cache.insert((kind, id), out);
+            done.insert(id, out);
+        }
+        done[&e]
     }
 
     fn expand_node(&mut self, id: ExprId) -> ExprId {
@@ -119,91 +130,107 @@ impl Pool {
     /// `c·R·sin²u + c·R·cos²u → c·R`, `c·R − c·R·sin²u → c·R·cos²u`,
     /// `cos u·cos v ± sin u·sin v → cos(u ∓ v)`, `sin u·cos v ± cos u·sin v → sin(u ± v)`.
     pub fn combine_trig(&mut self, e: ExprId) -> ExprId {
-        self.rewrite(e, &mut |pool, id| match pool.node(id) {
+        self.cached(TRIG, e, &mut |pool, id| match pool.node(id) {
             Node::Add(_) => pool.combine_trig_sum(id),
             _ => id,
         })
     }
 
     fn combine_trig_sum(&mut self, sum: ExprId) -> ExprId {
+        // One pass over a growing list: a combined pair is marked dead and its
+        // result appended (and itself examined later), so the cost is linear in
+        // the number of terms times the factors per term.
         let mut terms = self.terms(sum);
-        'again: loop {
-            let set: FxHashMap<ExprId, usize> = terms.iter().enumerate().map(|(i, &t)| (t, i)).collect();
-            for i in 0..terms.len() {
-                let term = terms[i];
-                for f in self.factors(term) {
-                    let (base, exp) = self.base_exp(f);
-                    let Node::Func(g, u) = *self.node(base) else { continue };
-                    if !matches!(g, Func::Sin | Func::Cos) {
-                        continue;
-                    }
-                    let other = if g == Func::Sin { Func::Cos } else { Func::Sin };
-                    // Pythagorean identities, for a square (or higher power).
-                    if self.as_number(exp).is_some_and(|n| n.to_f64() >= 2.0) {
-                        let sq = self.powi(base, -2);
-                        let rest = self.mul2(term, sq);
-                        let ob = self.func(other, u);
-                        let osq = self.powi(ob, 2);
-                        let partner = self.mul2(rest, osq);
-                        if let Some(&j) = set.get(&partner) {
-                            if j != i {
-                                terms = replace_pair(&terms, i, j, rest);
-                                continue 'again;
-                            }
-                        }
-                        let neg_rest = self.neg(rest);
-                        if let Some(&j) = set.get(&neg_rest) {
-                            // c·R·sin² − c·R = −c·R·cos²
-                            let v = self.mul2(neg_rest, osq);
-                            terms = replace_pair(&terms, i, j, v);
-                            continue 'again;
-                        }
-                    }
-                    // Angle sums, for factors of exponent one.
-                    if exp != self.one() {
-                        continue;
-                    }
-                    for f2 in self.factors(term) {
-                        let Node::Func(Func::Cos, v) = *self.node(f2) else { continue };
-                        if v == u || f2 == f {
-                            continue;
-                        }
-                        let inv = self.mul2(f, f2);
-                        let inv = self.powi(inv, -1);
-                        let rest = self.mul2(term, inv);
-                        let su = self.func(other, u);
-                        let sv = self.func(Func::Sin, v);
-                        let partner = self.mul(&[rest, su, sv]);
-                        let neg_partner = self.neg(partner);
-                        // g = cos: cos u cos v + sin u sin v = cos(u − v)
-                        // g = sin: sin u cos v + cos u sin v = sin(u + v)
-                        let (plus_arg, minus_arg) = if g == Func::Cos {
-                            (self.sub(u, v), self.add2(u, v))
-                        } else {
-                            (self.add2(u, v), self.sub(u, v))
-                        };
-                        for (candidate, arg) in [(partner, plus_arg), (neg_partner, minus_arg)] {
-                            if let Some(&j) = set.get(&candidate) {
-                                if j != i {
-                                    let c = self.func(g, arg);
-                                    let v = self.mul2(rest, c);
-                                    terms = replace_pair(&terms, i, j, v);
-                                    continue 'again;
-                                }
-                            }
-                        }
+        let mut alive = vec![true; terms.len()];
+        let mut index: FxHashMap<ExprId, Vec<usize>> = FxHashMap::default();
+        for (i, &t) in terms.iter().enumerate() {
+            index.entry(t).or_default().push(i);
+        }
+        let mut i = 0;
+        while i < terms.len() {
+            if alive[i] {
+                if let Some((j, with)) = self.trig_partner(terms[i], i, &index, &alive) {
+                    alive[i] = false;
+                    alive[j] = false;
+                    terms.push(with);
+                    alive.push(true);
+                    index.entry(with).or_default().push(terms.len() - 1);
+                }
+            }
+            i += 1;
+        }
+        let out: Vec<ExprId> = terms.iter().zip(&alive).filter(|(_, &a)| a).map(|(&t, _)| t).collect();
+        self.add(&out)
+    }
+
+    /// A live term `j ≠ i` that combines with `term`, and what the pair becomes.
+    fn trig_partner(
+        &mut self,
+        term: ExprId,
+        i: usize,
+        index: &FxHashMap<ExprId, Vec<usize>>,
+        alive: &[bool],
+    ) -> Option<(usize, ExprId)> {
+        let find = |id: ExprId| index.get(&id).and_then(|v| v.iter().copied().find(|&j| j != i && alive[j]));
+        for f in self.factors(term) {
+            let (base, exp) = self.base_exp(f);
+            let Node::Func(g, u) = *self.node(base) else { continue };
+            if !matches!(g, Func::Sin | Func::Cos) {
+                continue;
+            }
+            let other = if g == Func::Sin { Func::Cos } else { Func::Sin };
+            // Pythagorean identities, for a square (or higher power).
+            if self.as_number(exp).is_some_and(|n| n.to_f64() >= 2.0) {
+                let sq = self.powi(base, -2);
+                let rest = self.mul2(term, sq);
+                let ob = self.func(other, u);
+                let osq = self.powi(ob, 2);
+                let partner = self.mul2(rest, osq);
+                if let Some(j) = find(partner) {
+                    return Some((j, rest));
+                }
+                // c·R·sin² − c·R = −c·R·cos²
+                let neg_rest = self.neg(rest);
+                if let Some(j) = find(neg_rest) {
+                    let v = self.mul2(neg_rest, osq);
+                    return Some((j, v));
+                }
+            }
+            // Angle sums, for factors of exponent one.
+            if exp != self.one() {
+                continue;
+            }
+            for f2 in self.factors(term) {
+                let Node::Func(Func::Cos, v) = *self.node(f2) else { continue };
+                if v == u || f2 == f {
+                    continue;
+                }
+                let inv = self.mul2(f, f2);
+                let inv = self.powi(inv, -1);
+                let rest = self.mul2(term, inv);
+                let su = self.func(other, u);
+                let sv = self.func(Func::Sin, v);
+                let partner = self.mul(&[rest, su, sv]);
+                let neg_partner = self.neg(partner);
+                // g = cos: cos u cos v + sin u sin v = cos(u − v)
+                // g = sin: sin u cos v + cos u sin v = sin(u + v)
+                let (plus_arg, minus_arg) =
+                    if g == Func::Cos { (self.sub(u, v), self.add2(u, v)) } else { (self.add2(u, v), self.sub(u, v)) };
+                for (candidate, arg) in [(partner, plus_arg), (neg_partner, minus_arg)] {
+                    if let Some(j) = find(candidate) {
+                        let c = self.func(g, arg);
+                        return Some((j, self.mul2(rest, c)));
                     }
                 }
             }
-            break;
         }
-        self.add(&terms)
+        None
     }
 
     /// Pulls the factors common to every term of each sum out of it
     /// (`a*x^2 + a*x*y → a*x*(x + y)`), including a common rational content.
     pub fn factor_terms(&mut self, e: ExprId) -> ExprId {
-        self.rewrite(e, &mut |pool, id| match pool.node(id) {
+        self.cached(FACTOR, e, &mut |pool, id| match pool.node(id) {
             Node::Add(_) => pool.factor_sum(id),
             _ => id,
         })
@@ -214,6 +241,14 @@ impl Pool {
         // in canonical form), so only symbolic common factors stay outside.
         let parts = self.factor_sum_parts(sum);
         self.mul(&parts)
+    }
+
+    /// Pulls the factors common to the terms of `e` out, at the top level only.
+    pub fn factor_outer(&mut self, e: ExprId) -> ExprId {
+        match self.node(e) {
+            Node::Add(_) => self.factor_sum(e),
+            _ => e,
+        }
     }
 
     /// The factors common to every term of `sum` followed by the reduced sum
@@ -284,7 +319,7 @@ impl Pool {
         // Pull a leading minus out: -g*(a + b), not g*(-a - b).
         if self.is_negated(inner) {
             inner = self.neg(inner);
-            factors[0] = self.number(Number::Rational(content.neg().unwrap_or(content)));
+            factors[0] = self.number(Number::Rational(content.checked_neg().unwrap_or(content)));
         }
         factors.push(inner);
         factors
@@ -298,18 +333,22 @@ impl Pool {
         if terms.len() < 2 {
             return e;
         }
-        let var_nodes: FxHashSet<ExprId> = self
-            .reachable(&[e])
-            .into_iter()
-            .filter(|&id| self.as_symbol(id).is_some_and(is_var))
-            .collect();
+        // Which nodes depend on a variable, in one pass, children first.
+        let mut depends: FxHashMap<ExprId, bool> = FxHashMap::default();
+        for id in self.reachable(&[e]) {
+            let d = match self.node(id) {
+                Node::Sym(s) => is_var(*s),
+                node => self.children(node).iter().any(|c| depends[c]),
+            };
+            depends.insert(id, d);
+        }
         let mut groups: Vec<(ExprId, Vec<ExprId>)> = Vec::new();
         let mut index: FxHashMap<ExprId, usize> = FxHashMap::default();
         for t in terms {
             let mut var_part = Vec::new();
             let mut coeff = Vec::new();
             for f in self.factors(t) {
-                if self.reachable(&[f]).iter().any(|n| var_nodes.contains(n)) {
+                if depends[&f] {
                     var_part.push(f);
                 } else {
                     coeff.push(f);
@@ -350,8 +389,10 @@ impl Pool {
         let expanded = self.expand(e);
         let trig = self.combine_trig(expanded);
         let collected = self.collect(trig, is_var);
+        // Factoring only the outer sum: inner sums are already in the form the
+        // expressions they came from were simplified to.
         let mut best = e;
-        for candidate in [self.factor_terms(e), collected, self.factor_terms(collected), self.factor_terms(trig)] {
+        for candidate in [collected, self.factor_outer(collected), self.factor_outer(e)] {
             best = self.shorter(best, candidate);
         }
         best
@@ -365,17 +406,6 @@ impl Pool {
             a
         }
     }
-}
-
-fn replace_pair(terms: &[ExprId], i: usize, j: usize, with: ExprId) -> Vec<ExprId> {
-    let mut out: Vec<ExprId> = terms
-        .iter()
-        .enumerate()
-        .filter(|&(k, _)| k != i && k != j)
-        .map(|(_, &t)| t)
-        .collect();
-    out.push(with);
-    out
 }
 
 fn int_gcd(mut a: i128, mut b: i128) -> i128 {

@@ -1,0 +1,192 @@
+//! Error types of the crate: what a right-hand side may report ([`RhsError`]), what
+//! a solver run may fail with ([`SolveError`]) and what a linear solve may fail with
+//! ([`LinalgError`]).
+
+/// An error a problem's right-hand side (or Jacobian) reports to the integrator.
+///
+/// Callers fill it in; the integrator wraps it in [`SolveError::Rhs`] with the time of
+/// the failing evaluation.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum RhsError {
+    /// A component of the computed derivative is NaN or infinite.
+    #[error("component {index} of the derivative is not finite")]
+    NonFinite {
+        /// Index of the first offending component.
+        index: usize,
+    },
+    /// A matrix the right-hand side needs to solve with (e.g. a mass matrix) is singular.
+    #[error("singular system: {detail}")]
+    Singular {
+        /// What was singular, in words.
+        detail: String,
+    },
+    /// Anything else.
+    #[error("{0}")]
+    Other(String),
+}
+
+impl From<LinalgError> for RhsError {
+    fn from(err: LinalgError) -> Self {
+        RhsError::Singular { detail: err.to_string() }
+    }
+}
+
+/// An error of a linear solve ([`crate::LinearSolver`]).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum LinalgError {
+    /// A slice had the wrong length.
+    #[error("expected a slice of length {expected}, found {found}")]
+    DimensionMismatch {
+        /// Expected length.
+        expected: usize,
+        /// Actual length.
+        found: usize,
+    },
+    /// The matrix contains NaN or an infinity at `(row, col)`.
+    #[error("matrix entry ({row}, {col}) is not finite")]
+    NonFinite {
+        /// Row of the entry.
+        row: usize,
+        /// Column of the entry.
+        col: usize,
+    },
+    /// An exactly zero pivot was met in column `col`.
+    #[error("matrix is singular (zero pivot in column {col})")]
+    Singular {
+        /// Column of the zero pivot.
+        col: usize,
+    },
+    /// The pivots span more than the solver trusts: the smallest over the largest
+    /// pivot magnitude is below the threshold, so a solution would be mostly round-off.
+    #[error("matrix is ill-conditioned (pivot ratio {pivot_ratio:e} below {threshold:e})")]
+    IllConditioned {
+        /// min |pivot| / max |pivot|.
+        pivot_ratio: f64,
+        /// The threshold that was not met.
+        threshold: f64,
+    },
+    /// `solve` was called before a successful `factor`.
+    #[error("no factorization available")]
+    NotFactored,
+}
+
+/// An error of a solver: invalid configuration, a failing right-hand side, or a run
+/// that cannot continue.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SolveError {
+    /// A configuration value is out of range (NaN, negative, zero where positive is needed).
+    #[error("invalid {name} = {value}: {reason}")]
+    InvalidConfig {
+        /// Name of the option (`"rtol"`, `"dt"`, ...).
+        name: &'static str,
+        /// The offending value.
+        value: f64,
+        /// What was expected.
+        reason: &'static str,
+    },
+    /// The system has zero dimension.
+    #[error("the system has no state components")]
+    EmptySystem,
+    /// A slice had the wrong length.
+    #[error("expected a state of length {expected}, found {found}")]
+    DimensionMismatch {
+        /// Expected length.
+        expected: usize,
+        /// Actual length.
+        found: usize,
+    },
+    /// The initial state or time is not finite.
+    #[error("initial value component {index} is not finite")]
+    NonFiniteInitial {
+        /// Index of the offending component (`usize::MAX` for the time).
+        index: usize,
+    },
+    /// The end time lies before the current time (integration runs forward only).
+    #[error("end time {t_end} lies before the current time {t}")]
+    EndBeforeStart {
+        /// The current time.
+        t: f64,
+        /// The requested end time.
+        t_end: f64,
+    },
+    /// The right-hand side reported an error.
+    #[error("right-hand side failed at t = {t}: {source}")]
+    Rhs {
+        /// Time of the failing evaluation.
+        t: f64,
+        /// What the right-hand side reported.
+        source: RhsError,
+    },
+    /// The state (or its derivative) became NaN or infinite.
+    #[error("state component {index} became non-finite at t = {t}")]
+    NonFiniteState {
+        /// Time at which the non-finite value appeared.
+        t: f64,
+        /// Index of the first offending component.
+        index: usize,
+    },
+    /// The adaptive step size fell below what the time resolution allows.
+    #[error("step size {h:e} too small at t = {t}")]
+    StepSizeTooSmall {
+        /// Current time.
+        t: f64,
+        /// The step size.
+        h: f64,
+    },
+    /// The maximal number of steps was taken.
+    #[error("maximal number of steps ({max_steps}) reached at t = {t}")]
+    MaxStepsExceeded {
+        /// Current time.
+        t: f64,
+        /// The limit.
+        max_steps: usize,
+    },
+    /// The stage equations of an implicit method did not converge with the fixed step.
+    #[error("stage equations did not converge at t = {t} with step {h:e}; use a smaller step")]
+    NoConvergence {
+        /// Start of the failing step.
+        t: f64,
+        /// The step size.
+        h: f64,
+    },
+    /// A linear solve inside the solver failed.
+    #[error("linear algebra failed at t = {t}: {source}")]
+    Linalg {
+        /// Time of the failure.
+        t: f64,
+        /// The linear algebra error.
+        source: LinalgError,
+    },
+    /// Interpolation was asked for a time outside the last step.
+    #[error("cannot interpolate at t = {t}: dense output covers [{start}, {end}]")]
+    InterpolationOutOfRange {
+        /// Requested time.
+        t: f64,
+        /// Start of the last step.
+        start: f64,
+        /// End of the last step.
+        end: f64,
+    },
+    /// An event function returned NaN or an infinity.
+    #[error("event function {event} is not finite at t = {t}")]
+    EventNonFinite {
+        /// Index of the event function.
+        event: usize,
+        /// Time of the evaluation.
+        t: f64,
+    },
+    /// An explicit symplectic method was requested for a system that is not separable.
+    #[error("method {method} needs a separable Hamiltonian system (H = T(p) + V(q, t))")]
+    RequiresSeparable {
+        /// The method name.
+        method: &'static str,
+    },
+    /// The method name is unknown.
+    #[error("unknown method {name:?}; known methods: {known}")]
+    UnknownMethod {
+        /// The name given.
+        name: String,
+        /// The known names, comma separated.
+        known: String,
+    },
+}

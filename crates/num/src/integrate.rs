@@ -1,0 +1,293 @@
+//! The convenience driver [`integrate`]: runs a [`Solver`] to an end time, hands every
+//! accepted step or evenly spaced samples (from dense output) to an observer, and
+//! locates events (zero crossings of `g(t, y)`) with Brent's method on the dense output.
+
+use std::ops::ControlFlow;
+
+use crate::error::SolveError;
+use crate::root::brent;
+use crate::solver::{check_len, Solver, StepOutcome};
+
+/// Which points the observer receives (besides events).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Output {
+    /// The initial point and the end of every accepted step.
+    #[default]
+    EveryStep,
+    /// `n ≥ 2` evenly spaced points from the initial time to the end time, both
+    /// included (`t_k = t0 + k·(t_end − t0)/(n − 1)`), interpolated from dense output.
+    Samples(usize),
+}
+
+/// Which zero crossings of an event function count.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Direction {
+    /// `g` goes from negative to non-negative.
+    Rising,
+    /// `g` goes from positive to non-positive.
+    Falling,
+    /// Either.
+    #[default]
+    Both,
+}
+
+/// The boxed event function of an [`Event`].
+type EventFn<'a> = Box<dyn FnMut(f64, &[f64]) -> f64 + 'a>;
+
+/// An event function `g(t, y)` whose zero crossings are located.
+///
+/// At most one crossing per event and step is found (the one the sign change between
+/// the step's ends brackets); a step that crosses twice hides both, so bound the step
+/// (`Config::h_max`) when `g` oscillates faster than the solution.
+pub struct Event<'a> {
+    g: EventFn<'a>,
+    direction: Direction,
+    terminal: bool,
+}
+
+impl<'a> Event<'a> {
+    /// A non-terminal event counting crossings in both directions.
+    pub fn new(g: impl FnMut(f64, &[f64]) -> f64 + 'a) -> Self {
+        Event { g: Box::new(g), direction: Direction::Both, terminal: false }
+    }
+    /// The same event counting only crossings in `direction`.
+    pub fn with_direction(mut self, direction: Direction) -> Self {
+        self.direction = direction;
+        self
+    }
+    /// The same event, stopping the integration at its first crossing when `terminal`.
+    pub fn with_terminal(mut self, terminal: bool) -> Self {
+        self.terminal = terminal;
+        self
+    }
+}
+
+impl std::fmt::Debug for Event<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Event")
+            .field("direction", &self.direction)
+            .field("terminal", &self.terminal)
+            .finish_non_exhaustive()
+    }
+}
+
+/// What kind of point an [`Observation`] is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ObservationKind {
+    /// The end of an accepted step (or the initial point), with [`Output::EveryStep`].
+    Step,
+    /// An output sample, with [`Output::Samples`].
+    Sample,
+    /// A located crossing of event `index`.
+    Event {
+        /// Index of the event in the slice given to [`integrate`].
+        index: usize,
+    },
+}
+
+/// A point handed to the observer.
+#[derive(Clone, Copy, Debug)]
+pub struct Observation<'s> {
+    /// Time.
+    pub t: f64,
+    /// State at `t`.
+    pub y: &'s [f64],
+    /// Why the observer sees it.
+    pub kind: ObservationKind,
+}
+
+/// Why [`integrate`] returned.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StopReason {
+    /// The end time was reached.
+    Finished,
+    /// A terminal event occurred.
+    Event {
+        /// Index of the event.
+        index: usize,
+    },
+    /// The observer returned `ControlFlow::Break`.
+    Observer,
+}
+
+/// The result of [`integrate`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Summary {
+    /// The last time observed: `t_end`, the time of a terminal event, or of the point
+    /// at which the observer stopped.
+    pub t: f64,
+    /// Why the run stopped.
+    pub stop: StopReason,
+    /// Number of event crossings located.
+    pub events: usize,
+}
+
+/// Integrates with `solver` from its current time to `t_end`, calling `observer` on the
+/// points `output` asks for and on every event crossing, in time order.
+///
+/// After a terminal event the solver stands at the end of the step that contained it;
+/// the event's state is the one handed to the observer. Returns
+/// [`SolveError::EndBeforeStart`] when `t_end` lies before the solver's time.
+pub fn integrate<V: Solver + ?Sized>(
+    solver: &mut V,
+    t_end: f64,
+    output: Output,
+    events: &mut [Event<'_>],
+    mut observer: impl FnMut(&Observation<'_>) -> ControlFlow<()>,
+) -> Result<Summary, SolveError> {
+    let t0 = solver.t();
+    if t_end.is_nan() || t_end < t0 {
+        return Err(SolveError::EndBeforeStart { t: t0, t_end });
+    }
+    if let Output::Samples(n) = output {
+        if n < 2 {
+            return Err(SolveError::InvalidConfig {
+                name: "samples",
+                value: n as f64,
+                reason: "needs at least 2 samples (both ends)",
+            });
+        }
+    }
+    let dim = solver.state().len();
+    let mut y = vec![0.0; dim];
+    let mut g_prev = vec![0.0; events.len()];
+    let mut g_new = vec![0.0; events.len()];
+    // Located crossings of the current step: (time, event index).
+    let mut found: Vec<(f64, usize)> = Vec::with_capacity(events.len());
+    let mut n_events = 0;
+    for (k, ev) in events.iter_mut().enumerate() {
+        g_prev[k] = eval_event(ev, k, t0, solver.state())?;
+    }
+    let kind = match output {
+        Output::EveryStep => ObservationKind::Step,
+        Output::Samples(_) => ObservationKind::Sample,
+    };
+    let mut next_sample = 1usize;
+    let sample_time = |k: usize, n: usize| {
+        if k + 1 == n {
+            t_end
+        } else {
+            t0 + (t_end - t0) * (k as f64 / (n - 1) as f64)
+        }
+    };
+    let stopped = |flow: ControlFlow<()>| flow.is_break();
+    if stopped(observer(&Observation { t: t0, y: solver.state(), kind })) {
+        return Ok(Summary { t: t0, stop: StopReason::Observer, events: 0 });
+    }
+    if t_end == t0 {
+        if let Output::Samples(n) = output {
+            // Degenerate span: every sample is the initial point.
+            for _ in 1..n {
+                y.copy_from_slice(solver.state());
+                if stopped(observer(&Observation { t: t0, y: &y, kind })) {
+                    return Ok(Summary { t: t0, stop: StopReason::Observer, events: 0 });
+                }
+            }
+        }
+        return Ok(Summary { t: t0, stop: StopReason::Finished, events: 0 });
+    }
+    solver.set_stop_time(t_end)?;
+    loop {
+        let outcome = solver.step()?;
+        let t_a = solver.step_start();
+        let t_b = solver.t();
+        // Events in this step.
+        found.clear();
+        for (k, ev) in events.iter_mut().enumerate() {
+            g_new[k] = eval_event(ev, k, t_b, solver.state())?;
+            let (ga, gb) = (g_prev[k], g_new[k]);
+            let rising = ga < 0.0 && gb >= 0.0;
+            let falling = ga > 0.0 && gb <= 0.0;
+            let counts = match ev.direction {
+                Direction::Rising => rising,
+                Direction::Falling => falling,
+                Direction::Both => rising || falling,
+            };
+            if counts {
+                let tol = 4.0 * f64::EPSILON * t_a.abs().max(t_b.abs());
+                let root = brent(
+                    |t| {
+                        solver.interpolate(t, &mut y)?;
+                        eval_event(ev, k, t, &y)
+                    },
+                    t_a,
+                    t_b,
+                    ga,
+                    gb,
+                    tol,
+                )?;
+                found.push((root, k));
+            }
+        }
+        std::mem::swap(&mut g_prev, &mut g_new);
+        found.sort_by(|a, b| a.0.total_cmp(&b.0));
+        // The first terminal crossing cuts the step.
+        let cut = found.iter().position(|&(_, k)| events[k].terminal).map(|i| (i, found[i].0));
+        let t_limit = cut.map_or(t_b, |(_, t)| t);
+        let found_count = cut.map_or(found.len(), |(i, _)| i + 1);
+        let mut next_event = 0;
+        // Emit samples and events in time order up to t_limit.
+        loop {
+            let sample_t = match output {
+                Output::Samples(n) if next_sample < n => {
+                    let ts = sample_time(next_sample, n);
+                    (ts <= t_limit).then_some(ts)
+                }
+                _ => None,
+            };
+            let event = (next_event < found_count).then(|| found[next_event]);
+            let (t, obs_kind) = match (sample_t, event) {
+                (Some(ts), Some((te, k))) if te < ts => (te, ObservationKind::Event { index: k }),
+                (Some(ts), _) => (ts, ObservationKind::Sample),
+                (None, Some((te, k))) => (te, ObservationKind::Event { index: k }),
+                (None, None) => break,
+            };
+            match obs_kind {
+                ObservationKind::Sample => next_sample += 1,
+                _ => {
+                    next_event += 1;
+                    n_events += 1;
+                }
+            }
+            if t == t_b {
+                y.copy_from_slice(solver.state());
+            } else {
+                solver.interpolate(t, &mut y)?;
+            }
+            if stopped(observer(&Observation { t, y: &y, kind: obs_kind })) {
+                return Ok(Summary { t, stop: StopReason::Observer, events: n_events });
+            }
+            if let (ObservationKind::Event { index }, Some(_)) = (obs_kind, cut) {
+                if events[index].terminal {
+                    return Ok(Summary { t, stop: StopReason::Event { index }, events: n_events });
+                }
+            }
+        }
+        if output == Output::EveryStep
+            && stopped(observer(&Observation { t: t_b, y: solver.state(), kind: ObservationKind::Step }))
+        {
+            return Ok(Summary { t: t_b, stop: StopReason::Observer, events: n_events });
+        }
+        if outcome == StepOutcome::ReachedStop {
+            return Ok(Summary { t: t_b, stop: StopReason::Finished, events: n_events });
+        }
+    }
+}
+
+fn eval_event(ev: &mut Event<'_>, index: usize, t: f64, y: &[f64]) -> Result<f64, SolveError> {
+    let g = (ev.g)(t, y);
+    if g.is_finite() {
+        Ok(g)
+    } else {
+        Err(SolveError::EventNonFinite { event: index, t })
+    }
+}
+
+/// Runs `solver` to `t_end` and writes the final state into `y_end` (no observer,
+/// no events).
+pub fn integrate_to<V: Solver + ?Sized>(solver: &mut V, t_end: f64, y_end: &mut [f64]) -> Result<(), SolveError> {
+    check_len(solver.state().len(), y_end.len())?;
+    integrate(solver, t_end, Output::EveryStep, &mut [], |_| ControlFlow::Continue(()))?;
+    y_end.copy_from_slice(solver.state());
+    Ok(())
+}

@@ -1,0 +1,72 @@
+//! Numerics of `lagrange` that know nothing of symbols: ODE integrators over plain
+//! `f64` slices, event location, root finding and small dense linear algebra.
+//!
+//! ```
+//! use num::{integrate, Config, Method, OdeSystem, Output, RhsError};
+//!
+//! struct Oscillator; // x'' = -x as y = [x, v]
+//! impl OdeSystem for Oscillator {
+//!     fn dim(&self) -> usize { 2 }
+//!     fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), RhsError> {
+//!         dy[0] = y[1];
+//!         dy[1] = -y[0];
+//!         Ok(())
+//!     }
+//! }
+//!
+//! let config = Config { rtol: 1e-10, atol: 1e-12, ..Config::default() };
+//! let mut solver = Method::Dop853.build(Oscillator, 0.0, &[1.0, 0.0], &config).unwrap();
+//! integrate(&mut solver, std::f64::consts::PI, Output::EveryStep, &mut [], |_| {
+//!     std::ops::ControlFlow::Continue(())
+//! })
+//! .unwrap();
+//! assert!((solver.state()[0] + 1.0).abs() < 1e-8);
+//! ```
+//!
+//! # Map
+//!
+//! - Problems: [`OdeSystem`] (`y' = F(t, y)`), [`SeparableSystem`]
+//!   (`H = T(p) + V(q, t)`, state `[q, p]`).
+//! - Stepping: the [`Solver`] trait (`step`, `t`, `state`, `interpolate`,
+//!   `statistics`), implemented by [`Dopri5`], [`Dop853`] (adaptive explicit),
+//!   [`Composition`] (Verlet and its symplectic compositions), [`Gauss`]
+//!   (Gauss–Legendre, implicit symplectic) and [`Radau5`] (stiff).
+//! - [`Method`] names them for the command line and builds any of them;
+//!   [`select_step`] picks a fixed step from a tolerance.
+//! - [`integrate`] drives a solver with output sampling and [`Event`]s.
+//! - [`LinearSolver`] solves `M x = f` (dense or banded LU); [`brent`] finds roots.
+
+// Numerical kernels index several arrays with one loop variable; iterator zips over
+// four slices read worse than the formulas they implement.
+#![allow(clippy::needless_range_loop)]
+
+mod adaptive;
+mod composition;
+mod dop853;
+mod dopri5;
+mod error;
+mod gauss;
+mod integrate;
+mod linalg;
+mod method;
+mod radau5;
+mod root;
+mod solver;
+mod stepsize;
+mod system;
+
+pub use composition::{Composition, Scheme};
+pub use dop853::Dop853;
+pub use dopri5::Dopri5;
+pub use error::{LinalgError, RhsError, SolveError};
+pub use gauss::Gauss;
+pub use integrate::{
+    integrate, integrate_to, Direction, Event, Observation, ObservationKind, Output, StopReason, Summary,
+};
+pub use linalg::{LinearSolver, DEFAULT_PIVOT_RATIO};
+pub use method::Method;
+pub use radau5::Radau5;
+pub use root::brent;
+pub use solver::{Config, Controller, Solver, Statistics, StepOutcome};
+pub use stepsize::{run_fixed, select_step};
+pub use system::{finite_difference_jacobian, OdeSystem, Separable, SeparableSystem};

@@ -1,0 +1,225 @@
+//! The catalogue of methods ([`Method`]): names for `--method NAME`, one-line
+//! descriptions for `--list-methods`, properties (order, adaptive, symplectic) and
+//! [`Method::build`] / [`Method::build_separable`], which construct any of them as a
+//! `Box<dyn Solver>`.
+
+use std::fmt;
+use std::str::FromStr;
+
+use crate::composition::{Composition, Scheme};
+use crate::dop853::Dop853;
+use crate::dopri5::Dopri5;
+use crate::error::SolveError;
+use crate::gauss::Gauss;
+use crate::radau5::Radau5;
+use crate::solver::{check_initial, Config, Solver};
+use crate::stepsize::{guess_step, run_fixed, select_step};
+use crate::system::{OdeSystem, Separable, SeparableSystem};
+
+/// An integration method.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Method {
+    /// Dormand–Prince 5(4), adaptive explicit Runge–Kutta ([`Dopri5`]).
+    Dopri5,
+    /// DOP853, adaptive explicit Runge–Kutta of order 8 ([`Dop853`]).
+    Dop853,
+    /// Störmer–Verlet, symplectic, order 2, fixed step ([`Composition`]).
+    Verlet,
+    /// Yoshida's triple jump of Verlet, symplectic, order 4.
+    Yoshida4,
+    /// Kahan–Li 9-stage composition of Verlet, symplectic, order 6.
+    KahanLi6,
+    /// Kahan–Li 15-stage composition of Verlet, symplectic, order 8.
+    KahanLi8,
+    /// Gauss–Legendre collocation, 1 stage (implicit midpoint), symplectic, order 2 ([`Gauss`]).
+    Gauss2,
+    /// Gauss–Legendre collocation, 2 stages, symplectic, order 4.
+    Gauss4,
+    /// Gauss–Legendre collocation, 3 stages, symplectic, order 6.
+    Gauss6,
+    /// Radau IIA, 3 stages, order 5, adaptive, for stiff problems ([`Radau5`]).
+    Radau5,
+}
+
+impl Method {
+    /// Every method, in the order `--list-methods` shows them.
+    pub const ALL: [Method; 10] = [
+        Method::Dopri5,
+        Method::Dop853,
+        Method::Verlet,
+        Method::Yoshida4,
+        Method::KahanLi6,
+        Method::KahanLi8,
+        Method::Gauss2,
+        Method::Gauss4,
+        Method::Gauss6,
+        Method::Radau5,
+    ];
+
+    /// The name used on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Dopri5 => "dopri5",
+            Method::Dop853 => "dop853",
+            Method::Verlet => "verlet",
+            Method::Yoshida4 => "yoshida4",
+            Method::KahanLi6 => "kahanli6",
+            Method::KahanLi8 => "kahanli8",
+            Method::Gauss2 => "gauss2",
+            Method::Gauss4 => "gauss4",
+            Method::Gauss6 => "gauss6",
+            Method::Radau5 => "radau5",
+        }
+    }
+
+    /// A one-line description.
+    pub fn description(self) -> &'static str {
+        match self {
+            Method::Dopri5 => "Dormand-Prince 5(4), adaptive explicit Runge-Kutta (general purpose)",
+            Method::Dop853 => "Dormand-Prince 8(5,3), adaptive explicit Runge-Kutta (tight tolerances)",
+            Method::Verlet => "Stormer-Verlet, symplectic, order 2, fixed step (separable H)",
+            Method::Yoshida4 => "Yoshida triple-jump composition, symplectic, order 4, fixed step (separable H)",
+            Method::KahanLi6 => "Kahan-Li 9-stage composition, symplectic, order 6, fixed step (separable H)",
+            Method::KahanLi8 => "Kahan-Li 15-stage composition, symplectic, order 8, fixed step (separable H)",
+            Method::Gauss2 => "implicit midpoint (Gauss-Legendre 1 stage), symplectic, order 2, fixed step",
+            Method::Gauss4 => "Gauss-Legendre 2 stages, symplectic, order 4, fixed step",
+            Method::Gauss6 => "Gauss-Legendre 3 stages, symplectic, order 6, fixed step",
+            Method::Radau5 => "Radau IIA 3 stages, order 5, adaptive, implicit (stiff problems)",
+        }
+    }
+
+    /// The classical order of accuracy.
+    pub fn order(self) -> u32 {
+        match self {
+            Method::Dopri5 | Method::Radau5 => 5,
+            Method::Dop853 | Method::KahanLi8 => 8,
+            Method::Verlet | Method::Gauss2 => 2,
+            Method::Yoshida4 | Method::Gauss4 => 4,
+            Method::KahanLi6 | Method::Gauss6 => 6,
+        }
+    }
+
+    /// Whether the method adapts its step to `rtol`/`atol` (otherwise it takes a fixed
+    /// step `dt`, chosen by [`select_step`] when not given).
+    pub fn is_adaptive(self) -> bool {
+        matches!(self, Method::Dopri5 | Method::Dop853 | Method::Radau5)
+    }
+
+    /// Whether the method is symplectic (for Hamiltonian systems: no energy drift).
+    pub fn is_symplectic(self) -> bool {
+        !self.is_adaptive()
+    }
+
+    /// Whether the method needs a [`SeparableSystem`] (the explicit compositions).
+    pub fn needs_separable(self) -> bool {
+        matches!(self, Method::Verlet | Method::Yoshida4 | Method::KahanLi6 | Method::KahanLi8)
+    }
+
+    /// Builds a solver for a general system from `(t0, y0)`.
+    ///
+    /// Fails with [`SolveError::RequiresSeparable`] for the explicit symplectic
+    /// compositions. A fixed-step method without `config.dt` first picks its step with
+    /// [`select_step`] (capped by `config.h_max`; set it to the length of the run).
+    pub fn build<'a, S: OdeSystem + 'a>(
+        self,
+        mut system: S,
+        t0: f64,
+        y0: &[f64],
+        config: &Config,
+    ) -> Result<Box<dyn Solver + 'a>, SolveError> {
+        config.validate()?;
+        check_initial(system.dim(), t0, y0)?;
+        if self.needs_separable() {
+            return Err(SolveError::RequiresSeparable { method: self.name() });
+        }
+        let mut config = *config;
+        if !self.is_adaptive() && config.dt.is_none() {
+            let guess = guess_step(&mut system, self.order(), t0, y0, &config)?;
+            let dt = select_step(
+                |h, steps, out| {
+                    let cfg = Config { dt: Some(h), ..config };
+                    run_fixed(Gauss::new(&mut system, self, t0, y0, &cfg), steps, out)
+                },
+                self.order(),
+                y0,
+                &config,
+                guess,
+            )?;
+            config.dt = Some(dt);
+        }
+        Ok(match self {
+            Method::Dopri5 => Box::new(Dopri5::new(system, t0, y0, &config)?),
+            Method::Dop853 => Box::new(Dop853::new(system, t0, y0, &config)?),
+            Method::Radau5 => Box::new(Radau5::new(system, t0, y0, &config)?),
+            _ => Box::new(Gauss::new(system, self, t0, y0, &config)?),
+        })
+    }
+
+    /// Builds a solver for a separable system from `(t0, y0)`, `y0 = [q0, p0]`. Every
+    /// method applies; the non-composition ones see the system through [`Separable`].
+    pub fn build_separable<'a, S: SeparableSystem + 'a>(
+        self,
+        mut system: S,
+        t0: f64,
+        y0: &[f64],
+        config: &Config,
+    ) -> Result<Box<dyn Solver + 'a>, SolveError> {
+        let Some(scheme) = Scheme::of(self) else {
+            return self.build(Separable(system), t0, y0, config);
+        };
+        config.validate()?;
+        check_initial(2 * system.n(), t0, y0)?;
+        let mut config = *config;
+        if config.dt.is_none() {
+            let guess = guess_step(&mut Separable(&mut system), self.order(), t0, y0, &config)?;
+            let dt = select_step(
+                |h, steps, out| {
+                    let cfg = Config { dt: Some(h), ..config };
+                    run_fixed(Composition::new(&mut system, scheme, t0, y0, &cfg), steps, out)
+                },
+                self.order(),
+                y0,
+                &config,
+                guess,
+            )?;
+            config.dt = Some(dt);
+        }
+        Ok(Box::new(Composition::new(system, scheme, t0, y0, &config)?))
+    }
+
+    /// The names of all methods, comma separated.
+    pub fn known_names() -> String {
+        Method::ALL.iter().map(|m| m.name()).collect::<Vec<_>>().join(", ")
+    }
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Method {
+    type Err = SolveError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let lower = s.trim().to_ascii_lowercase();
+        Method::ALL
+            .into_iter()
+            .find(|m| m.name() == lower)
+            .ok_or_else(|| SolveError::UnknownMethod { name: s.to_string(), known: Method::known_names() })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip() {
+        for m in Method::ALL {
+            assert_eq!(m.name().parse::<Method>().unwrap(), m);
+            assert!(!m.description().is_empty());
+        }
+        assert!(matches!("rk4".parse::<Method>(), Err(SolveError::UnknownMethod { .. })));
+    }
+}

@@ -1,0 +1,300 @@
+//! The stepping interface every integrator implements ([`Solver`], shaped like
+//! diffsol's `OdeSolverMethod`), its [`Config`], [`Statistics`] and the small helpers
+//! the integrators share (validation, error norms, Hermite dense output, the fixed-step
+//! clock).
+
+use crate::error::SolveError;
+use crate::method::Method;
+use crate::system::first_non_finite;
+
+/// What a successful [`Solver::step`] did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StepOutcome {
+    /// An internal step was accepted; [`Solver::t`] advanced.
+    Stepped,
+    /// The accepted step landed exactly on the stop time set with
+    /// [`Solver::set_stop_time`] (which is then cleared).
+    ReachedStop,
+}
+
+/// Work counters of a solver.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Statistics {
+    /// Accepted steps.
+    pub steps: usize,
+    /// Rejected step attempts (error test or Newton failure).
+    pub rejected: usize,
+    /// Calls of the right-hand side made by the solver (for separable systems: calls
+    /// of `force`; the cheap `velocity` calls are not counted). Calls made inside a
+    /// default finite-difference [`crate::OdeSystem::jacobian`] are not counted.
+    pub rhs_evaluations: usize,
+    /// Calls of [`crate::OdeSystem::jacobian`].
+    pub jacobian_evaluations: usize,
+    /// LU factorizations.
+    pub lu_decompositions: usize,
+    /// Newton (or fixed-point) iterations of implicit methods.
+    pub newton_iterations: usize,
+}
+
+/// The PI or standard step-size controller of the adaptive explicit methods.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Controller {
+    /// Proportional–integral control (Gustafsson; Hairer's `beta = 0.04` for DOPRI5,
+    /// `beta = 0` for DOP853, where it reduces to standard control). Smoother step
+    /// sequences with the same error.
+    #[default]
+    Pi,
+    /// Standard (integral-only) control: `h_new = h · safety · err^(-1/(p+1))`.
+    Standard,
+}
+
+/// Options of every solver. Fields a method does not use are ignored
+/// (`dt` by adaptive methods, `rtol`/`atol` by fixed-step methods given a `dt`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Config {
+    /// Relative tolerance (dimensionless). Default `1e-6`: about six correct digits
+    /// per step, the usual default of ODE suites.
+    pub rtol: f64,
+    /// Absolute tolerance, in the units of the state. Default `1e-9`: for states of
+    /// order one it rarely binds, yet protects components passing through zero.
+    pub atol: f64,
+    /// Maximal number of accepted steps. Default `10_000_000`: large enough for long
+    /// symplectic runs, small enough to stop a stalled adaptive run.
+    pub max_steps: usize,
+    /// First step of adaptive methods; `None` estimates it (Hairer's `hinit`).
+    pub h_init: Option<f64>,
+    /// Largest step of adaptive methods; `None` means unbounded.
+    pub h_max: Option<f64>,
+    /// Step of fixed-step methods; `None` picks one from `rtol`/`atol` with
+    /// [`crate::select_step`].
+    pub dt: Option<f64>,
+    /// Step-size controller of the explicit adaptive methods.
+    pub controller: Controller,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Config {
+            rtol: 1e-6,
+            atol: 1e-9,
+            max_steps: 10_000_000,
+            h_init: None,
+            h_max: None,
+            dt: None,
+            controller: Controller::Pi,
+        }
+    }
+}
+
+impl Config {
+    /// Checks every field: tolerances finite and positive (`rtol` at least `1e-15`
+    /// would be asking for less than round-off, so it is raised by the methods, not
+    /// rejected), steps finite and positive, `max_steps` positive.
+    pub fn validate(&self) -> Result<(), SolveError> {
+        let positive = |name: &'static str, value: f64| {
+            if value.is_finite() && value > 0.0 {
+                Ok(())
+            } else {
+                Err(SolveError::InvalidConfig { name, value, reason: "must be finite and positive" })
+            }
+        };
+        positive("rtol", self.rtol)?;
+        if !(self.atol.is_finite() && self.atol >= 0.0) {
+            return Err(SolveError::InvalidConfig {
+                name: "atol",
+                value: self.atol,
+                reason: "must be finite and non-negative",
+            });
+        }
+        if let Some(h) = self.h_init {
+            positive("h_init", h)?;
+        }
+        if let Some(h) = self.h_max {
+            positive("h_max", h)?;
+        }
+        if let Some(h) = self.dt {
+            positive("dt", h)?;
+        }
+        if self.max_steps == 0 {
+            return Err(SolveError::InvalidConfig { name: "max_steps", value: 0.0, reason: "must be positive" });
+        }
+        Ok(())
+    }
+}
+
+/// A time-stepping integrator: advance with [`step`](Solver::step), read
+/// [`t`](Solver::t) and [`state`](Solver::state), and interpolate within the last step.
+///
+/// Integration runs forward in time. The trait is object safe, so
+/// [`Method::build`] can hand out `Box<dyn Solver>`.
+pub trait Solver {
+    /// The method this solver implements.
+    fn method(&self) -> Method;
+    /// Current time.
+    fn t(&self) -> f64;
+    /// Current state.
+    fn state(&self) -> &[f64];
+    /// Start of the last accepted step (equal to [`t`](Solver::t) before the first step).
+    fn step_start(&self) -> f64;
+    /// The step the next [`step`](Solver::step) will try.
+    fn step_size(&self) -> f64;
+    /// Takes one accepted step (adaptive methods retry rejected attempts internally).
+    fn step(&mut self) -> Result<StepOutcome, SolveError>;
+    /// Writes the dense-output state at `t` into `out`; `t` must lie within the last
+    /// step, `[step_start(), t()]`.
+    fn interpolate(&self, t: f64, out: &mut [f64]) -> Result<(), SolveError>;
+    /// Work counters so far.
+    fn statistics(&self) -> Statistics;
+    /// Makes the solver land exactly on `t_stop` (the step that would pass it is
+    /// shortened). `t_stop` must not lie before [`t`](Solver::t).
+    fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolveError>;
+}
+
+impl<S: Solver + ?Sized> Solver for Box<S> {
+    fn method(&self) -> Method {
+        (**self).method()
+    }
+    fn t(&self) -> f64 {
+        (**self).t()
+    }
+    fn state(&self) -> &[f64] {
+        (**self).state()
+    }
+    fn step_start(&self) -> f64 {
+        (**self).step_start()
+    }
+    fn step_size(&self) -> f64 {
+        (**self).step_size()
+    }
+    fn step(&mut self) -> Result<StepOutcome, SolveError> {
+        (**self).step()
+    }
+    fn interpolate(&self, t: f64, out: &mut [f64]) -> Result<(), SolveError> {
+        (**self).interpolate(t, out)
+    }
+    fn statistics(&self) -> Statistics {
+        (**self).statistics()
+    }
+    fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolveError> {
+        (**self).set_stop_time(t_stop)
+    }
+}
+
+/// Checks an initial value problem: non-empty, matching lengths, finite values.
+pub(crate) fn check_initial(dim: usize, t0: f64, y0: &[f64]) -> Result<(), SolveError> {
+    if dim == 0 {
+        return Err(SolveError::EmptySystem);
+    }
+    if y0.len() != dim {
+        return Err(SolveError::DimensionMismatch { expected: dim, found: y0.len() });
+    }
+    if !t0.is_finite() {
+        return Err(SolveError::NonFiniteInitial { index: usize::MAX });
+    }
+    if let Some(index) = first_non_finite(y0) {
+        return Err(SolveError::NonFiniteInitial { index });
+    }
+    Ok(())
+}
+
+/// Checks a stop time against the current time.
+pub(crate) fn check_stop(t: f64, t_stop: f64) -> Result<(), SolveError> {
+    if t_stop.is_nan() || t_stop < t {
+        return Err(SolveError::EndBeforeStart { t, t_end: t_stop });
+    }
+    Ok(())
+}
+
+/// Checks that `t` lies in `[start, end]` up to round-off.
+pub(crate) fn check_interpolation(t: f64, start: f64, end: f64) -> Result<(), SolveError> {
+    let slack = 1e-12 * (end - start).abs().max(f64::MIN_POSITIVE) + 4.0 * f64::EPSILON * end.abs();
+    if !(t >= start - slack && t <= end + slack) {
+        return Err(SolveError::InterpolationOutOfRange { t, start, end });
+    }
+    Ok(())
+}
+
+/// Checks the length of an output slice.
+pub(crate) fn check_len(expected: usize, found: usize) -> Result<(), SolveError> {
+    if expected != found {
+        return Err(SolveError::DimensionMismatch { expected, found });
+    }
+    Ok(())
+}
+
+/// Cubic Hermite interpolation on a step of length `h` at `theta = (t - t0)/h`, from
+/// the values and derivatives at both ends.
+pub(crate) fn hermite(theta: f64, h: f64, y0: &[f64], f0: &[f64], y1: &[f64], f1: &[f64], out: &mut [f64]) {
+    let t2 = theta * theta;
+    let t3 = t2 * theta;
+    let h00 = 2.0 * t3 - 3.0 * t2 + 1.0;
+    let h10 = t3 - 2.0 * t2 + theta;
+    let h01 = -2.0 * t3 + 3.0 * t2;
+    let h11 = t3 - t2;
+    for i in 0..out.len() {
+        out[i] = h00 * y0[i] + h10 * h * f0[i] + h01 * y1[i] + h11 * h * f1[i];
+    }
+}
+
+/// A fixed-step time grid `t = base + k·h`, computed by multiplication so that a
+/// million steps do not accumulate round-off in `t`, and landing exactly on a stop time.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct FixedClock {
+    base: f64,
+    k: u64,
+    pub(crate) h: f64,
+    stop: Option<f64>,
+}
+
+impl FixedClock {
+    pub(crate) fn new(t0: f64, h: f64) -> Self {
+        FixedClock { base: t0, k: 0, h, stop: None }
+    }
+    pub(crate) fn t(&self) -> f64 {
+        self.base + self.k as f64 * self.h
+    }
+    /// The end of the next step and whether it is the stop time. A step that would end
+    /// within `1e-6·h` before the stop is stretched onto it, to avoid a sliver step.
+    pub(crate) fn next(&self) -> (f64, bool) {
+        let t_next = self.base + (self.k + 1) as f64 * self.h;
+        match self.stop {
+            Some(stop) if t_next >= stop - 1e-6 * self.h => (stop, true),
+            _ => (t_next, false),
+        }
+    }
+    pub(crate) fn advance(&mut self, reached_stop: bool) {
+        if reached_stop {
+            self.base = self.stop.take().unwrap_or(self.base);
+            self.k = 0;
+        } else {
+            self.k += 1;
+        }
+    }
+    pub(crate) fn set_stop(&mut self, t_stop: f64) -> Result<(), SolveError> {
+        check_stop(self.t(), t_stop)?;
+        self.stop = Some(t_stop);
+        Ok(())
+    }
+}
+
+/// Sum `y += incr` with Kahan compensation held in `comp`: long fixed-step runs then
+/// do not accumulate round-off in the state (which would show as energy drift).
+pub(crate) fn compensated_add(y: &mut [f64], comp: &mut [f64], incr: &[f64]) {
+    for i in 0..y.len() {
+        let dy = incr[i] + comp[i];
+        let new = y[i] + dy;
+        comp[i] = dy - (new - y[i]);
+        y[i] = new;
+    }
+}
+
+impl std::fmt::Debug for dyn Solver + '_ {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Solver")
+            .field("method", &self.method())
+            .field("t", &self.t())
+            .field("step_size", &self.step_size())
+            .field("statistics", &self.statistics())
+            .finish_non_exhaustive()
+    }
+}
