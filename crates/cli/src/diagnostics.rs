@@ -28,6 +28,22 @@ impl Failure {
         }
     }
 
+    /// Bad command-line usage (exit 2).
+    pub fn usage(message: impl Into<String>) -> Failure {
+        Failure::Input { file: "command line".into(), message: message.into(), located: None, help: None }
+    }
+
+    /// A model error in an expression given on the command line (`what` names
+    /// the option); `offset` is where the parsed part starts within `text`.
+    pub fn expression(what: &str, text: &str, e: mech::ModelError, offset: usize) -> Failure {
+        Failure::Input {
+            file: what.to_string(),
+            message: e.message,
+            located: e.span.map(|s| (text.to_string(), clamp(s.start + offset..s.end + offset, text))),
+            help: e.help,
+        }
+    }
+
     /// A failed run.
     pub fn run(message: impl Into<String>) -> Failure {
         Failure::Run { message: message.into() }

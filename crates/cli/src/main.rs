@@ -7,6 +7,8 @@
 
 mod diagnostics;
 mod format;
+mod plot;
+mod simulate;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use diagnostics::Failure;
@@ -35,6 +37,60 @@ enum Command {
         #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_set)]
         set: Vec<(String, f64)>,
     },
+    /// Integrate the motion from [initial], stream it to CSV, plot it and audit the conserved quantities.
+    Simulate {
+        /// The model file (TOML).
+        #[arg(required_unless_present = "list_methods")]
+        model: Option<PathBuf>,
+        /// End time (the run starts at t = 0).
+        #[arg(long, required_unless_present = "list_methods", allow_negative_numbers = true)]
+        until: Option<f64>,
+        /// Integrator (see --list-methods); default: chosen from the derivation.
+        #[arg(long)]
+        method: Option<String>,
+        /// Relative tolerance (default 1e-9); fixed-step methods pick their step from it.
+        #[arg(long)]
+        rtol: Option<f64>,
+        /// Absolute tolerance (default 1e-12, or rtol/1000 when --rtol is given).
+        #[arg(long)]
+        atol: Option<f64>,
+        /// Fixed step for fixed-step methods.
+        #[arg(long)]
+        dt: Option<f64>,
+        /// Write the trajectory to this CSV file.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Number of evenly spaced rows (both ends included; default 1001).
+        #[arg(long, conflicts_with = "every_step")]
+        samples: Option<usize>,
+        /// One row per integrator step instead of evenly spaced samples.
+        #[arg(long)]
+        every_step: bool,
+        /// Draw coordinates, a phase portrait and the invariants' drift to this SVG file.
+        #[arg(long)]
+        plot: Option<PathBuf>,
+        /// Summary format on stdout.
+        #[arg(long, value_enum, default_value_t = SummaryFormat::Text)]
+        summary: SummaryFormat,
+        /// Override a parameter: --set g=1.62 (repeatable).
+        #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_set)]
+        set: Vec<(String, f64)>,
+        /// Stop when a condition becomes true, e.g. "y < 0" or "th' > 0" (repeatable).
+        #[arg(long = "stop-when", value_name = "CONDITION")]
+        stop_when: Vec<String>,
+        /// List the integrators and exit.
+        #[arg(long)]
+        list_methods: bool,
+    },
+}
+
+/// Summary formats of `simulate`.
+#[derive(Clone, Copy, ValueEnum, PartialEq)]
+enum SummaryFormat {
+    /// A table for people.
+    Text,
+    /// JSON (`lagrange.simulate/1`).
+    Json,
 }
 
 /// Output formats of `derive`.
@@ -64,6 +120,37 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Derive { model, format, set } => derive(&model, format, &set),
+        Command::Simulate { list_methods: true, .. } => write_stdout(&simulate::list_methods()),
+        Command::Simulate {
+            model,
+            until,
+            method,
+            rtol,
+            atol,
+            dt,
+            out,
+            samples,
+            every_step,
+            plot,
+            summary,
+            set,
+            stop_when,
+            list_methods: false,
+        } => simulate::run(&simulate::Options {
+            model: model.unwrap_or_default(),
+            until: until.unwrap_or(f64::NAN),
+            method,
+            rtol,
+            atol,
+            dt,
+            out,
+            samples,
+            every_step,
+            plot,
+            summary_json: summary == SummaryFormat::Json,
+            set,
+            stop_when,
+        }),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -76,7 +163,7 @@ fn main() -> ExitCode {
 }
 
 /// Reads a model file, or explains why it cannot.
-fn read_source(path: &Path) -> Result<String, Failure> {
+pub(crate) fn read_source(path: &Path) -> Result<String, Failure> {
     let bytes = std::fs::read(path).map_err(|e| Failure::input(path, format!("cannot read the file: {e}")))?;
     if bytes.len() > mech::MAX_FILE_BYTES {
         return Err(Failure::input(
@@ -106,7 +193,7 @@ fn derive(path: &Path, format: Format, set: &[(String, f64)]) -> Result<(), Fail
 }
 
 /// Writes to stdout; a closed pipe is not an error worth a message.
-fn write_stdout(text: &str) -> Result<(), Failure> {
+pub(crate) fn write_stdout(text: &str) -> Result<(), Failure> {
     let mut out = std::io::stdout().lock();
     match out.write_all(text.as_bytes()).and_then(|_| out.flush()) {
         Ok(()) => Ok(()),

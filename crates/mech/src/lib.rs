@@ -19,12 +19,16 @@
 //! ```
 
 mod derive;
+mod dynamics;
 mod error;
 mod model;
 pub mod probe;
 mod report;
+mod run;
 
 pub use derive::{Conserved, Derivation, Verdicts};
+pub use dynamics::{invariants_of, Dynamics, Form, Invariant, System};
 pub use error::ModelError;
 pub use model::{Coordinate, InitialValue, Located, Model, Parameter, Particle, MAX_FILE_BYTES};
-pub use report::{DeriveReport, HamiltonEquations, NamedExpr};
+pub use report::{DeriveReport, HamiltonEquations, NamedExpr, Ordered};
+pub use run::{choose_method, simulate, Audit, Row, RunConfig, RunError, RunReport, StopCondition};

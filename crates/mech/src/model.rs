@@ -513,6 +513,65 @@ impl Model {
         })
     }
 
+    /// Parses an expression in the model's names (parameters, coordinates,
+    /// velocities, t), e.g. a stop condition from the command line. Spans in the
+    /// error are byte offsets into `text`.
+    pub fn parse_state_expr(&mut self, text: &str, what: &str) -> Result<ExprId, ModelError> {
+        let mut r = Reader {
+            source: text,
+            pool: std::mem::take(&mut self.pool),
+            coordinates: self.coordinates.clone(),
+            parameters: self.parameters.clone(),
+        };
+        let result = r.expr_str(text, 0..text.len(), Scope::State, what).map(|l| l.expr);
+        // The whole text is the expression: spans are offsets into it.
+        let result = result.map_err(|mut e| {
+            if let Some(span) = &mut e.span {
+                if span.start > text.len() {
+                    *span = 0..text.len();
+                }
+            }
+            e
+        });
+        self.pool = r.pool;
+        result
+    }
+
+    /// The initial coordinates and velocities from `[initial]`, evaluated with
+    /// the parameters' values. Every coordinate and velocity must be given.
+    pub fn initial_state(&self) -> Result<(Vec<f64>, Vec<f64>), ModelError> {
+        let n = self.n_coords();
+        let mut q = vec![None; n];
+        let mut qd = vec![None; n];
+        let env = |name: &str| self.parameter(name);
+        for iv in &self.initial {
+            let v = self
+                .pool
+                .eval(iv.value.expr, &env)
+                .map_err(|e| ModelError::at(iv.value.span.clone(), e.to_string()))?;
+            if !v.is_finite() {
+                return Err(ModelError::at(iv.value.span.clone(), format!("the initial value evaluates to {v}")));
+            }
+            let slot = if iv.order == 0 { &mut q } else { &mut qd };
+            slot[iv.coord] = Some(v);
+        }
+        let mut missing = Vec::new();
+        for (i, c) in self.coordinates.iter().enumerate() {
+            if q[i].is_none() {
+                missing.push(c.name.clone());
+            }
+            if qd[i].is_none() {
+                missing.push(format!("{}'", c.name));
+            }
+        }
+        if !missing.is_empty() {
+            let list: Vec<String> = missing.iter().map(|m| format!("\"{m}\" = ...")).collect();
+            return Err(ModelError::whole(format!("[initial] has no value for {}", missing.join(", ")))
+                .with_help(format!("add under [initial]: {}", list.join(", "))));
+        }
+        Ok((q.into_iter().flatten().collect(), qd.into_iter().flatten().collect()))
+    }
+
     /// The number of degrees of freedom.
     pub fn n_coords(&self) -> usize {
         self.coordinates.len()

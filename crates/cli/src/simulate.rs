@@ -1,0 +1,372 @@
+//! `lagrange simulate`: integrate a model's motion, stream the trajectory to
+//! CSV, draw it, and print the audit of the conserved quantities.
+//!
+//! The run itself is `mech::simulate`; this module parses the options, writes
+//! the CSV row by row (constant memory; flushed even when the run fails),
+//! keeps a bounded, decimated copy for the plot, and shows progress on a
+//! terminal.
+
+use crate::diagnostics::Failure;
+use crate::plot::{self, PlotData, Series};
+use mech::{Derivation, RunConfig, RunError, RunReport, StopCondition};
+use num::{Direction, Method, Output};
+use serde_json::json;
+use std::fs::File;
+use std::io::{BufWriter, IsTerminal, Write};
+use std::ops::ControlFlow;
+use std::path::{Path, PathBuf};
+
+/// Options of `simulate`, as parsed by clap.
+pub struct Options {
+    pub model: PathBuf,
+    pub until: f64,
+    pub method: Option<String>,
+    pub rtol: Option<f64>,
+    pub atol: Option<f64>,
+    pub dt: Option<f64>,
+    pub out: Option<PathBuf>,
+    pub samples: Option<usize>,
+    pub every_step: bool,
+    pub plot: Option<PathBuf>,
+    pub summary_json: bool,
+    pub set: Vec<(String, f64)>,
+    pub stop_when: Vec<String>,
+}
+
+/// The most points kept for the plot; beyond it every other point is dropped.
+const MAX_PLOT_POINTS: usize = 8192;
+
+/// Lists the methods, one line each.
+pub fn list_methods() -> String {
+    let mut s = String::new();
+    for m in Method::ALL {
+        s.push_str(&format!("{:<9} {}\n", m.name(), m.description()));
+    }
+    s
+}
+
+pub fn run(opts: &Options) -> Result<(), Failure> {
+    let source = crate::read_source(&opts.model)?;
+    let path = &opts.model;
+    let model = mech::Model::parse(&source, &opts.set).map_err(|e| Failure::model(path, &source, e))?;
+    let mut derivation = Derivation::new(model).map_err(|e| Failure::model(path, &source, e))?;
+
+    let method = match &opts.method {
+        None => None,
+        Some(name) => Some(name.parse::<Method>().map_err(|e| Failure::input(path, e.to_string()))?),
+    };
+    for (name, v) in [("--rtol", opts.rtol), ("--atol", opts.atol), ("--dt", opts.dt)] {
+        if let Some(v) = v {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Failure::usage(format!("{name} must be a positive number, not {v}")));
+            }
+        }
+    }
+    if !(opts.until.is_finite() && opts.until > 0.0) {
+        return Err(Failure::usage(format!("--until must be a positive time, not {}", opts.until)));
+    }
+    let mut stop_when = Vec::new();
+    for text in &opts.stop_when {
+        stop_when.push(parse_stop(&mut derivation, text)?);
+    }
+    let defaults = RunConfig::default();
+    let rtol = opts.rtol.unwrap_or(defaults.rtol);
+    let config = RunConfig {
+        until: opts.until,
+        method,
+        rtol,
+        atol: opts.atol.unwrap_or(if opts.rtol.is_some() { rtol * 1e-3 } else { defaults.atol }),
+        dt: opts.dt,
+        output: if opts.every_step {
+            Output::EveryStep
+        } else {
+            match opts.samples {
+                Some(n) if n < 2 => return Err(Failure::usage("--samples needs at least 2 rows (both ends)")),
+                Some(n) => Output::Samples(n),
+                None => defaults.output,
+            }
+        },
+        stop_when,
+    };
+
+    // Columns: t, coordinates, velocities, invariants.
+    let names: Vec<String> = derivation.coordinate_names().iter().map(|s| s.to_string()).collect();
+    let n = names.len();
+    let mut csv = match &opts.out {
+        Some(p) => Some(BufWriter::new(
+            File::create(p).map_err(|e| Failure::input(p, format!("cannot create the CSV file: {e}")))?,
+        )),
+        None => None,
+    };
+    let mut header_written = false;
+    let mut csv_error: Option<std::io::Error> = None;
+    let mut plot_data = PlotKeeper::new(n);
+    let progress = progress_bar(opts.until);
+    let inv_names: Vec<String> = mech::invariants_of(&derivation).into_iter().map(|i| i.name).collect();
+
+    let result = mech::simulate(&mut derivation, &config, |row| {
+        if let Some(w) = csv.as_mut() {
+            let r = (|| -> std::io::Result<()> {
+                if !header_written {
+                    let mut cols = vec!["t".to_string()];
+                    cols.extend(names.iter().cloned());
+                    cols.extend(names.iter().map(|c| format!("{c}'")));
+                    cols.extend(inv_names.iter().cloned());
+                    writeln!(w, "{}", cols.join(","))?;
+                    header_written = true;
+                }
+                write!(w, "{}", row.t)?;
+                for v in row.q.iter().chain(row.qd).chain(row.invariants) {
+                    write!(w, ",{v}")?;
+                }
+                writeln!(w)
+            })();
+            if let Err(e) = r {
+                csv_error = Some(e);
+                return ControlFlow::Break(());
+            }
+        }
+        if opts.plot.is_some() {
+            plot_data.push(row.t, row.q, row.qd, row.invariants);
+        }
+        if let Some(pb) = &progress {
+            pb.set_position((row.t / opts.until * 1000.0) as u64);
+        }
+        ControlFlow::Continue(())
+    });
+    if let Some(pb) = &progress {
+        pb.finish_and_clear();
+    }
+    if let Some(mut w) = csv {
+        if let Err(e) = w.flush() {
+            csv_error.get_or_insert(e);
+        }
+    }
+    if let Some(e) = csv_error {
+        let p = opts.out.as_deref().unwrap_or(Path::new("-"));
+        return Err(Failure::run(format!("cannot write {}: {e}", p.display())));
+    }
+    let (report, failure) = match result {
+        Ok(r) => (r, None),
+        Err(RunError::Input(e)) => return Err(Failure::model(path, &source, e)),
+        Err(RunError::Failed { message, report }) => (*report, Some(message)),
+    };
+
+    if let Some(plot_path) = &opts.plot {
+        let data = plot_data.into_plot(&derivation.model.name, &report, &names, &inv_names);
+        plot::write_svg(plot_path, &data).map_err(Failure::run)?;
+    }
+    let text =
+        if opts.summary_json { summary_json(&report, &names) } else { summary_text(&report, &names, &derivation) };
+    crate::write_stdout(&text)?;
+    for w in &report.warnings {
+        eprintln!("warning: {w}");
+    }
+    match failure {
+        Some(message) => Err(Failure::run(format!(
+            "{message}{}",
+            opts.out.as_ref().map_or(String::new(), |p| format!(" ({} keeps the rows up to there)", p.display()))
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// `EXPR < RHS`, `EXPR > RHS` or `EXPR` (any crossing of zero).
+fn parse_stop(d: &mut Derivation, text: &str) -> Result<StopCondition, Failure> {
+    let (lhs, rhs, direction) = match text.find(['<', '>']) {
+        Some(i) => {
+            let dir = if text.as_bytes()[i] == b'<' { Direction::Falling } else { Direction::Rising };
+            let rest = text[i + 1..].strip_prefix('=').unwrap_or(&text[i + 1..]);
+            (&text[..i], Some((i + 1 + (text[i + 1..].len() - rest.len()), rest)), dir)
+        }
+        None => (text, None, Direction::Both),
+    };
+    let located = |e: mech::ModelError, offset: usize| Failure::expression("--stop-when", text, e, offset);
+    let g_lhs = d.model.parse_state_expr(lhs, "--stop-when").map_err(|e| located(e, 0))?;
+    let g = match rhs {
+        Some((offset, rhs)) => {
+            let g_rhs = d.model.parse_state_expr(rhs, "--stop-when").map_err(|e| located(e, offset))?;
+            d.model.pool.sub(g_lhs, g_rhs)
+        }
+        None => g_lhs,
+    };
+    Ok(StopCondition { expr: g, direction, text: text.to_string() })
+}
+
+fn progress_bar(until: f64) -> Option<indicatif::ProgressBar> {
+    if !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let pb = indicatif::ProgressBar::new(1000);
+    pb.set_style(
+        indicatif::ProgressStyle::with_template("{bar:40} {percent:>3}% t of {msg}  {elapsed}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    pb.set_message(format!("{until}"));
+    Some(pb)
+}
+
+fn summary_json(r: &RunReport, names: &[String]) -> String {
+    let mut fin = serde_json::Map::new();
+    for (i, name) in names.iter().enumerate() {
+        fin.insert(name.clone(), json!(r.final_q[i]));
+        fin.insert(format!("{name}'"), json!(r.final_qd[i]));
+    }
+    let mut inv = serde_json::Map::new();
+    for a in &r.invariants {
+        inv.insert(
+            a.name.clone(),
+            json!({
+                "initial": a.initial,
+                "final": a.final_value,
+                "max_abs_drift": a.max_abs_drift,
+                "max_rel_drift": a.max_rel_drift,
+                "conserved": a.conserved,
+            }),
+        );
+    }
+    let v = json!({
+        "format": "lagrange.simulate/1",
+        "method": r.method.name(),
+        "form": r.form.name(),
+        "dt": r.dt,
+        "rtol": r.rtol,
+        "atol": r.atol,
+        "steps": r.steps,
+        "rejected_steps": r.rejected,
+        "rhs_evaluations": r.rhs_evaluations,
+        "t_final": r.t_final,
+        "stopped_by": r.stopped_by,
+        "final": fin,
+        "invariants": inv,
+        "warnings": r.warnings,
+        "wall_seconds": r.wall_seconds,
+    });
+    let mut s = serde_json::to_string_pretty(&v).unwrap_or_default();
+    s.push('\n');
+    s
+}
+
+fn summary_text(r: &RunReport, names: &[String], d: &Derivation) -> String {
+    let mut s = String::new();
+    s.push_str(&format!("{}\n", d.model.name));
+    let step = match r.dt {
+        Some(h) => format!("fixed step {h:.3e}"),
+        None => format!("rtol {:.0e}, atol {:.0e}", r.rtol, r.atol),
+    };
+    s.push_str(&format!(
+        "method {} ({}, {}), state [q, {}]\n",
+        r.method.name(),
+        r.method.description(),
+        step,
+        if r.form.name() == "lagrange" { "q'" } else { "p" }
+    ));
+    s.push_str(&format!(
+        "{} steps ({} rejected), {} right-hand-side evaluations, {:.3} s\n",
+        r.steps, r.rejected, r.rhs_evaluations, r.wall_seconds
+    ));
+    match &r.stopped_by {
+        Some(why) => s.push_str(&format!("stopped at t = {} ({why})\n", r.t_final)),
+        None => s.push_str(&format!("reached t = {}\n", r.t_final)),
+    }
+    s.push_str("final state:");
+    for (i, name) in names.iter().enumerate() {
+        s.push_str(&format!("  {name} = {:.10}  {name}' = {:.10}", r.final_q[i], r.final_qd[i]));
+    }
+    s.push('\n');
+    if !r.invariants.is_empty() {
+        s.push_str("invariants          initial              final                max abs drift  max rel drift\n");
+        for a in &r.invariants {
+            s.push_str(&format!(
+                "  {:<8}{} {:>20.12e} {:>20.12e} {:>14.3e} {:>14.3e}\n",
+                a.name,
+                if a.conserved { "*" } else { " " },
+                a.initial,
+                a.final_value,
+                a.max_abs_drift,
+                a.max_rel_drift
+            ));
+        }
+        s.push_str("  (* conserved according to the derivation)\n");
+    }
+    s
+}
+
+/// A bounded, decimated copy of the run for the plot: constant memory however
+/// long the run.
+struct PlotKeeper {
+    n: usize,
+    stride: usize,
+    seen: usize,
+    t: Vec<f64>,
+    q: Vec<Vec<f64>>,
+    qd: Vec<Vec<f64>>,
+    inv: Vec<Vec<f64>>,
+}
+
+impl PlotKeeper {
+    fn new(n: usize) -> PlotKeeper {
+        PlotKeeper {
+            n,
+            stride: 1,
+            seen: 0,
+            t: Vec::new(),
+            q: vec![Vec::new(); n],
+            qd: vec![Vec::new(); n],
+            inv: Vec::new(),
+        }
+    }
+
+    fn push(&mut self, t: f64, q: &[f64], qd: &[f64], inv: &[f64]) {
+        if self.inv.is_empty() {
+            self.inv = vec![Vec::new(); inv.len()];
+        }
+        self.seen += 1;
+        if !(self.seen - 1).is_multiple_of(self.stride) {
+            return;
+        }
+        self.t.push(t);
+        for i in 0..self.n {
+            self.q[i].push(q[i]);
+            self.qd[i].push(qd[i]);
+        }
+        for (k, v) in inv.iter().enumerate() {
+            self.inv[k].push(*v);
+        }
+        if self.t.len() >= MAX_PLOT_POINTS {
+            let halve = |v: &mut Vec<f64>| {
+                let kept: Vec<f64> = v.iter().step_by(2).copied().collect();
+                *v = kept;
+            };
+            halve(&mut self.t);
+            self.q.iter_mut().chain(self.qd.iter_mut()).chain(self.inv.iter_mut()).for_each(halve);
+            self.stride *= 2;
+        }
+    }
+
+    fn into_plot(self, title: &str, r: &RunReport, names: &[String], inv_names: &[String]) -> PlotData {
+        let series = |vals: Vec<Vec<f64>>, suffix: &str| -> Vec<Series> {
+            vals.into_iter()
+                .zip(names)
+                .map(|(values, name)| Series { name: format!("{name}{suffix}"), values })
+                .collect()
+        };
+        let step = match r.dt {
+            Some(h) => format!("dt {h:.2e}"),
+            None => format!("rtol {:.0e}", r.rtol),
+        };
+        PlotData {
+            title: title.to_string(),
+            subtitle: format!("{}, {}, {} steps", r.method.name(), step, r.steps),
+            time: self.t,
+            coordinates: series(self.q, ""),
+            velocities: series(self.qd, "'"),
+            invariants: self
+                .inv
+                .into_iter()
+                .zip(inv_names)
+                .map(|(values, name)| Series { name: name.clone(), values })
+                .collect(),
+        }
+    }
+}

@@ -1,0 +1,379 @@
+//! Dynamics: a derivation compiled to numbers, in the three forms the
+//! integrators want, plus the invariants to audit along a run.
+//!
+//! - Lagrange form, state `[q, q']`: `q'' = M⁻¹ f`, solving `M q'' = f` at every
+//!   call (M is never inverted symbolically).
+//! - Hamilton form, state `[q, p]`: `q' = M⁻¹(p − b)`, `p' = ∂L/∂q − ∂R/∂q' + Q`
+//!   at that q'. Symplectic implicit methods (Gauss–Legendre) need canonical
+//!   variables, and this gives them for any L quadratic in the velocities.
+//! - Separable form, state `[q, p]`: M constant and the forcing free of
+//!   velocities, so `q' = M⁻¹p` with M factored once and `p' = f(q, t)`; the
+//!   explicit symplectic compositions need this split.
+//!
+//! Every expression a run needs is compiled into one [`Tape`] per use, with the
+//! parameters as inputs. Entry point: [`Dynamics::new`], then [`Dynamics::system`].
+
+use crate::derive::Derivation;
+use crate::error::ModelError;
+use crate::probe;
+use num::{LinearSolver, OdeSystem, RhsError, SeparableSystem};
+use sym::{ExprId, Tape};
+
+/// The state variables a system integrates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Form {
+    /// `[q, q']`, accelerations from `M q'' = f`.
+    Lagrange,
+    /// `[q, p]`, Hamilton's equations evaluated numerically.
+    Hamilton,
+    /// `[q, p]` with `H = ½pᵀM⁻¹p + V(q, t)`, M constant.
+    Separable,
+}
+
+impl Form {
+    /// Its name for summaries.
+    pub fn name(self) -> &'static str {
+        match self {
+            Form::Lagrange => "lagrange",
+            Form::Hamilton => "hamilton",
+            Form::Separable => "separable",
+        }
+    }
+}
+
+/// A quantity evaluated along a run.
+#[derive(Debug, Clone)]
+pub struct Invariant {
+    /// Its name (`H`, `E`, `p_th`).
+    pub name: String,
+    /// The expression in (q, q', t).
+    pub expr: ExprId,
+}
+
+/// The compiled dynamics of a derivation. See the module documentation.
+#[derive(Debug, Clone)]
+pub struct Dynamics {
+    n: usize,
+    /// Input vector template: `[q, q', t, parameters]`.
+    inputs: Vec<f64>,
+    /// Outputs `M` (row-major, n²) and `f` (n) from `[q, q', t, params]`.
+    mass_forcing: Tape,
+    /// Outputs `M` (n²), `b` (n) and `∂L/∂q − ∂R/∂q' + Q` (n) from `[q, q', t, params]`.
+    hamilton: Option<Tape>,
+    /// Outputs the invariants from `[q, q', t, params]`.
+    invariants_tape: Tape,
+    invariants: Vec<Invariant>,
+    /// Whether H = ½pᵀM⁻¹p + V(q, t) with M constant.
+    separable: bool,
+    /// Whether L is quadratic in the velocities (M free of q').
+    quadratic: bool,
+    coordinate_names: Vec<String>,
+}
+
+impl Dynamics {
+    /// Compiles the expressions of a derivation.
+    pub fn new(d: &mut Derivation) -> Dynamics {
+        let n = d.q.len();
+        let param_syms: Vec<ExprId> = d.model.parameters.iter().map(|p| d.model.pool.symbol(&p.name)).collect();
+        let invariants = invariants_of(d);
+        let pool = &mut d.model.pool;
+        let mut input_syms: Vec<ExprId> = Vec::with_capacity(2 * n + 1 + param_syms.len());
+        input_syms.extend(&d.q);
+        input_syms.extend(&d.qd);
+        input_syms.push(d.t);
+        input_syms.extend(&param_syms);
+        let mut inputs = vec![0.0; input_syms.len()];
+        for (k, p) in d.model.parameters.iter().enumerate() {
+            inputs[2 * n + 1 + k] = p.value;
+        }
+
+        let mut outs: Vec<ExprId> = d.mass_matrix.iter().flatten().copied().collect();
+        outs.extend(&d.forcing);
+        let mass_forcing = Tape::compile(pool, &outs, &input_syms).expect("derivation symbols are inputs");
+
+        let quadratic = d.mass_matrix.iter().flatten().all(|&m| d.qd.iter().all(|&v| pool.free_of(m, v)));
+        let hamilton = quadratic.then(|| {
+            let zero_vel: probe::Subst = d.qd.iter().map(|&v| (v, pool.zero())).collect();
+            let mut outs: Vec<ExprId> = d.mass_matrix.iter().flatten().copied().collect();
+            for &p in &d.momenta {
+                outs.push(pool.substitute(p, &zero_vel));
+            }
+            for i in 0..n {
+                let mut terms = vec![pool.diff(d.lagrangian, d.q[i]), d.forces[i]];
+                if let Some(r) = d.dissipation {
+                    let dr = pool.diff(r, d.qd[i]);
+                    terms.push(pool.neg(dr));
+                }
+                outs.push(pool.add(&terms));
+            }
+            Tape::compile(pool, &outs, &input_syms).expect("derivation symbols are inputs")
+        });
+        let constant_mass = d
+            .mass_matrix
+            .iter()
+            .flatten()
+            .all(|&m| d.q.iter().chain(&d.qd).all(|&v| pool.free_of(m, v)) && pool.free_of(m, d.t));
+        let velocity_free_forcing = d.forcing.iter().all(|&f| d.qd.iter().all(|&v| pool.free_of(f, v)));
+        let no_linear_momentum = d.momenta.iter().all(|&p| {
+            let zero_vel: probe::Subst = d.qd.iter().map(|&v| (v, pool.zero())).collect();
+            let b = pool.substitute(p, &zero_vel);
+            probe::is_zero(pool, b)
+        });
+        let separable = quadratic && constant_mass && velocity_free_forcing && no_linear_momentum;
+
+        let exprs: Vec<ExprId> = invariants.iter().map(|i| i.expr).collect();
+        let invariants_tape = Tape::compile(pool, &exprs, &input_syms).expect("derivation symbols are inputs");
+
+        Dynamics {
+            n,
+            inputs,
+            mass_forcing,
+            hamilton,
+            invariants_tape,
+            invariants,
+            separable,
+            quadratic,
+            coordinate_names: d.model.coordinates.iter().map(|c| c.name.clone()).collect(),
+        }
+    }
+
+    /// The number of coordinates.
+    pub fn n_coords(&self) -> usize {
+        self.n
+    }
+
+    /// The coordinate names.
+    pub fn coordinate_names(&self) -> &[String] {
+        &self.coordinate_names
+    }
+
+    /// True when H = ½pᵀM⁻¹p + V(q, t) with a constant M.
+    pub fn is_separable(&self) -> bool {
+        self.separable
+    }
+
+    /// True when Hamilton's form is available (L quadratic in the velocities).
+    pub fn has_hamilton_form(&self) -> bool {
+        self.quadratic && self.hamilton.is_some()
+    }
+
+    /// The invariants audited along a run.
+    pub fn invariants(&self) -> &[Invariant] {
+        &self.invariants
+    }
+
+    /// A first-order system in the given form.
+    pub fn system(&self, form: Form) -> System {
+        let n = self.n;
+        System {
+            dynamics: self.clone(),
+            form,
+            inputs: self.inputs.clone(),
+            out: vec![0.0; n * n + 2 * n],
+            mass: vec![0.0; n * n],
+            lu: LinearSolver::new(n),
+            work: vec![0.0; n],
+            factored_once: false,
+        }
+    }
+
+    /// Evaluates the invariants at (q, q', t) into `out`.
+    pub fn eval_invariants(&mut self, t: f64, q: &[f64], qd: &[f64], out: &mut [f64]) {
+        let n = self.n;
+        self.inputs[..n].copy_from_slice(q);
+        self.inputs[n..2 * n].copy_from_slice(qd);
+        self.inputs[2 * n] = t;
+        self.invariants_tape.eval(&self.inputs, out);
+    }
+}
+
+/// The quantities audited along a run: H, every conserved momentum, and the
+/// energy E where it differs from H.
+pub fn invariants_of(d: &Derivation) -> Vec<Invariant> {
+    let mut invariants = vec![Invariant { name: "H".into(), expr: d.energy_function }];
+    for c in &d.conserved {
+        if c.name != "H" {
+            invariants.push(Invariant { name: c.name.clone(), expr: c.expr });
+        }
+    }
+    if let (Some(e), Some(false)) = (d.energy, d.hamiltonian_is_energy) {
+        invariants.push(Invariant { name: "E".into(), expr: e });
+    }
+    invariants
+}
+
+/// A compiled first-order system, ready for an integrator. Scratch space is
+/// allocated once; evaluations allocate nothing.
+#[derive(Debug, Clone)]
+pub struct System {
+    dynamics: Dynamics,
+    form: Form,
+    inputs: Vec<f64>,
+    out: Vec<f64>,
+    mass: Vec<f64>,
+    lu: LinearSolver,
+    work: Vec<f64>,
+    factored_once: bool,
+}
+
+impl System {
+    /// The form of the state.
+    pub fn form(&self) -> Form {
+        self.form
+    }
+
+    /// The initial state in this form from (q, q') at time t.
+    pub fn initial_state(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<Vec<f64>, ModelError> {
+        let n = self.dynamics.n;
+        let mut y = Vec::with_capacity(2 * n);
+        y.extend_from_slice(q);
+        match self.form {
+            Form::Lagrange => y.extend_from_slice(qd),
+            Form::Hamilton | Form::Separable => {
+                // p = M q' + b.
+                self.set_inputs(t, q, qd);
+                let tape = self.dynamics.hamilton.as_mut().expect("Hamilton form needs L quadratic in q'");
+                tape.eval(&self.inputs, &mut self.out[..n * n + 2 * n]);
+                for i in 0..n {
+                    let mut p = self.out[n * n + i];
+                    for j in 0..n {
+                        p += self.out[i * n + j] * qd[j];
+                    }
+                    y.push(p);
+                }
+            }
+        }
+        Ok(y)
+    }
+
+    /// Converts a state of this form to (q, q') at time t.
+    pub fn velocities(&mut self, t: f64, y: &[f64], qd: &mut [f64]) -> Result<(), RhsError> {
+        let n = self.dynamics.n;
+        match self.form {
+            Form::Lagrange => {
+                qd.copy_from_slice(&y[n..]);
+                Ok(())
+            }
+            Form::Hamilton | Form::Separable => self.hamilton_velocities(t, y, qd),
+        }
+    }
+
+    /// The number of invariants [`System::invariants_at`] writes.
+    pub fn n_invariants(&self) -> usize {
+        self.dynamics.invariants.len()
+    }
+
+    /// Evaluates the invariants at a state of this form.
+    pub fn invariants_at(&mut self, t: f64, y: &[f64], qd: &mut [f64], out: &mut [f64]) -> Result<(), RhsError> {
+        let n = self.dynamics.n;
+        self.velocities(t, y, qd)?;
+        let q: Vec<f64> = y[..n].to_vec();
+        self.dynamics.eval_invariants(t, &q, qd, out);
+        Ok(())
+    }
+
+    fn set_inputs(&mut self, t: f64, q: &[f64], qd: &[f64]) {
+        let n = self.dynamics.n;
+        self.inputs[..n].copy_from_slice(q);
+        self.inputs[n..2 * n].copy_from_slice(qd);
+        self.inputs[2 * n] = t;
+    }
+
+    /// q' = M⁻¹(p − b), leaving M, b and the momentum rates in `out`.
+    fn hamilton_velocities(&mut self, t: f64, y: &[f64], qd: &mut [f64]) -> Result<(), RhsError> {
+        let n = self.dynamics.n;
+        let (q, p) = y.split_at(n);
+        self.inputs[..n].copy_from_slice(q);
+        for v in &mut self.inputs[n..2 * n] {
+            *v = 0.0;
+        }
+        self.inputs[2 * n] = t;
+        let tape = self.dynamics.hamilton.as_mut().expect("Hamilton form needs L quadratic in q'");
+        tape.eval(&self.inputs, &mut self.out);
+        self.lu.factor(&self.out[..n * n]).map_err(RhsError::from)?;
+        for i in 0..n {
+            qd[i] = p[i] - self.out[n * n + i];
+        }
+        self.lu.solve_in_place(qd).map_err(RhsError::from)?;
+        Ok(())
+    }
+}
+
+impl OdeSystem for System {
+    fn dim(&self) -> usize {
+        2 * self.dynamics.n
+    }
+
+    fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), RhsError> {
+        let n = self.dynamics.n;
+        match self.form {
+            Form::Lagrange => {
+                self.inputs[..2 * n].copy_from_slice(y);
+                self.inputs[2 * n] = t;
+                let out = &mut self.out[..n * n + n];
+                self.dynamics.mass_forcing.eval(&self.inputs, out);
+                self.lu.factor(&out[..n * n]).map_err(RhsError::from)?;
+                dy[..n].copy_from_slice(&y[n..]);
+                dy[n..].copy_from_slice(&out[n * n..]);
+                self.lu.solve_in_place(&mut dy[n..]).map_err(RhsError::from)?;
+            }
+            Form::Hamilton | Form::Separable => {
+                let mut qd = std::mem::take(&mut self.work);
+                let r = self.hamilton_velocities(t, y, &mut qd);
+                if let Err(e) = r {
+                    self.work = qd;
+                    return Err(e);
+                }
+                // p' = ∂L/∂q − ∂R/∂q' + Q at q' = M⁻¹(p − b).
+                self.inputs[n..2 * n].copy_from_slice(&qd);
+                let tape = self.dynamics.hamilton.as_mut().expect("Hamilton form needs L quadratic in q'");
+                tape.eval(&self.inputs, &mut self.out);
+                dy[..n].copy_from_slice(&qd);
+                dy[n..].copy_from_slice(&self.out[n * n + n..]);
+                self.work = qd;
+            }
+        }
+        if let Some(index) = dy.iter().position(|v| !v.is_finite()) {
+            return Err(RhsError::NonFinite { index });
+        }
+        Ok(())
+    }
+}
+
+impl SeparableSystem for System {
+    fn n(&self) -> usize {
+        self.dynamics.n
+    }
+
+    fn velocity(&mut self, p: &[f64], dq: &mut [f64]) -> Result<(), RhsError> {
+        let n = self.dynamics.n;
+        if !self.factored_once {
+            // M is constant: evaluate and factor it once.
+            for v in &mut self.inputs[..=2 * n] {
+                *v = 0.0;
+            }
+            self.dynamics.mass_forcing.eval(&self.inputs, &mut self.out[..n * n + n]);
+            self.mass.copy_from_slice(&self.out[..n * n]);
+            self.lu.factor(&self.mass).map_err(RhsError::from)?;
+            self.factored_once = true;
+        }
+        dq.copy_from_slice(p);
+        self.lu.solve_in_place(dq).map_err(RhsError::from)?;
+        Ok(())
+    }
+
+    fn force(&mut self, t: f64, q: &[f64], dp: &mut [f64]) -> Result<(), RhsError> {
+        let n = self.dynamics.n;
+        self.inputs[..n].copy_from_slice(q);
+        for v in &mut self.inputs[n..2 * n] {
+            *v = 0.0;
+        }
+        self.inputs[2 * n] = t;
+        self.dynamics.mass_forcing.eval(&self.inputs, &mut self.out[..n * n + n]);
+        dp.copy_from_slice(&self.out[n * n..n * n + n]);
+        if let Some(index) = dp.iter().position(|v| !v.is_finite()) {
+            return Err(RhsError::NonFinite { index: n + index });
+        }
+        Ok(())
+    }
+}
