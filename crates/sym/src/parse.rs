@@ -130,6 +130,17 @@ pub enum ParseErrorKind {
         /// The limit.
         limit: usize,
     },
+    /// A numeric exponent larger in magnitude than [`Limits::max_exponent`].
+    #[error("exponent {value} is larger than {limit} in magnitude")]
+    ExponentTooLarge {
+        /// The exponent as written.
+        value: String,
+        /// The limit.
+        limit: u64,
+    },
+    /// A floating-point constant (or a product of them) that is not finite.
+    #[error("the constant overflows a 64-bit float")]
+    NonFiniteConstant,
     /// The parse would add more than [`Limits::max_nodes`] nodes to the pool.
     #[error("expression has more than {limit} nodes")]
     TooManyNodes {
@@ -152,11 +163,16 @@ pub struct Limits {
     /// Most nodes one parse may add to the pool. Default 1 000 000, a guard
     /// against canonicalization blow-ups rather than a limit users should meet.
     pub max_nodes: usize,
+    /// Largest magnitude of a numeric exponent. Default 1000: the steepest
+    /// potentials of physics (Lennard-Jones r^-12, r^-18 softening) are far
+    /// below it, while x^1000000000 would only produce meaningless numbers
+    /// (and 2^1000000000 an unbounded exact integer).
+    pub max_exponent: u64,
 }
 
 impl Default for Limits {
     fn default() -> Self {
-        Limits { max_len: 100_000, max_depth: 64, max_nodes: 1_000_000 }
+        Limits { max_len: 100_000, max_depth: 64, max_nodes: 1_000_000, max_exponent: 1000 }
     }
 }
 
@@ -334,6 +350,9 @@ impl Parser<'_, '_, '_> {
 
     /// Fails when the parse has grown the pool past the node limit.
     fn check_nodes(&self, e: ExprId, span: Span) -> PResult<ExprId> {
+        if self.pool.as_number(e).is_some_and(|n| !n.to_f64().is_finite()) {
+            return Err(self.error(ParseErrorKind::NonFiniteConstant, span));
+        }
         let limit = self.opts.limits.max_nodes;
         if self.pool.len().saturating_sub(self.start_len) > limit {
             return Err(self.error(ParseErrorKind::TooManyNodes { limit }, span));
@@ -520,8 +539,16 @@ impl Parser<'_, '_, '_> {
         }
         self.enter()?;
         self.bump()?;
+        let exp_start = self.tok.start;
         let exp = self.exponent()?;
         self.leave();
+        if let Some(n) = self.pool.as_number(exp) {
+            let limit = self.opts.limits.max_exponent;
+            if n.to_f64().abs() > limit as f64 {
+                let span = Span::new(exp_start, self.tok.start);
+                return Err(self.error(ParseErrorKind::ExponentTooLarge { value: n.to_string(), limit }, span));
+            }
+        }
         let e = self.pool.pow(base, exp);
         self.check_nodes(e, Span::new(start, self.tok.start))
     }
@@ -807,5 +834,13 @@ mod tests {
         for text in ["(-2)^127", "x/(-2)^127", "(-1/2)^127", "2^127", "(-2)^128", "1e300*1e300"] {
             let _ = pool.parse(text);
         }
+    }
+
+    #[test]
+    fn huge_exponents_and_overflowing_constants_are_errors() {
+        check_err("x^1000000000", "exponent 1000000000 is larger than 1000 in magnitude", "1000000000");
+        check_err("x^-2000", "exponent -2000 is larger than 1000 in magnitude", "-2000");
+        check_err("1e300*1e300", "the constant overflows a 64-bit float", "1e300*1e300");
+        check("r^-12", "1/r^12");
     }
 }
