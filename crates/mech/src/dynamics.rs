@@ -377,3 +377,57 @@ impl SeparableSystem for System {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Model;
+
+    const PENDULUM: &str = r#"
+coordinates = ["th"]
+gravity = "g"
+[parameters]
+m = 2.0
+l = 1.5
+g = 9.81
+[[particles]]
+mass = "m"
+position = ["l*sin(th)", "-l*cos(th)"]
+"#;
+
+    fn dynamics(text: &str) -> Dynamics {
+        let mut d = Derivation::new(Model::parse(text, &[]).unwrap()).unwrap();
+        Dynamics::new(&mut d)
+    }
+
+    #[test]
+    fn every_form_gives_the_pendulum_equation() {
+        let dy = dynamics(PENDULUM);
+        assert!(dy.is_separable(), "M = m l^2 is constant and f depends on th alone");
+        let (th, om): (f64, f64) = (0.7, -0.3);
+        let expect = -9.81 / 1.5 * th.sin();
+        let mut out = [0.0; 2];
+        let mut lag = dy.system(Form::Lagrange);
+        lag.rhs(0.0, &[th, om], &mut out).unwrap();
+        assert!((out[0] - om).abs() < 1e-15 && (out[1] - expect).abs() < 1e-12, "{out:?}");
+        let mut ham = dy.system(Form::Hamilton);
+        let y = ham.initial_state(0.0, &[th], &[om]).unwrap();
+        assert!((y[1] - 2.0 * 1.5 * 1.5 * om).abs() < 1e-12, "p = m l^2 th'");
+        ham.rhs(0.0, &y, &mut out).unwrap();
+        assert!((out[0] - om).abs() < 1e-12);
+        assert!((out[1] - 2.0 * 1.5 * 1.5 * expect).abs() < 1e-10, "p' = m l^2 th''");
+        let mut sep = dy.system(Form::Separable);
+        let (mut dq, mut dp) = ([0.0], [0.0]);
+        sep.velocity(&y[1..], &mut dq).unwrap();
+        sep.force(0.0, &y[..1], &mut dp).unwrap();
+        assert!((dq[0] - om).abs() < 1e-12 && (dp[0] - out[1]).abs() < 1e-10);
+    }
+
+    #[test]
+    fn a_singular_mass_matrix_is_an_error_not_a_number() {
+        let dy = dynamics("coordinates = [\"x\"]\nkinetic = \"x^2*x'^2/2\"\n");
+        let mut sys = dy.system(Form::Lagrange);
+        let mut out = [0.0; 2];
+        assert!(matches!(sys.rhs(0.0, &[0.0, 1.0], &mut out), Err(RhsError::Singular { .. })));
+    }
+}
