@@ -4,6 +4,9 @@
 use ariadne::{Label, Report, ReportKind, Source};
 use std::path::Path;
 
+/// Longest source line shown in a diagnostic snippet, in bytes.
+const MAX_SNIPPET_LINE: usize = 400;
+
 /// Why the program stops without a result.
 pub enum Failure {
     /// Bad input: a message, optionally located in a source text.
@@ -77,6 +80,16 @@ impl Failure {
                     .with_label(Label::new((file.as_str(), span.clone())).with_message(short(message)));
                 if let Some(h) = help {
                     report = report.with_help(h);
+                }
+                // A snippet of a very long line (10 000 parentheses) would only
+                // repeat it; the first line already says where.
+                let line_len = source[..span.start].rsplit('\n').next().map_or(0, str::len)
+                    + source[span.start..].split('\n').next().map_or(0, str::len);
+                if line_len > MAX_SNIPPET_LINE {
+                    if let Some(h) = help {
+                        out.push_str(&format!("  help: {h}\n"));
+                    }
+                    return out;
                 }
                 let mut buf = Vec::new();
                 if report.finish().write((file.as_str(), Source::from(source.as_str())), &mut buf).is_ok() {

@@ -46,25 +46,26 @@ pub fn text(d: &Derivation) -> String {
         if d.dissipation.is_some() { " + ∂R/∂q'" } else { "" },
         if d.forces.iter().any(|f| !pool.is_zero(*f)) { " − Q" } else { "" }
     );
+    let label_w = names.iter().map(|n| n.chars().count()).max().unwrap_or(1) + 1;
     for i in 0..n {
-        let _ = writeln!(o, "  {}:  {} = 0", names[i], s(d.equations[i]));
+        let _ = writeln!(o, "  {:<label_w$} {} = 0", format!("{}:", names[i]), s(d.equations[i]));
     }
 
     let _ = writeln!(o, "\nin the form M(q, t) q'' = f(q, q', t)");
-    let w = (0..n)
-        .flat_map(|i| (0..n).map(move |j| (i, j)))
-        .map(|(i, j)| s(d.mass_matrix[i][j]).chars().count())
-        .max()
-        .unwrap_or(1);
+    let cells: Vec<Vec<String>> = d.mass_matrix.iter().map(|row| row.iter().map(|&e| s(e)).collect()).collect();
+    let widths: Vec<usize> =
+        (0..n).map(|j| cells.iter().map(|row| row[j].chars().count()).max().unwrap_or(1)).collect();
+    let name_w = names.iter().map(|n| n.chars().count()).max().unwrap_or(1);
     for i in 0..n {
-        let row: Vec<String> = (0..n).map(|j| format!("{:<w$}", s(d.mass_matrix[i][j]))).collect();
+        let row: Vec<String> = (0..n).map(|j| format!("{:<w$}", cells[i][j], w = widths[j])).collect();
         let _ = writeln!(
             o,
-            "  {} [ {} ] {}''  =  {}",
+            "  {} [ {} ] {:<name_w$}  =  {}",
             if i == n / 2 { "M =" } else { "   " },
             row.join("  "),
-            names[i],
-            s(d.forcing[i])
+            format!("{}''", names[i]),
+            s(d.forcing[i]),
+            name_w = name_w + 2
         );
     }
 

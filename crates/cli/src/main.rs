@@ -18,7 +18,12 @@ use std::process::ExitCode;
 
 /// Analytical mechanics from a model file: equations of motion, Hamiltonian, conserved quantities.
 #[derive(Parser)]
-#[command(name = "lagrange", version, about, long_about = None)]
+#[command(
+    name = "lagrange",
+    version,
+    about = "Analytical mechanics from a model file: equations of motion, Hamiltonian, conserved quantities, motion",
+    long_about = None
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
