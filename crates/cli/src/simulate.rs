@@ -237,6 +237,8 @@ fn summary_json(r: &RunReport, names: &[String]) -> String {
         "rhs_evaluations": r.rhs_evaluations,
         "t_final": r.t_final,
         "stopped_by": r.stopped_by,
+        "failure": r.failure,
+        "pilot_rhs_evaluations": r.pilot_rhs_evaluations,
         "final": fin,
         "invariants": inv,
         "warnings": r.warnings,
@@ -262,12 +264,21 @@ fn summary_text(r: &RunReport, names: &[String], d: &Derivation) -> String {
         if r.form.name() == "lagrange" { "q'" } else { "p" }
     ));
     s.push_str(&format!(
-        "{} steps ({} rejected), {} right-hand-side evaluations, {:.3} s\n",
-        r.steps, r.rejected, r.rhs_evaluations, r.wall_seconds
+        "{} steps ({} rejected), {} right-hand-side evaluations{}, {:.3} s\n",
+        r.steps,
+        r.rejected,
+        r.rhs_evaluations,
+        if r.pilot_rhs_evaluations > 0 {
+            format!(" (+{} choosing the step)", r.pilot_rhs_evaluations)
+        } else {
+            String::new()
+        },
+        r.wall_seconds
     ));
-    match &r.stopped_by {
-        Some(why) => s.push_str(&format!("stopped at t = {} ({why})\n", r.t_final)),
-        None => s.push_str(&format!("reached t = {}\n", r.t_final)),
+    match (&r.failure, &r.stopped_by) {
+        (Some(_), _) => s.push_str(&format!("FAILED after t = {} (see the error below)\n", r.t_final)),
+        (None, Some(why)) => s.push_str(&format!("stopped at t = {} ({why})\n", r.t_final)),
+        (None, None) => s.push_str(&format!("reached t = {}\n", r.t_final)),
     }
     s.push_str("final state:");
     for (i, name) in names.iter().enumerate() {

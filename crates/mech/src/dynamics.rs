@@ -272,6 +272,22 @@ impl System {
         Ok(())
     }
 
+    /// The mass matrix M(q, t) (row-major) at a state of this form.
+    pub fn mass_matrix_at(&mut self, t: f64, y: &[f64]) -> Vec<f64> {
+        let n = self.dynamics.n;
+        self.inputs[..n].copy_from_slice(&y[..n]);
+        for v in &mut self.inputs[n..2 * n] {
+            *v = 0.0;
+        }
+        if self.form == Form::Lagrange {
+            // M may depend on the velocities when L is not quadratic in them.
+            self.inputs[n..2 * n].copy_from_slice(&y[n..]);
+        }
+        self.inputs[2 * n] = t;
+        self.dynamics.mass_forcing.eval(&self.inputs, &mut self.out[..n * n + n]);
+        self.out[..n * n].to_vec()
+    }
+
     fn set_inputs(&mut self, t: f64, q: &[f64], qd: &[f64]) {
         let n = self.dynamics.n;
         self.inputs[..n].copy_from_slice(q);

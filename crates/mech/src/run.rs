@@ -126,6 +126,10 @@ pub struct RunReport {
     pub stopped_by: Option<String>,
     /// Warnings (an invariant drifting beyond what the tolerance explains).
     pub warnings: Vec<String>,
+    /// Why the run failed midway, if it did.
+    pub failure: Option<String>,
+    /// Right-hand-side evaluations of the pilot runs that chose a fixed step.
+    pub pilot_rhs_evaluations: usize,
     /// Wall-clock seconds of the integration (compilation included).
     pub wall_seconds: f64,
 }
@@ -213,6 +217,7 @@ pub fn simulate(
     let input_error = |e: SolveError| RunError::Input(ModelError::whole(e.to_string()));
     let mut solver = build(system.clone(), &solver_config).map_err(input_error)?;
     let mut dt = None;
+    let mut pilot_rhs = 0;
     if !method.is_adaptive() {
         // A fixed step chosen from the tolerance at the start may be too long
         // later in the run (a pendulum released from rest speeds up): pilot
@@ -221,12 +226,15 @@ pub fn simulate(
         // sample spacing, so that every output row is an integrator state,
         // not an interpolation between two.
         let mut h = solver.step_size();
+        pilot_rhs += solver.statistics().rhs_evaluations;
         if config.dt.is_none() && d.hamiltonian_conserved {
             let target = 10.0 * config.rtol.max(1e-14);
             for _ in 0..4 {
                 let cfg = Config { dt: Some(h), ..solver_config };
                 let pilot = build(system.clone(), &cfg).map_err(input_error)?;
-                let Some(drift) = pilot_drift(pilot, &mut probe_system, config.until, n) else { break };
+                let (drift, evaluations) = pilot_drift(pilot, &mut probe_system, config.until, n);
+                pilot_rhs += evaluations;
+                let Some(drift) = drift else { break };
                 if drift <= target {
                     break;
                 }
@@ -357,6 +365,8 @@ pub fn simulate(
         invariants: audits,
         stopped_by: None,
         warnings,
+        failure: None,
+        pilot_rhs_evaluations: pilot_rhs,
         wall_seconds: 0.0,
     };
     report.wall_seconds = start.elapsed().as_secs_f64();
@@ -369,20 +379,92 @@ pub fn simulate(
                 StopReason::Finished => None,
             };
             if let Some(message) = row_error {
+                report.failure = Some(message.clone());
                 return Err(RunError::Failed { message, report: Box::new(report) });
             }
             Ok(report)
         }
         Err(e) => {
-            let message = describe_failure(&e, &names, form);
+            let at = (solver.t(), solver.state().to_vec());
+            let message = describe_failure(&e, &names, form, &mut probe_system, &y0, at);
+            report.failure = Some(message.clone());
             Err(RunError::Failed { message, report: Box::new(report) })
         }
     }
 }
 
+/// Why the integrator could not go on, judged from the last good state: a mass
+/// matrix that has become singular (measured against its size at the start, so
+/// that a 1×1 M → 0 counts), or the component that grows without bound.
+fn diagnose(system: &mut System, names: &[String], form: Form, y0: &[f64], t: f64, y: &[f64]) -> Option<String> {
+    let n = names.len();
+    let m0 = system.mass_matrix_at(0.0, y0);
+    let m = system.mass_matrix_at(t, y);
+    // A step that cannot be taken near a state where M has lost most of its
+    // smallest pivot (x^2 x'^2/2 with x → 0) is M becoming singular; the step
+    // that fails may still be a little before the singular point.
+    if let (Some(p0), Some(p)) = (smallest_pivot(&m0, n), smallest_pivot(&m, n)) {
+        if p < 0.05 * p0 {
+            return Some(format!(
+                "the mass matrix becomes singular at t ≈ {t} (its smallest pivot fell from {p0:.3e} at the start to {p:.3e}): the accelerations are undetermined there"
+            ));
+        }
+    }
+    // The fastest-growing component relative to where it started.
+    let (k, size) = y
+        .iter()
+        .zip(y0)
+        .map(|(v, v0)| v.abs() / v0.abs().max(1.0))
+        .enumerate()
+        .fold((0, 0.0f64), |best, (k, r)| if r > best.1 { (k, r) } else { best });
+    (size > 1e3)
+        .then(|| format!("the motion blew up at t = {t}: {} has grown to {:.3e}", component_name(k, names, form), y[k]))
+}
+
+/// The smallest pivot of an LU with partial pivoting (None if not finite).
+fn smallest_pivot(m: &[f64], n: usize) -> Option<f64> {
+    if m.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let mut a = m.to_vec();
+    let mut min = f64::INFINITY;
+    for col in 0..n {
+        let p = (col..n).max_by(|&i, &j| a[i * n + col].abs().total_cmp(&a[j * n + col].abs()))?;
+        for c in 0..n {
+            a.swap(col * n + c, p * n + c);
+        }
+        let piv = a[col * n + col];
+        min = min.min(piv.abs());
+        if piv == 0.0 {
+            return Some(0.0);
+        }
+        for r in col + 1..n {
+            let f = a[r * n + col] / piv;
+            for c in col..n {
+                a[r * n + c] -= f * a[col * n + c];
+            }
+        }
+    }
+    Some(min)
+}
+
+fn component_name(index: usize, names: &[String], form: Form) -> String {
+    let n = names.len();
+    if index < n {
+        format!("the coordinate '{}'", names[index])
+    } else if index < 2 * n {
+        match form {
+            Form::Lagrange => format!("the velocity '{}''", names[index - n]),
+            _ => format!("the momentum 'p_{}'", names[index - n]),
+        }
+    } else {
+        format!("component {index}")
+    }
+}
+
 /// The largest relative drift of H (the first invariant) over every step of a
 /// run without output; None when the pilot fails (the real run reports why).
-fn pilot_drift(mut solver: Box<dyn Solver>, system: &mut System, until: f64, n: usize) -> Option<f64> {
+fn pilot_drift(mut solver: Box<dyn Solver>, system: &mut System, until: f64, n: usize) -> (Option<f64>, usize) {
     let mut qd = vec![0.0; n];
     let mut inv = vec![0.0; system.n_invariants()];
     let mut h0: Option<f64> = None;
@@ -402,24 +484,19 @@ fn pilot_drift(mut solver: Box<dyn Solver>, system: &mut System, until: f64, n: 
         drift = drift.max(d);
         ControlFlow::Continue(())
     });
-    (result.is_ok() && !failed).then_some(drift)
+    ((result.is_ok() && !failed).then_some(drift), solver.statistics().rhs_evaluations)
 }
 
 /// A failure in the user's terms: the time and the coordinate concerned.
-fn describe_failure(e: &SolveError, names: &[String], form: Form) -> String {
-    let n = names.len();
-    let component = |index: usize| -> String {
-        if index < n {
-            format!("the coordinate '{}'", names[index])
-        } else if index < 2 * n {
-            match form {
-                Form::Lagrange => format!("the velocity '{}''", names[index - n]),
-                _ => format!("the momentum 'p_{}'", names[index - n]),
-            }
-        } else {
-            format!("component {index}")
-        }
-    };
+fn describe_failure(
+    e: &SolveError,
+    names: &[String],
+    form: Form,
+    system: &mut System,
+    y0: &[f64],
+    (t_last, y_last): (f64, Vec<f64>),
+) -> String {
+    let component = |index: usize| component_name(index, names, form);
     match e {
         SolveError::NonFiniteState { t, index } => {
             format!("the motion blew up at t = {t}: {} is no longer finite", component(*index))
@@ -430,6 +507,11 @@ fn describe_failure(e: &SolveError, names: &[String], form: Form) -> String {
         SolveError::Rhs { t, source: num::RhsError::Singular { detail } } => {
             format!("the mass matrix became singular at t = {t} ({detail}): the accelerations are undetermined there")
         }
-        other => other.to_string(),
+        // A step that cannot be taken (too small, or implicit stages that do not
+        // converge): say why from the last good state when it can be told.
+        other => match diagnose(system, names, form, y0, t_last, &y_last) {
+            Some(why) => format!("{why} ({other})"),
+            None => other.to_string(),
+        },
     }
 }

@@ -1,0 +1,282 @@
+#!/usr/bin/env python3
+"""Benchmark `lagrange simulate` against SciPy's solve_ivp on SymPy-derived motion, in one run.
+
+What it does, in order:
+
+1. times `target/release/lagrange simulate MODEL --until T --rtol R --atol R --every-step
+   --summary json` (building the binary with `cargo build --release` if it is missing) for
+   the double pendulum (examples/double_pendulum.toml, t = 0..100), the 50-mass chain
+   (examples/chain50.toml, t = 0..100) and Kepler (examples/kepler.toml, t = 0..1000),
+   each with `--method dop853` and with the method the derivation picks (no --method):
+   median over --repeats runs of the integration's `wall_seconds` (compilation and, for
+   fixed-step methods, the pilot runs that choose the step included) and of the whole
+   process, and the summary's steps, rhs_evaluations and H's max_rel_drift (H is the
+   energy for all three);
+2. runs the anchor ../shared/bench/scipy_simulate.py on the same systems with DOP853, the
+   `lambdify` and `hand` right-hand sides and the same tolerances (rtol = atol), in a venv
+   under ${TMPDIR:-/tmp} with the anchors' pinned requirements if this Python cannot import
+   sympy, numpy and scipy (the venv logic is bench/derive.py's);
+3. prints two Markdown tables -- every run, and the ratios ours vs SciPy (wall time, RHS
+   evaluations, energy drift) -- and writes every record as JSON lines to --out.
+
+Matched settings: rtol = atol = R on both sides (SciPy's anchor uses rtol = atol); both
+sides report the energy drift at the accepted steps (`--every-step` for us, SciPy's
+`energy_drift_steps`), and both time the integration without dense output. Standard
+library only.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+sys.dont_write_bytecode = True  # importing derive.py must not leave bench/__pycache__
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import derive as derive_bench  # noqa: E402  (ensure_binary, anchor_python, run_anchor)
+
+REPO = Path(__file__).resolve().parent.parent
+DEFAULT_ANCHORS = REPO.parent / "shared" / "bench"
+BENCH = "lagrange_simulate"
+
+# (name in the anchor, model file, end time)
+SYSTEMS = [
+    ("double_pendulum", "examples/double_pendulum.toml", 100.0),
+    ("chain", "examples/chain50.toml", 100.0),
+    ("kepler", "examples/kepler.toml", 1000.0),
+]
+
+
+def log(message: str) -> None:
+    print(f"[simulate.py] {message}", file=sys.stderr, flush=True)
+
+
+# ------------------------------------------------------------------ our side
+
+
+def run_ours(binary: Path, model: str, until: float, rtol: float, method: str | None, timeout: float) -> dict:
+    """One `simulate` run: its summary JSON plus the process wall time."""
+    args = [str(binary), "simulate", model, "--until", repr(until), "--rtol", repr(rtol), "--atol", repr(rtol),
+            "--every-step", "--summary", "json"]
+    if method is not None:
+        args += ["--method", method]
+    start = time.perf_counter()
+    try:
+        proc = subprocess.run(args, cwd=REPO, capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return {"error": f"timed out after {timeout:.0f} s"}
+    wall = time.perf_counter() - start
+    if proc.returncode != 0:
+        return {"error": f"exit {proc.returncode}: {proc.stderr.strip()[-500:]}"}
+    try:
+        summary = json.loads(proc.stdout)
+    except json.JSONDecodeError as err:
+        return {"error": f"summary is not JSON: {err}"}
+    summary["process_wall_s"] = wall
+    summary["stderr"] = proc.stderr.strip()
+    return summary
+
+
+def measure_ours(binary: Path, rtols, methods, repeats: int, timeout: float) -> list[dict]:
+    records = []
+    for system, model, until in SYSTEMS:
+        for rtol in rtols:
+            for method in methods:
+                requested = None if method == "default" else method
+                runs = []
+                for _ in range(repeats):
+                    run = run_ours(binary, model, until, rtol, requested, timeout)
+                    runs.append(run)
+                    if "error" in run:
+                        break
+                ok = [r for r in runs if "error" not in r]
+                last = runs[-1]
+                record = {
+                    "bench": BENCH,
+                    "record": "run",
+                    "tool": "lagrange",
+                    "system": system,
+                    "model": model,
+                    "t_end": until,
+                    "rtol": rtol,
+                    "atol": rtol,
+                    "requested": method,
+                    "method": last.get("method"),
+                    "dt": last.get("dt"),
+                    "wall_s": statistics.median(r["wall_seconds"] for r in ok) if ok else None,
+                    "process_wall_s": statistics.median(r["process_wall_s"] for r in ok) if ok else None,
+                    "wall_samples": [r["wall_seconds"] for r in ok],
+                    "steps": last.get("steps"),
+                    "rhs_evaluations": last.get("rhs_evaluations"),
+                    "energy_drift_steps": (last.get("invariants") or {}).get("H", {}).get("max_rel_drift"),
+                    "invariants": last.get("invariants"),
+                    "final": last.get("final"),
+                    "warnings": last.get("warnings"),
+                    "repeats": len(ok),
+                    "error": None if ok else last.get("error"),
+                }
+                log(f"lagrange {system} rtol={rtol:g} {method} -> {record['method']}: wall={fmt_s(record['wall_s'])} "
+                    f"steps={record['steps']} rhs={record['rhs_evaluations']} drift={fmt_e(record['energy_drift_steps'])}")
+                records.append(record)
+    return records
+
+
+# ------------------------------------------------------------------ report
+
+
+def fmt_s(seconds) -> str:
+    if seconds is None:
+        return "n/a"
+    return f"{seconds * 1e3:.1f} ms" if seconds < 1 else f"{seconds:.2f} s"
+
+
+def fmt_e(value) -> str:
+    return "n/a" if value is None else f"{value:.1e}"
+
+
+def fmt_int(value) -> str:
+    return "n/a" if value is None else f"{value:,}"
+
+
+def fmt_ratio(num, den, digits: int = 1) -> str:
+    if num is None or den is None or den == 0:
+        return "n/a"
+    return f"{num / den:.{digits}f}×" if num / den >= 0.1 else f"{num / den:.2g}×"
+
+
+def scipy_index(records: list[dict]) -> dict:
+    """SciPy DOP853 runs by (system, rtol, variant)."""
+    out = {}
+    for r in records:
+        if r.get("record") == "run" and r.get("method") == "DOP853" and not r.get("timeout"):
+            out[(r["system"], float(r["rtol"]), r["variant"])] = r
+    return out
+
+
+def tables(ours: list[dict], scipy: dict, variants) -> tuple[str, list[dict]]:
+    runs = ["| system | rtol = atol | run | steps | RHS evaluations | integration wall | process wall | max rel. energy drift (steps) |",
+            "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: |"]
+    ratios = ["| system | rtol | ours | wall: SciPy lambdify / ours | wall: SciPy hand / ours | "
+              "RHS evals: SciPy / ours | energy drift: ours / SciPy |",
+              "| --- | --- | --- | ---: | ---: | ---: | ---: |"]
+    ratio_records = []
+    seen = set()
+    for r in ours:
+        key = (r["system"], r["rtol"])
+        label = f"lagrange {r['method'] or r['requested']}" + (" (default)" if r["requested"] == "default" else "")
+        if r["dt"]:
+            label += f", dt {r['dt']:.3g}"
+        runs.append(f"| {r['system']} | {r['rtol']:g} | {label} | {fmt_int(r['steps'])} | {fmt_int(r['rhs_evaluations'])} "
+                    f"| {fmt_s(r['wall_s'])} | {fmt_s(r['process_wall_s'])} | {fmt_e(r['energy_drift_steps'])} |")
+        if key not in seen:
+            seen.add(key)
+            for variant in variants:
+                s = scipy.get((r["system"], r["rtol"], variant))
+                if s is None:
+                    runs.append(f"| {r['system']} | {r['rtol']:g} | SciPy DOP853 {variant} | n/a | n/a | n/a | – | n/a |")
+                    continue
+                runs.append(f"| {r['system']} | {r['rtol']:g} | SciPy DOP853 {variant} | {fmt_int(s.get('n_steps'))} "
+                            f"| {fmt_int(s.get('rhs_calls'))} | {fmt_s(s.get('wall_s'))} | – "
+                            f"| {fmt_e(s.get('energy_drift_steps'))} |")
+        lam = scipy.get((r["system"], r["rtol"], "lambdify"))
+        hand = scipy.get((r["system"], r["rtol"], "hand"))
+        ref = hand or lam
+        ratio = {
+            "bench": BENCH,
+            "record": "ratio",
+            "system": r["system"],
+            "rtol": r["rtol"],
+            "ours": r["method"],
+            "wall_lambdify_over_ours": None if not (lam and r["wall_s"]) else lam["wall_s"] / r["wall_s"],
+            "wall_hand_over_ours": None if not (hand and r["wall_s"]) else hand["wall_s"] / r["wall_s"],
+            "rhs_scipy_over_ours": None if not (ref and r["rhs_evaluations"]) else ref["rhs_calls"] / r["rhs_evaluations"],
+            "drift_ours_over_scipy": None if not (ref and r["energy_drift_steps"] is not None and ref.get("energy_drift_steps"))
+            else r["energy_drift_steps"] / ref["energy_drift_steps"],
+        }
+        ratio_records.append(ratio)
+        ratios.append(
+            f"| {r['system']} | {r['rtol']:g} | {label} "
+            f"| {fmt_ratio(lam and lam['wall_s'], r['wall_s'])} | {fmt_ratio(hand and hand['wall_s'], r['wall_s'])} "
+            f"| {fmt_ratio(ref and ref['rhs_calls'], r['rhs_evaluations'], 2)} "
+            f"| {fmt_ratio(r['energy_drift_steps'], ref and ref.get('energy_drift_steps'), 2)} |"
+        )
+    return "\n".join(runs) + "\n\n" + "\n".join(ratios) + "\n", ratio_records
+
+
+# ------------------------------------------------------------------ main
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--rtols", default="1e-10", help="comma-separated tolerances, rtol = atol (default 1e-10)")
+    parser.add_argument("--methods", default="dop853,default",
+                        help="our methods, comma-separated; `default` = the derivation's choice (default dop853,default)")
+    parser.add_argument("--repeats", type=int, default=5, help="runs of ours per case (median; default 5)")
+    parser.add_argument("--anchor-repeats", type=int, default=3, help="timed repeats per SciPy run (default 3)")
+    parser.add_argument("--grid-points", type=int, default=0,
+                        help="SciPy's dense t_eval audit grid (a second run per case); 0 skips it (default)")
+    parser.add_argument("--timeout", type=float, default=300.0, help="seconds per run of ours (default 300)")
+    parser.add_argument("--anchor-timeout", type=float, default=3600.0, help="seconds for the SciPy script (default 3600)")
+    parser.add_argument("--no-scipy", action="store_true", help="skip the anchor")
+    parser.add_argument("--no-install", action="store_true", help="never create or fill the anchors' venv")
+    parser.add_argument("--binary", type=Path, default=REPO / "target" / "release" / "lagrange")
+    parser.add_argument("--no-build", action="store_true", help="never run cargo")
+    parser.add_argument("--anchors", type=Path, default=DEFAULT_ANCHORS, help="folder of scipy_simulate.py")
+    parser.add_argument("--out", type=Path,
+                        default=Path(os.environ.get("TMPDIR") or "/tmp") / "lagrange-simulate-bench.jsonl")
+    args = parser.parse_args(argv)
+    rtols = [float(v) for v in args.rtols.split(",") if v]
+    methods = [m for m in args.methods.split(",") if m]
+    variants = ["lambdify", "hand"]
+
+    records: list[dict] = [{"bench": BENCH, "record": "machine", "nproc": os.cpu_count(), "platform": platform.platform(),
+                            "python": platform.python_version(), "cpu": platform.processor()}]
+    if not derive_bench.ensure_binary(args.binary, build=not args.no_build):
+        return 1
+    ours = measure_ours(args.binary, rtols, methods, args.repeats, args.timeout)
+    records += ours
+
+    scipy_records: list[dict] = []
+    if not args.no_scipy:
+        python = derive_bench.anchor_python(args.anchors, ("sympy", "numpy", "scipy"), allow_install=not args.no_install)
+        if python is None:
+            records.append({"bench": BENCH, "record": "anchor_error", "anchor": "scipy_simulate", "error": "no Python with scipy"})
+        else:
+            anchor_args = [
+                "--systems", ",".join(s for s, _, _ in SYSTEMS),
+                "--variants", ",".join(variants),
+                "--methods", "DOP853",
+                "--rtols", ",".join(repr(r) for r in rtols),
+                "--repeats", str(args.anchor_repeats),
+                "--grid-points", str(args.grid_points),
+                "--no-cse",
+            ]
+            scipy_records, error = derive_bench.run_anchor(python, args.anchors / "scipy_simulate.py", anchor_args,
+                                                           args.anchor_timeout)
+            for r in scipy_records:
+                r["source"] = "scipy_simulate.py"
+            if error:
+                records.append({"bench": BENCH, "record": "anchor_error", "anchor": "scipy_simulate", "error": error})
+                log(f"scipy_simulate.py: {error}")
+    records += scipy_records
+
+    text, ratio_records = tables(ours, scipy_index(scipy_records), variants)
+    records += ratio_records
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    with args.out.open("w") as f:
+        for r in records:
+            f.write(json.dumps(r) + "\n")
+    print(text)
+    log(f"records in {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
