@@ -9,6 +9,7 @@ mod diagnostics;
 mod format;
 mod plot;
 mod simulate;
+mod sweep;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use diagnostics::Failure;
@@ -87,6 +88,8 @@ enum Command {
         #[arg(long)]
         list_methods: bool,
     },
+    /// Run many trajectories over a grid of initial values or parameters, on all cores.
+    Sweep(sweep::Args),
 }
 
 /// Summary formats of `simulate`.
@@ -125,6 +128,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Derive { model, format, set } => derive(&model, format, &set),
+        Command::Sweep(args) => sweep::run(&args),
         Command::Simulate { list_methods: true, .. } => write_stdout(&simulate::list_methods()),
         Command::Simulate {
             model,

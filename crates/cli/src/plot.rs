@@ -439,7 +439,7 @@ impl Axis {
 }
 
 /// The round number (1, 2 or 5 times a power of ten) nearest above `rough`.
-fn nice_step(rough: f64) -> f64 {
+pub(crate) fn nice_step(rough: f64) -> f64 {
     let rough = if rough.is_finite() && rough > 0.0 { rough } else { 1.0 };
     let decade = 10f64.powf(rough.log10().floor());
     let mantissa = rough / decade;

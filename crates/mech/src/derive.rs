@@ -215,7 +215,14 @@ impl Derivation {
             e_terms.push(pool.neg(f));
             equations.push(pool.add(&e_terms));
         }
-        if probe::is_singular(pool, &mass_matrix) {
+        // M is singular when one of its blocks is (a chain of masses has a
+        // thousand 1×1 blocks, not one 1000×1000 matrix to factor).
+        let singular = blocks(pool, &mass_matrix).iter().any(|idx| {
+            let block: Vec<Vec<ExprId>> =
+                idx.iter().map(|&i| idx.iter().map(|&j| mass_matrix[i][j]).collect()).collect();
+            probe::is_singular(pool, &block)
+        });
+        if singular {
             let span = model
                 .lagrangian
                 .as_ref()
@@ -312,10 +319,12 @@ impl Derivation {
         }
 
         // The Hamiltonian, by the Legendre transform for L quadratic in q'.
-        let quadratic = mass_matrix
-            .iter()
-            .flatten()
-            .all(|&m| qd.iter().all(|&v| pool.free_of(m, v)) && qdd.iter().all(|&a| pool.free_of(m, a)));
+        // One walk over all of M: no velocity or acceleration of a coordinate in it.
+        let entries: Vec<ExprId> = mass_matrix.iter().flatten().copied().collect();
+        let quadratic = pool.reachable(&entries).into_iter().all(|id| match pool.as_symbol(id) {
+            Some(s) => s.order == 0 || !vars.names.contains(&s.name),
+            None => true,
+        });
         let (hamiltonian, velocities, hamilton) = if !quadratic {
             verdicts.energy.push(
                 "L is not quadratic in the velocities, so p = ∂L/∂q' cannot be solved for q' in closed form; H is not given.".into(),
@@ -406,7 +415,7 @@ fn legendre(pool: &mut Pool, s: &System, momenta: &[ExprId], is_var: &dyn Fn(Sym
     let b: Vec<ExprId> = momenta.iter().map(|&pi| pool.substitute(pi, &zero_vel)).collect();
     let l0 = pool.substitute(s.lagrangian, &zero_vel);
     let shifted: Vec<ExprId> = (0..n).map(|i| pool.sub(s.p[i], b[i])).collect();
-    let v = solve_symbolic(pool, s.mass_matrix, &shifted, is_var);
+    let v = solve_symbolic(pool, s.mass_matrix, &shifted, is_var)?;
     if v.iter().any(|&x| pool.tree_size(x) > MAX_PRINTED_TREE) {
         return None;
     }
@@ -530,7 +539,12 @@ fn particle_kinetic(
 /// blocks use the adjugate over the (simplified) determinant, and larger
 /// blocks use Gaussian elimination without pivoting (M is positive definite)
 /// whose intermediate results stay shared in the DAG.
-fn solve_symbolic(pool: &mut Pool, m: &[Vec<ExprId>], r: &[ExprId], is_var: &dyn Fn(Symbol) -> bool) -> Vec<ExprId> {
+fn solve_symbolic(
+    pool: &mut Pool,
+    m: &[Vec<ExprId>],
+    r: &[ExprId],
+    is_var: &dyn Fn(Symbol) -> bool,
+) -> Option<Vec<ExprId>> {
     let n = r.len();
     let mut v = vec![pool.zero(); n];
     for idx in blocks(pool, m) {
@@ -540,13 +554,13 @@ fn solve_symbolic(pool: &mut Pool, m: &[Vec<ExprId>], r: &[ExprId], is_var: &dyn
         let sol = match k {
             1 => vec![pool.div(rhs[0], a[0][0])],
             2 | 3 => adjugate_solve(pool, &a, &rhs, is_var),
-            _ => elimination_solve(pool, a, rhs),
+            _ => elimination_solve(pool, a, rhs)?,
         };
         for (pos, &i) in idx.iter().enumerate() {
             v[i] = sol[pos];
         }
     }
-    v
+    Some(v)
 }
 
 /// The groups of coordinates that M couples (connected components of its
@@ -629,10 +643,16 @@ fn adjugate_solve(pool: &mut Pool, a: &[Vec<ExprId>], r: &[ExprId], is_var: &dyn
         .collect()
 }
 
-fn elimination_solve(pool: &mut Pool, mut a: Vec<Vec<ExprId>>, mut r: Vec<ExprId>) -> Vec<ExprId> {
+/// Gaussian elimination; None as soon as a pivot is too long to print, since
+/// the solution divides by every pivot (a dense block of a pendulum with four
+/// links gets there within a few columns, long before the O(k³) work is done).
+fn elimination_solve(pool: &mut Pool, mut a: Vec<Vec<ExprId>>, mut r: Vec<ExprId>) -> Option<Vec<ExprId>> {
     let k = r.len();
     for col in 0..k {
         let piv = a[col][col];
+        if pool.tree_size(piv) > MAX_PRINTED_TREE {
+            return None;
+        }
         for row in col + 1..k {
             if pool.is_zero(a[row][col]) {
                 continue;
@@ -655,7 +675,7 @@ fn elimination_solve(pool: &mut Pool, mut a: Vec<Vec<ExprId>>, mut r: Vec<ExprId
         }
         v[row] = pool.div(acc, a[row][row]);
     }
-    v
+    Some(v)
 }
 
 /// Explains whether h equals T + U₀, the way the notes do: a time-dependent

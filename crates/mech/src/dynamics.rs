@@ -17,7 +17,8 @@ use crate::derive::Derivation;
 use crate::error::ModelError;
 use crate::probe;
 use num::{LinearSolver, OdeSystem, RhsError, SeparableSystem};
-use sym::{ExprId, Tape};
+use std::sync::Arc;
+use sym::{Compiled, ExprId, Tape};
 
 /// The state variables a system integrates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -50,6 +51,30 @@ pub struct Invariant {
     pub expr: ExprId,
 }
 
+/// One group of expressions evaluated together: native code from the JIT, or
+/// the tape interpreter where the JIT is not available on this machine.
+#[derive(Debug, Clone)]
+enum Kernel {
+    Native(Arc<Compiled>),
+    Interpreted(Tape),
+}
+
+impl Kernel {
+    fn new(tape: Tape) -> Kernel {
+        match Compiled::new(&tape) {
+            Ok(native) => Kernel::Native(Arc::new(native)),
+            Err(_) => Kernel::Interpreted(tape),
+        }
+    }
+
+    fn eval(&mut self, inputs: &[f64], outputs: &mut [f64]) {
+        match self {
+            Kernel::Native(native) => native.eval(inputs, outputs),
+            Kernel::Interpreted(tape) => tape.eval(inputs, outputs),
+        }
+    }
+}
+
 /// The compiled dynamics of a derivation. See the module documentation.
 #[derive(Debug, Clone)]
 pub struct Dynamics {
@@ -57,11 +82,11 @@ pub struct Dynamics {
     /// Input vector template: `[q, q', t, parameters]`.
     inputs: Vec<f64>,
     /// Outputs `M` (row-major, n²) and `f` (n) from `[q, q', t, params]`.
-    mass_forcing: Tape,
+    mass_forcing: Kernel,
     /// Outputs `M` (n²), `b` (n) and `∂L/∂q − ∂R/∂q' + Q` (n) from `[q, q', t, params]`.
-    hamilton: Option<Tape>,
+    hamilton: Option<Kernel>,
     /// Outputs the invariants from `[q, q', t, params]`.
-    invariants_tape: Tape,
+    invariants_tape: Kernel,
     invariants: Vec<Invariant>,
     /// Whether H = ½pᵀM⁻¹p + V(q, t) with M constant.
     separable: bool,
@@ -89,7 +114,7 @@ impl Dynamics {
 
         let mut outs: Vec<ExprId> = d.mass_matrix.iter().flatten().copied().collect();
         outs.extend(&d.forcing);
-        let mass_forcing = Tape::compile(pool, &outs, &input_syms).expect("derivation symbols are inputs");
+        let mass_forcing = Kernel::new(Tape::compile(pool, &outs, &input_syms).expect("derivation symbols are inputs"));
 
         let quadratic = d.mass_matrix.iter().flatten().all(|&m| d.qd.iter().all(|&v| pool.free_of(m, v)));
         let hamilton = quadratic.then(|| {
@@ -106,7 +131,7 @@ impl Dynamics {
                 }
                 outs.push(pool.add(&terms));
             }
-            Tape::compile(pool, &outs, &input_syms).expect("derivation symbols are inputs")
+            Kernel::new(Tape::compile(pool, &outs, &input_syms).expect("derivation symbols are inputs"))
         });
         let constant_mass = d
             .mass_matrix
@@ -122,7 +147,8 @@ impl Dynamics {
         let separable = quadratic && constant_mass && velocity_free_forcing && no_linear_momentum;
 
         let exprs: Vec<ExprId> = invariants.iter().map(|i| i.expr).collect();
-        let invariants_tape = Tape::compile(pool, &exprs, &input_syms).expect("derivation symbols are inputs");
+        let invariants_tape =
+            Kernel::new(Tape::compile(pool, &exprs, &input_syms).expect("derivation symbols are inputs"));
 
         Dynamics {
             n,
@@ -220,6 +246,15 @@ impl System {
     /// The form of the state.
     pub fn form(&self) -> Form {
         self.form
+    }
+
+    /// Sets the parameter values (in the model's order) for the next
+    /// evaluations: an ensemble over parameters reuses the compiled tapes.
+    pub fn set_parameters(&mut self, values: &[f64]) {
+        let start = 2 * self.dynamics.n + 1;
+        self.inputs[start..start + values.len()].copy_from_slice(values);
+        self.dynamics.inputs[start..start + values.len()].copy_from_slice(values);
+        self.factored_once = false;
     }
 
     /// The initial state in this form from (q, q') at time t.

@@ -9,16 +9,21 @@
 use crate::expr::{ExprId, Func, NameId, Node, Pool, Symbol};
 use crate::number::Number;
 use rustc_hash::{FxHashMap, FxHashSet};
+use std::collections::BinaryHeap;
 
 impl Pool {
     /// The partial derivative ∂e/∂x, where `x` is a symbol node (`q`, `q'`, `t`, …).
     /// Symbols other than `x` are independent of it: `diff(q', q) = 0`.
     pub fn diff(&mut self, e: ExprId, x: ExprId) -> ExprId {
         debug_assert!(matches!(self.node(x), Node::Sym(_)), "diff with respect to a non-symbol");
+        // Most subexpressions do not contain x, and their symbol filters say so.
+        if !self.may_contain(e, x) {
+            return self.zero();
+        }
         if let Some(&d) = self.diff_cache.get(&(e, x)) {
             return d;
         }
-        let d = match self.node(e).clone() {
+        let d = match *self.node(e) {
             Node::Num(_) | Node::Pi => self.zero(),
             Node::Sym(_) => {
                 if e == x {
@@ -27,12 +32,14 @@ impl Pool {
                     self.zero()
                 }
             }
-            Node::Add(ts) => {
+            Node::Add(ref ts) => {
+                let ts = ts.clone();
                 let ds: Vec<ExprId> = ts.iter().map(|&t| self.diff(t, x)).collect();
                 self.add(&ds)
             }
-            Node::Mul(fs) => {
-                let mut terms = Vec::with_capacity(fs.len());
+            Node::Mul(ref fs) => {
+                let fs = fs.clone();
+                let mut terms = Vec::new();
                 for i in 0..fs.len() {
                     let df = self.diff(fs[i], x);
                     if self.is_zero(df) {
@@ -160,15 +167,30 @@ impl Pool {
 
     /// The ids reachable from `roots`, children before parents (ascending ids).
     pub fn reachable(&self, roots: &[ExprId]) -> Vec<ExprId> {
-        let mut seen: FxHashSet<ExprId> = FxHashSet::default();
-        let mut stack: Vec<ExprId> = roots.to_vec();
-        while let Some(id) = stack.pop() {
-            if seen.insert(id) {
-                stack.extend(self.children(self.node(id)));
+        // Children have smaller ids than their parents, so popping the largest
+        // id first sees every copy of an id in a row, after all its parents:
+        // a heap deduplicates without hashing.
+        let mut roots = roots.to_vec();
+        roots.sort_unstable();
+        roots.dedup();
+        let mut heap = BinaryHeap::from(roots);
+        let mut out: Vec<ExprId> = Vec::new();
+        while let Some(id) = heap.pop() {
+            if out.last() == Some(&id) {
+                continue;
+            }
+            out.push(id);
+            match self.node(id) {
+                Node::Num(_) | Node::Pi | Node::Sym(_) => {}
+                Node::Add(ts) | Node::Mul(ts) => heap.extend(ts.iter().copied()),
+                &Node::Pow(a, b) | &Node::Atan2(a, b) => {
+                    heap.push(a);
+                    heap.push(b);
+                }
+                &Node::Func(_, a) => heap.push(a),
             }
         }
-        let mut out: Vec<ExprId> = seen.into_iter().collect();
-        out.sort_unstable();
+        out.reverse();
         out
     }
 
@@ -181,7 +203,22 @@ impl Pool {
 
     /// True when `e` does not contain the symbol `x`.
     pub fn free_of(&self, e: ExprId, x: ExprId) -> bool {
-        !self.reachable(&[e]).contains(&x)
+        if !matches!(self.node(x), Node::Sym(_)) {
+            return !self.reachable(&[e]).contains(&x);
+        }
+        // Only subexpressions whose symbol filter admits x can contain it.
+        let mut seen: FxHashSet<ExprId> = FxHashSet::default();
+        let mut stack = vec![e];
+        while let Some(id) = stack.pop() {
+            if id == x {
+                return false;
+            }
+            if !self.may_contain(id, x) || !seen.insert(id) {
+                continue;
+            }
+            stack.extend(self.children(self.node(id)));
+        }
+        true
     }
 
     /// The number of distinct nodes of `e` (its size as a DAG).
@@ -192,28 +229,32 @@ impl Pool {
     /// Replaces every occurrence of the keys of `map` in `e` by their values and
     /// rebuilds the result in canonical form.
     pub fn substitute(&mut self, e: ExprId, map: &FxHashMap<ExprId, ExprId>) -> ExprId {
-        let order = self.reachable(&[e]);
+        // Subexpressions free of every key (by their symbol filters) stay as they are.
+        let keys_mask = map.keys().fold(0u64, |m, &k| match self.node(k) {
+            Node::Sym(_) => m | self.sym_mask(k),
+            _ => u64::MAX,
+        });
         let mut done: FxHashMap<ExprId, ExprId> = FxHashMap::default();
-        for id in order {
+        // Post-order walk: (id, children done).
+        let mut stack = vec![(e, false)];
+        while let Some((id, ready)) = stack.pop() {
+            if done.contains_key(&id) {
+                continue;
+            }
             if let Some(&v) = map.get(&id) {
                 done.insert(id, v);
                 continue;
             }
-            let node = self.node(id).clone();
-            let new = match node {
-                Node::Num(_) | Node::Pi | Node::Sym(_) => id,
-                Node::Add(ts) => {
-                    let ts: Vec<ExprId> = ts.iter().map(|t| done[t]).collect();
-                    self.add(&ts)
-                }
-                Node::Mul(fs) => {
-                    let fs: Vec<ExprId> = fs.iter().map(|f| done[f]).collect();
-                    self.mul(&fs)
-                }
-                Node::Pow(b, p) => self.pow(done[&b], done[&p]),
-                Node::Func(f, u) => self.func(f, done[&u]),
-                Node::Atan2(y, x) => self.atan2(done[&y], done[&x]),
-            };
+            if self.sym_mask(id) & keys_mask == 0 {
+                done.insert(id, id);
+                continue;
+            }
+            if !ready {
+                stack.push((id, true));
+                stack.extend(self.children(self.node(id)).into_iter().map(|c| (c, false)));
+                continue;
+            }
+            let new = self.rebuild(id, |c| done[&c]);
             done.insert(id, new);
         }
         done[&e]

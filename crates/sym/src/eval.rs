@@ -24,9 +24,9 @@ pub enum EvalError {
 }
 
 /// One tape instruction; operands are slot indices, the result goes to the
-/// instruction's own slot.
+/// instruction's own slot. `jit.rs` translates the same list to native code.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-enum Op {
+pub(crate) enum Op {
     Input(u32),
     Const(u64),
     Add(u32, u32),
@@ -82,10 +82,17 @@ impl Builder<'_> {
             1 => base,
             2 => self.emit(Op::Square(base)),
             -1 => self.emit(Op::Recip(base)),
-            n if n < 0 => {
-                let p = self.powi(base, -n);
-                self.emit(Op::Recip(p))
-            }
+            n if n < 0 => match n.checked_neg() {
+                Some(m) => {
+                    let p = self.powi(base, m);
+                    self.emit(Op::Recip(p))
+                }
+                // i64::MIN has no positive counterpart.
+                None => {
+                    let e = self.constant(n as f64);
+                    self.emit(Op::Powf(base, e))
+                }
+            },
             n => match i32::try_from(n) {
                 Ok(k) => self.emit(Op::Powi(base, k)),
                 Err(_) => {
@@ -269,6 +276,17 @@ impl Tape {
     /// True when the tape has no instruction.
     pub fn is_empty(&self) -> bool {
         self.ops.is_empty()
+    }
+
+    /// The instructions, in order: instruction `i` writes slot `i`, and its
+    /// operands are earlier slots; `Input(k)` has `k < n_inputs`.
+    pub(crate) fn ops(&self) -> &[Op] {
+        &self.ops
+    }
+
+    /// The slot of each output, in root order.
+    pub(crate) fn output_slots(&self) -> &[u32] {
+        &self.outputs
     }
 
     /// Evaluates every root. `inputs.len()` must be [`Tape::n_inputs`] and

@@ -11,8 +11,9 @@
 //! points: [`Pool::add`], [`Pool::mul`], [`Pool::pow`], [`Pool::func`].
 
 use crate::number::{Number, Rational};
-use rustc_hash::FxHashMap;
+use rustc_hash::{FxHashMap, FxHasher};
 use std::cmp::Ordering;
+use std::hash::{Hash, Hasher};
 
 /// The id of a node in a [`Pool`].
 #[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Debug)]
@@ -151,12 +152,20 @@ pub enum Node {
 #[derive(Clone, Debug)]
 pub struct Pool {
     nodes: Vec<Node>,
-    index: FxHashMap<Node, ExprId>,
+    /// The hash of each node, for the intern table.
+    hashes: Vec<u64>,
+    /// The intern table: node ids by hash, open addressing with linear probing,
+    /// at most half full. It is looked up with borrowed operand slices, so
+    /// finding an existing sum or product allocates nothing.
+    table: Vec<u32>,
     names: Vec<Box<str>>,
     name_index: FxHashMap<Box<str>, NameId>,
     name_rank: Vec<u8>,
     /// Tree size of each node (the node counted with all its repetitions).
     tree_sizes: Vec<u64>,
+    /// The symbols of each node as a 64-bit Bloom filter (one hashed bit per
+    /// symbol): a clear bit proves a symbol absent without a traversal.
+    sym_masks: Vec<u64>,
     /// Memo of `diff`: (expression, variable) → derivative.
     pub(crate) diff_cache: FxHashMap<(ExprId, ExprId), ExprId>,
     /// Memos of the rewrites of `simplify` (each a pure function of the id).
@@ -167,11 +176,13 @@ impl Default for Pool {
     fn default() -> Self {
         let mut pool = Pool {
             nodes: Vec::new(),
-            index: FxHashMap::default(),
+            hashes: Vec::new(),
+            table: vec![EMPTY; 1024],
             names: Vec::new(),
             name_index: FxHashMap::default(),
             name_rank: Vec::new(),
             tree_sizes: Vec::new(),
+            sym_masks: Vec::new(),
             diff_cache: FxHashMap::default(),
             rewrite_cache: FxHashMap::default(),
         };
@@ -181,6 +192,47 @@ impl Default for Pool {
         pool.intern(Node::Num(Number::MINUS_ONE));
         pool
     }
+}
+
+/// An empty slot of the intern table.
+const EMPTY: u32 = u32::MAX;
+
+/// Which n-ary node an operand slice is looked up as.
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+enum Seq {
+    Add,
+    Mul,
+}
+
+fn hash_seq(kind: Seq, items: &[ExprId]) -> u64 {
+    let mut h = FxHasher::default();
+    kind.hash(&mut h);
+    items.hash(&mut h);
+    h.finish()
+}
+
+fn hash_node(node: &Node) -> u64 {
+    match node {
+        Node::Add(ts) => hash_seq(Seq::Add, ts),
+        Node::Mul(fs) => hash_seq(Seq::Mul, fs),
+        other => {
+            let mut h = FxHasher::default();
+            other.hash(&mut h);
+            h.finish()
+        }
+    }
+}
+
+/// Where a hash starts probing in a table of `mask + 1` slots (the high half of
+/// a Fibonacci product: well mixed even when the hash's low bits are not).
+fn home_slot(hash: u64, mask: usize) -> usize {
+    (hash.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32) as usize & mask
+}
+
+/// The Bloom-filter bit of a symbol.
+fn symbol_bit(s: Symbol) -> u64 {
+    let h = (u64::from(s.name.0) << 8 | u64::from(s.order)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    1 << (h >> 58)
 }
 
 /// Below this many operands, sums and products find like terms by a linear scan.
@@ -206,10 +258,53 @@ impl Pool {
     }
 
     fn intern(&mut self, node: Node) -> ExprId {
-        if let Some(&id) = self.index.get(&node) {
-            return id;
+        let hash = hash_node(&node);
+        match self.lookup(hash, |n| *n == node) {
+            Ok(id) => id,
+            Err(slot) => self.insert(node, hash, slot),
         }
-        let id = ExprId(u32::try_from(self.nodes.len()).expect("more than 2^32 expression nodes"));
+    }
+
+    /// Interns the sum or product of `items` (already canonical), allocating
+    /// only when it is new.
+    fn intern_seq(&mut self, kind: Seq, items: &[ExprId]) -> ExprId {
+        let hash = hash_seq(kind, items);
+        let found = self.lookup(hash, |n| match (kind, n) {
+            (Seq::Add, Node::Add(ts)) => **ts == *items,
+            (Seq::Mul, Node::Mul(fs)) => **fs == *items,
+            _ => false,
+        });
+        match found {
+            Ok(id) => id,
+            Err(slot) => {
+                let items: Box<[ExprId]> = items.into();
+                let node = if kind == Seq::Add { Node::Add(items) } else { Node::Mul(items) };
+                self.insert(node, hash, slot)
+            }
+        }
+    }
+
+    /// The id of the node with this hash for which `eq` holds, or the empty
+    /// slot where it would go.
+    fn lookup(&self, hash: u64, eq: impl Fn(&Node) -> bool) -> Result<ExprId, usize> {
+        let mask = self.table.len() - 1;
+        let mut slot = home_slot(hash, mask);
+        loop {
+            let id = self.table[slot];
+            if id == EMPTY {
+                return Err(slot);
+            }
+            if self.hashes[id as usize] == hash && eq(&self.nodes[id as usize]) {
+                return Ok(ExprId(id));
+            }
+            slot = (slot + 1) & mask;
+        }
+    }
+
+    /// Stores a new node at `slot` of the table (from a failed [`Pool::lookup`]).
+    fn insert(&mut self, node: Node, hash: u64, slot: usize) -> ExprId {
+        let raw =
+            u32::try_from(self.nodes.len()).ok().filter(|&i| i != EMPTY).expect("more than 2^32 expression nodes");
         let sz = |c: &ExprId| self.tree_sizes[c.index()];
         let size = 1u64.saturating_add(match &node {
             Node::Num(_) | Node::Pi | Node::Sym(_) => 0,
@@ -217,10 +312,92 @@ impl Pool {
             Node::Pow(a, b) | Node::Atan2(a, b) => sz(a).saturating_add(sz(b)),
             Node::Func(_, a) => sz(a),
         });
+        let mk = |c: &ExprId| self.sym_masks[c.index()];
+        let mask = match &node {
+            Node::Num(_) | Node::Pi => 0,
+            Node::Sym(s) => symbol_bit(*s),
+            Node::Add(ts) | Node::Mul(ts) => ts.iter().map(mk).fold(0, |a, b| a | b),
+            Node::Pow(a, b) | Node::Atan2(a, b) => mk(a) | mk(b),
+            Node::Func(_, a) => mk(a),
+        };
         self.tree_sizes.push(size);
-        self.nodes.push(node.clone());
-        self.index.insert(node, id);
-        id
+        self.sym_masks.push(mask);
+        self.hashes.push(hash);
+        self.nodes.push(node);
+        self.table[slot] = raw;
+        if self.nodes.len() * 2 > self.table.len() {
+            self.grow_table();
+        }
+        ExprId(raw)
+    }
+
+    fn grow_table(&mut self) {
+        let mut table = vec![EMPTY; self.table.len() * 2];
+        let mask = table.len() - 1;
+        for (id, &hash) in self.hashes.iter().enumerate() {
+            let mut slot = home_slot(hash, mask);
+            while table[slot] != EMPTY {
+                slot = (slot + 1) & mask;
+            }
+            table[slot] = id as u32;
+        }
+        self.table = table;
+    }
+
+    /// The node `id` with each child `c` replaced by `new(c)`, rebuilt in
+    /// canonical form; `id` itself when no child changes.
+    pub(crate) fn rebuild(&mut self, id: ExprId, new: impl Fn(ExprId) -> ExprId) -> ExprId {
+        match self.node(id) {
+            Node::Num(_) | Node::Pi | Node::Sym(_) => id,
+            Node::Add(ts) | Node::Mul(ts) => {
+                if ts.iter().all(|&c| new(c) == c) {
+                    return id;
+                }
+                let is_add = matches!(self.node(id), Node::Add(_));
+                let ts: Vec<ExprId> = ts.iter().map(|&c| new(c)).collect();
+                if is_add {
+                    self.add(&ts)
+                } else {
+                    self.mul(&ts)
+                }
+            }
+            &Node::Pow(b, p) => {
+                let (nb, np) = (new(b), new(p));
+                if (nb, np) == (b, p) {
+                    id
+                } else {
+                    self.pow(nb, np)
+                }
+            }
+            &Node::Func(f, u) => {
+                let nu = new(u);
+                if nu == u {
+                    id
+                } else {
+                    self.func(f, nu)
+                }
+            }
+            &Node::Atan2(y, x) => {
+                let (ny, nx) = (new(y), new(x));
+                if (ny, nx) == (y, x) {
+                    id
+                } else {
+                    self.atan2(ny, nx)
+                }
+            }
+        }
+    }
+
+    /// The Bloom filter of the symbols of `e` (see [`Pool::may_contain`]).
+    pub(crate) fn sym_mask(&self, e: ExprId) -> u64 {
+        self.sym_masks[e.index()]
+    }
+
+    /// True when `x` (a symbol node) may occur in `e`; false proves it does
+    /// not (a Bloom filter: no traversal, but false positives).
+    pub(crate) fn may_contain(&self, e: ExprId, x: ExprId) -> bool {
+        let bit = self.sym_masks[x.index()];
+        self.sym_masks[e.index()] & bit == bit
     }
 
     /// The size of `e` written out as a tree (how long its printed form is, roughly).
@@ -416,18 +593,25 @@ impl Pool {
 
     /// Splits a term into its numeric coefficient and the rest (`3*x*y` → `(3, x*y)`).
     pub fn split_coeff(&mut self, id: ExprId) -> (Number, ExprId) {
-        match self.node(id) {
-            Node::Num(n) => (*n, self.one()),
-            Node::Mul(fs) => {
-                if let Some(n) = self.as_number(fs[0]) {
-                    let rest: Vec<ExprId> = fs[1..].to_vec();
-                    let rest = if rest.len() == 1 { rest[0] } else { self.intern(Node::Mul(rest.into())) };
-                    (n, rest)
-                } else {
-                    (Number::ONE, id)
-                }
+        let Node::Mul(fs) = self.node(id) else {
+            return match self.as_number(id) {
+                Some(n) => (n, self.one()),
+                None => (Number::ONE, id),
+            };
+        };
+        let Some(n) = self.as_number(fs[0]) else { return (Number::ONE, id) };
+        if fs.len() == 2 {
+            return (n, fs[1]);
+        }
+        // The rest of a canonical product is canonical: look it up as it is.
+        let rest = &fs[1..];
+        let hash = hash_seq(Seq::Mul, rest);
+        match self.lookup(hash, |node| matches!(node, Node::Mul(gs) if **gs == *rest)) {
+            Ok(r) => (n, r),
+            Err(slot) => {
+                let node = Node::Mul(rest.into());
+                (n, self.insert(node, hash, slot))
             }
-            _ => (Number::ONE, id),
         }
     }
 
@@ -443,48 +627,33 @@ impl Pool {
             let v = c.times(*r);
             return self.number(v);
         }
-        let mut fs = vec![self.number(c)];
+        let c = self.number(c);
+        let mut fs: Vec<ExprId> = Vec::with_capacity(8);
+        fs.push(c);
         match self.node(rest) {
             Node::Mul(inner) => fs.extend_from_slice(inner),
             _ => fs.push(rest),
         }
-        self.intern(Node::Mul(fs.into()))
+        self.intern_seq(Seq::Mul, &fs)
     }
 
     /// The canonical sum of `terms`.
     pub fn add(&mut self, terms: &[ExprId]) -> ExprId {
-        let mut constant = Number::ZERO;
-        // Coefficient per non-numeric part, in first-seen order; small sums
-        // (the common case) look parts up by a linear scan.
-        let mut coeffs: FxHashMap<ExprId, usize> = FxHashMap::default();
-        let mut parts: Vec<(ExprId, Number)> = Vec::new();
-        let mut stack: Vec<ExprId> = terms.iter().rev().copied().collect();
-        while let Some(t) = stack.pop() {
+        let mut acc = SumAcc::default();
+        for &t in terms {
             match self.node(t) {
-                Node::Num(n) => constant = constant.plus(*n),
-                Node::Add(ts) => stack.extend(ts.iter().rev().copied()),
-                _ => {
-                    let (c, rest) = self.split_coeff(t);
-                    let found = if parts.len() <= SMALL {
-                        parts.iter().position(|p| p.0 == rest)
-                    } else {
-                        if coeffs.is_empty() {
-                            coeffs.extend(parts.iter().enumerate().map(|(i, p)| (p.0, i)));
-                        }
-                        coeffs.get(&rest).copied()
-                    };
-                    match found {
-                        Some(i) => parts[i].1 = parts[i].1.plus(c),
-                        None => {
-                            if !coeffs.is_empty() {
-                                coeffs.insert(rest, parts.len());
-                            }
-                            parts.push((rest, c));
-                        }
+                Node::Add(ts) => {
+                    // Canonical sums never nest, so one level of flattening suffices.
+                    for k in 0..ts.len() {
+                        let Node::Add(ts) = self.node(t) else { unreachable!() };
+                        let u = ts[k];
+                        self.add_term(&mut acc, u);
                     }
                 }
+                _ => self.add_term(&mut acc, t),
             }
         }
+        let SumAcc { constant, parts, .. } = acc;
         let mut out: Vec<ExprId> = Vec::with_capacity(parts.len() + 1);
         for (rest, c) in parts {
             if !c.is_zero() {
@@ -498,66 +667,101 @@ impl Pool {
         match out.len() {
             0 => self.zero(),
             1 => out[0],
-            _ => self.intern(Node::Add(out.into())),
+            _ => self.intern_seq(Seq::Add, &out),
+        }
+    }
+
+    /// Adds one term (not a sum) to a sum being built.
+    fn add_term(&mut self, acc: &mut SumAcc, t: ExprId) {
+        if let Node::Add(_) = self.node(t) {
+            // Only a non-canonical caller nests sums; flatten it all the same.
+            let ts = self.terms(t);
+            for u in ts {
+                self.add_term(acc, u);
+            }
+            return;
+        }
+        if let Some(n) = self.as_number(t) {
+            acc.constant = acc.constant.plus(n);
+            return;
+        }
+        let (c, rest) = self.split_coeff(t);
+        // Small sums (the common case) find like parts by a linear scan.
+        let found = if acc.parts.len() <= SMALL {
+            acc.parts.iter().position(|p| p.0 == rest)
+        } else {
+            if acc.index.is_empty() {
+                acc.index.extend(acc.parts.iter().enumerate().map(|(i, p)| (p.0, i)));
+            }
+            acc.index.get(&rest).copied()
+        };
+        match found {
+            Some(i) => acc.parts[i].1 = acc.parts[i].1.plus(c),
+            None => {
+                if !acc.index.is_empty() {
+                    acc.index.insert(rest, acc.parts.len());
+                }
+                acc.parts.push((rest, c));
+            }
         }
     }
 
     /// The canonical product of `factors`.
     pub fn mul(&mut self, factors: &[ExprId]) -> ExprId {
         let mut coeff = Number::ONE;
-        // Exponent terms per base, in first-seen order.
-        let mut parts: Vec<(ExprId, Vec<ExprId>)> = Vec::new();
-        let mut stack: Vec<ExprId> = factors.iter().rev().copied().collect();
-        while let Some(f) = stack.pop() {
+        // Exponent per base, in first-seen order.
+        let mut parts: Vec<(ExprId, ExprId)> = Vec::with_capacity(factors.len() + 4);
+        for &f in factors {
             match self.node(f) {
-                Node::Num(n) => coeff = coeff.times(*n),
-                Node::Mul(fs) => stack.extend(fs.iter().rev().copied()),
-                _ => {
-                    let (base, exp) = self.base_exp(f);
-                    match parts.iter().position(|p| p.0 == base) {
-                        Some(i) => parts[i].1.push(exp),
-                        None => parts.push((base, vec![exp])),
+                Node::Mul(fs) => {
+                    for k in 0..fs.len() {
+                        let Node::Mul(fs) = self.node(f) else { unreachable!() };
+                        let g = fs[k];
+                        self.mul_factor(&mut coeff, &mut parts, g);
                     }
                 }
+                _ => self.mul_factor(&mut coeff, &mut parts, f),
             }
         }
         if coeff.is_zero() {
             return self.number(coeff);
         }
         let mut out: Vec<ExprId> = Vec::with_capacity(parts.len() + 1);
-        for (base, exps) in parts {
-            let f = if exps.len() == 1 {
-                self.pow(base, exps[0])
-            } else {
-                let e = self.add(&exps);
-                self.pow(base, e)
-            };
+        // Set when a power changed its base (e.g. (x^a)^2 = x^(2a)) or split
+        // into a product: then two factors may share a base again.
+        let mut rebased = false;
+        for &(base, exp) in &parts {
+            let f = self.pow(base, exp);
             match self.node(f) {
                 Node::Num(n) => coeff = coeff.times(*n),
                 Node::Mul(fs) => {
                     // A power that folded into a product (e.g. (2*x)^2 = 4*x^2).
-                    for &g in fs.iter() {
+                    rebased = true;
+                    for k in 0..fs.len() {
+                        let Node::Mul(fs) = self.node(f) else { unreachable!() };
+                        let g = fs[k];
                         match self.as_number(g) {
                             Some(n) => coeff = coeff.times(n),
                             None => out.push(g),
                         }
                     }
                 }
-                _ => out.push(f),
+                _ => {
+                    rebased |= self.base_exp(f).0 != base;
+                    out.push(f);
+                }
             }
         }
         if coeff.is_zero() {
             return self.number(coeff);
         }
         // Merge factors that share a base after folding.
-        if out.len() > 1 {
-            let bases: Vec<ExprId> = out.iter().map(|&f| self.base_exp(f).0).collect();
-            let dup = (1..bases.len()).any(|i| bases[..i].contains(&bases[i]));
+        if rebased && out.len() > 1 {
+            let dup = (1..out.len()).any(|i| (0..i).any(|j| self.base_exp(out[j]).0 == self.base_exp(out[i]).0));
             if dup {
                 let c = self.number(coeff);
-                let mut all = vec![c];
-                all.extend(out);
-                return self.mul(&all);
+                out.insert(0, c);
+                return self.mul(&out);
             }
         }
         // A number times one sum distributes: 2*(x + y) = 2*x + 2*y, so that
@@ -578,7 +782,34 @@ impl Pool {
         }
         match out.len() {
             1 => out[0],
-            _ => self.intern(Node::Mul(out.into())),
+            _ => self.intern_seq(Seq::Mul, &out),
+        }
+    }
+
+    /// Multiplies one factor (not a product) into a product being built.
+    fn mul_factor(&mut self, coeff: &mut Number, parts: &mut Vec<(ExprId, ExprId)>, f: ExprId) {
+        if let Node::Mul(_) = self.node(f) {
+            // Only a non-canonical caller nests products; flatten it all the same.
+            let fs = self.factors(f);
+            for g in fs {
+                self.mul_factor(coeff, parts, g);
+            }
+            return;
+        }
+        if let Some(n) = self.as_number(f) {
+            *coeff = coeff.times(n);
+            return;
+        }
+        let (base, exp) = self.base_exp(f);
+        match parts.iter().position(|p| p.0 == base) {
+            Some(i) => {
+                let prev = parts[i].1;
+                parts[i].1 = match (self.as_number(prev), self.as_number(exp)) {
+                    (Some(a), Some(b)) => self.number(a.plus(b)),
+                    _ => self.add2(prev, exp),
+                };
+            }
+            None => parts.push((base, exp)),
         }
     }
 
@@ -760,8 +991,8 @@ impl Pool {
     /// the most significant (last) one, so that terms in the same coordinates sit
     /// together; the constant last.
     fn cmp_terms(&self, a: ExprId, b: ExprId) -> Ordering {
-        let xs = self.term_factors(a);
-        let ys = self.term_factors(b);
+        let xs = self.term_factors(&a);
+        let ys = self.term_factors(&b);
         for (x, y) in xs.iter().rev().zip(ys.iter().rev()) {
             let o = self.cmp(*x, *y);
             if o != Ordering::Equal {
@@ -772,12 +1003,26 @@ impl Pool {
     }
 
     /// The non-numeric factors of a term.
-    fn term_factors(&self, id: ExprId) -> &[ExprId] {
-        match self.node(id) {
+    fn term_factors<'a>(&'a self, id: &'a ExprId) -> &'a [ExprId] {
+        match self.node(*id) {
             Node::Mul(fs) if self.as_number(fs[0]).is_some() => &fs[1..],
             Node::Mul(fs) => fs,
-            _ => std::slice::from_ref(self.index.get(self.node(id)).expect("interned")),
+            _ => std::slice::from_ref(id),
         }
+    }
+}
+
+/// A sum being built by [`Pool::add`]: the constant, and the coefficient of
+/// each non-numeric part in first-seen order (indexed by a map once it is long).
+struct SumAcc {
+    constant: Number,
+    parts: Vec<(ExprId, Number)>,
+    index: FxHashMap<ExprId, usize>,
+}
+
+impl Default for SumAcc {
+    fn default() -> Self {
+        SumAcc { constant: Number::ZERO, parts: Vec::new(), index: FxHashMap::default() }
     }
 }
 

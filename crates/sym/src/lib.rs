@@ -4,7 +4,8 @@
 //! is stored once and named by an [`ExprId`]. The pool parses the expression
 //! language, prints it back (text that parses to the same expression, and LaTeX),
 //! differentiates, substitutes, simplifies, and evaluates many expressions at once
-//! over their shared subexpressions with a [`Tape`].
+//! over their shared subexpressions with a [`Tape`], which [`Compiled`] turns into
+//! native code.
 //!
 //! ```
 //! let mut pool = sym::Pool::default();
@@ -17,6 +18,7 @@
 mod diff;
 mod eval;
 mod expr;
+mod jit;
 mod number;
 mod parse;
 mod print;
@@ -24,6 +26,7 @@ mod simplify;
 
 pub use eval::{EvalError, Tape};
 pub use expr::{ExprId, Func, NameId, Node, Pool, Symbol};
+pub use jit::{Compiled, JitError};
 pub use number::{Number, Rational};
 pub use parse::{Limits, ParseError, ParseErrorKind, ParseOptions, Span};
 pub use print::{Display, Latex};

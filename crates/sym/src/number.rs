@@ -91,6 +91,10 @@ impl Rational {
 
     /// Checked sum.
     pub fn checked_add(self, o: Rational) -> Option<Rational> {
+        // Integers (the common case) need no gcd: i128 division is slow.
+        if self.den == 1 && o.den == 1 {
+            return Some(Rational::int(self.num.checked_add(o.num)?));
+        }
         let g = gcd(self.den, o.den)?;
         let a = self.num.checked_mul(o.den / g)?;
         let b = o.num.checked_mul(self.den / g)?;
@@ -99,6 +103,9 @@ impl Rational {
 
     /// Checked product.
     pub fn checked_mul(self, o: Rational) -> Option<Rational> {
+        if self.den == 1 && o.den == 1 {
+            return Some(Rational::int(self.num.checked_mul(o.num)?));
+        }
         let g1 = gcd(self.num, o.den)?.max(1);
         let g2 = gcd(o.num, self.den)?.max(1);
         let n = (self.num / g1).checked_mul(o.num / g2)?;
@@ -220,7 +227,10 @@ impl Number {
 
     /// True for an exact or floating zero.
     pub fn is_zero(self) -> bool {
-        self.to_f64() == 0.0
+        match self {
+            Number::Rational(r) => r.is_zero(),
+            Number::Float(x) => x == 0.0,
+        }
     }
 
     /// True for exact one (a float 1.0 is kept as a float on purpose).
@@ -230,7 +240,10 @@ impl Number {
 
     /// True when negative.
     pub fn is_negative(self) -> bool {
-        self.to_f64() < 0.0
+        match self {
+            Number::Rational(r) => r.is_negative(),
+            Number::Float(x) => x < 0.0,
+        }
     }
 
     /// The exact rational, if this is one.

@@ -46,33 +46,35 @@ impl Pool {
     }
 
     /// `rewrite` memoized per node: a rewrite is a pure function of the id, so
-    /// the many overlapping expressions of a derivation share the work.
+    /// the many overlapping expressions of a derivation share the work. Each
+    /// node is rebuilt from its rewritten children, then rewritten itself; the
+    /// walk stops at nodes already in the memo.
     fn cached(&mut self, kind: u8, e: ExprId, f: &mut dyn FnMut(&mut Pool, ExprId) -> ExprId) -> ExprId {
-        let mut done: FxHashMap<ExprId, ExprId> = FxHashMap::default();
-        for id in self.reachable(&[e]) {
-            if let Some(&r) = self.rewrite_cache.get(&(kind, id)) {
-                done.insert(id, r);
+        if let Some(&r) = self.rewrite_cache.get(&(kind, e)) {
+            return r;
+        }
+        // Post-order walk: (id, children done).
+        let mut stack = vec![(e, false)];
+        while let Some((id, ready)) = stack.pop() {
+            if self.rewrite_cache.contains_key(&(kind, id)) {
                 continue;
             }
-            let rebuilt = match self.node(id).clone() {
-                Node::Num(_) | Node::Pi | Node::Sym(_) => id,
-                Node::Add(ts) => {
-                    let ts: Vec<ExprId> = ts.iter().map(|t| done[t]).collect();
-                    self.add(&ts)
+            if !ready {
+                stack.push((id, true));
+                for c in self.children(self.node(id)) {
+                    if !self.rewrite_cache.contains_key(&(kind, c)) {
+                        stack.push((c, false));
+                    }
                 }
-                Node::Mul(fs) => {
-                    let fs: Vec<ExprId> = fs.iter().map(|t| done[t]).collect();
-                    self.mul(&fs)
-                }
-                Node::Pow(b, p) => self.pow(done[&b], done[&p]),
-                Node::Func(g, u) => self.func(g, done[&u]),
-                Node::Atan2(y, x) => self.atan2(done[&y], done[&x]),
-            };
+                continue;
+            }
+            let cache = std::mem::take(&mut self.rewrite_cache);
+            let rebuilt = self.rebuild(id, |c| cache[&(kind, c)]);
+            self.rewrite_cache = cache;
             let out = f(self, rebuilt);
             self.rewrite_cache.insert((kind, id), out);
-            done.insert(id, out);
         }
-        done[&e]
+        self.rewrite_cache[&(kind, e)]
     }
 
     fn expand_node(&mut self, id: ExprId) -> ExprId {
@@ -333,22 +335,15 @@ impl Pool {
         if terms.len() < 2 {
             return e;
         }
-        // Which nodes depend on a variable, in one pass, children first.
+        // Which factors depend on a variable, memoized over the shared subexpressions.
         let mut depends: FxHashMap<ExprId, bool> = FxHashMap::default();
-        for id in self.reachable(&[e]) {
-            let d = match self.node(id) {
-                Node::Sym(s) => is_var(*s),
-                node => self.children(node).iter().any(|c| depends[c]),
-            };
-            depends.insert(id, d);
-        }
         let mut groups: Vec<(ExprId, Vec<ExprId>)> = Vec::new();
         let mut index: FxHashMap<ExprId, usize> = FxHashMap::default();
         for t in terms {
             let mut var_part = Vec::new();
             let mut coeff = Vec::new();
             for f in self.factors(t) {
-                if depends[&f] {
+                if self.depends_on(f, is_var, &mut depends) {
                     var_part.push(f);
                 } else {
                     coeff.push(f);
@@ -372,6 +367,25 @@ impl Pool {
             out.push(self.mul(&parts));
         }
         self.add(&out)
+    }
+
+    /// True when `e` contains a symbol for which `is_var` holds (`memo` keeps
+    /// the answers for subexpressions).
+    fn depends_on(&self, e: ExprId, is_var: &dyn Fn(Symbol) -> bool, memo: &mut FxHashMap<ExprId, bool>) -> bool {
+        if let Some(&d) = memo.get(&e) {
+            return d;
+        }
+        let d = match self.node(e) {
+            Node::Num(_) | Node::Pi => false,
+            Node::Sym(s) => is_var(*s),
+            Node::Add(xs) | Node::Mul(xs) => xs.iter().any(|&x| self.depends_on(x, is_var, memo)),
+            &Node::Pow(a, b) | &Node::Atan2(a, b) => {
+                self.depends_on(a, is_var, memo) || self.depends_on(b, is_var, memo)
+            }
+            &Node::Func(_, a) => self.depends_on(a, is_var, memo),
+        };
+        memo.insert(e, d);
+        d
     }
 
     /// Expands, combines trigonometric terms and factors common terms, and

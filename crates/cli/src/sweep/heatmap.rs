@@ -1,0 +1,334 @@
+//! The heat map of a 2-D sweep, one SVG: a cell per run at (first axis, second
+//! axis), coloured by one column (the Lyapunov exponent: the chaos map), with a
+//! colour bar, axis labels named after the grid and a title.
+//!
+//! Enter at [`check_request`] (before running) and [`write_svg`]. Colours are
+//! viridis (perceptually uniform, legible in grey and to colour-blind readers);
+//! the range spans the 0.5th to 99.5th percentile so that a few outliers do not
+//! wash out the map, and the bar's ends say when values were clipped. The drift
+//! of H is shown as log₁₀. Failed or missing runs are grey. Cells of equal colour
+//! in a row are drawn as one rectangle, which keeps a 200×200 map's file small.
+
+use crate::plot::nice_step;
+use mech::{Axis, SweepTable};
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+use std::error::Error;
+use std::path::Path;
+
+const WIDTH: u32 = 960;
+const HEIGHT: u32 = 860;
+/// Drawn at `SCALE` times the size and shrunk by the `viewBox`: plotters rounds to whole pixels.
+const SCALE: u32 = 4;
+const FONT: &str = "sans-serif";
+const INK: RGBColor = RGBColor(0x22, 0x22, 0x22);
+const MUTED: RGBColor = RGBColor(0x66, 0x66, 0x66);
+const MISSING: RGBColor = RGBColor(0xbb, 0xbb, 0xbb);
+/// Matplotlib's viridis at eleven evenly spaced points.
+const VIRIDIS: [(u8, u8, u8); 11] = [
+    (0x44, 0x01, 0x54),
+    (0x48, 0x28, 0x78),
+    (0x41, 0x44, 0x87),
+    (0x35, 0x5f, 0x8d),
+    (0x2a, 0x78, 0x8e),
+    (0x21, 0x91, 0x8c),
+    (0x22, 0xa8, 0x84),
+    (0x44, 0xbf, 0x70),
+    (0x7a, 0xd1, 0x51),
+    (0xbc, 0xdf, 0x27),
+    (0xfd, 0xe7, 0x25),
+];
+
+fn px(len: u32) -> u32 {
+    len * SCALE
+}
+
+fn pos(len: i32) -> i32 {
+    len * SCALE as i32
+}
+
+fn style(size: u32, color: &'static RGBColor, anchor: (HPos, VPos)) -> TextStyle<'static> {
+    TextStyle::from((FONT, px(size)).into_font()).color(color).pos(Pos::new(anchor.0, anchor.1))
+}
+
+/// The column a `--color` names: `lyapunov`, `drift`, a final coordinate or velocity (`a`, `a'`), or any column.
+fn column_of(color: &str) -> String {
+    match color {
+        "lyapunov" | "energy_drift" | "t_final" => color.to_string(),
+        "drift" => "energy_drift".into(),
+        c if c.starts_with("final_") => c.to_string(),
+        c => format!("final_{c}"),
+    }
+}
+
+/// Refuses, before any run, a heat map that cannot be drawn: a grid that is not
+/// 2-D, or a colour that is not a column.
+pub fn check_request(n_axes: usize, color: &str, columns: &[String]) -> Result<(), String> {
+    if n_axes != 2 {
+        return Err(format!(
+            "--heatmap needs a 2-D grid (two axes, as in --grid \"a=-3:3:100,b=-3:3:100\"); this one has {n_axes}; the CSV has every run"
+        ));
+    }
+    let column = column_of(color);
+    if !columns.contains(&column) {
+        let mut known = vec!["lyapunov".to_string(), "drift".into()];
+        known.extend(columns.iter().filter_map(|c| c.strip_prefix("final_").map(str::to_string)));
+        return Err(format!("--color '{color}' is not available; choose one of {}", known.join(", ")));
+    }
+    Ok(())
+}
+
+/// Draws the heat map of `table`'s 2-D grid, coloured by `color`, to `path`.
+pub fn write_svg(path: &Path, table: &SweepTable, color: &str) -> Result<(), String> {
+    let svg = render(table, color).map_err(|e| format!("cannot draw the heat map {}: {e}", path.display()))?;
+    std::fs::write(path, svg).map_err(|e| format!("cannot write the heat map {}: {e}", path.display()))
+}
+
+/// How values map to colours.
+struct Scale {
+    lo: f64,
+    hi: f64,
+    log: bool,
+    clipped_lo: bool,
+    clipped_hi: bool,
+}
+
+impl Scale {
+    fn new(values: &[f64], log: bool) -> Scale {
+        let mut v: Vec<f64> =
+            values.iter().map(|&x| if log { x.log10() } else { x }).filter(|x| x.is_finite()).collect();
+        v.sort_by(f64::total_cmp);
+        if v.is_empty() {
+            return Scale { lo: 0.0, hi: 1.0, log, clipped_lo: false, clipped_hi: false };
+        }
+        let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
+        let (mut lo, mut hi) = (at(0.005), at(0.995));
+        if hi - lo <= 1e-12 * lo.abs().max(hi.abs()).max(1e-300) {
+            let pad = if lo == 0.0 { 1.0 } else { 0.1 * lo.abs() };
+            (lo, hi) = (lo - pad, hi + pad);
+        }
+        Scale { lo, hi, log, clipped_lo: v[0] < lo, clipped_hi: v[v.len() - 1] > hi }
+    }
+
+    /// Position in 0..=1 of a value, None when it has no colour.
+    fn fraction(&self, value: f64) -> Option<f64> {
+        let x = if self.log { value.log10() } else { value };
+        x.is_finite().then(|| ((x - self.lo) / (self.hi - self.lo)).clamp(0.0, 1.0))
+    }
+}
+
+fn viridis(f: f64) -> RGBColor {
+    let x = f.clamp(0.0, 1.0) * (VIRIDIS.len() - 1) as f64;
+    let k = (x.floor() as usize).min(VIRIDIS.len() - 2);
+    let w = x - k as f64;
+    let mix = |a: u8, b: u8| (f64::from(a) + (f64::from(b) - f64::from(a)) * w).round() as u8;
+    let (a, b) = (VIRIDIS[k], VIRIDIS[k + 1]);
+    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+}
+
+fn describe(column: &str) -> String {
+    match column {
+        "lyapunov" => "largest Lyapunov exponent λ".into(),
+        "energy_drift" => "relative drift of H".into(),
+        "t_final" => "time reached".into(),
+        c => format!("final {}", c.trim_start_matches("final_")),
+    }
+}
+
+fn render(table: &SweepTable, color: &str) -> Result<String, Box<dyn Error>> {
+    let axes = table.axes().ok_or("the table has no grid in its provenance")?;
+    let [ax, ay] = axes.as_slice() else { return Err("the grid is not 2-D".into()) };
+    let column = column_of(color);
+    let k = table.value_index(&column).ok_or_else(|| format!("no column '{column}'"))?;
+    let values: Vec<f64> = table.rows.iter().map(|r| r.values[k]).collect();
+    let scale = Scale::new(&values, column == "energy_drift");
+    // Cell colours, [i][j] for the i-th value of the first axis and j-th of the second.
+    let mut cells = vec![vec![MISSING; ay.count]; ax.count];
+    for row in &table.rows {
+        let (i, j) = (row.run / ay.count, row.run % ay.count);
+        if i < ax.count {
+            if let Some(f) = scale.fraction(row.values[k]) {
+                cells[i][j] = viridis(f);
+            }
+        }
+    }
+    let edges = |a: &Axis| {
+        let half = if a.count > 1 { 0.5 * (a.stop - a.start) / (a.count - 1) as f64 } else { 0.5 };
+        let (lo, hi) = (a.start - half, a.stop + half);
+        if lo <= hi {
+            (lo, hi, half)
+        } else {
+            (hi, lo, half)
+        }
+    };
+    let (x_lo, x_hi, hx) = edges(ax);
+    let (y_lo, y_hi, hy) = edges(ay);
+
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (px(WIDTH), px(HEIGHT))).into_drawing_area();
+        root.fill(&WHITE)?;
+        let (header, body) = root.split_vertically(px(86));
+        let center = pos(WIDTH as i32 / 2);
+        let model = table.meta("model").unwrap_or("sweep");
+        let title = format!("{model}: {}", describe(&column));
+        let bold = TextStyle::from((FONT, px(26)).into_font().style(FontStyle::Bold))
+            .color(&INK)
+            .pos(Pos::new(HPos::Center, VPos::Top));
+        header.draw_text(&title, &bold, (center, pos(16)))?;
+        let failed = table.rows.iter().filter(|r| !r.failure.is_empty()).count();
+        let mut subtitle = format!(
+            "{} × {} runs to t = {}, {} at rtol {}",
+            ax.count,
+            ay.count,
+            table.meta("until").unwrap_or("?").trim_end_matches(".0"),
+            table.meta("method").unwrap_or("?"),
+            table.meta("rtol").unwrap_or("?"),
+        );
+        if column == "lyapunov" {
+            subtitle.push_str(", twin at d₀ = 10⁻⁸ renormalized every time unit");
+        }
+        if failed > 0 || table.rows.len() < ax.count * ay.count {
+            subtitle
+                .push_str(&format!("; grey: {} failed or missing", failed + ax.count * ay.count - table.rows.len()));
+        }
+        header.draw_text(&subtitle, &style(17, &MUTED, (HPos::Center, VPos::Top)), (center, pos(52)))?;
+
+        let (left, right) = body.split_horizontally(px(WIDTH - 170));
+        let mut chart = ChartBuilder::on(&left.margin(px(4), px(10), px(10), px(10)))
+            .x_label_area_size(px(56))
+            .y_label_area_size(px(74))
+            .build_cartesian_2d(x_lo..x_hi, y_lo..y_hi)?;
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_desc(ax.name.as_str())
+            .y_desc(ay.name.as_str())
+            .x_labels(8)
+            .y_labels(8)
+            .x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| tick(*v))
+            .axis_style(MUTED.stroke_width(px(1)))
+            .set_all_tick_mark_size(px(5))
+            .label_style(style(17, &INK, (HPos::Center, VPos::Top)))
+            .axis_desc_style(style(21, &INK, (HPos::Center, VPos::Top)))
+            .draw()?;
+        // One rectangle per run of equal colour along the first axis.
+        let mut rects = Vec::new();
+        for j in 0..ay.count {
+            let y = ay.value(j);
+            let mut i = 0;
+            while i < ax.count {
+                let c = cells[i][j];
+                let mut end = i + 1;
+                while end < ax.count && cells[end][j] == c {
+                    end += 1;
+                }
+                let (x0, x1) = (ax.value(i) - hx, ax.value(end - 1) + hx);
+                rects.push(Rectangle::new([(x0, y - hy), (x1, y + hy)], c.filled()));
+                i = end;
+            }
+        }
+        chart.draw_series(rects)?;
+
+        draw_colorbar(&right, &scale, &describe(&column))?;
+        root.present()?;
+    }
+    let big = format!("width=\"{}\" height=\"{}\"", px(WIDTH), px(HEIGHT));
+    Ok(svg.replacen(&big, &format!("width=\"{WIDTH}\" height=\"{HEIGHT}\" shape-rendering=\"crispEdges\""), 1))
+}
+
+type Area<'a> = DrawingArea<SVGBackend<'a>, plotters::coord::Shift>;
+
+fn draw_colorbar(area: &Area, scale: &Scale, label: &str) -> Result<(), Box<dyn Error>> {
+    let (top, bottom) = (pos(40), area.dim_in_pixel().1 as i32 - pos(76));
+    let (x0, x1) = (pos(18), pos(46));
+    let steps = 256;
+    let height = f64::from(bottom - top);
+    for s in 0..steps {
+        let ya = bottom - (height * s as f64 / steps as f64).round() as i32;
+        let yb = bottom - (height * (s + 1) as f64 / steps as f64).round() as i32;
+        let c = viridis((s as f64 + 0.5) / steps as f64);
+        area.draw(&Rectangle::new([(x0, yb), (x1, ya)], c.filled()))?;
+    }
+    area.draw(&Rectangle::new([(x0, top), (x1, bottom)], MUTED.stroke_width(px(1))))?;
+    // On a log scale, only whole powers of ten.
+    let step = if scale.log {
+        nice_step((scale.hi - scale.lo) / 6.0).max(1.0)
+    } else {
+        nice_step((scale.hi - scale.lo) / 6.0)
+    };
+    let first = (scale.lo / step).ceil() as i64;
+    let last = (scale.hi / step).floor() as i64;
+    let text = style(16, &INK, (HPos::Left, VPos::Center));
+    for k in first..=last.min(first + 20) {
+        let v = k as f64 * step;
+        let y = bottom - (height * (v - scale.lo) / (scale.hi - scale.lo)).round() as i32;
+        area.draw(&PathElement::new(vec![(x1, y), (x1 + pos(6), y)], INK.stroke_width(px(1))))?;
+        let mut label = tick(v);
+        if scale.log {
+            label = format!("10{}", superscript(&label));
+        }
+        area.draw_text(&label, &text, (x1 + pos(10), y))?;
+    }
+    let note = style(14, &MUTED, (HPos::Left, VPos::Center));
+    if scale.clipped_hi {
+        area.draw_text("and above", &note, (x0, top - pos(14)))?;
+    }
+    if scale.clipped_lo {
+        area.draw_text("and below", &note, (x0, bottom + pos(14)))?;
+    }
+    // The bar's caption, rotated along it.
+    let caption = TextStyle::from((FONT, px(18)).into_font().transform(FontTransform::Rotate270))
+        .color(&INK)
+        .pos(Pos::new(HPos::Center, VPos::Center));
+    area.draw_text(label, &caption, (pos(146), (top + bottom) / 2))?;
+    Ok(())
+}
+
+/// `−11` as `⁻¹¹`.
+fn superscript(text: &str) -> String {
+    text.chars()
+        .map(|c| match c {
+            '−' | '-' => '⁻',
+            '0' => '⁰',
+            '1' => '¹',
+            '2' => '²',
+            '3' => '³',
+            '4' => '⁴',
+            '5' => '⁵',
+            '6' => '⁶',
+            '7' => '⁷',
+            '8' => '⁸',
+            '9' => '⁹',
+            other => other,
+        })
+        .collect()
+}
+
+/// A tick label with a true minus sign and no trailing zeros.
+fn tick(v: f64) -> String {
+    let v = if v.abs() < 1e-12 { 0.0 } else { v };
+    let text = format!("{v:.3}");
+    let text = if text.contains('.') { text.trim_end_matches('0').trim_end_matches('.') } else { &text };
+    text.replace('-', "−")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn colours_and_ticks() {
+        assert_eq!(viridis(0.0), RGBColor(0x44, 0x01, 0x54));
+        assert_eq!(viridis(1.0), RGBColor(0xfd, 0xe7, 0x25));
+        assert_eq!(tick(-1.5), "−1.5");
+        assert_eq!(tick(2.0), "2");
+        assert_eq!(column_of("a'"), "final_a'");
+        assert_eq!(superscript("−11"), "⁻¹¹");
+        assert_eq!(column_of("drift"), "energy_drift");
+        let s = Scale::new(&[1e-12, 1e-10, f64::NAN], true);
+        assert_eq!(s.fraction(1e-12), Some(0.0));
+        assert_eq!(s.fraction(f64::NAN), None);
+    }
+}

@@ -1,0 +1,123 @@
+//! `lagrange sweep` end to end: the real binary on a small double-pendulum grid
+//! (rows, shards merged back to the unsharded output, the heat map) and bad
+//! grids (exit 2).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn lagrange(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lagrange")).args(args).output().expect("the binary runs")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("lagrange-sweep-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn text(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+const GRID: &str = "a=-3:3:4,b=-3:3:4";
+
+#[test]
+fn shards_merge_to_the_whole_sweep_and_the_heat_map_is_drawn() {
+    let model = repo().join("examples/double_pendulum.toml");
+    let model = model.to_str().unwrap();
+    let whole = scratch("whole.csv");
+    let svg = scratch("map.svg");
+    let out = lagrange(&[
+        "sweep",
+        model,
+        "--until",
+        "2",
+        "--grid",
+        GRID,
+        "--out",
+        whole.to_str().unwrap(),
+        "--heatmap",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let csv = text(&whole);
+    let lines: Vec<&str> = csv.lines().collect();
+    assert!(
+        lines[0].starts_with("# lagrange sweep; model=planar double pendulum; grid=a=-3.0:3.0:4,b=-3.0:3.0:4; runs=16")
+    );
+    assert_eq!(lines[1], "run,a,b,t_final,final_a,final_b,final_a',final_b',energy_drift,lyapunov,failure");
+    assert_eq!(lines.len(), 2 + 16);
+    for (k, line) in lines[2..].iter().enumerate() {
+        let fields: Vec<&str> = line.split(',').collect();
+        assert_eq!(fields[0], k.to_string());
+        assert_eq!(fields[3], "2.0", "t_final of {line}");
+        let drift: f64 = fields[8].parse().unwrap();
+        assert!(drift < 1e-6, "{line}");
+        assert!(fields[9].parse::<f64>().unwrap().is_finite() && fields[10].is_empty(), "{line}");
+    }
+    let map = text(&svg);
+    assert!(map.contains("<svg") && map.contains("largest Lyapunov exponent"), "{}", &map[..200.min(map.len())]);
+
+    let mut parts = Vec::new();
+    for i in 0..3 {
+        let part = scratch(&format!("part{i}.csv"));
+        let shard = format!("{i}/3");
+        let out = lagrange(&[
+            "sweep",
+            model,
+            "--until",
+            "2",
+            "--grid",
+            GRID,
+            "--shard",
+            &shard,
+            "--threads",
+            "1",
+            "--out",
+            part.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        parts.push(part.to_str().unwrap().to_string());
+    }
+    let merged = scratch("merged.csv");
+    let mut args = vec!["sweep", "--merge", merged.to_str().unwrap()];
+    args.extend(parts.iter().rev().map(String::as_str));
+    let out = lagrange(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(text(&merged), csv);
+
+    // Two of three shards: the merge names what is missing.
+    let out = lagrange(&["sweep", "--merge", merged.to_str().unwrap(), &parts[0], &parts[2]]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("5 of 16 runs are missing (first: [1, 4, 7, 10, 13]); missing shards: 1/3"), "{err}");
+}
+
+#[test]
+fn bad_grids_and_requests_exit_2() {
+    let model = repo().join("examples/double_pendulum.toml");
+    let model = model.to_str().unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (&["--grid", "a=0:1"], "'a=0:1' is not NAME=START:STOP:COUNT"),
+        (
+            &["--grid", "z=0:1:3"],
+            "'z' is not a coordinate, a velocity or a parameter of the model (known: a, a', b, b'",
+        ),
+        (&["--grid", "a=0:1:0"], "the count of 'a' must be a whole number of at least 1, not '0'"),
+        (&["--grid", "a=0:1:3", "--heatmap", "x.svg"], "--heatmap needs a 2-D grid"),
+        (&["--grid", "a=0:1:3,b=0:1:3", "--heatmap", "x.svg", "--color", "c"], "--color 'c' is not available"),
+        (&["--grid", "a=0:1:3", "--shard", "3/3"], "--shard must be I/N"),
+    ];
+    for (extra, expect) in cases {
+        let mut args = vec!["sweep", model, "--until", "1"];
+        args.extend_from_slice(extra);
+        let out = lagrange(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{extra:?}: {err}");
+        assert!(err.contains(expect), "{extra:?}: {err}");
+    }
+}

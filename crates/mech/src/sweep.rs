@@ -1,0 +1,1141 @@
+//! Ensembles: many trajectories of one model over a grid of initial values or
+//! parameters, on all cores, one result row per run.
+//!
+//! Enter at [`Grid::parse`] (the `--grid` text against a model), then [`sweep`],
+//! which returns a [`SweepTable`]; [`SweepTable::to_csv`] / [`SweepTable::parse`]
+//! are its file form and [`merge`] joins the tables of shards.
+//!
+//! # A run
+//!
+//! Each run overrides some initial coordinates (`a`), velocities (`a'`) or
+//! parameters of the model and integrates from t = 0 to `until`. The derivation
+//! is compiled once ([`Dynamics`]); every worker thread clones the compiled
+//! [`System`] (a grid over parameters recompiles per run, since a compiled system
+//! holds its parameter values). A run records its final state, the relative drift
+//! of H, |H(T) − H(0)| / |H(0)| (absolute where H(0) = 0), and an estimate of the
+//! largest Lyapunov exponent.
+//!
+//! # The Lyapunov exponent (Benettin's two-trajectory method)
+//!
+//! A twin starts at `y0 + d0·u`, `d0 =` [`LYAPUNOV_D0`], `u` the unit vector with
+//! equal components, in the state the integrator uses (`[q, q']` for DOP853).
+//! Both are integrated over segments of [`LYAPUNOV_INTERVAL`] time units; after
+//! each, the distance `d_k` between them is measured (Euclidean norm of the state
+//! difference), `ln(d_k/d0)` added up, and the twin pulled back along the
+//! difference to distance `d0`. Then `λ ≈ Σ ln(d_k/d0) / T`. The twin stays
+//! within the linear regime (it is renormalized long before the separation
+//! saturates at the size of the phase space), so this estimates the exponent of
+//! the tangent dynamics without variational equations. It is a finite-time
+//! estimate: positive and of order one on chaotic orbits, tending to zero as 1/T
+//! on regular ones (a pendulum's twin drifts apart linearly). `d0 = 1e-8` sits
+//! well above the integration error per segment at the default `rtol = 1e-10`
+//! and well below any scale of the motion. The main trajectory is integrated in
+//! the same segments whether or not the exponent is asked for, so the final
+//! state does not depend on that choice.
+//!
+//! # Shards
+//!
+//! `Shard { index: i, count: n }` takes the runs whose index is `i` modulo `n`
+//! (strided rather than contiguous: neighbouring grid points cost alike — a
+//! chaotic region is expensive — so striding balances machines). [`merge`]
+//! checks the shards belong to the same sweep (same columns and provenance),
+//! sorts the rows by run index and reports duplicated or missing runs.
+//!
+//! # Default method
+//!
+//! DOP853 at `rtol` (default [`DEFAULT_RTOL`]): for an ensemble the cost per
+//! trajectory is what counts, and an adaptive 8th-order explicit method is the
+//! cheapest way to a given accuracy at tight tolerances; it needs no pilot runs
+//! to choose a step (as fixed-step symplectic methods do per initial state), and
+//! the runs' lengths are short enough (tens of periods) that the secular energy
+//! drift symplectic methods avoid stays at the tolerance level, which the
+//! `energy_drift` column reports for every run.
+
+use crate::derive::Derivation;
+use crate::dynamics::{Dynamics, Form, System};
+use crate::error::ModelError;
+use crate::model::Model;
+use crate::run::choose_method;
+use num::{integrate_to, Config, Method, SolveError, Solver};
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+/// Initial separation of the Lyapunov twin, in state units.
+pub const LYAPUNOV_D0: f64 = 1e-8;
+/// Time between renormalizations of the twin (also the segment length of every run).
+pub const LYAPUNOV_INTERVAL: f64 = 1.0;
+/// Default relative tolerance: the integration error per segment stays far below
+/// [`LYAPUNOV_D0`], which the exponent's estimate needs.
+pub const DEFAULT_RTOL: f64 = 1e-10;
+/// The most runs one sweep may have (a typo like `count = 1e9` is refused, not run).
+pub const MAX_RUNS: usize = 100_000_000;
+/// The first line of a sweep's CSV starts with this.
+pub const CSV_MAGIC: &str = "# lagrange sweep";
+
+/// Why a grid, a shard, a table or a merge is not usable.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SweepError {
+    /// An empty `--grid`.
+    #[error("the grid is empty; expected NAME=START:STOP:COUNT, comma separated")]
+    EmptyGrid,
+    /// An axis that is not `NAME=START:STOP:COUNT`.
+    #[error("in the grid: '{item}' is not NAME=START:STOP:COUNT")]
+    AxisSyntax {
+        /// The offending axis text.
+        item: String,
+    },
+    /// A start or stop that is not a finite number.
+    #[error("in the grid: the {what} of '{name}' must be a finite number, not '{text}'")]
+    AxisNumber {
+        /// The axis name.
+        name: String,
+        /// `start` or `stop`.
+        what: &'static str,
+        /// The text found.
+        text: String,
+    },
+    /// A count that is not a whole number ≥ 1.
+    #[error("in the grid: the count of '{name}' must be a whole number of at least 1, not '{text}'")]
+    AxisCount {
+        /// The axis name.
+        name: String,
+        /// The text found.
+        text: String,
+    },
+    /// A name that is no coordinate, velocity or parameter.
+    #[error("in the grid: '{name}' is not a coordinate, a velocity or a parameter of the model (known: {known})")]
+    UnknownName {
+        /// The name.
+        name: String,
+        /// The names the grid may use.
+        known: String,
+    },
+    /// The same name on two axes.
+    #[error("in the grid: '{name}' appears on two axes")]
+    DuplicateAxis {
+        /// The name.
+        name: String,
+    },
+    /// Too many runs.
+    #[error("the grid has {runs} runs; a sweep may have at most {max}")]
+    TooLarge {
+        /// The product of the counts.
+        runs: u128,
+        /// [`MAX_RUNS`].
+        max: usize,
+    },
+    /// A `--shard` that is not `i/n` with `i < n`.
+    #[error("--shard must be I/N with 0 <= I < N (the I-th of N slices), not '{text}'")]
+    ShardSyntax {
+        /// The text found.
+        text: String,
+    },
+    /// An end time that is not positive.
+    #[error("--until must be a positive time, not {until}")]
+    Until {
+        /// The value found.
+        until: f64,
+    },
+    /// The thread pool could not be made.
+    #[error("cannot start {threads} threads: {reason}")]
+    Threads {
+        /// Requested threads.
+        threads: usize,
+        /// Why not.
+        reason: String,
+    },
+    /// A model problem (a missing initial value, an impossible method).
+    #[error("{0}")]
+    Model(ModelError),
+    /// A CSV that is not a sweep's output.
+    #[error("{file}, line {line}: {reason}")]
+    Table {
+        /// The file's name.
+        file: String,
+        /// 1-based line.
+        line: usize,
+        /// What is wrong.
+        reason: String,
+    },
+    /// Shards of different sweeps.
+    #[error("{file} is not a shard of the same sweep as {first}: {reason}")]
+    Mismatch {
+        /// The first shard.
+        first: String,
+        /// The shard that differs.
+        file: String,
+        /// What differs.
+        reason: String,
+    },
+    /// A run present twice.
+    #[error("run {run} appears twice ({first} and {second})")]
+    DuplicateRun {
+        /// The run index.
+        run: usize,
+        /// Where it appeared first.
+        first: String,
+        /// Where again.
+        second: String,
+    },
+    /// Runs absent from every shard.
+    #[error("{count} of {total} runs are missing (first: {first:?}); missing shards: {shards}")]
+    MissingRuns {
+        /// How many.
+        count: usize,
+        /// Runs in the sweep.
+        total: usize,
+        /// The first few missing run indices.
+        first: Vec<usize>,
+        /// The shards (`i/n`) that would hold them.
+        shards: String,
+    },
+    /// Nothing to merge.
+    #[error("no shard files to merge")]
+    NothingToMerge,
+}
+
+/// What an axis of the grid sets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Target {
+    /// The initial value of coordinate `k`.
+    Coordinate(usize),
+    /// The initial velocity of coordinate `k`.
+    Velocity(usize),
+    /// Parameter `k` (in the model's order).
+    Parameter(usize),
+}
+
+/// One axis: `count` evenly spaced values from `start` to `stop`, both included.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Axis {
+    /// The name as written (`a`, `a'`, `g`).
+    pub name: String,
+    /// First value.
+    pub start: f64,
+    /// Last value (equal to `start` when `count` is 1).
+    pub stop: f64,
+    /// Number of values, at least 1.
+    pub count: usize,
+}
+
+impl Axis {
+    /// The `k`-th value.
+    pub fn value(&self, k: usize) -> f64 {
+        if self.count <= 1 {
+            self.start
+        } else if k + 1 == self.count {
+            self.stop
+        } else {
+            self.start + (self.stop - self.start) * (k as f64 / (self.count - 1) as f64)
+        }
+    }
+}
+
+/// Parses `name=start:stop:count,...` without a model: the axes of a grid as text
+/// describes them (used again to read a merged CSV's provenance).
+pub fn parse_axes(spec: &str) -> Result<Vec<Axis>, SweepError> {
+    let mut axes: Vec<Axis> = Vec::new();
+    for item in spec.split(',').map(str::trim) {
+        if item.is_empty() {
+            if spec.trim().is_empty() {
+                return Err(SweepError::EmptyGrid);
+            }
+            return Err(SweepError::AxisSyntax { item: spec.trim().to_string() });
+        }
+        let syntax = || SweepError::AxisSyntax { item: item.to_string() };
+        let (name, range) = item.split_once('=').ok_or_else(syntax)?;
+        let name = name.trim();
+        let parts: Vec<&str> = range.split(':').map(str::trim).collect();
+        if name.is_empty() || parts.len() != 3 {
+            return Err(syntax());
+        }
+        let number = |what: &'static str, text: &str| {
+            text.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| SweepError::AxisNumber {
+                name: name.to_string(),
+                what,
+                text: text.to_string(),
+            })
+        };
+        let start = number("start", parts[0])?;
+        let stop = number("stop", parts[1])?;
+        let count = parts[2]
+            .parse::<usize>()
+            .ok()
+            .filter(|&c| c >= 1)
+            .ok_or_else(|| SweepError::AxisCount { name: name.to_string(), text: parts[2].to_string() })?;
+        if axes.iter().any(|a| a.name == name) {
+            return Err(SweepError::DuplicateAxis { name: name.to_string() });
+        }
+        axes.push(Axis { name: name.to_string(), start, stop: if count == 1 { start } else { stop }, count });
+    }
+    let runs = axes.iter().fold(1u128, |acc, a| acc.saturating_mul(a.count as u128));
+    if runs > MAX_RUNS as u128 {
+        return Err(SweepError::TooLarge { runs, max: MAX_RUNS });
+    }
+    Ok(axes)
+}
+
+/// The axes as text that [`parse_axes`] reads back.
+pub fn format_axes(axes: &[Axis]) -> String {
+    axes.iter().map(|a| format!("{}={:?}:{:?}:{}", a.name, a.start, a.stop, a.count)).collect::<Vec<_>>().join(",")
+}
+
+/// A grid of runs: the cartesian product of its axes, the first axis varying
+/// slowest (run index `((i0·n1) + i1)·n2 + i2 …`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Grid {
+    /// The axes, in the order given.
+    pub axes: Vec<Axis>,
+    /// What each axis sets.
+    pub targets: Vec<Target>,
+}
+
+impl Grid {
+    /// Parses a `--grid` text and resolves its names against a model.
+    pub fn parse(spec: &str, model: &Model) -> Result<Grid, SweepError> {
+        let axes = parse_axes(spec)?;
+        let mut targets = Vec::with_capacity(axes.len());
+        for axis in &axes {
+            let name = axis.name.as_str();
+            let base = name.strip_suffix('\'').unwrap_or(name);
+            let coord = model.coordinates.iter().position(|c| c.name == base);
+            let target = match coord {
+                Some(k) if base.len() == name.len() => Some(Target::Coordinate(k)),
+                Some(k) => Some(Target::Velocity(k)),
+                None => model.parameters.iter().position(|p| p.name == name).map(Target::Parameter),
+            };
+            let known = || {
+                let mut names: Vec<String> = Vec::new();
+                for c in &model.coordinates {
+                    names.push(c.name.clone());
+                    names.push(format!("{}'", c.name));
+                }
+                names.extend(model.parameters.iter().map(|p| p.name.clone()));
+                names.join(", ")
+            };
+            targets.push(target.ok_or_else(|| SweepError::UnknownName { name: name.to_string(), known: known() })?);
+        }
+        Ok(Grid { axes, targets })
+    }
+
+    /// The number of runs.
+    pub fn len(&self) -> usize {
+        self.axes.iter().map(|a| a.count).product()
+    }
+
+    /// True when the grid has no run (never, for a parsed grid).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The input values of run `run`, one per axis.
+    pub fn point(&self, run: usize) -> Vec<f64> {
+        let mut rest = run;
+        let mut values = vec![0.0; self.axes.len()];
+        for (k, axis) in self.axes.iter().enumerate().rev() {
+            values[k] = axis.value(rest % axis.count);
+            rest /= axis.count;
+        }
+        values
+    }
+}
+
+/// The `index`-th of `count` slices of a sweep: the runs `r` with `r % count == index`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    /// Which slice, `0..count`.
+    pub index: usize,
+    /// How many slices.
+    pub count: usize,
+}
+
+impl Default for Shard {
+    fn default() -> Self {
+        Shard { index: 0, count: 1 }
+    }
+}
+
+impl Shard {
+    /// Parses `i/n`.
+    pub fn parse(text: &str) -> Result<Shard, SweepError> {
+        let err = || SweepError::ShardSyntax { text: text.to_string() };
+        let (i, n) = text.split_once('/').ok_or_else(err)?;
+        let index: usize = i.trim().parse().map_err(|_| err())?;
+        let count: usize = n.trim().parse().map_err(|_| err())?;
+        if count == 0 || index >= count {
+            return Err(err());
+        }
+        Ok(Shard { index, count })
+    }
+
+    /// The run indices of this shard among `total`, ascending.
+    pub fn runs(self, total: usize) -> impl Iterator<Item = usize> {
+        (self.index..total).step_by(self.count)
+    }
+
+    /// Whether the sweep is split at all.
+    pub fn is_whole(self) -> bool {
+        self.count == 1
+    }
+}
+
+impl std::fmt::Display for Shard {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
+    }
+}
+
+/// Options of a sweep.
+#[derive(Debug, Clone)]
+pub struct SweepConfig {
+    /// End time of every run (each starts at t = 0).
+    pub until: f64,
+    /// The integrator; `None`: DOP853 (see the module documentation).
+    pub method: Option<Method>,
+    /// Relative tolerance (fixed-step methods choose their step from it).
+    pub rtol: f64,
+    /// Absolute tolerance.
+    pub atol: f64,
+    /// Whether to estimate the largest Lyapunov exponent (doubles the cost).
+    pub lyapunov: bool,
+    /// Which slice of the runs.
+    pub shard: Shard,
+    /// Worker threads; `None`: one per core.
+    pub threads: Option<usize>,
+}
+
+impl Default for SweepConfig {
+    fn default() -> Self {
+        SweepConfig {
+            until: 10.0,
+            method: None,
+            rtol: DEFAULT_RTOL,
+            // Two digits below rtol for states of order one: protects components
+            // through zero without binding elsewhere.
+            atol: DEFAULT_RTOL * 1e-2,
+            lyapunov: true,
+            shard: Shard::default(),
+            threads: None,
+        }
+    }
+}
+
+/// One row of a sweep's table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TableRow {
+    /// The run index in the whole grid.
+    pub run: usize,
+    /// Every numeric column between `run` and `failure`.
+    pub values: Vec<f64>,
+    /// Why the run failed (empty when it did not).
+    pub failure: String,
+}
+
+/// A sweep's result: provenance, columns and rows, in run order. Its file form
+/// is CSV with one comment line of provenance first ([`SweepTable::to_csv`]).
+///
+/// Columns: `run`, the grid's names (inputs), `t_final`, `final_<q>` per
+/// coordinate, `final_<q>'` per velocity, `energy_drift`, `lyapunov`, `failure`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepTable {
+    /// Provenance as `key=value` pairs (`model`, `grid`, `runs`, `until`, `method`,
+    /// `rtol`, `atol`, `parameters`, `lyapunov`, and `shard` for a part).
+    pub meta: Vec<(String, String)>,
+    /// Column names, `run` first and `failure` last.
+    pub columns: Vec<String>,
+    /// The rows, ascending by run.
+    pub rows: Vec<TableRow>,
+}
+
+impl SweepTable {
+    /// A provenance value.
+    pub fn meta(&self, key: &str) -> Option<&str> {
+        self.meta.iter().find(|(k, _)| k == key).map(|(_, v)| v.as_str())
+    }
+
+    /// The number of runs of the whole sweep (from the provenance).
+    pub fn total_runs(&self) -> Option<usize> {
+        self.meta("runs")?.parse().ok()
+    }
+
+    /// The grid's axes (from the provenance).
+    pub fn axes(&self) -> Option<Vec<Axis>> {
+        parse_axes(self.meta("grid")?).ok()
+    }
+
+    /// The index into [`TableRow::values`] of a column (`None` for `run`, `failure` or an unknown name).
+    pub fn value_index(&self, column: &str) -> Option<usize> {
+        let k = self.columns.iter().position(|c| c == column)?;
+        (k >= 1 && k + 1 < self.columns.len()).then(|| k - 1)
+    }
+
+    /// The CSV text: the provenance comment, the header and one line per row.
+    /// Numbers print in the shortest form that reads back exactly (`1e-10`, `0.5`, `NaN`).
+    pub fn to_csv(&self) -> String {
+        let mut s = String::with_capacity(64 * (self.rows.len() + 2));
+        s.push_str(CSV_MAGIC);
+        for (k, v) in &self.meta {
+            let _ = write!(s, "; {k}={v}");
+        }
+        s.push('\n');
+        s.push_str(&self.columns.join(","));
+        s.push('\n');
+        for row in &self.rows {
+            let _ = write!(s, "{}", row.run);
+            for v in &row.values {
+                let _ = write!(s, ",{v:?}");
+            }
+            s.push(',');
+            s.push_str(&csv_field(&row.failure));
+            s.push('\n');
+        }
+        s
+    }
+
+    /// Reads the text [`SweepTable::to_csv`] writes; `file` names it in errors.
+    pub fn parse(text: &str, file: &str) -> Result<SweepTable, SweepError> {
+        let err = |line: usize, reason: String| SweepError::Table { file: file.to_string(), line, reason };
+        let mut lines = text.lines();
+        let first = lines.next().unwrap_or_default();
+        let Some(rest) = first.strip_prefix(CSV_MAGIC) else {
+            return Err(err(
+                1,
+                format!("not the output of `lagrange sweep` (the first line should start with '{CSV_MAGIC}')"),
+            ));
+        };
+        let mut meta = Vec::new();
+        for pair in rest.split("; ").map(str::trim).filter(|p| !p.is_empty()) {
+            let (k, v) = pair.split_once('=').ok_or_else(|| err(1, format!("provenance '{pair}' is not KEY=VALUE")))?;
+            meta.push((k.to_string(), v.to_string()));
+        }
+        let columns: Vec<String> = lines.next().unwrap_or_default().split(',').map(str::to_string).collect();
+        if columns.len() < 2 || columns[0] != "run" || columns.last().map(String::as_str) != Some("failure") {
+            return Err(err(2, "the header should start with 'run' and end with 'failure'".into()));
+        }
+        let n_values = columns.len() - 2;
+        let mut rows = Vec::new();
+        for (k, line) in lines.enumerate() {
+            let line_no = k + 3;
+            if line.is_empty() {
+                continue;
+            }
+            let mut fields = line.splitn(n_values + 2, ',');
+            let run = fields
+                .next()
+                .and_then(|f| f.parse::<usize>().ok())
+                .ok_or_else(|| err(line_no, "the run index is not a whole number".into()))?;
+            let mut values = Vec::with_capacity(n_values);
+            for c in 0..n_values {
+                let field = fields.next().ok_or_else(|| err(line_no, format!("{} columns expected", columns.len())))?;
+                let v = field
+                    .parse::<f64>()
+                    .map_err(|_| err(line_no, format!("'{field}' in column '{}' is not a number", columns[c + 1])))?;
+                values.push(v);
+            }
+            let failure = unquote(fields.next().unwrap_or_default());
+            rows.push(TableRow { run, values, failure });
+        }
+        Ok(SweepTable { meta, columns, rows })
+    }
+}
+
+/// A CSV field: quoted when it holds a comma, a quote or a line break (which
+/// becomes a space: one row per line).
+fn csv_field(text: &str) -> String {
+    let text = text.replace(['\n', '\r'], " ");
+    if text.contains([',', '"']) {
+        format!("\"{}\"", text.replace('"', "\"\""))
+    } else {
+        text
+    }
+}
+
+fn unquote(field: &str) -> String {
+    match field.strip_prefix('"').and_then(|f| f.strip_suffix('"')) {
+        Some(inner) => inner.replace("\"\"", "\""),
+        None => field.to_string(),
+    }
+}
+
+/// Runs the sweep of `grid` (the runs of `config.shard`) in parallel and returns
+/// its table, rows in run order whatever the scheduling. `progress` is called once
+/// per finished run, from any thread. A run that fails does not stop the sweep:
+/// its row holds NaN where values are missing and the reason in `failure`.
+pub fn sweep(
+    d: &mut Derivation,
+    grid: &Grid,
+    config: &SweepConfig,
+    progress: &(dyn Fn() + Sync),
+) -> Result<SweepTable, SweepError> {
+    if !(config.until.is_finite() && config.until > 0.0) {
+        return Err(SweepError::Until { until: config.until });
+    }
+    let dynamics = Dynamics::new(d);
+    let (method, form) =
+        choose_method(d, &dynamics, Some(config.method.unwrap_or(Method::Dop853))).map_err(SweepError::Model)?;
+    let d: &Derivation = d;
+    // Initial values from the model; a value neither in [initial] nor on an axis
+    // is an error before anything runs.
+    let base = initial_values(&d.model).map_err(SweepError::Model)?;
+    if grid.is_empty() {
+        return Err(SweepError::EmptyGrid);
+    }
+    complete(&base, grid, &grid.point(0), &d.model).map_err(SweepError::Model)?;
+    let has_parameters = grid.targets.iter().any(|t| matches!(t, Target::Parameter(_)));
+    let system = dynamics.system(form);
+    let runs: Vec<usize> = config.shard.runs(grid.len()).collect();
+    let n = dynamics.n_coords();
+    let plan = Plan { method, form, config };
+
+    // Each worker owns its systems (and, for parameter grids, a derivation to
+    // recompile); rows come back in the order of `runs`.
+    let work = || -> Vec<TableRow> {
+        runs.par_iter()
+            .map_init(
+                || (system.clone(), system.clone(), has_parameters.then(|| d.clone())),
+                |(sys, twin, derivation), &run| {
+                    let inputs = grid.point(run);
+                    let outcome = match derivation {
+                        Some(derivation) => {
+                            for (value, target) in inputs.iter().zip(&grid.targets) {
+                                if let Target::Parameter(k) = *target {
+                                    derivation.model.parameters[k].value = *value;
+                                }
+                            }
+                            initial_values(&derivation.model)
+                                .and_then(|values| complete(&values, grid, &inputs, &derivation.model))
+                                .map_err(|e| e.message)
+                                .map(|(q, qd)| {
+                                    // The tapes take the parameters as inputs: no recompilation.
+                                    let values: Vec<f64> =
+                                        derivation.model.parameters.iter().map(|p| p.value).collect();
+                                    sys.set_parameters(&values);
+                                    twin.set_parameters(&values);
+                                    plan.run(sys, twin, &q, &qd)
+                                })
+                        }
+                        None => complete(&base, grid, &inputs, &d.model)
+                            .map_err(|e| e.message)
+                            .map(|(q, qd)| plan.run(sys, twin, &q, &qd)),
+                    };
+                    progress();
+                    row(run, inputs, n, outcome)
+                },
+            )
+            .collect()
+    };
+    let rows = match config.threads {
+        None => work(),
+        Some(threads) => rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| SweepError::Threads { threads, reason: e.to_string() })?
+            .install(work),
+    };
+
+    let mut columns = vec!["run".to_string()];
+    columns.extend(grid.axes.iter().map(|a| a.name.clone()));
+    columns.push("t_final".into());
+    let names = dynamics.coordinate_names();
+    columns.extend(names.iter().map(|c| format!("final_{c}")));
+    columns.extend(names.iter().map(|c| format!("final_{c}'")));
+    columns.extend(["energy_drift".into(), "lyapunov".into(), "failure".into()]);
+    let model = &d.model;
+    let parameters: Vec<String> = model.parameters.iter().map(|p| format!("{}={:?}", p.name, p.value)).collect();
+    let mut meta = vec![
+        ("model".to_string(), model.name.replace([';', '\n', '\r'], ",")),
+        ("grid".into(), format_axes(&grid.axes)),
+        ("runs".into(), grid.len().to_string()),
+        ("until".into(), format!("{:?}", config.until)),
+        ("method".into(), method.name().to_string()),
+        ("rtol".into(), format!("{:?}", config.rtol)),
+        ("atol".into(), format!("{:?}", config.atol)),
+        ("parameters".into(), parameters.join(" ")),
+        (
+            "lyapunov".into(),
+            if config.lyapunov { format!("d0 {LYAPUNOV_D0:?} every {LYAPUNOV_INTERVAL:?}") } else { "off".into() },
+        ),
+    ];
+    if !config.shard.is_whole() {
+        meta.push(("shard".into(), config.shard.to_string()));
+    }
+    Ok(SweepTable { meta, columns, rows })
+}
+
+/// What one run produced.
+#[derive(Debug)]
+struct RunOutcome {
+    t_final: f64,
+    q: Vec<f64>,
+    qd: Vec<f64>,
+    energy_drift: f64,
+    lyapunov: f64,
+    failure: Option<String>,
+}
+
+/// The row of a run; a run that could not start has only its inputs.
+fn row(run: usize, inputs: Vec<f64>, n: usize, outcome: Result<RunOutcome, String>) -> TableRow {
+    let outcome = outcome.unwrap_or_else(|message| RunOutcome {
+        t_final: 0.0,
+        q: vec![f64::NAN; n],
+        qd: vec![f64::NAN; n],
+        energy_drift: f64::NAN,
+        lyapunov: f64::NAN,
+        failure: Some(message),
+    });
+    let mut values = inputs;
+    values.push(outcome.t_final);
+    values.extend(&outcome.q);
+    values.extend(&outcome.qd);
+    values.push(outcome.energy_drift);
+    values.push(outcome.lyapunov);
+    TableRow { run, values, failure: outcome.failure.unwrap_or_default() }
+}
+
+/// The `[initial]` values of a model at its current parameter values (None where not given).
+type Initial = (Vec<Option<f64>>, Vec<Option<f64>>);
+
+fn initial_values(model: &Model) -> Result<Initial, ModelError> {
+    let n = model.n_coords();
+    let (mut q, mut qd) = (vec![None; n], vec![None; n]);
+    let env = |name: &str| model.parameter(name);
+    for iv in &model.initial {
+        let v =
+            model.pool.eval(iv.value.expr, &env).map_err(|e| ModelError::at(iv.value.span.clone(), e.to_string()))?;
+        let slot = if iv.order == 0 { &mut q } else { &mut qd };
+        slot[iv.coord] = Some(v);
+    }
+    Ok((q, qd))
+}
+
+/// The initial (q, q') of a run: the model's values overridden by the grid's.
+fn complete(base: &Initial, grid: &Grid, inputs: &[f64], model: &Model) -> Result<(Vec<f64>, Vec<f64>), ModelError> {
+    let (mut q, mut qd) = base.clone();
+    for (value, target) in inputs.iter().zip(&grid.targets) {
+        match *target {
+            Target::Coordinate(k) => q[k] = Some(*value),
+            Target::Velocity(k) => qd[k] = Some(*value),
+            Target::Parameter(_) => {}
+        }
+    }
+    let mut missing = Vec::new();
+    for (k, c) in model.coordinates.iter().enumerate() {
+        if q[k].is_none() {
+            missing.push(c.name.clone());
+        }
+        if qd[k].is_none() {
+            missing.push(format!("{}'", c.name));
+        }
+    }
+    if !missing.is_empty() {
+        return Err(ModelError::whole(format!(
+            "no initial value for {}: neither [initial] nor the grid gives one",
+            missing.join(", ")
+        ))
+        .with_help("add them under [initial] or as axes of --grid"));
+    }
+    if let Some(v) = q.iter().chain(&qd).flatten().find(|v| !v.is_finite()) {
+        return Err(ModelError::whole(format!("an initial value evaluates to {v}")));
+    }
+    Ok((q.into_iter().flatten().collect(), qd.into_iter().flatten().collect()))
+}
+
+/// The integrator and options shared by every run.
+struct Plan<'a> {
+    method: Method,
+    form: Form,
+    config: &'a SweepConfig,
+}
+
+/// A solver in the form the method needs, borrowing its system.
+fn build<'a>(
+    method: Method,
+    form: Form,
+    system: &'a mut System,
+    t0: f64,
+    y0: &[f64],
+    config: &Config,
+) -> Result<Box<dyn Solver + 'a>, SolveError> {
+    if form == Form::Separable {
+        method.build_separable(system, t0, y0, config)
+    } else {
+        method.build(system, t0, y0, config)
+    }
+}
+
+impl Plan<'_> {
+    /// One run from (q0, q0'): the main trajectory in segments of
+    /// [`LYAPUNOV_INTERVAL`], and the twin beside it (module documentation).
+    fn run(&self, sys: &mut System, twin_sys: &mut System, q0: &[f64], qd0: &[f64]) -> RunOutcome {
+        let n = q0.len();
+        let cfg = self.config;
+        let mut out = RunOutcome {
+            t_final: 0.0,
+            q: vec![f64::NAN; n],
+            qd: vec![f64::NAN; n],
+            energy_drift: f64::NAN,
+            lyapunov: f64::NAN,
+            failure: None,
+        };
+        let y0 = match sys.initial_state(0.0, q0, qd0) {
+            Ok(y) => y,
+            Err(e) => {
+                out.failure = Some(e.message);
+                return out;
+            }
+        };
+        let mut qd = vec![0.0; n];
+        let mut inv = vec![0.0; sys.n_invariants()];
+        let h0 = sys.invariants_at(0.0, &y0, &mut qd, &mut inv).ok().map(|()| inv[0]);
+        let mut solver_config = Config { rtol: cfg.rtol, atol: cfg.atol, h_max: Some(cfg.until), ..Config::default() };
+        let mut y = y0.clone();
+        let mut t = 0.0;
+        let mut twin_failure: Option<String> = None;
+        let mut log_sum = 0.0;
+        {
+            let mut main = match build(self.method, self.form, sys, 0.0, &y0, &solver_config) {
+                Ok(s) => s,
+                Err(e) => {
+                    out.failure = Some(e.to_string());
+                    return out;
+                }
+            };
+            if !self.method.is_adaptive() {
+                // The twin takes the step chosen for the main trajectory.
+                solver_config.dt = Some(main.step_size());
+            }
+            let mut twin_y = cfg.lyapunov.then(|| perturbed(&y0));
+            let mut twin_h = None;
+            let mut segment = 0u32;
+            while t < cfg.until {
+                segment += 1;
+                let mut t_next = f64::from(segment) * LYAPUNOV_INTERVAL;
+                // A last sliver shorter than a millionth of a segment joins the one before.
+                if t_next > cfg.until - 1e-6 * LYAPUNOV_INTERVAL {
+                    t_next = cfg.until;
+                }
+                if let Err(e) = integrate_to(main.as_mut(), t_next, &mut y) {
+                    out.t_final = main.t();
+                    out.failure = Some(e.to_string());
+                    return out;
+                }
+                if let (Some(ty), None) = (twin_y.as_mut(), &twin_failure) {
+                    let twin_config = Config { h_init: twin_h, ..solver_config };
+                    let step = build(self.method, self.form, twin_sys, t, ty, &twin_config).and_then(|mut s| {
+                        integrate_to(s.as_mut(), t_next, ty)?;
+                        Ok(s.step_size())
+                    });
+                    match step {
+                        Ok(h) => {
+                            twin_h = Some(h);
+                            let dist = distance(&y, ty);
+                            if dist > 0.0 && dist.is_finite() {
+                                log_sum += (dist / LYAPUNOV_D0).ln();
+                                for (tk, yk) in ty.iter_mut().zip(&y) {
+                                    *tk = yk + (*tk - yk) * (LYAPUNOV_D0 / dist);
+                                }
+                            } else {
+                                twin_failure =
+                                    Some(format!("the perturbed twin's distance became {dist} at t = {t_next}"));
+                            }
+                        }
+                        Err(e) => twin_failure = Some(format!("the perturbed twin failed: {e}")),
+                    }
+                }
+                t = t_next;
+            }
+        }
+        out.t_final = t;
+        if let Err(e) = sys.invariants_at(t, &y, &mut qd, &mut inv) {
+            out.failure = Some(format!("at t = {t}: {e}"));
+            return out;
+        }
+        out.q.copy_from_slice(&y[..n]);
+        out.qd.copy_from_slice(&qd);
+        if let Some(h0) = h0 {
+            let drift = (inv[0] - h0).abs();
+            out.energy_drift = if h0 != 0.0 { drift / h0.abs() } else { drift };
+        }
+        if cfg.lyapunov && twin_failure.is_none() {
+            out.lyapunov = log_sum / t;
+        }
+        out.failure = twin_failure;
+        out
+    }
+}
+
+/// `y0` moved by [`LYAPUNOV_D0`] along the unit vector with equal components.
+fn perturbed(y0: &[f64]) -> Vec<f64> {
+    let step = LYAPUNOV_D0 / (y0.len() as f64).sqrt();
+    y0.iter().map(|v| v + step).collect()
+}
+
+fn distance(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt()
+}
+
+/// Joins the tables of a sweep's shards (`name`, table) into the table of the
+/// whole sweep, rows sorted by run. Fails when the shards come from different
+/// sweeps (columns or provenance differ), when a shard or a run appears twice,
+/// or when runs are missing.
+pub fn merge(shards: &[(String, SweepTable)]) -> Result<SweepTable, SweepError> {
+    let Some((first_name, first)) = shards.first() else {
+        return Err(SweepError::NothingToMerge);
+    };
+    let whole =
+        |t: &SweepTable| -> Vec<(String, String)> { t.meta.iter().filter(|(k, _)| k != "shard").cloned().collect() };
+    let meta = whole(first);
+    let total = first.total_runs().ok_or_else(|| SweepError::Table {
+        file: first_name.clone(),
+        line: 1,
+        reason: "the provenance line has no 'runs='".into(),
+    })?;
+    let shard_of = |name: &str, t: &SweepTable| -> Result<Shard, SweepError> {
+        match t.meta("shard") {
+            None => Ok(Shard::default()),
+            Some(text) => Shard::parse(text).map_err(|_| SweepError::Table {
+                file: name.to_string(),
+                line: 1,
+                reason: format!("'shard={text}' is not I/N"),
+            }),
+        }
+    };
+    let count = shard_of(first_name, first)?.count;
+    let mut seen: BTreeMap<usize, &str> = BTreeMap::new();
+    let mut rows: Vec<(usize, &str, &TableRow)> = Vec::new();
+    for (name, table) in shards {
+        let mismatch = |reason: String| SweepError::Mismatch { first: first_name.clone(), file: name.clone(), reason };
+        if table.columns != first.columns {
+            return Err(mismatch(format!(
+                "its columns are {} instead of {}",
+                table.columns.join(","),
+                first.columns.join(",")
+            )));
+        }
+        let other = whole(table);
+        if other != meta {
+            let keys: Vec<&String> = meta.iter().chain(&other).map(|(k, _)| k).collect();
+            let value = |m: &[(String, String)], k: &str| m.iter().find(|(kk, _)| kk == k).map(|(_, v)| v.clone());
+            let key = keys.into_iter().find(|k| value(&meta, k) != value(&other, k)).cloned().unwrap_or_default();
+            return Err(mismatch(format!(
+                "{key} is '{}' there and '{}' here",
+                value(&meta, &key).unwrap_or_default(),
+                value(&other, &key).unwrap_or_default()
+            )));
+        }
+        let shard = shard_of(name, table)?;
+        if shard.count != count {
+            return Err(mismatch(format!("it is one of {} shards, not of {count}", shard.count)));
+        }
+        if let Some(previous) = seen.insert(shard.index, name) {
+            return Err(SweepError::Mismatch {
+                first: previous.to_string(),
+                file: name.clone(),
+                reason: format!("both are shard {shard}"),
+            });
+        }
+        for (k, row) in table.rows.iter().enumerate() {
+            if row.run >= total || row.run % shard.count != shard.index {
+                return Err(SweepError::Table {
+                    file: name.clone(),
+                    line: k + 3,
+                    reason: format!("run {} does not belong to shard {shard} of {total} runs", row.run),
+                });
+            }
+            rows.push((row.run, name, row));
+        }
+    }
+    rows.sort_by_key(|r| r.0);
+    for pair in rows.windows(2) {
+        if pair[0].0 == pair[1].0 {
+            return Err(SweepError::DuplicateRun {
+                run: pair[0].0,
+                first: pair[0].1.to_string(),
+                second: pair[1].1.to_string(),
+            });
+        }
+    }
+    if rows.len() != total {
+        let present: Vec<usize> = rows.iter().map(|r| r.0).collect();
+        let missing: Vec<usize> = (0..total).filter(|r| present.binary_search(r).is_err()).collect();
+        let mut absent: Vec<String> =
+            (0..count).filter(|i| !seen.contains_key(i)).map(|i| Shard { index: i, count }.to_string()).collect();
+        if absent.is_empty() {
+            absent.push("none (rows are missing from the shard files)".into());
+        }
+        return Err(SweepError::MissingRuns {
+            count: missing.len(),
+            total,
+            first: missing.iter().take(5).copied().collect(),
+            shards: absent.join(", "),
+        });
+    }
+    Ok(SweepTable { meta, columns: first.columns.clone(), rows: rows.into_iter().map(|r| r.2.clone()).collect() })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const DOUBLE_PENDULUM: &str = include_str!("../../../examples/double_pendulum.toml");
+    const OSCILLATOR: &str = include_str!("../../../examples/oscillator.toml");
+
+    fn derivation(text: &str) -> Derivation {
+        Derivation::new(Model::parse(text, &[]).unwrap()).unwrap()
+    }
+
+    #[track_caller]
+    fn check_grid(spec: &str, expect: &str) {
+        let d = derivation(DOUBLE_PENDULUM);
+        let got = match Grid::parse(spec, &d.model) {
+            Ok(g) => format!("{} runs: {} {:?}", g.len(), format_axes(&g.axes), g.targets),
+            Err(e) => format!("error: {e}"),
+        };
+        assert_eq!(got, expect);
+    }
+
+    #[test]
+    fn grids() {
+        check_grid("a=0:3:4,b=-1:1:3", "12 runs: a=0.0:3.0:4,b=-1.0:1.0:3 [Coordinate(0), Coordinate(1)]");
+        check_grid(" a' = 0 : 1 : 2 , g=1:2:2", "4 runs: a'=0.0:1.0:2,g=1.0:2.0:2 [Velocity(0), Parameter(4)]");
+        check_grid("a=1:5:1", "1 runs: a=1.0:1.0:1 [Coordinate(0)]");
+        check_grid("", "error: the grid is empty; expected NAME=START:STOP:COUNT, comma separated");
+        check_grid("a=0:1", "error: in the grid: 'a=0:1' is not NAME=START:STOP:COUNT");
+        check_grid("a=0:1:2,", "error: in the grid: 'a=0:1:2,' is not NAME=START:STOP:COUNT");
+        check_grid("a=x:1:2", "error: in the grid: the start of 'a' must be a finite number, not 'x'");
+        check_grid("a=0:inf:2", "error: in the grid: the stop of 'a' must be a finite number, not 'inf'");
+        check_grid("a=0:1:0", "error: in the grid: the count of 'a' must be a whole number of at least 1, not '0'");
+        check_grid("a=0:1:2.5", "error: in the grid: the count of 'a' must be a whole number of at least 1, not '2.5'");
+        check_grid(
+            "c=0:1:2",
+            "error: in the grid: 'c' is not a coordinate, a velocity or a parameter of the model (known: a, a', b, b', mA, mB, lA, lB, g)",
+        );
+        check_grid("a''=0:1:2", "error: in the grid: 'a''' is not a coordinate, a velocity or a parameter of the model (known: a, a', b, b', mA, mB, lA, lB, g)");
+        check_grid("a=0:1:2,a=0:1:3", "error: in the grid: 'a' appears on two axes");
+        check_grid(
+            "a=0:1:100000,b=0:1:100000",
+            "error: the grid has 10000000000 runs; a sweep may have at most 100000000",
+        );
+    }
+
+    #[test]
+    fn points_vary_the_last_axis_fastest_and_hit_both_ends() {
+        let d = derivation(DOUBLE_PENDULUM);
+        let g = Grid::parse("a=0:1:3,b=-2:2:2", &d.model).unwrap();
+        let points: Vec<Vec<f64>> = (0..g.len()).map(|r| g.point(r)).collect();
+        assert_eq!(points, [[0.0, -2.0], [0.0, 2.0], [0.5, -2.0], [0.5, 2.0], [1.0, -2.0], [1.0, 2.0]]);
+    }
+
+    #[test]
+    fn shards_cover_every_run_exactly_once() {
+        for total in [0, 1, 7, 100, 101] {
+            for count in 1..=9 {
+                let mut hits = vec![0; total];
+                for index in 0..count {
+                    let shard = Shard::parse(&format!("{index}/{count}")).unwrap();
+                    shard.runs(total).for_each(|r| hits[r] += 1);
+                }
+                assert!(hits.iter().all(|&h| h == 1), "{total} runs in {count} shards: {hits:?}");
+            }
+        }
+        for bad in ["3/3", "1", "a/2", "0/0", "-1/2", ""] {
+            assert!(Shard::parse(bad).is_err(), "{bad}");
+        }
+    }
+
+    fn config(until: f64) -> SweepConfig {
+        SweepConfig { until, ..SweepConfig::default() }
+    }
+
+    fn column(t: &SweepTable, name: &str) -> Vec<f64> {
+        let k = t.value_index(name).unwrap();
+        t.rows.iter().map(|r| r.values[k]).collect()
+    }
+
+    #[test]
+    fn lyapunov_exponents_tell_chaos_from_order() {
+        // Released from a = 2, b = 2.5 the double pendulum is chaotic; at small amplitude it is nearly linear.
+        let mut d = derivation(DOUBLE_PENDULUM);
+        let grid = Grid::parse("a=0.05:2:2,b=0.05:2.5:2", &d.model).unwrap();
+        let t = sweep(&mut d, &grid, &config(30.0), &|| {}).unwrap();
+        let lyapunov = column(&t, "lyapunov");
+        assert!(lyapunov[3] > 0.5, "chaotic: {lyapunov:?}");
+        assert!(lyapunov[0].abs() < 0.2, "near-linear: {lyapunov:?}");
+        assert!(column(&t, "energy_drift").iter().all(|&e| e < 1e-7), "{t:?}");
+
+        let mut d = derivation(OSCILLATOR);
+        let grid = Grid::parse("x=0.5:2:3,om=0.5:2:2", &d.model).unwrap();
+        let t = sweep(&mut d, &grid, &config(20.0), &|| {}).unwrap();
+        for (row, l) in t.rows.iter().zip(column(&t, "lyapunov")) {
+            assert!(l.abs() < 0.05, "harmonic oscillator {:?}: {l}", row.values);
+        }
+        // Parameters reach the dynamics: om = 2 runs x(20) = x0 cos(40).
+        let final_x = column(&t, "final_x");
+        assert!((final_x[5] - 2.0 * 40f64.cos()).abs() < 1e-7, "{final_x:?}");
+        assert!((final_x[0] - 0.5 * 10f64.cos()).abs() < 1e-7, "{final_x:?}");
+    }
+
+    #[test]
+    fn rows_are_in_run_order_whatever_the_threads_and_shards_merge_back() {
+        let mut d = derivation(DOUBLE_PENDULUM);
+        let grid = Grid::parse("a=-3:3:3,b'=-1:1:3", &d.model).unwrap();
+        let whole = sweep(&mut d, &grid, &SweepConfig { threads: Some(3), ..config(1.5) }, &|| {}).unwrap();
+        assert_eq!(whole.rows.iter().map(|r| r.run).collect::<Vec<_>>(), (0..9).collect::<Vec<_>>());
+        let text = whole.to_csv();
+        assert_eq!(SweepTable::parse(&text, "whole.csv").unwrap(), whole);
+        let part = |i: usize| {
+            let cfg = SweepConfig { shard: Shard { index: i, count: 2 }, threads: Some(1), ..config(1.5) };
+            let t = sweep(&mut d.clone(), &grid, &cfg, &|| {}).unwrap();
+            (format!("part{i}.csv"), SweepTable::parse(&t.to_csv(), "part").unwrap())
+        };
+        let (p0, p1) = (part(0), part(1));
+        assert_eq!(p0.1.rows.len(), 5);
+        assert_eq!(merge(&[p1.clone(), p0.clone()]).unwrap().to_csv(), text);
+
+        let err = |shards: &[(String, SweepTable)]| merge(shards).unwrap_err().to_string();
+        assert_eq!(
+            err(std::slice::from_ref(&p0)),
+            "4 of 9 runs are missing (first: [1, 3, 5, 7]); missing shards: 1/2"
+        );
+        let mut cut = p1.clone();
+        cut.1.rows.remove(2);
+        assert_eq!(
+            err(&[p0.clone(), cut]),
+            "1 of 9 runs are missing (first: [5]); missing shards: none (rows are missing from the shard files)"
+        );
+        assert_eq!(
+            err(&[p0.clone(), p0.clone()]),
+            "part0.csv is not a shard of the same sweep as part0.csv: both are shard 0/2"
+        );
+        let mut other = p1.clone();
+        other.1.meta.iter_mut().find(|(k, _)| k == "until").unwrap().1 = "3".into();
+        assert_eq!(
+            err(&[p0, other]),
+            "part1.csv is not a shard of the same sweep as part0.csv: until is '1.5' there and '3' here"
+        );
+    }
+
+    #[test]
+    fn a_run_that_fails_is_a_row_with_its_reason() {
+        // x'' = -x^3 * 1e6 from x = 1e3 overflows: the run fails, the sweep goes on.
+        let text = "coordinates = [\"x\"]\nkinetic = \"x'^2/2\"\npotential = \"k*x^4/4\"\n[parameters]\nk = 1e6\n[initial]\n\"x'\" = 0\n";
+        let mut d = derivation(text);
+        let grid = Grid::parse("x=1:1e200:2", &d.model).unwrap();
+        let t = sweep(&mut d, &grid, &config(1.0), &|| {}).unwrap();
+        assert_eq!(t.rows[0].failure, "");
+        assert!(!t.rows[1].failure.is_empty(), "{t:?}");
+        assert!(column(&t, "lyapunov")[1].is_nan());
+        // NaN is not equal to itself: compare through the text.
+        let csv = t.to_csv();
+        assert_eq!(SweepTable::parse(&csv, "f.csv").unwrap().to_csv(), csv);
+    }
+
+    #[test]
+    fn a_value_missing_from_initial_and_grid_is_an_error() {
+        let mut d = derivation("coordinates = [\"x\"]\nkinetic = \"x'^2/2\"\n[initial]\nx = 1\n");
+        let grid = Grid::parse("x=0:1:2", &d.model).unwrap();
+        let e = sweep(&mut d, &grid, &config(1.0), &|| {}).unwrap_err();
+        assert_eq!(e.to_string(), "no initial value for x': neither [initial] nor the grid gives one");
+    }
+}

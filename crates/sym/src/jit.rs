@@ -1,0 +1,489 @@
+//! Native code for a [`Tape`]: the tape's instruction list compiled to one
+//! machine function with cranelift.
+//!
+//! [`Compiled::new`] translates the tape one instruction at a time into
+//! cranelift SSA values (the tape already removed repeated subexpressions
+//! across all its roots, and cranelift's optimizer runs on top), loads the
+//! inputs from and stores the outputs to the caller's slices, and keeps every
+//! intermediate in a register or a spill slot chosen by the register
+//! allocator instead of the tape's slot array. [`Compiled::eval`] is then one
+//! indirect call. The tape stays the reference and the fallback where
+//! cranelift has no backend: both compute the same IEEE operations in the same
+//! order and call the same `f64` functions, so they agree to rounding.
+//!
+//! The elementary functions (`sin`, `exp`, `atan2`, `powf`, ...) are calls
+//! to `extern "C"` wrappers of the `f64` methods, registered as symbols of
+//! the JIT module. `sqrt`, `abs`, negation and the arithmetic are native
+//! instructions, and integer powers are unrolled binary exponentiation (the
+//! same multiplications as `f64::powi`).
+
+// Running JIT-compiled code can only be done through a raw function pointer.
+// The unsafe surface is three small blocks, each with its safety argument:
+// the pointer cast in `Compiled::new`, the call in `Compiled::eval` (buffer
+// lengths checked just before), and freeing the code in `Drop`.
+#![allow(unsafe_code)]
+
+use crate::eval::{Op, Tape};
+use crate::expr::Func;
+use cranelift_codegen::ir::{types, AbiParam, FuncRef, InstBuilder, MemFlagsData, Signature, UserFuncName, Value};
+use cranelift_codegen::isa::OwnedTargetIsa;
+use cranelift_codegen::settings::{self, Configurable};
+use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
+use cranelift_jit::{JITBuilder, JITModule};
+use cranelift_module::{default_libcall_names, Linkage, Module};
+use rustc_hash::FxHashMap;
+use std::sync::{Mutex, OnceLock, PoisonError};
+
+/// Why a tape could not be compiled to native code. The caller falls back to
+/// [`Tape::eval`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum JitError {
+    /// Cranelift has no backend for this machine, or refused its flags.
+    #[error("no native code generator for this machine: {reason}")]
+    UnsupportedHost {
+        /// What cranelift said.
+        reason: String,
+    },
+    /// Cranelift failed to compile or link the function.
+    #[error("native code generation failed: {message}")]
+    Codegen {
+        /// What cranelift said.
+        message: String,
+    },
+}
+
+/// The signature of every compiled function: `inputs` points to
+/// `n_inputs` values, `outputs` to `n_outputs` values.
+type RawFn = unsafe extern "C" fn(inputs: *const f64, outputs: *mut f64);
+
+/// A tape compiled to native code. Evaluation takes `&self`, so one
+/// `Compiled` serves several threads at once.
+///
+/// ```
+/// let mut pool = sym::Pool::default();
+/// let e = pool.parse("x*sin(y) + y^3").unwrap();
+/// let (x, y) = (pool.symbol("x"), pool.symbol("y"));
+/// let tape = sym::Tape::compile(&pool, &[e], &[x, y]).unwrap();
+/// let native = sym::Compiled::new(&tape).unwrap();
+/// let mut out = [0.0];
+/// native.eval(&[2.0, 0.5], &mut out);
+/// assert_eq!(out[0], 2.0 * 0.5f64.sin() + 0.125);
+/// ```
+pub struct Compiled {
+    /// Owns the executable memory `func` points into; taken only in `Drop`.
+    /// The mutex is never locked: it only makes the module (which is `Send`
+    /// but not `Sync`) shareable, since `eval` never touches it.
+    module: Mutex<Option<JITModule>>,
+    func: RawFn,
+    n_inputs: usize,
+    n_outputs: usize,
+    n_ops: usize,
+}
+
+impl std::fmt::Debug for Compiled {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Compiled")
+            .field("n_inputs", &self.n_inputs)
+            .field("n_outputs", &self.n_outputs)
+            .field("n_ops", &self.n_ops)
+            .finish_non_exhaustive()
+    }
+}
+
+/// The host ISA with `opt_level=speed`, built once per process.
+fn host_isa() -> Result<OwnedTargetIsa, JitError> {
+    static ISA: OnceLock<Result<OwnedTargetIsa, JitError>> = OnceLock::new();
+    ISA.get_or_init(|| {
+        let unsupported = |reason: String| JitError::UnsupportedHost { reason };
+        let mut flags = settings::builder();
+        for (name, value) in [
+            ("opt_level", "speed"),
+            // cranelift-jit requires both (absolute addresses, far calls).
+            ("use_colocated_libcalls", "false"),
+            ("is_pic", "false"),
+            // The IR comes from a verified tape; checking it again costs
+            // compile time in optimized builds only.
+            ("enable_verifier", if cfg!(debug_assertions) { "true" } else { "false" }),
+        ] {
+            flags.set(name, value).map_err(|e| unsupported(e.to_string()))?;
+        }
+        let isa = cranelift_native::builder().map_err(|e| unsupported(e.to_string()))?;
+        isa.finish(settings::Flags::new(flags)).map_err(|e| unsupported(e.to_string()))
+    })
+    .clone()
+}
+
+/// Declares one `extern "C"` wrapper per elementary function, and the
+/// table from [`Func`] to its symbol name and address.
+macro_rules! unary_wrappers {
+    ($($f:ident => $name:ident),* $(,)?) => {
+        $(extern "C" fn $name(x: f64) -> f64 {
+            Func::$f.apply(x)
+        })*
+
+        /// The symbol and address of the wrapper of `f`.
+        fn unary(f: Func) -> (&'static str, *const u8) {
+            match f {
+                $(Func::$f => (stringify!($name), $name as *const u8),)*
+            }
+        }
+    };
+}
+
+unary_wrappers! {
+    Sin => lagrange_sin,
+    Cos => lagrange_cos,
+    Tan => lagrange_tan,
+    Asin => lagrange_asin,
+    Acos => lagrange_acos,
+    Atan => lagrange_atan,
+    Sinh => lagrange_sinh,
+    Cosh => lagrange_cosh,
+    Tanh => lagrange_tanh,
+    Exp => lagrange_exp,
+    Log => lagrange_log,
+    Abs => lagrange_abs,
+}
+
+extern "C" fn lagrange_powf(x: f64, y: f64) -> f64 {
+    x.powf(y)
+}
+
+extern "C" fn lagrange_atan2(y: f64, x: f64) -> f64 {
+    y.atan2(x)
+}
+
+const POWF: &str = "lagrange_powf";
+const ATAN2: &str = "lagrange_atan2";
+
+/// Translates the tape into the body of one function.
+struct Translator<'a, 'b> {
+    module: &'a mut JITModule,
+    b: FunctionBuilder<'b>,
+    /// Imported wrappers already declared in this function, by symbol.
+    imports: FxHashMap<&'static str, FuncRef>,
+}
+
+impl Translator<'_, '_> {
+    /// Calls the wrapper `name` taking `args.len()` floats and returning one.
+    fn call(&mut self, name: &'static str, args: &[Value]) -> Result<Value, JitError> {
+        let f = match self.imports.get(name) {
+            Some(&f) => f,
+            None => {
+                let mut sig = self.module.make_signature();
+                sig.params.extend(args.iter().map(|_| AbiParam::new(types::F64)));
+                sig.returns.push(AbiParam::new(types::F64));
+                let id = self.module.declare_function(name, Linkage::Import, &sig).map_err(codegen)?;
+                let f = self.module.declare_func_in_func(id, self.b.func);
+                self.imports.insert(name, f);
+                f
+            }
+        };
+        let call = self.b.ins().call(f, args);
+        Ok(self.b.inst_results(call)[0])
+    }
+
+    /// `x^n` by binary exponentiation: the multiplications of `f64::powi`
+    /// (compiler-rt's `__powidf2`), at most 62 for any `i32`.
+    fn powi(&mut self, x: Value, n: i32) -> Value {
+        let mut m = n.unsigned_abs();
+        let mut square = x;
+        let mut acc: Option<Value> = None;
+        loop {
+            if m & 1 == 1 {
+                acc = Some(match acc {
+                    Some(a) => self.b.ins().fmul(a, square),
+                    None => square,
+                });
+            }
+            m >>= 1;
+            if m == 0 {
+                break;
+            }
+            square = self.b.ins().fmul(square, square);
+        }
+        let r = acc.unwrap_or_else(|| self.b.ins().f64const(1.0));
+        if n < 0 {
+            let one = self.b.ins().f64const(1.0);
+            self.b.ins().fdiv(one, r)
+        } else {
+            r
+        }
+    }
+
+    /// Emits the whole function: loads, one value per tape instruction, stores.
+    fn body(&mut self, tape: &Tape, inputs: Value, outputs: Value) -> Result<(), JitError> {
+        // Aligned, never trapping: the buffers are `f64` slices of checked length.
+        let flags = MemFlagsData::trusted();
+        let mut v: Vec<Value> = Vec::with_capacity(tape.len());
+        for op in tape.ops() {
+            let x = match *op {
+                Op::Input(k) => {
+                    assert!((k as usize) < tape.n_inputs(), "tape reads input {k} of {}", tape.n_inputs());
+                    self.b.ins().load(types::F64, flags, inputs, offset(k as usize)?)
+                }
+                Op::Const(bits) => self.b.ins().f64const(f64::from_bits(bits)),
+                Op::Add(a, c) => self.b.ins().fadd(v[a as usize], v[c as usize]),
+                Op::Sub(a, c) => self.b.ins().fsub(v[a as usize], v[c as usize]),
+                Op::Mul(a, c) => self.b.ins().fmul(v[a as usize], v[c as usize]),
+                Op::Div(a, c) => self.b.ins().fdiv(v[a as usize], v[c as usize]),
+                Op::Neg(a) => self.b.ins().fneg(v[a as usize]),
+                Op::Recip(a) => {
+                    let one = self.b.ins().f64const(1.0);
+                    self.b.ins().fdiv(one, v[a as usize])
+                }
+                Op::Square(a) => self.b.ins().fmul(v[a as usize], v[a as usize]),
+                Op::Powi(a, n) => self.powi(v[a as usize], n),
+                Op::Powf(a, c) => self.call(POWF, &[v[a as usize], v[c as usize]])?,
+                Op::Sqrt(a) => self.b.ins().sqrt(v[a as usize]),
+                Op::Func(Func::Abs, a) => self.b.ins().fabs(v[a as usize]),
+                Op::Func(f, a) => self.call(unary(f).0, &[v[a as usize]])?,
+                Op::Atan2(a, c) => self.call(ATAN2, &[v[a as usize], v[c as usize]])?,
+            };
+            v.push(x);
+        }
+        for (k, &s) in tape.output_slots().iter().enumerate() {
+            self.b.ins().store(flags, v[s as usize], outputs, offset(k)?);
+        }
+        self.b.ins().return_(&[]);
+        Ok(())
+    }
+}
+
+/// The byte offset of element `k` of an `f64` buffer.
+fn offset(k: usize) -> Result<i32, JitError> {
+    k.checked_mul(8)
+        .and_then(|o| i32::try_from(o).ok())
+        .ok_or_else(|| JitError::Codegen { message: format!("buffer index {k} exceeds the 2 GiB addressing limit") })
+}
+
+fn codegen(e: impl std::fmt::Display) -> JitError {
+    JitError::Codegen { message: e.to_string() }
+}
+
+impl Compiled {
+    /// Compiles `tape` to one native function with the same inputs and
+    /// outputs. Fails only when cranelift does not support the host (the
+    /// caller then keeps using [`Tape::eval`]).
+    pub fn new(tape: &Tape) -> Result<Compiled, JitError> {
+        let mut jb = JITBuilder::with_isa(host_isa()?, default_libcall_names());
+        for f in Func::ALL {
+            let (name, ptr) = unary(f);
+            jb.symbol(name, ptr);
+        }
+        jb.symbol(POWF, lagrange_powf as *const u8);
+        jb.symbol(ATAN2, lagrange_atan2 as *const u8);
+        let mut module = JITModule::new(jb);
+
+        let ptr = module.target_config().pointer_type();
+        let mut sig: Signature = module.make_signature();
+        sig.params.push(AbiParam::new(ptr));
+        sig.params.push(AbiParam::new(ptr));
+        let id = module.declare_function("tape", Linkage::Local, &sig).map_err(codegen)?;
+
+        let mut ctx = module.make_context();
+        ctx.func.signature = sig;
+        ctx.func.name = UserFuncName::user(0, id.as_u32());
+        let mut fctx = FunctionBuilderContext::new();
+        {
+            let mut b = FunctionBuilder::new(&mut ctx.func, &mut fctx);
+            let entry = b.create_block();
+            b.append_block_params_for_function_params(entry);
+            b.switch_to_block(entry);
+            b.seal_block(entry);
+            let (inputs, outputs) = (b.block_params(entry)[0], b.block_params(entry)[1]);
+            let mut t = Translator { module: &mut module, b, imports: FxHashMap::default() };
+            t.body(tape, inputs, outputs)?;
+            let config = t.module.target_config();
+            t.b.finalize(config);
+        }
+        module.define_function(id, &mut ctx).map_err(codegen)?;
+        module.clear_context(&mut ctx);
+        module.finalize_definitions().map_err(codegen)?;
+        let code = module.get_finalized_function(id);
+        // SAFETY: `code` is the entry of the function just defined with
+        // signature `(ptr, ptr) -> ()` in the host's default calling
+        // convention, which is `extern "C"` on every host cranelift-native
+        // supports; the module that owns the code lives as long as `self`.
+        let func = unsafe { std::mem::transmute::<*const u8, RawFn>(code) };
+        Ok(Compiled {
+            module: Mutex::new(Some(module)),
+            func,
+            n_inputs: tape.n_inputs(),
+            n_outputs: tape.n_outputs(),
+            n_ops: tape.len(),
+        })
+    }
+
+    /// The number of inputs expected by [`Compiled::eval`].
+    pub fn n_inputs(&self) -> usize {
+        self.n_inputs
+    }
+
+    /// The number of outputs written by [`Compiled::eval`].
+    pub fn n_outputs(&self) -> usize {
+        self.n_outputs
+    }
+
+    /// The number of tape instructions this function was compiled from.
+    pub fn len(&self) -> usize {
+        self.n_ops
+    }
+
+    /// True when the tape had no instruction.
+    pub fn is_empty(&self) -> bool {
+        self.n_ops == 0
+    }
+
+    /// Evaluates every root, as [`Tape::eval`] does, without allocating.
+    ///
+    /// # Panics
+    ///
+    /// When `inputs.len()` is not [`Compiled::n_inputs`] or `outputs.len()`
+    /// not [`Compiled::n_outputs`].
+    pub fn eval(&self, inputs: &[f64], outputs: &mut [f64]) {
+        assert_eq!(inputs.len(), self.n_inputs, "Compiled::eval: wrong number of inputs");
+        assert_eq!(outputs.len(), self.n_outputs, "Compiled::eval: wrong number of outputs");
+        // SAFETY: the function reads `inputs[k]` only for the tape's
+        // `Input(k)`, and `k < n_inputs` was asserted when it was compiled;
+        // it writes `outputs[k]` exactly for `k < n_outputs`. Both lengths
+        // were just checked, the slices are valid, aligned and do not
+        // overlap (one is `&mut`). The code is alive while `self` is (it is
+        // freed only in `Drop`), calls nothing but the safe wrappers above,
+        // and never unwinds.
+        unsafe { (self.func)(inputs.as_ptr(), outputs.as_mut_ptr()) }
+    }
+}
+
+impl Drop for Compiled {
+    fn drop(&mut self) {
+        let module = self.module.get_mut().unwrap_or_else(PoisonError::into_inner).take();
+        if let Some(module) = module {
+            // SAFETY: `self.func` is the only pointer into this module's
+            // memory and is never called again: `drop` has `&mut self`, so no
+            // `eval` is running, and `self` is gone afterwards.
+            unsafe { module.free_memory() }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::expr::Pool;
+
+    /// The names of the inputs of every case, in order, and their values.
+    const INPUTS: [(&str, f64); 4] = [("x", 0.7), ("y", -1.3), ("z", 2.5), ("q'", 0.25)];
+
+    /// Compiles `text` (roots separated by `;`) both ways and checks that the
+    /// native code gives bit for bit what the tape gives, and `expect`.
+    #[track_caller]
+    fn check(text: &str, expect: &[f64]) {
+        let mut pool = Pool::default();
+        let roots: Vec<_> = text.split(';').map(|r| pool.parse(r).unwrap()).collect();
+        let inputs: Vec<_> = INPUTS.iter().map(|(n, _)| pool.parse(n).unwrap()).collect();
+        let values: Vec<f64> = INPUTS.iter().map(|&(_, v)| v).collect();
+        let mut tape = Tape::compile(&pool, &roots, &inputs).unwrap();
+        let native = Compiled::new(&tape).unwrap();
+        assert_eq!((native.n_inputs(), native.n_outputs()), (4, roots.len()));
+        let (mut by_tape, mut by_jit) = (vec![0.0; roots.len()], vec![f64::NAN; roots.len()]);
+        tape.eval(&values, &mut by_tape);
+        native.eval(&values, &mut by_jit);
+        for k in 0..roots.len() {
+            let same = by_tape[k].to_bits() == by_jit[k].to_bits() || (by_tape[k].is_nan() && by_jit[k].is_nan());
+            assert!(same, "root {k} of {text}: tape {} jit {}", by_tape[k], by_jit[k]);
+        }
+        // `expect` is plain Rust, whose `powi` with a constant exponent may
+        // round differently (about n ulps), hence the loose tolerance.
+        let close =
+            |a: f64, b: f64| a == b || (a - b).abs() <= 1e-13 * a.abs().max(b.abs()) || (a.is_nan() && b.is_nan());
+        assert!(by_jit.iter().zip(expect).all(|(&a, &b)| close(a, b)), "{text}: {by_jit:?} != {expect:?}");
+    }
+
+    #[test]
+    fn arithmetic() {
+        let (x, y, z, v) = (0.7f64, -1.3f64, 2.5f64, 0.25f64);
+        check("x + y; x - y; x*y*z; x/y; -z; 1/z; x^2", &[x + y, x - y, x * y * z, x / y, -z, 1.0 / z, x * x]);
+        check("x*y - z/q' + 3", &[x * y - z / v + 3.0]);
+        check("2; pi; x", &[2.0, std::f64::consts::PI, x]);
+    }
+
+    #[test]
+    fn integer_and_fractional_powers() {
+        let (x, y, z) = (0.7f64, -1.3f64, 2.5f64);
+        check("x^3; y^7; z^-5; x^0", &[x.powi(3), y.powi(7), z.powi(-5), 1.0]);
+        check("z^300; z^-300; y^999", &[z.powi(300), z.powi(-300), y.powi(999)]);
+        check("z^(1/2); z^(-1/2); z^(3/2); sqrt(x)", &[z.sqrt(), 1.0 / z.sqrt(), z.sqrt().powi(3), x.sqrt()]);
+        check("z^x; z^(1/3)", &[z.powf(x), z.powf(1.0 / 3.0)]);
+    }
+
+    #[test]
+    fn the_most_negative_exponent_compiles() {
+        let mut pool = Pool::default();
+        let x = pool.symbol("x");
+        let e = pool.powi(x, i64::MIN);
+        let mut tape = Tape::compile(&pool, &[e], &[x]).unwrap();
+        let native = Compiled::new(&tape).unwrap();
+        for (x, want) in [(1.0, 1.0), (-1.0, 1.0), (2.0, 0.0), (0.5, f64::INFINITY)] {
+            let (mut by_tape, mut by_jit) = ([0.0], [0.0]);
+            tape.eval(&[x], &mut by_tape);
+            native.eval(&[x], &mut by_jit);
+            assert_eq!((by_tape[0], by_jit[0]), (want, want), "x = {x}");
+        }
+    }
+
+    #[test]
+    fn elementary_functions() {
+        let (x, y) = (0.7f64, -1.3f64);
+        check(
+            "sin(x); cos(y); tan(x); asin(x); acos(x); atan(y)",
+            &[x.sin(), y.cos(), x.tan(), x.asin(), x.acos(), y.atan()],
+        );
+        check(
+            "sinh(y); cosh(x); tanh(y); exp(y); log(x); abs(y)",
+            &[y.sinh(), x.cosh(), y.tanh(), y.exp(), x.ln(), y.abs()],
+        );
+        check("atan2(y, x); atan2(x, y)", &[y.atan2(x), x.atan2(y)]);
+    }
+
+    #[test]
+    fn domain_errors_give_nan_and_infinity_as_the_tape_does() {
+        check("log(y); sqrt(y); asin(z); 1/(x - x); y^(1/2)", &[f64::NAN, f64::NAN, f64::NAN, f64::INFINITY, f64::NAN]);
+    }
+
+    #[test]
+    fn shared_subexpressions_and_no_inputs_or_outputs() {
+        let s = 0.7f64.sin() * -1.3;
+        check("sin(x)*y; sin(x)*y + 1; (sin(x)*y)^2", &[s, s + 1.0, s * s]);
+        // A tape with no inputs, and one with no outputs.
+        let mut pool = Pool::default();
+        let e = pool.parse("2*pi").unwrap();
+        let native = Compiled::new(&Tape::compile(&pool, &[e], &[]).unwrap()).unwrap();
+        let mut out = [0.0];
+        native.eval(&[], &mut out);
+        assert_eq!(out, [std::f64::consts::TAU]);
+        let none = Compiled::new(&Tape::compile(&pool, &[], &[]).unwrap()).unwrap();
+        none.eval(&[], &mut []);
+        assert!(none.is_empty());
+    }
+
+    #[test]
+    fn compiled_functions_are_shared_between_threads() {
+        fn send_sync<T: Send + Sync>(_: &T) {}
+        let mut pool = Pool::default();
+        let e = pool.parse("x*cos(x)").unwrap();
+        let x = pool.symbol("x");
+        let native = Compiled::new(&Tape::compile(&pool, &[e], &[x]).unwrap()).unwrap();
+        send_sync(&native);
+        std::thread::scope(|s| {
+            for k in 0..2 {
+                let native = &native;
+                s.spawn(move || {
+                    let (x, mut out) = (k as f64, [0.0]);
+                    native.eval(&[x], &mut out);
+                    assert_eq!(out[0], x * x.cos());
+                });
+            }
+        });
+    }
+}
