@@ -84,6 +84,9 @@ enum Command {
         /// Stop when a condition becomes true, e.g. "y < 0" or "th' > 0" (repeatable).
         #[arg(long = "stop-when", value_name = "CONDITION")]
         stop_when: Vec<String>,
+        /// Record the crossings of a condition as extra CSV rows without stopping, e.g. "th = 0" or "x' > 0" (repeatable).
+        #[arg(long = "crossing", value_name = "CONDITION")]
+        crossing: Vec<String>,
         /// List the integrators and exit.
         #[arg(long)]
         list_methods: bool,
@@ -144,6 +147,7 @@ fn main() -> ExitCode {
             summary,
             set,
             stop_when,
+            crossing,
             list_methods: false,
         } => simulate::run(&simulate::Options {
             model: model.unwrap_or_default(),
@@ -159,6 +163,7 @@ fn main() -> ExitCode {
             summary_json: summary == SummaryFormat::Json,
             set,
             stop_when,
+            crossing,
         }),
     };
     match result {

@@ -31,6 +31,7 @@ pub struct Options {
     pub summary_json: bool,
     pub set: Vec<(String, f64)>,
     pub stop_when: Vec<String>,
+    pub crossing: Vec<String>,
 }
 
 /// The most points kept for the plot; beyond it every other point is dropped.
@@ -67,7 +68,11 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     }
     let mut stop_when = Vec::new();
     for text in &opts.stop_when {
-        stop_when.push(parse_stop(&mut derivation, text)?);
+        stop_when.push(parse_stop(&mut derivation, text, "--stop-when")?);
+    }
+    let mut crossings = Vec::new();
+    for text in &opts.crossing {
+        crossings.push(parse_stop(&mut derivation, text, "--crossing")?);
     }
     let defaults = RunConfig::default();
     let rtol = opts.rtol.unwrap_or(defaults.rtol);
@@ -87,6 +92,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
             }
         },
         stop_when,
+        crossings,
     };
 
     // Columns: t, coordinates, velocities, invariants.
@@ -99,6 +105,8 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
         None => None,
     };
     let mut header_written = false;
+    let with_events = !opts.stop_when.is_empty() || !opts.crossing.is_empty();
+    let mut crossings_seen = 0usize;
     let mut csv_error: Option<std::io::Error> = None;
     let mut plot_data = PlotKeeper::new(n);
     let progress = progress_bar(opts.until);
@@ -112,12 +120,19 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
                     cols.extend(names.iter().cloned());
                     cols.extend(names.iter().map(|c| format!("{c}'")));
                     cols.extend(inv_names.iter().cloned());
+                    if with_events {
+                        cols.push("event".into());
+                    }
                     writeln!(w, "{}", cols.join(","))?;
                     header_written = true;
                 }
                 write!(w, "{}", row.t)?;
                 for v in row.q.iter().chain(row.qd).chain(row.invariants) {
                     write!(w, ",{v}")?;
+                }
+                if with_events {
+                    // Conditions are quoted: they may contain commas (atan2(y, x) < 0).
+                    write!(w, ",{}", row.event.map_or(String::new(), |e| format!("\"{}\"", e.replace('"', "\"\""))))?;
                 }
                 writeln!(w)
             })();
@@ -126,7 +141,10 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
                 return ControlFlow::Break(());
             }
         }
-        if opts.plot.is_some() {
+        if row.event.is_some() {
+            crossings_seen += 1;
+        }
+        if opts.plot.is_some() && row.event.is_none() {
             plot_data.push(row.t, row.q, row.qd, row.invariants);
         }
         if let Some(pb) = &progress {
@@ -156,8 +174,15 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
         let data = plot_data.into_plot(&derivation.model.name, &report, &names, &inv_names);
         plot::write_svg(plot_path, &data).map_err(Failure::run)?;
     }
-    let text =
+    let mut text =
         if opts.summary_json { summary_json(&report, &names) } else { summary_text(&report, &names, &derivation) };
+    if !opts.summary_json && !opts.crossing.is_empty() {
+        text.push_str(&format!(
+            "{crossings_seen} crossing{} recorded{}\n",
+            if crossings_seen == 1 { "" } else { "s" },
+            if opts.out.is_some() { " in the CSV (column event)" } else { " (give --out to keep them)" }
+        ));
+    }
     crate::write_stdout(&text)?;
     for w in &report.warnings {
         eprintln!("warning: {w}");
@@ -172,20 +197,24 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
 }
 
 /// `EXPR < RHS`, `EXPR > RHS` or `EXPR` (any crossing of zero).
-fn parse_stop(d: &mut Derivation, text: &str) -> Result<StopCondition, Failure> {
-    let (lhs, rhs, direction) = match text.find(['<', '>']) {
+fn parse_stop(d: &mut Derivation, text: &str, option: &str) -> Result<StopCondition, Failure> {
+    let (lhs, rhs, direction) = match text.find(['<', '>', '=']) {
         Some(i) => {
-            let dir = if text.as_bytes()[i] == b'<' { Direction::Falling } else { Direction::Rising };
+            let dir = match text.as_bytes()[i] {
+                b'<' => Direction::Falling,
+                b'>' => Direction::Rising,
+                _ => Direction::Both,
+            };
             let rest = text[i + 1..].strip_prefix('=').unwrap_or(&text[i + 1..]);
             (&text[..i], Some((i + 1 + (text[i + 1..].len() - rest.len()), rest)), dir)
         }
         None => (text, None, Direction::Both),
     };
-    let located = |e: mech::ModelError, offset: usize| Failure::expression("--stop-when", text, e, offset);
-    let g_lhs = d.model.parse_state_expr(lhs, "--stop-when").map_err(|e| located(e, 0))?;
+    let located = |e: mech::ModelError, offset: usize| Failure::expression(option, text, e, offset);
+    let g_lhs = d.model.parse_state_expr(lhs, option).map_err(|e| located(e, 0))?;
     let g = match rhs {
         Some((offset, rhs)) => {
-            let g_rhs = d.model.parse_state_expr(rhs, "--stop-when").map_err(|e| located(e, offset))?;
+            let g_rhs = d.model.parse_state_expr(rhs, option).map_err(|e| located(e, offset))?;
             d.model.pool.sub(g_lhs, g_rhs)
         }
         None => g_lhs,

@@ -45,6 +45,8 @@ pub struct RunConfig {
     pub output: Output,
     /// Stop conditions.
     pub stop_when: Vec<StopCondition>,
+    /// Crossings to record without stopping (the rows of a Poincaré section).
+    pub crossings: Vec<StopCondition>,
 }
 
 impl Default for RunConfig {
@@ -59,6 +61,7 @@ impl Default for RunConfig {
             dt: None,
             output: Output::Samples(1001),
             stop_when: Vec::new(),
+            crossings: Vec::new(),
         }
     }
 }
@@ -74,8 +77,10 @@ pub struct Row<'a> {
     pub qd: &'a [f64],
     /// Invariants, in the order of [`RunReport::invariants`].
     pub invariants: &'a [f64],
-    /// Whether this row is a stop event.
+    /// Whether this row is a stop event or a crossing.
     pub is_event: bool,
+    /// The condition of a stop or crossing row, as the user wrote it.
+    pub event: Option<&'a str>,
 }
 
 /// The audit of one invariant.
@@ -258,14 +263,17 @@ pub fn simulate(
     inputs.extend(&param_syms);
     let mut values = vec![0.0; 2 * n + 1];
     values.extend(d.model.parameters.iter().map(|p| p.value));
+    // Stop conditions first (terminal), then crossings (recorded, not stopping).
+    let conditions: Vec<(&StopCondition, bool)> =
+        config.stop_when.iter().map(|c| (c, true)).chain(config.crossings.iter().map(|c| (c, false))).collect();
     let mut stop_tapes = Vec::new();
-    for cond in &config.stop_when {
+    for &(cond, terminal) in &conditions {
         let tape = Tape::compile(&d.model.pool, &[cond.expr], &inputs)
-            .map_err(|e| RunError::Input(ModelError::whole(format!("in --stop-when '{}': {e}", cond.text))))?;
-        stop_tapes.push((tape, values.clone(), cond.direction));
+            .map_err(|e| RunError::Input(ModelError::whole(format!("in the condition '{}': {e}", cond.text))))?;
+        stop_tapes.push((tape, values.clone(), cond.direction, terminal));
     }
     let mut events: Vec<Event<'_>> = Vec::new();
-    for (tape, values, direction) in stop_tapes {
+    for (tape, values, direction, terminal) in stop_tapes {
         let mut sys = probe_system.clone();
         let mut tape = tape;
         let mut values = values;
@@ -283,7 +291,7 @@ pub fn simulate(
                 out[0]
             })
             .with_direction(direction)
-            .with_terminal(true),
+            .with_terminal(terminal),
         );
     }
 
@@ -305,7 +313,11 @@ pub fn simulate(
             return ControlFlow::Break(());
         }
         let init = initial.get_or_insert_with(|| inv.clone());
-        for k in 0..n_inv {
+        // Event rows are interpolated between two steps (cubic Hermite for the
+        // compositions): their error is the interpolant's, not the integrator's,
+        // so they do not enter the audit.
+        let interpolated_event = matches!(obs.kind, ObservationKind::Event { .. });
+        for k in (0..n_inv).filter(|_| !interpolated_event) {
             let a = (inv[k] - init[k]).abs();
             if a.is_finite() {
                 max_abs[k] = max_abs[k].max(a);
@@ -323,6 +335,10 @@ pub fn simulate(
             qd: &qd,
             invariants: &inv,
             is_event: matches!(obs.kind, ObservationKind::Event { .. }),
+            event: match obs.kind {
+                ObservationKind::Event { index } => Some(conditions[index].0.text.as_str()),
+                _ => None,
+            },
         })
     });
 
@@ -374,7 +390,7 @@ pub fn simulate(
         Ok(summary) => {
             report.t_final = summary.t;
             report.stopped_by = match summary.stop {
-                StopReason::Event { index } => Some(config.stop_when[index].text.clone()),
+                StopReason::Event { index } => Some(conditions[index].0.text.clone()),
                 StopReason::Observer => row_error.clone().or(Some("stopped by the caller".into())),
                 StopReason::Finished => None,
             };

@@ -3,7 +3,9 @@
 //! Every node is stored once in [`Pool`]; building an equal node again returns the
 //! same id, so equality is `==` on ids and common subexpressions are shared for
 //! free. Children always have smaller ids than their parents, which lets
-//! evaluation walk the arena in order without recursion.
+//! evaluation walk the arena in order without recursion. Side tables per node
+//! hold its tree size and a 64-bit Bloom filter of its symbols, so "does `e`
+//! contain `x`" is usually answered without a traversal.
 //!
 //! Constructors keep a canonical form (SymPy's "automatic simplification", done
 //! cheaply): sums and products are flattened, numeric parts folded exactly, like
