@@ -7,6 +7,8 @@
 
 mod diagnostics;
 mod format;
+mod modes;
+mod orbit;
 mod plot;
 mod simulate;
 mod sweep;
@@ -93,6 +95,10 @@ enum Command {
     },
     /// Run many trajectories over a grid of initial values or parameters, on all cores.
     Sweep(sweep::Args),
+    /// Small oscillations about an equilibrium: normal frequencies and mode shapes.
+    Modes(modes::Args),
+    /// A central-force orbit from the initial state: turning points, kind, period, apsidal angle.
+    Orbit(orbit::Args),
 }
 
 /// Summary formats of `simulate`.
@@ -132,6 +138,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Derive { model, format, set } => derive(&model, format, &set),
         Command::Sweep(args) => sweep::run(&args),
+        Command::Modes(args) => modes::run(&args),
+        Command::Orbit(args) => orbit::run(&args),
         Command::Simulate { list_methods: true, .. } => write_stdout(&simulate::list_methods()),
         Command::Simulate {
             model,

@@ -105,7 +105,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
         None => None,
     };
     let mut header_written = false;
-    let with_events = !opts.stop_when.is_empty() || !opts.crossing.is_empty();
+    let with_events = !opts.crossing.is_empty();
     let mut crossings_seen = 0usize;
     let mut csv_error: Option<std::io::Error> = None;
     let mut plot_data = PlotKeeper::new(n);

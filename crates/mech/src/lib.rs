@@ -22,6 +22,8 @@ mod derive;
 mod dynamics;
 mod error;
 mod model;
+mod modes;
+mod orbit;
 pub mod probe;
 mod report;
 mod run;
@@ -31,6 +33,8 @@ pub use derive::{Conserved, Derivation, Verdicts};
 pub use dynamics::{invariants_of, Dynamics, Form, Invariant, System};
 pub use error::ModelError;
 pub use model::{Coordinate, InitialValue, Located, Model, Parameter, Particle, MAX_FILE_BYTES};
+pub use modes::{normal_modes, Mode, ModeKind, Modes, ModesConfig, ModesError, ModesReport, SymbolicModes};
+pub use orbit::{Kepler, Orbit, OrbitError, OrbitKind, OrbitReport};
 pub use report::{DeriveReport, HamiltonEquations, NamedExpr, Ordered};
 pub use run::{choose_method, simulate, Audit, Row, RunConfig, RunError, RunReport, StopCondition};
 pub use sweep::{

@@ -1,0 +1,229 @@
+//! `lagrange modes` and `lagrange orbit` run through the real binary on the
+//! examples: the JSON contracts (`lagrange.modes/1`, `lagrange.orbit/1`), the
+//! notes' results (coupled oscillators, triatomic molecule, double pendulum,
+//! the 50-mass chain, Kepler orbits, the reduced mass), the figures, and the
+//! failures that are bad input (exit 2).
+
+use serde_json::Value;
+use std::f64::consts::PI;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn repo_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().expect("the repository root exists")
+}
+
+/// Exit code, stdout and stderr of `lagrange ARGS` run in the repository root.
+fn lagrange(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_lagrange"))
+        .args(args)
+        .current_dir(repo_root())
+        .output()
+        .unwrap_or_else(|e| panic!("cannot start lagrange {args:?}: {e}"));
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[track_caller]
+fn json(args: &[&str]) -> Value {
+    let (code, stdout, stderr) = lagrange(args);
+    assert_eq!(code, 0, "lagrange {args:?}\n{stdout}\n{stderr}");
+    serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("not JSON ({e}):\n{stdout}"))
+}
+
+fn floats(v: &Value) -> Vec<f64> {
+    v.as_array().expect("an array").iter().map(|x| x.as_f64().expect("a number")).collect()
+}
+
+#[track_caller]
+fn close(got: f64, want: f64, rel: f64) {
+    assert!((got - want).abs() <= rel * want.abs().max(1e-12), "got {got}, want {want}");
+}
+
+fn temp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("lagrange-modes-orbit-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a temporary directory");
+    dir.join(name)
+}
+
+#[test]
+fn coupled_oscillators_follow_the_contract() {
+    let v = json(&["modes", "examples/coupled_oscillators.toml", "--format", "json"]);
+    assert_eq!(v["format"], "lagrange.modes/1");
+    for key in ["equilibrium", "T", "U", "frequencies", "modes", "stable"] {
+        assert!(v.get(key).is_some(), "missing {key}");
+    }
+    let f = floats(&v["frequencies"]);
+    close(f[0], 1.0, 1e-12);
+    close(f[1], 1.5, 1e-12);
+    assert_eq!(v["stable"], true);
+    assert_eq!(v["equilibrium"]["q1"], 0.0);
+    assert_eq!(floats(&v["U"][0]), vec![1.625, -0.625]);
+    assert!(v["secular_equation"].as_str().unwrap().ends_with("= 0"));
+}
+
+#[test]
+fn triatomic_molecule_frequencies_and_free_translation() {
+    let v = json(&["modes", "examples/triatomic.toml", "--format", "json"]);
+    let (m, big, k) = (16.0f64, 12.0f64, 1.0f64);
+    let f = floats(&v["frequencies"]);
+    close(f[0] + 1.0, 1.0, 1e-12);
+    close(f[1], (k / m).sqrt(), 1e-12);
+    close(f[2], (k / m * (1.0 + 2.0 * m / big)).sqrt(), 1e-12);
+    assert_eq!(v["kinds"][0], "free");
+    let exact: Vec<&str> = v["exact_frequencies"].as_array().unwrap().iter().map(|x| x.as_str().unwrap()).collect();
+    assert_eq!(exact[1], "sqrt(k/m)");
+    let (_, text, _) = lagrange(&["modes", "examples/triatomic.toml"]);
+    assert!(text.contains("free motion"), "{text}");
+}
+
+#[test]
+fn chain_of_fifty_masses_has_the_textbook_frequencies() {
+    let v = json(&["modes", "examples/chain50.toml", "--format", "json"]);
+    let f = floats(&v["frequencies"]);
+    assert_eq!(f.len(), 50);
+    for (j, w) in f.iter().enumerate() {
+        let want = 2.0 * ((j + 1) as f64 * PI / (2.0 * 51.0)).sin();
+        close(*w, want, 1e-10);
+    }
+}
+
+#[test]
+fn double_pendulum_upside_down_is_rejected_and_its_lowest_position_is_not() {
+    let (code, _, stderr) = lagrange(&["modes", "examples/double_pendulum.toml"]);
+    assert_eq!(code, 2);
+    assert!(stderr.contains("unstable") && stderr.contains("--at"), "{stderr}");
+
+    let v = json(&["modes", "examples/double_pendulum.toml", "--at", "a=0", "b=0", "--format", "json"]);
+    let f = floats(&v["frequencies"]);
+    let g = 9.81f64;
+    close(f[0], ((2.0 - 2f64.sqrt()) * g).sqrt(), 1e-12);
+    close(f[1], ((2.0 + 2f64.sqrt()) * g).sqrt(), 1e-12);
+
+    let v = json(&["modes", "examples/double_pendulum.toml", "--allow-unstable", "--format", "json"]);
+    assert_eq!(v["stable"], false);
+    assert!(v["frequencies"][0].is_null());
+}
+
+#[test]
+fn modes_bad_input_exits_2() {
+    let (code, _, stderr) = lagrange(&["modes", "examples/kepler.toml"]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("no equilibrium"), "{stderr}");
+    let (code, _, stderr) = lagrange(&["modes", "examples/coupled_oscillators.toml", "--at", "zz=1"]);
+    assert_eq!(code, 2);
+    assert!(stderr.contains("no coordinate 'zz'"), "{stderr}");
+}
+
+#[test]
+fn modes_animation_is_an_svg() {
+    let path = temp("triatomic.svg");
+    let (code, _, stderr) = lagrange(&["modes", "examples/triatomic.toml", "--animate", path.to_str().unwrap()]);
+    assert_eq!(code, 0, "{stderr}");
+    let svg = std::fs::read_to_string(&path).unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("<animate") && svg.trim_end().ends_with("</svg>"));
+}
+
+#[test]
+fn kepler_orbit_follows_the_contract_and_the_closed_forms() {
+    let v = json(&["orbit", "examples/kepler.toml", "--format", "json"]);
+    assert_eq!(v["format"], "lagrange.orbit/1");
+    for key in [
+        "energy",
+        "angular_momentum",
+        "reduced_mass",
+        "kind",
+        "eccentricity",
+        "semi_latus_rectum",
+        "periapsis",
+        "apoapsis",
+        "period",
+        "apsidal_angle",
+    ] {
+        assert!(v.get(key).is_some(), "missing {key}");
+    }
+    // mu = k = 1, r = 1, th' = 1.2 at rest radially: l = 1.2, E = 0.72 - 1.
+    let (l, e) = (1.2f64, 0.72 - 1.0);
+    let alpha = l * l;
+    let eps = (1.0 + 2.0 * e * l * l).sqrt();
+    assert_eq!(v["kind"], "ellipse");
+    close(v["eccentricity"].as_f64().unwrap(), eps, 1e-13);
+    close(v["semi_latus_rectum"].as_f64().unwrap(), alpha, 1e-13);
+    close(v["periapsis"].as_f64().unwrap(), alpha / (1.0 + eps), 1e-13);
+    close(v["apoapsis"].as_f64().unwrap(), alpha / (1.0 - eps), 1e-13);
+    let a = alpha / (1.0 - eps * eps);
+    close(v["period"].as_f64().unwrap(), 2.0 * PI * a.powf(1.5), 1e-13);
+    close(v["apsidal_angle"].as_f64().unwrap(), PI, 1e-15);
+}
+
+#[test]
+fn two_bodies_orbit_with_the_reduced_mass() {
+    let v = json(&["orbit", "examples/two_body.toml", "--format", "json"]);
+    close(v["reduced_mass"].as_f64().unwrap(), 3.0 * 1.0 / (3.0 + 1.0), 1e-14);
+    assert_eq!(v["reduced_mass_expr"], "m1*m2/(m1 + m2)");
+    assert_eq!(v["kind"], "ellipse");
+    // k = G m1 m2 = 3, mu = 3/4, r = 1, th' = 1.5: l = 9/8, E = mu/2*(9/4) - 3.
+    let (mu, k, l) = (0.75f64, 3.0f64, 1.125f64);
+    let e = 0.5 * mu * 2.25 - k;
+    close(v["energy"].as_f64().unwrap(), e, 1e-14);
+    close(v["eccentricity"].as_f64().unwrap(), (1.0 + 2.0 * e * l * l / (mu * k * k)).sqrt(), 1e-13);
+}
+
+#[test]
+fn screened_potential_precesses_and_plots() {
+    let path = temp("central.svg");
+    let v = json(&["orbit", "examples/central_force.toml", "--format", "json", "--plot", path.to_str().unwrap()]);
+    assert_eq!(v["kind"], "bounded");
+    assert!(v["eccentricity"].is_null());
+    let apsidal = v["apsidal_angle"].as_f64().unwrap();
+    assert!(apsidal > PI && apsidal < 1.1 * PI, "{apsidal}");
+    let svg = std::fs::read_to_string(&path).unwrap();
+    assert!(svg.contains("<svg") && svg.contains("effective potential"));
+}
+
+/// The Laplace–Runge–Lenz vector `orbit` reports stays constant along a `simulate` run.
+#[test]
+fn runge_lenz_vector_is_conserved_in_simulation() {
+    let v = json(&["orbit", "examples/kepler.toml", "--format", "json"]);
+    let a0 = floats(&v["runge_lenz"]);
+    let csv = temp("kepler.csv");
+    let (code, _, stderr) = lagrange(&[
+        "simulate",
+        "examples/kepler.toml",
+        "--until",
+        "45",
+        "--rtol",
+        "1e-11",
+        "--out",
+        csv.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (ir, ith, ird, ithd) = (col("r"), col("th"), col("r'"), col("th'"));
+    let (mu, k) = (1.0, 1.0);
+    for line in lines {
+        let x: Vec<f64> = line.split(',').map(|s| s.parse().unwrap()).collect();
+        let (r, th, rd, thd) = (x[ir], x[ith], x[ird], x[ithd]);
+        let l = mu * r * r * thd;
+        let (c, s) = (th.cos(), th.sin());
+        let (vx, vy) = (rd * c - r * thd * s, rd * s + r * thd * c);
+        let a = [mu * l * vy - mu * k * c, -mu * l * vx - mu * k * s];
+        assert!((a[0] - a0[0]).abs() < 1e-7 && (a[1] - a0[1]).abs() < 1e-7, "A = {a:?}, reported {a0:?}");
+    }
+}
+
+#[test]
+fn orbit_rejects_other_models() {
+    let (code, _, stderr) = lagrange(&["orbit", "examples/coupled_oscillators.toml"]);
+    assert_eq!(code, 2);
+    assert!(stderr.contains("not a central-force model"), "{stderr}");
+    let (code, _, stderr) = lagrange(&["orbit", "examples/chain50.toml"]);
+    assert_eq!(code, 2);
+    assert!(stderr.contains("exactly two"), "{stderr}");
+}

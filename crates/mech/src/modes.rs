@@ -1,0 +1,1019 @@
+//! Small oscillations and normal modes about an equilibrium, as the notes'
+//! Sec. 3.3 computes them by hand.
+//!
+//! Entry point: [`normal_modes`]. It finds the equilibrium ∂U/∂q = 0 nearest a
+//! starting configuration by a damped Newton method on the compiled gradient and
+//! Hessian of U, builds `T = M(q₀)` and `U = ∂²U/∂q∂q (q₀)`, and solves the
+//! generalized symmetric eigenproblem `U a = Ω² T a` by a Cholesky factor of T
+//! and a symmetric eigensolver, normalizing each mode shape to `aᵀ T a = 1`.
+//! Zero modes are told apart: a free motion (U does not change along the mode,
+//! as for the translation of a molecule) is reported, a vanishing curvature that
+//! is not a symmetry (U = q⁴) is a degenerate equilibrium and an error.
+//!
+//! For up to three coordinates at an equilibrium with exact (integer)
+//! coordinates, the secular equation `det(U − Ω²T) = 0` is also built
+//! symbolically and solved exactly where it factors (trial roots, then the
+//! quadratic formula).
+//!
+//! The potential is `U = −L(q, q' = 0)`: for particle models their potential
+//! energy, for a `lagrangian` string its velocity-independent part (with
+//! moving constraints this includes −T₀, the effective potential).
+
+use crate::derive::Derivation;
+use crate::error::ModelError;
+use crate::probe::{self, Subst};
+use crate::report::Ordered;
+use serde::Serialize;
+use sym::{ExprId, Node, Pool, Tape};
+
+/// Newton iterations before "no equilibrium nearby".
+const MAX_NEWTON: usize = 200;
+/// Eigenvalues of U below this fraction of the largest are zero modes.
+const ZERO_MODE: f64 = 1e-9;
+/// Largest system whose secular equation is built symbolically.
+const MAX_SYMBOLIC: usize = 3;
+
+/// Options of [`normal_modes`].
+#[derive(Debug, Clone, Default)]
+pub struct ModesConfig {
+    /// Starting values for some coordinates (`--at q=v`); the others start at
+    /// their `[initial]` value.
+    pub at: Vec<(String, f64)>,
+}
+
+/// What kind of motion a normal mode is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ModeKind {
+    /// An oscillation with frequency Ω > 0.
+    Oscillation,
+    /// Ω = 0 and U does not change along the mode: a free motion (translation, rotation).
+    Free,
+    /// Ω² < 0: the equilibrium is unstable along this mode.
+    Unstable,
+}
+
+/// One normal mode.
+#[derive(Debug, Clone)]
+pub struct Mode {
+    /// Ω², the eigenvalue of `U a = Ω² T a`.
+    pub omega_squared: f64,
+    /// Ω (0 for a free mode, None for an unstable one).
+    pub frequency: Option<f64>,
+    /// The kind of motion.
+    pub kind: ModeKind,
+    /// The amplitude per coordinate, with `aᵀ T a = 1` and its largest component positive.
+    pub shape: Vec<f64>,
+}
+
+/// The secular equation and the frequencies in closed form.
+#[derive(Debug, Clone)]
+pub struct SymbolicModes {
+    /// T at the equilibrium, in the parameters.
+    pub t_matrix: Vec<Vec<ExprId>>,
+    /// U at the equilibrium, in the parameters.
+    pub u_matrix: Vec<Vec<ExprId>>,
+    /// The symbol standing for Ω in `secular`.
+    pub omega: ExprId,
+    /// det(U − Ω²T), a polynomial in Ω².
+    pub secular: ExprId,
+    /// Ω² in closed form, ascending as the numeric ones (None where it does not factor).
+    pub omega_squared: Option<Vec<ExprId>>,
+    /// Ω in closed form, ascending.
+    pub frequencies: Option<Vec<ExprId>>,
+}
+
+/// Small oscillations about an equilibrium.
+#[derive(Debug, Clone)]
+pub struct Modes {
+    /// Coordinate names.
+    pub coordinates: Vec<String>,
+    /// Where Newton's method started.
+    pub start: Vec<f64>,
+    /// The equilibrium q₀.
+    pub equilibrium: Vec<f64>,
+    /// Newton iterations taken.
+    pub newton_iterations: usize,
+    /// |∂U/∂q| at the equilibrium.
+    pub gradient_norm: f64,
+    /// U(q₀).
+    pub potential: f64,
+    /// T = M(q₀).
+    pub t_matrix: Vec<Vec<f64>>,
+    /// U = ∂²U/∂q∂q at q₀.
+    pub u_matrix: Vec<Vec<f64>>,
+    /// The modes by ascending Ω².
+    pub modes: Vec<Mode>,
+    /// True when no Ω² is negative.
+    pub stable: bool,
+    /// The closed forms, when the system is small and the equilibrium exact.
+    pub symbolic: Option<SymbolicModes>,
+    /// Remarks for the reader (what was neglected, why no closed form).
+    pub notes: Vec<String>,
+}
+
+impl Modes {
+    /// The normal frequencies Ω, ascending (None for an unstable mode).
+    pub fn frequencies(&self) -> Vec<Option<f64>> {
+        self.modes.iter().map(|m| m.frequency).collect()
+    }
+}
+
+/// Why there are no normal modes to report.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum ModesError {
+    /// The model itself is wrong (missing initial values, unknown `--at` name).
+    #[error("{0}")]
+    Model(ModelError),
+    /// The model is not a conservative system about a fixed equilibrium.
+    #[error("{reason}")]
+    NotConservative {
+        /// Which part of the model prevents it.
+        reason: String,
+    },
+    /// Newton's method found no point with ∂U/∂q = 0.
+    #[error("no equilibrium near {start}: {why}")]
+    NoEquilibrium {
+        /// The starting configuration, as `q=v` pairs.
+        start: String,
+        /// What went wrong (diverged, did not converge).
+        why: String,
+    },
+    /// The kinetic-energy matrix is not positive definite at the equilibrium.
+    #[error("the kinetic-energy matrix T = M(q₀) is not positive definite at the equilibrium {at}")]
+    SingularKinetic {
+        /// The equilibrium, as `q=v` pairs.
+        at: String,
+    },
+    /// A zero mode along which U is not constant: the oscillation is not harmonic.
+    #[error("the equilibrium at {at} is degenerate: U has no curvature along the mode {shape}, yet U changes along it, so small oscillations there are not harmonic")]
+    Degenerate {
+        /// The equilibrium, as `q=v` pairs.
+        at: String,
+        /// The flat direction, as `q=v` pairs.
+        shape: String,
+    },
+}
+
+impl ModesError {
+    /// A hint on how to fix it.
+    pub fn help(&self) -> Option<String> {
+        match self {
+            ModesError::Model(e) => e.help.clone(),
+            ModesError::NotConservative { .. } => {
+                Some("small oscillations need L = T − U with T quadratic in q' and U(q) not depending on t".into())
+            }
+            ModesError::NoEquilibrium { .. } => {
+                Some("start elsewhere with --at q=v (e.g. --at th=0), or check that U has a minimum".into())
+            }
+            ModesError::SingularKinetic { .. } => {
+                Some("the coordinates are singular there (like polar coordinates at r = 0); choose others".into())
+            }
+            ModesError::Degenerate { .. } => {
+                Some("the leading term of U about this point is of higher than second order (like q^4)".into())
+            }
+        }
+    }
+}
+
+impl From<ModelError> for ModesError {
+    fn from(e: ModelError) -> Self {
+        ModesError::Model(e)
+    }
+}
+
+/// U, ∂U/∂q and the upper triangle of ∂²U/∂q∂q, compiled.
+struct Potential {
+    tape: Tape,
+    n: usize,
+    inputs: Vec<f64>,
+    out: Vec<f64>,
+}
+
+impl Potential {
+    /// Evaluates at q: (U, gradient, Hessian).
+    fn eval(&mut self, q: &[f64]) -> (f64, Vec<f64>, nalgebra::DMatrix<f64>) {
+        let n = self.n;
+        self.inputs[..n].copy_from_slice(q);
+        self.tape.eval(&self.inputs, &mut self.out);
+        let g = self.out[1..=n].to_vec();
+        let mut h = nalgebra::DMatrix::zeros(n, n);
+        let mut k = n + 1;
+        for i in 0..n {
+            for j in i..n {
+                h[(i, j)] = self.out[k];
+                h[(j, i)] = self.out[k];
+                k += 1;
+            }
+        }
+        (self.out[0], g, h)
+    }
+
+    fn value(&mut self, q: &[f64]) -> f64 {
+        self.eval(q).0
+    }
+}
+
+fn pairs(names: &[String], values: &[f64]) -> String {
+    let parts: Vec<String> = names.iter().zip(values).map(|(n, v)| format!("{n}={}", short(*v))).collect();
+    format!("({})", parts.join(", "))
+}
+
+/// A number with 6 significant digits, trailing zeros dropped.
+pub(crate) fn short(v: f64) -> String {
+    if v == 0.0 || (v.abs() >= 1e-4 && v.abs() < 1e6) {
+        let s = format!("{:.6}", v);
+        let s = s.trim_end_matches('0').trim_end_matches('.').to_string();
+        if s == "-0" {
+            "0".into()
+        } else {
+            s
+        }
+    } else {
+        format!("{v:.5e}")
+    }
+}
+
+fn norm(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+/// The symbols a derivation's expressions may contain, in tape input order:
+/// coordinates, velocities, time, parameters.
+pub(crate) fn inputs_of(d: &mut Derivation) -> (Vec<ExprId>, Vec<f64>) {
+    let n = d.q.len();
+    let mut ids: Vec<ExprId> = d.q.clone();
+    ids.extend(&d.qd);
+    ids.push(d.t);
+    let mut values = vec![0.0; 2 * n + 1];
+    let params: Vec<(String, f64)> = d.model.parameters.iter().map(|p| (p.name.clone(), p.value)).collect();
+    for (name, v) in params {
+        ids.push(d.model.pool.symbol(&name));
+        values.push(v);
+    }
+    (ids, values)
+}
+
+/// The velocity-independent potential U(q) = −L(q, 0) and the checks that
+/// small oscillations apply.
+fn potential_of(d: &mut Derivation) -> Result<(ExprId, Vec<String>), ModesError> {
+    let mut notes = Vec::new();
+    if d.explicit_time {
+        return Err(ModesError::NotConservative {
+            reason: "L depends explicitly on the time t, so there is no fixed equilibrium to oscillate about".into(),
+        });
+    }
+    if d.forces.iter().any(|&f| !probe::is_zero(d.pool(), f)) {
+        return Err(ModesError::NotConservative {
+            reason: "the model has generalized forces [forces], which are not derived from a potential".into(),
+        });
+    }
+    if d.dissipation.is_some() {
+        notes.push("Rayleigh's dissipation function is left out: these are the undamped normal modes".into());
+    }
+    let pool = &mut d.model.pool;
+    let zero_vel: Subst = d.qd.iter().map(|&v| (v, pool.zero())).collect();
+    // Terms linear in the velocities, b(q)·q', act like a magnetic field (gyroscopic
+    // forces) unless b is a gradient; small oscillations as in the notes need none.
+    for i in 0..d.q.len() {
+        let b = pool.substitute(d.momenta[i], &zero_vel);
+        if !probe::is_zero(pool, b) {
+            let name = &d.model.coordinates[i].name;
+            return Err(ModesError::NotConservative {
+                reason: format!(
+                    "L has a term linear in the velocity {name}' (∂L/∂{name}' at rest is {}): gyroscopic forces are not covered",
+                    pool.display(b)
+                ),
+            });
+        }
+    }
+    let l0 = pool.substitute(d.lagrangian, &zero_vel);
+    let u = pool.neg(l0);
+    Ok((pool.simplify(u), notes))
+}
+
+/// Finds the equilibrium near the starting point and the normal modes about it.
+pub fn normal_modes(d: &mut Derivation, config: &ModesConfig) -> Result<Modes, ModesError> {
+    let n = d.q.len();
+    let names: Vec<String> = d.model.coordinates.iter().map(|c| c.name.clone()).collect();
+    let start = starting_point(d, config)?;
+    let (u, mut notes) = potential_of(d)?;
+
+    // Compile U, ∇U and the upper triangle of the Hessian.
+    let pool = &mut d.model.pool;
+    let grad: Vec<ExprId> = d.q.iter().map(|&q| pool.diff(u, q)).collect();
+    let mut roots = vec![u];
+    roots.extend(&grad);
+    let mut hess = vec![vec![pool.zero(); n]; n];
+    for i in 0..n {
+        for j in i..n {
+            let h = pool.diff(grad[i], d.q[j]);
+            hess[i][j] = h;
+            hess[j][i] = h;
+            roots.push(h);
+        }
+    }
+    let (input_ids, input_values) = inputs_of(d);
+    let pool = &d.model.pool;
+    let tape = Tape::compile(pool, &roots, &input_ids)
+        .map_err(|e| ModesError::NotConservative { reason: format!("U cannot be evaluated: {e}") })?;
+    let n_out = roots.len();
+    let mut pot = Potential { tape, n, inputs: input_values.clone(), out: vec![0.0; n_out] };
+
+    let (mut q0, iterations, gnorm) = newton(&mut pot, &start, &names)?;
+    // Rounding noise about an exact zero is zero (q = -1e-16 reads as a result).
+    let q_big = q0.iter().fold(1.0f64, |m, v| m.max(v.abs()));
+    q0.iter_mut().filter(|v| v.abs() <= 1e-14 * q_big).for_each(|v| *v = 0.0);
+    let (u0, _, hmat) = pot.eval(&q0);
+
+    // T = M(q₀).
+    let m_roots: Vec<ExprId> = d.mass_matrix.iter().flatten().copied().collect();
+    let mut mtape = Tape::compile(pool, &m_roots, &input_ids)
+        .map_err(|e| ModesError::NotConservative { reason: format!("T cannot be evaluated: {e}") })?;
+    let mut inputs = input_values;
+    inputs[..n].copy_from_slice(&q0);
+    let mut mvals = vec![0.0; m_roots.len()];
+    mtape.eval(&inputs, &mut mvals);
+    let tmat = nalgebra::DMatrix::from_row_slice(n, n, &mvals);
+    let at = pairs(&names, &q0);
+    if !tmat.iter().all(|v| v.is_finite()) || !hmat.iter().all(|v| v.is_finite()) {
+        return Err(ModesError::NoEquilibrium {
+            start: pairs(&names, &start),
+            why: format!("T or U is not finite at {at}"),
+        });
+    }
+
+    // U a = λ T a  ⇔  (L⁻¹ U L⁻ᵀ) y = λ y with T = L Lᵀ and a = L⁻ᵀ y.
+    let chol = tmat.clone().cholesky().ok_or_else(|| ModesError::SingularKinetic { at: at.clone() })?;
+    let l = chol.l();
+    let l_inv = l.clone().try_inverse().ok_or_else(|| ModesError::SingularKinetic { at: at.clone() })?;
+    let s = &l_inv * &hmat * l_inv.transpose();
+    let s = (&s + s.transpose()) * 0.5;
+    let eig = s.symmetric_eigen();
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+    let lam_scale = eig.eigenvalues.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    // The curvature met on the way is the scale for "zero": at a degenerate
+    // bottom (U = q⁴) every eigenvalue vanishes, so the equilibrium's own are no scale.
+    let (_, _, h_start) = pot.eval(&start);
+    let start_scale = (&l_inv * h_start * l_inv.transpose()).amax();
+    let zero_scale = if start_scale.is_finite() { lam_scale.max(start_scale) } else { lam_scale };
+    let energy_scale = 1.0 + u0.abs();
+    let mut modes = Vec::with_capacity(n);
+    for &k in &order {
+        let y = eig.eigenvectors.column(k).into_owned();
+        let a = l_inv.transpose() * y;
+        let mut shape: Vec<f64> = a.iter().copied().collect();
+        // The largest component positive (ties: the first); rounding noise is zero.
+        let big = shape.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        shape.iter_mut().filter(|v| v.abs() <= 1e-13 * big).for_each(|v| *v = 0.0);
+        if let Some(first) = shape.iter().find(|v| v.abs() > big * (1.0 - 1e-9)) {
+            if *first < 0.0 {
+                shape.iter_mut().for_each(|v| *v = -*v);
+            }
+        }
+        let lam = eig.eigenvalues[k];
+        let (omega_squared, frequency, kind) = if lam.abs() <= ZERO_MODE * zero_scale.max(f64::MIN_POSITIVE) {
+            // Free motion or a flat, non-harmonic bottom: test U along the mode.
+            let step = 0.1 * (1.0 + q0.iter().fold(0.0f64, |m, v| m.max(v.abs()))) / big.max(f64::MIN_POSITIVE);
+            let mut flat = true;
+            for sgn in [-1.0, 1.0, -0.1, 0.1] {
+                let q: Vec<f64> = q0.iter().zip(&shape).map(|(q, a)| q + sgn * step * a).collect();
+                let du = pot.value(&q) - u0;
+                let curv_scale = 0.5 * lam_scale * (sgn * step).powi(2);
+                if du.is_nan() || du.abs() > 1e-9 * (energy_scale + curv_scale) {
+                    flat = false;
+                }
+            }
+            if !flat {
+                return Err(ModesError::Degenerate { at, shape: pairs(&names, &shape) });
+            }
+            (0.0, Some(0.0), ModeKind::Free)
+        } else if lam > 0.0 {
+            (lam, Some(lam.sqrt()), ModeKind::Oscillation)
+        } else {
+            (lam, None, ModeKind::Unstable)
+        };
+        modes.push(Mode { omega_squared, frequency, kind, shape });
+    }
+    let stable = modes.iter().all(|m| m.kind != ModeKind::Unstable);
+    if modes.iter().any(|m| m.kind == ModeKind::Free) {
+        notes.push(
+            "a zero mode (Ω = 0) is a free motion: U does not change along it (a translation or rotation of the whole system); its normal coordinate moves uniformly, Q = A t + B".into(),
+        );
+    }
+
+    let symbolic = if n <= MAX_SYMBOLIC {
+        let r = symbolic_modes(d, &hess, &q0, &modes);
+        if let Err(why) = &r {
+            notes.push(format!("no closed form: {why}"));
+        }
+        r.ok()
+    } else {
+        None
+    };
+
+    let to_rows =
+        |m: &nalgebra::DMatrix<f64>| -> Vec<Vec<f64>> { (0..n).map(|i| (0..n).map(|j| m[(i, j)]).collect()).collect() };
+    Ok(Modes {
+        coordinates: names,
+        start,
+        equilibrium: q0,
+        newton_iterations: iterations,
+        gradient_norm: gnorm,
+        potential: u0,
+        t_matrix: to_rows(&tmat),
+        u_matrix: to_rows(&hmat),
+        modes,
+        stable,
+        symbolic,
+        notes,
+    })
+}
+
+/// The starting configuration: `[initial]` values (0 where missing), overridden by `--at`.
+fn starting_point(d: &Derivation, config: &ModesConfig) -> Result<Vec<f64>, ModesError> {
+    let model = &d.model;
+    let n = model.n_coords();
+    let mut q = vec![0.0; n];
+    let env = |name: &str| model.parameter(name);
+    for iv in model.initial.iter().filter(|iv| iv.order == 0) {
+        let v =
+            model.pool.eval(iv.value.expr, &env).map_err(|e| ModelError::at(iv.value.span.clone(), e.to_string()))?;
+        q[iv.coord] = v;
+    }
+    for (name, v) in &config.at {
+        let Some(i) = model.coordinates.iter().position(|c| &c.name == name) else {
+            let known: Vec<&str> = model.coordinates.iter().map(|c| c.name.as_str()).collect();
+            return Err(ModelError::whole(format!("--at {name}: the model has no coordinate '{name}'"))
+                .with_help(format!("its coordinates are: {}", known.join(", ")))
+                .into());
+        };
+        if !v.is_finite() {
+            return Err(ModelError::whole(format!("--at {name}: the value must be finite")).into());
+        }
+        q[i] = *v;
+    }
+    Ok(q)
+}
+
+/// A damped Newton method on ∇U = 0, with |∇U|² as merit function and a
+/// pseudo-inverse of the Hessian (flat directions, such as a free translation,
+/// get no step). Returns the point, the iterations and |∇U| there.
+fn newton(pot: &mut Potential, start: &[f64], names: &[String]) -> Result<(Vec<f64>, usize, f64), ModesError> {
+    let n = start.len();
+    let fail = |why: String| ModesError::NoEquilibrium { start: pairs(names, start), why };
+    let mut q = start.to_vec();
+    let (_, mut g, mut h) = pot.eval(&q);
+    let size0 = 1.0 + norm(start);
+    for iter in 0..=MAX_NEWTON {
+        if !g.iter().chain(h.iter()).all(|v| v.is_finite()) {
+            return Err(fail(format!("U or its derivatives are not finite at {}", pairs(names, &q))));
+        }
+        let gnorm = norm(&g);
+        let hscale = h.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let qscale = 1.0 + norm(&q);
+        if gnorm == 0.0 {
+            return Ok((q, iter, gnorm));
+        }
+        if iter == MAX_NEWTON {
+            break;
+        }
+        let eig = h.clone().symmetric_eigen();
+        let lmax = eig.eigenvalues.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let gv = nalgebra::DVector::from_column_slice(&g);
+        let mut step = nalgebra::DVector::zeros(n);
+        for k in 0..n {
+            let lam = eig.eigenvalues[k];
+            if lam.abs() > 1e-12 * lmax {
+                let v = eig.eigenvectors.column(k);
+                step -= v * (v.dot(&gv) / lam);
+            }
+        }
+        if step.norm() <= 1e-14 * qscale {
+            // Converged: Newton's steps shrink to nothing (quadratically at a
+            // regular equilibrium, geometrically at a degenerate one).
+            if gnorm <= 1e-8 * hscale.max(1.0) * qscale {
+                return Ok((q, iter, gnorm));
+            }
+            return Err(fail(format!(
+                "Newton's method stalls at {} with |∂U/∂q| = {}",
+                pairs(names, &q),
+                short(gnorm)
+            )));
+        }
+        // Backtracking on |∇U|².
+        let mut t = 1.0;
+        let merit = gnorm * gnorm;
+        loop {
+            let trial: Vec<f64> = q.iter().zip(step.iter()).map(|(a, b)| a + t * b).collect();
+            let (_, g2, h2) = pot.eval(&trial);
+            let m2: f64 = g2.iter().map(|x| x * x).sum();
+            if m2.is_finite() && (m2 <= (1.0 - 1e-4 * t) * merit || t < 1e-4) {
+                q = trial;
+                g = g2;
+                h = h2;
+                break;
+            }
+            t *= 0.5;
+        }
+        if norm(&q.iter().zip(start).map(|(a, b)| a - b).collect::<Vec<_>>()) > 1e3 * size0 {
+            return Err(fail(format!("Newton's method runs away (to {})", pairs(names, &q))));
+        }
+    }
+    Err(fail(format!("Newton's method did not converge in {MAX_NEWTON} iterations (|∂U/∂q| = {})", short(norm(&g)))))
+}
+
+/// A name for Ω that is not one of the model's names.
+fn fresh_name(d: &Derivation, base: &str) -> String {
+    let mut name = base.to_string();
+    while d.model.parameters.iter().any(|p| p.name == name) || d.model.coordinates.iter().any(|c| c.name == name) {
+        name.push('_');
+    }
+    name
+}
+
+/// The secular equation det(U − Ω²T) and, where it factors, its roots.
+fn symbolic_modes(
+    d: &mut Derivation,
+    hess: &[Vec<ExprId>],
+    q0: &[f64],
+    modes: &[Mode],
+) -> Result<SymbolicModes, String> {
+    let n = q0.len();
+    let lam_name = fresh_name(d, "lam");
+    let om_name = fresh_name(d, "Om");
+    let params: Vec<String> = d.model.parameters.iter().map(|p| p.name.clone()).collect();
+    let param_only = |pool: &Pool, e: ExprId| -> bool {
+        pool.reachable(&[e]).into_iter().all(|id| match pool.node(id) {
+            Node::Sym(s) => params.iter().any(|p| p == pool.name_str(s.name)),
+            _ => true,
+        })
+    };
+    // T and U as they are (constant for a quadratic U), else at the
+    // equilibrium, which must then be exact: 0, ±1, ... (not a float).
+    let mut subst = Subst::default();
+    let constant = {
+        let pool = &d.model.pool;
+        d.mass_matrix.iter().chain(hess).flatten().all(|&e| param_only(pool, e))
+    };
+    if !constant {
+        for (i, &v) in q0.iter().enumerate() {
+            let r = v.round();
+            if (v - r).abs() > 1e-9 * (1.0 + v.abs()) || r.abs() > 1e6 {
+                return Err(format!(
+                    "T and U depend on the coordinates, and the equilibrium {} = {} is not an exact integer",
+                    d.model.coordinates[i].name,
+                    short(v)
+                ));
+            }
+            let pool = &mut d.model.pool;
+            subst.insert(d.q[i], pool.int(r as i64));
+        }
+    }
+    let pool = &mut d.model.pool;
+    let mut tm = vec![vec![pool.zero(); n]; n];
+    let mut um = vec![vec![pool.zero(); n]; n];
+    for i in 0..n {
+        for j in 0..n {
+            let t = pool.substitute(d.mass_matrix[i][j], &subst);
+            tm[i][j] = pool.simplify(t);
+            let u = pool.substitute(hess[i][j], &subst);
+            um[i][j] = pool.simplify(u);
+        }
+    }
+    if !tm.iter().chain(&um).flatten().all(|&e| param_only(pool, e)) {
+        return Err("T or U at the equilibrium still depends on the coordinates".into());
+    }
+    let lam = pool.symbol(&lam_name);
+    let om = pool.symbol(&om_name);
+    let a: Vec<Vec<ExprId>> = (0..n)
+        .map(|i| {
+            (0..n)
+                .map(|j| {
+                    let lt = pool.mul2(lam, tm[i][j]);
+                    pool.sub(um[i][j], lt)
+                })
+                .collect()
+        })
+        .collect();
+    let det = determinant(pool, &a);
+    let det = pool.expand(det);
+    // Coefficients c_k of λ^k: c_k = (1/k!) d^k det/dλ^k at λ = 0.
+    let mut coeffs = Vec::with_capacity(n + 1);
+    let mut dk = det;
+    let mut fact = 1i64;
+    let at_zero: Subst = [(lam, pool.zero())].into_iter().collect();
+    for k in 0..=n {
+        if k > 0 {
+            dk = pool.diff(dk, lam);
+            fact *= k as i64;
+        }
+        let c = pool.substitute(dk, &at_zero);
+        let inv = pool.rational(1, fact);
+        let c = pool.mul2(inv, c);
+        let c = pool.simplify(c);
+        coeffs.push(probe::zero_if_vanishing(pool, c));
+    }
+    // The secular polynomial in Ω.
+    let om2 = pool.powi(om, 2);
+    let terms: Vec<ExprId> = coeffs
+        .iter()
+        .enumerate()
+        .map(|(k, &c)| {
+            let p = pool.powi(om2, k as i64);
+            pool.mul2(c, p)
+        })
+        .collect();
+    let secular = pool.add(&terms);
+    let mut candidates = vec![pool.zero()];
+    for i in 0..n {
+        if !probe::is_zero(pool, tm[i][i]) {
+            candidates.push(pool.div(um[i][i], tm[i][i]));
+        }
+        for j in 0..n {
+            if i == j {
+                continue;
+            }
+            for sign in [1i64, -1] {
+                let s = pool.int(sign);
+                let uij = pool.mul2(s, um[i][j]);
+                let tij = pool.mul2(s, tm[i][j]);
+                let num = pool.add2(um[i][i], uij);
+                let den = pool.add2(tm[i][i], tij);
+                if !probe::is_zero(pool, den) {
+                    candidates.push(pool.div(num, den));
+                }
+            }
+        }
+    }
+    let roots = solve(pool, coeffs, &candidates);
+    let (omega_squared, frequencies) = match roots {
+        Some(roots) => match_roots(d, roots, modes),
+        None => (None, None),
+    };
+    Ok(SymbolicModes { t_matrix: tm, u_matrix: um, omega: om, secular, omega_squared, frequencies })
+}
+
+/// Orders the exact roots like the numeric Ω² and takes their square roots;
+/// None when they do not match (a closed form must agree with the numbers).
+fn match_roots(d: &mut Derivation, roots: Vec<ExprId>, modes: &[Mode]) -> (Option<Vec<ExprId>>, Option<Vec<ExprId>>) {
+    let model = &d.model;
+    let env = |name: &str| model.parameter(name);
+    let mut valued = Vec::new();
+    for r in roots {
+        match model.pool.eval(r, &env) {
+            Ok(v) if v.is_finite() => valued.push((v, r)),
+            _ => return (None, None),
+        }
+    }
+    valued.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let scale = modes.iter().fold(0.0f64, |m, x| m.max(x.omega_squared.abs())).max(f64::MIN_POSITIVE);
+    if valued.len() != modes.len()
+        || valued.iter().zip(modes).any(|((v, _), m)| (v - m.omega_squared).abs() > 1e-8 * scale)
+    {
+        return (None, None);
+    }
+    let pool = &mut d.model.pool;
+    let sq: Vec<ExprId> = valued.iter().map(|&(_, r)| r).collect();
+    let om: Vec<ExprId> = sq
+        .iter()
+        .map(|&r| {
+            let s = pool.sqrt(r);
+            pool.simplify(s)
+        })
+        .collect();
+    (Some(sq), Some(om))
+}
+
+/// Roots of Σ c_k λ^k: trial roots first (deflating by each one found), then
+/// the formula for degree ≤ 2. None when a cubic has no trial root.
+fn solve(pool: &mut Pool, mut c: Vec<ExprId>, candidates: &[ExprId]) -> Option<Vec<ExprId>> {
+    while c.len() > 1 && probe::is_zero(pool, *c.last()?) {
+        c.pop();
+    }
+    let deg = c.len() - 1;
+    match deg {
+        0 => return Some(Vec::new()),
+        1 => {
+            let r = pool.div(c[0], c[1]);
+            let r = pool.neg(r);
+            return Some(vec![pool.simplify(r)]);
+        }
+        _ => {}
+    }
+    for &r in candidates {
+        let mut terms = Vec::new();
+        for (k, &ck) in c.iter().enumerate() {
+            let p = pool.powi(r, k as i64);
+            terms.push(pool.mul2(ck, p));
+        }
+        let value = pool.add(&terms);
+        if probe::is_zero(pool, value) {
+            // Synthetic division: c(λ) = (λ − r) b(λ).
+            let mut b = vec![pool.zero(); deg];
+            b[deg - 1] = c[deg];
+            for k in (1..deg).rev() {
+                let rb = pool.mul2(r, b[k]);
+                let s = pool.add2(c[k], rb);
+                b[k - 1] = pool.simplify(s);
+            }
+            let mut rest = solve(pool, b, candidates)?;
+            rest.push(pool.simplify(r));
+            return Some(rest);
+        }
+    }
+    if deg == 2 {
+        let (a, b, cc) = (c[2], c[1], c[0]);
+        let b2 = pool.powi(b, 2);
+        let four = pool.int(4);
+        let fac = pool.mul(&[four, a, cc]);
+        let disc = pool.sub(b2, fac);
+        let disc = pool.simplify(disc);
+        let sq = pool.sqrt(disc);
+        let two = pool.int(2);
+        let two_a = pool.mul2(two, a);
+        let mb = pool.neg(b);
+        let r1 = pool.sub(mb, sq);
+        let r1 = pool.div(r1, two_a);
+        let r2 = pool.add2(mb, sq);
+        let r2 = pool.div(r2, two_a);
+        return Some(vec![r1, r2]);
+    }
+    None
+}
+
+/// det A by cofactor expansion (n ≤ 3).
+fn determinant(pool: &mut Pool, a: &[Vec<ExprId>]) -> ExprId {
+    let n = a.len();
+    match n {
+        0 => pool.one(),
+        1 => a[0][0],
+        _ => {
+            let mut terms = Vec::with_capacity(n);
+            for j in 0..n {
+                let minor: Vec<Vec<ExprId>> = a[1..]
+                    .iter()
+                    .map(|row| row.iter().enumerate().filter(|&(k, _)| k != j).map(|(_, &x)| x).collect())
+                    .collect();
+                let m = determinant(pool, &minor);
+                let mut t = pool.mul2(a[0][j], m);
+                if j % 2 == 1 {
+                    t = pool.neg(t);
+                }
+                terms.push(t);
+            }
+            pool.add(&terms)
+        }
+    }
+}
+
+/// The modes as the JSON contract `lagrange.modes/1`.
+#[derive(Debug, Clone, Serialize)]
+pub struct ModesReport {
+    /// Always `lagrange.modes/1`.
+    pub format: &'static str,
+    /// The model's name.
+    pub name: String,
+    /// q₀ by coordinate.
+    pub equilibrium: Ordered<f64>,
+    /// T = M(q₀).
+    #[serde(rename = "T")]
+    pub t_matrix: Vec<Vec<f64>>,
+    /// U = ∂²U/∂q∂q at q₀.
+    #[serde(rename = "U")]
+    pub u_matrix: Vec<Vec<f64>>,
+    /// Ω ascending (null for an unstable mode).
+    pub frequencies: Vec<Option<f64>>,
+    /// Mode shapes, one per frequency, normalized to aᵀTa = 1.
+    pub modes: Vec<Vec<f64>>,
+    /// True when no Ω² is negative.
+    pub stable: bool,
+    /// Ω² ascending (negative for an unstable mode).
+    pub omega_squared: Vec<f64>,
+    /// The kind of each mode: oscillation, free, unstable.
+    pub kinds: Vec<ModeKind>,
+    /// The secular equation det(U − Ω²T) = 0 in the expression language (Ω is `Om`), or null.
+    pub secular_equation: Option<String>,
+    /// Ω in closed form, ascending, or null.
+    pub exact_frequencies: Option<Vec<String>>,
+    /// Newton iterations used to find the equilibrium.
+    pub newton_iterations: usize,
+}
+
+impl ModesReport {
+    /// The report of computed modes.
+    pub fn new(d: &Derivation, m: &Modes) -> ModesReport {
+        let pool = d.pool();
+        let sym = m.symbolic.as_ref();
+        ModesReport {
+            format: "lagrange.modes/1",
+            name: d.model.name.clone(),
+            equilibrium: Ordered(m.coordinates.iter().cloned().zip(m.equilibrium.iter().copied()).collect()),
+            t_matrix: m.t_matrix.clone(),
+            u_matrix: m.u_matrix.clone(),
+            frequencies: m.frequencies(),
+            modes: m.modes.iter().map(|x| x.shape.clone()).collect(),
+            stable: m.stable,
+            omega_squared: m.modes.iter().map(|x| x.omega_squared).collect(),
+            kinds: m.modes.iter().map(|x| x.kind).collect(),
+            secular_equation: sym.map(|s| format!("{} = 0", pool.display(s.secular))),
+            exact_frequencies: sym
+                .and_then(|s| s.frequencies.as_ref())
+                .map(|f| f.iter().map(|&e| pool.display(e).to_string()).collect()),
+            newton_iterations: m.newton_iterations,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Model;
+
+    fn derive(text: &str, set: &[(&str, f64)]) -> Derivation {
+        let set: Vec<(String, f64)> = set.iter().map(|(k, v)| (k.to_string(), *v)).collect();
+        let model = Model::parse(text, &set).expect("model parses");
+        Derivation::new(model).expect("derivation")
+    }
+
+    fn example(name: &str) -> String {
+        let path = format!("{}/../../examples/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+        std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"))
+    }
+
+    #[track_caller]
+    fn check_frequencies(m: &Modes, expect: &[f64]) {
+        let got: Vec<f64> = m.frequencies().into_iter().map(|f| f.expect("stable")).collect();
+        assert_eq!(got.len(), expect.len());
+        for (g, e) in got.iter().zip(expect) {
+            assert!((g - e).abs() <= 1e-10 * (1.0 + e.abs()), "got {got:?}, expected {expect:?}");
+        }
+    }
+
+    /// Every mode solves U a = Ω² T a with aᵀ T a = 1, and modes are T-orthogonal.
+    #[track_caller]
+    fn check_eigen(m: &Modes) {
+        let n = m.coordinates.len();
+        let t = nalgebra::DMatrix::from_fn(n, n, |i, j| m.t_matrix[i][j]);
+        let u = nalgebra::DMatrix::from_fn(n, n, |i, j| m.u_matrix[i][j]);
+        let scale = u.amax().max(t.amax());
+        for (i, a) in m.modes.iter().enumerate() {
+            let av = nalgebra::DVector::from_column_slice(&a.shape);
+            let r = &u * &av - &t * &av * a.omega_squared;
+            assert!(r.amax() <= 1e-9 * scale * (1.0 + av.amax()), "mode {i}: residual {}", r.amax());
+            for (j, b) in m.modes.iter().enumerate() {
+                let bv = nalgebra::DVector::from_column_slice(&b.shape);
+                let dot = (av.transpose() * &t * bv)[(0, 0)];
+                let expect = if i == j { 1.0 } else { 0.0 };
+                assert!((dot - expect).abs() < 1e-9, "aᵀTa[{i}][{j}] = {dot}");
+            }
+        }
+    }
+
+    #[test]
+    fn coupled_oscillators_match_the_notes() {
+        let mut d = derive(&example("coupled_oscillators"), &[]);
+        let m = normal_modes(&mut d, &ModesConfig::default()).unwrap();
+        // m = k = 1, k12 = 0.625: Ω₁ = sqrt(k/m) = 1, Ω₂ = sqrt((k + 2k12)/m) = 1.5 (Fig. 3.3).
+        check_frequencies(&m, &[1.0, 1.5]);
+        check_eigen(&m);
+        // Symmetric and antisymmetric modes, each normalized: (1, 1)/√2, (1, −1)/√2.
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        for (a, e) in m.modes[0].shape.iter().zip([h, h]) {
+            assert!((a - e).abs() < 1e-12);
+        }
+        assert!((m.modes[1].shape[0] - h).abs() < 1e-12 && (m.modes[1].shape[1] + h).abs() < 1e-12);
+        assert!(m.stable);
+        let s = m.symbolic.as_ref().expect("a 2x2 secular equation");
+        assert!(s.frequencies.is_some(), "the quadratic formula gives closed forms");
+    }
+
+    #[test]
+    fn triatomic_molecule_has_a_free_translation_and_the_notes_frequencies() {
+        let mut d = derive(&example("triatomic"), &[]);
+        let m = normal_modes(&mut d, &ModesConfig::default()).unwrap();
+        let (mm, big, k) = (16.0f64, 12.0f64, 1.0f64);
+        check_frequencies(&m, &[0.0, (k / mm).sqrt(), (k / mm * (1.0 + 2.0 * mm / big)).sqrt()]);
+        check_eigen(&m);
+        assert_eq!(m.modes[0].kind, ModeKind::Free);
+        assert!(m.stable);
+        // The notes' V: translation (1,1,1)/sqrt(M+2m); Ω₂ mode (1,0,−1)/sqrt(2m).
+        let tr = 1.0 / (big + 2.0 * mm).sqrt();
+        for a in &m.modes[0].shape {
+            assert!((a - tr).abs() < 1e-12);
+        }
+        let s2 = 1.0 / (2.0 * mm).sqrt();
+        let expect = [s2, 0.0, -s2];
+        for (a, e) in m.modes[1].shape.iter().zip(expect) {
+            assert!((a - e).abs() < 1e-12, "{:?}", m.modes[1].shape);
+        }
+        // Exact: Ω² = 0, k/m, k/m (1 + 2m/M).
+        let s = m.symbolic.as_ref().unwrap_or_else(|| panic!("no symbolic modes: {:?}", m.notes));
+        let om2 = s.omega_squared.as_ref().expect("the cubic factors");
+        let pool = d.pool();
+        let mut expect_exprs = Vec::new();
+        let mut p = pool.clone();
+        for text in ["0", "k/m", "k/m*(1 + 2*m/M)"] {
+            expect_exprs.push(p.parse(text).unwrap());
+        }
+        for (&got, &want) in om2.iter().zip(&expect_exprs) {
+            let diff = p.sub(got, want);
+            assert!(probe::is_zero(&p, diff), "Ω² = {} is not {}", p.display(got), p.display(want));
+        }
+    }
+
+    #[test]
+    fn double_pendulum_about_its_lowest_position() {
+        let mut d = derive(&example("double_pendulum"), &[]);
+        let at = vec![("a".to_string(), 0.1), ("b".to_string(), -0.2)];
+        let m = normal_modes(&mut d, &ModesConfig { at }).unwrap();
+        assert!(m.equilibrium.iter().all(|q| q.abs() < 1e-12), "{:?}", m.equilibrium);
+        // Equal masses and lengths: Ω² = (2 ∓ √2) g/l.
+        let g = 9.81f64;
+        check_frequencies(&m, &[((2.0 - 2f64.sqrt()) * g).sqrt(), ((2.0 + 2f64.sqrt()) * g).sqrt()]);
+        check_eigen(&m);
+        assert!(m.symbolic.as_ref().and_then(|s| s.frequencies.as_ref()).is_some());
+    }
+
+    #[test]
+    fn double_pendulum_upside_down_is_unstable() {
+        let mut d = derive(&example("double_pendulum"), &[]);
+        let m = normal_modes(&mut d, &ModesConfig::default()).unwrap();
+        let pi = std::f64::consts::PI;
+        assert!(m.equilibrium.iter().all(|q| (q - pi).abs() < 1e-9), "{:?}", m.equilibrium);
+        assert!(!m.stable);
+        assert_eq!(m.modes[0].kind, ModeKind::Unstable);
+    }
+
+    #[test]
+    fn chain_of_fifty_masses() {
+        let mut d = derive(&example("chain50"), &[]);
+        let m = normal_modes(&mut d, &ModesConfig::default()).unwrap();
+        let n = 50.0;
+        let expect: Vec<f64> =
+            (1..=50).map(|j| 2.0 * (j as f64 * std::f64::consts::PI / (2.0 * (n + 1.0))).sin()).collect();
+        check_frequencies(&m, &expect);
+        check_eigen(&m);
+        assert!(m.symbolic.is_none());
+    }
+
+    #[test]
+    fn bad_equilibria_are_errors() {
+        let flat =
+            "coordinates = [\"x\"]\nkinetic = \"x'^2/2\"\npotential = \"x^4\"\n[initial]\nx = 1.0\n\"x'\" = 0.0\n";
+        let mut d = derive(flat, &[]);
+        let e = normal_modes(&mut d, &ModesConfig::default()).unwrap_err();
+        assert!(matches!(e, ModesError::Degenerate { .. }), "{e}");
+
+        let none = "coordinates = [\"x\"]\nkinetic = \"x'^2/2\"\npotential = \"x\"\n[initial]\nx = 1.0\n\"x'\" = 0.0\n";
+        let mut d = derive(none, &[]);
+        let e = normal_modes(&mut d, &ModesConfig::default()).unwrap_err();
+        assert!(matches!(e, ModesError::NoEquilibrium { .. }), "{e}");
+
+        let mut d = derive(&example("kepler"), &[]);
+        let e = normal_modes(&mut d, &ModesConfig::default()).unwrap_err();
+        assert!(matches!(e, ModesError::NoEquilibrium { .. }), "{e}");
+    }
+
+    /// The notes' case (iii): started in the Ω₃ mode, the molecule stays in it:
+    /// the other normal coordinates Q = aᵀT(q − q₀) stay zero.
+    #[test]
+    fn a_simulation_started_in_a_mode_stays_in_it() {
+        let text = example("triatomic");
+        let mut d = derive(&text, &[]);
+        let m = normal_modes(&mut d, &ModesConfig::default()).unwrap();
+        let amp = 0.05;
+        for (k, mode) in m.modes.iter().enumerate().skip(1) {
+            let head = text.split("[initial]").next().unwrap();
+            let mut model = head.to_string();
+            model.push_str("[initial]\n");
+            for (i, c) in m.coordinates.iter().enumerate() {
+                model.push_str(&format!("{c} = {}\n\"{c}'\" = 0.0\n", m.equilibrium[i] + amp * mode.shape[i]));
+            }
+            let mut sim = derive(&model, &[]);
+            let config = crate::RunConfig { until: 60.0, rtol: 1e-11, atol: 1e-13, ..Default::default() };
+            let n = m.coordinates.len();
+            let t = nalgebra::DMatrix::from_fn(n, n, |i, j| m.t_matrix[i][j]);
+            let mut worst: f64 = 0.0;
+            let mut main_err: f64 = 0.0;
+            let omega = mode.frequency.unwrap();
+            crate::simulate(&mut sim, &config, |row| {
+                let dq = nalgebra::DVector::from_iterator(n, row.q.iter().zip(&m.equilibrium).map(|(a, b)| a - b));
+                for (j, other) in m.modes.iter().enumerate() {
+                    let av = nalgebra::DVector::from_column_slice(&other.shape);
+                    let qj = (av.transpose() * &t * &dq)[(0, 0)];
+                    if j == k {
+                        main_err = main_err.max((qj - amp * (omega * row.t).cos()).abs());
+                    } else {
+                        worst = worst.max(qj.abs());
+                    }
+                }
+                std::ops::ControlFlow::Continue(())
+            })
+            .unwrap();
+            assert!(worst < 1e-8, "mode {k}: other normal coordinates reach {worst}");
+            assert!(main_err < 1e-7, "mode {k}: Q_k departs from A cos(Ωt) by {main_err}");
+        }
+    }
+}
