@@ -94,6 +94,9 @@ pub fn text(d: &Derivation) -> String {
         }
         None => {
             let _ = writeln!(o, "  (not in closed form) h(q, q', t) = {}", s(d.energy_function));
+            for line in &d.verdicts.hamiltonian {
+                let _ = writeln!(o, "    {line}");
+            }
         }
     }
     if let Some(e) = d.energy {

@@ -30,6 +30,8 @@ pub struct Verdicts {
     pub energy: Vec<String>,
     /// Sentences explaining `hamiltonian_conserved`.
     pub conservation: Vec<String>,
+    /// Why H is not given in closed form, when it is not.
+    pub hamiltonian: Vec<String>,
 }
 
 /// Everything derived from a model. Expressions live in `model.pool`.
@@ -271,17 +273,25 @@ impl Derivation {
         let forced: Vec<usize> = (0..n).filter(|&i| !probe::is_zero(pool, forces[i])).collect();
         let hamiltonian_conserved = !explicit_time && !dissipative && forced.is_empty();
         let mut verdicts = Verdicts::default();
+        // dH/dt = −∂L/∂t − Σ q'·∂R/∂q' + Σ Q·q': name each term that is there.
+        let mut rate = Vec::new();
         if explicit_time {
-            verdicts.conservation.push("L depends explicitly on the time (∂L/∂t ≠ 0), so dH/dt = −∂L/∂t ≠ 0.".into());
+            verdicts.conservation.push("L depends explicitly on the time (∂L/∂t ≠ 0).".into());
+            rate.push("−∂L/∂t");
         }
         if dissipative {
-            verdicts.conservation.push("the dissipation function R takes energy out: dH/dt = −Σ q'·∂R/∂q'.".into());
+            verdicts.conservation.push("The dissipation function R takes energy out.".into());
+            rate.push("− Σ q'·∂R/∂q'");
         }
         if !forced.is_empty() {
             let list: Vec<&str> = forced.iter().map(|&i| names[i].as_str()).collect();
+            verdicts.conservation.push(format!("Generalized forces act on {} and do work.", list.join(", ")));
+            rate.push("+ Σ Q·q'");
+        }
+        if !rate.is_empty() {
             verdicts
                 .conservation
-                .push(format!("generalized forces act on {}: they do work dH/dt = Σ Q·q'.", list.join(", ")));
+                .push(format!("So dH/dt = {} ≠ 0.", rate.join(" ")).replace("= − ", "= −").replace("= + ", "= "));
         }
         if hamiltonian_conserved {
             verdicts.conservation.push(
@@ -302,7 +312,7 @@ impl Derivation {
             _ => {
                 verdicts
                     .energy
-                    .push("the model gives only L, so T and U (and hence the energy) are not known separately.".into());
+                    .push("The model gives only L, so T and U (and hence the energy) are not known separately.".into());
                 (None, None)
             }
         };
@@ -326,7 +336,7 @@ impl Derivation {
             None => true,
         });
         let (hamiltonian, velocities, hamilton) = if !quadratic {
-            verdicts.energy.push(
+            verdicts.hamiltonian.push(
                 "L is not quadratic in the velocities, so p = ∂L/∂q' cannot be solved for q' in closed form; H is not given.".into(),
             );
             (None, None, None)
@@ -336,8 +346,8 @@ impl Derivation {
             match legendre(pool, &sys, &momenta, &is_var) {
                 Some((h, v, eqs)) => (Some(h), Some(v), Some(eqs)),
                 None => {
-                    verdicts.energy.push(format!(
-                        "M couples {} coordinates densely: H = ½(p − b)ᵀM⁻¹(p − b) − L₀ written out would be too long to print, so H and Hamilton's equations are left to numerics (M is never inverted symbolically).",
+                    verdicts.hamiltonian.push(format!(
+                        "M couples {} coordinates densely: H = ½(p − b)ᵀM⁻¹(p − b) − L₀ written out would be too long to print, so H and Hamilton's equations are left to numerics, which solve M q' = p − b at each step.",
                         largest_block(pool, &mass_matrix)
                     ));
                     (None, None, None)
@@ -706,17 +716,17 @@ fn explain_energy(
     let velocity_potential = !probe::are_equal(pool, potential, u0);
     if homogeneous {
         verdicts.energy.push(
-            "T is a homogeneous quadratic function of the velocities (the positions x(q) do not depend on t).".into(),
+            "T is a homogeneous quadratic function of the velocities (no term of T is linear in or free of q').".into(),
         );
     } else {
-        verdicts.energy.push("T is not homogeneous quadratic in the velocities: the positions x(q, t) depend on time, so T has terms linear in and free of q'.".into());
+        verdicts.energy.push("T is not homogeneous quadratic in the velocities: it has terms linear in or free of q' (as when the positions x(q, t) depend on time).".into());
     }
     if velocity_potential {
         verdicts.energy.push("U depends on the velocities (a generalized potential); only its velocity-independent part enters the energy.".into());
     }
     if same {
-        verdicts.energy.push("so H = Σ q'·p − L equals T + U: H is the energy.".into());
+        verdicts.energy.push("So H = Σ q'·p − L equals T + U: H is the energy.".into());
     } else {
-        verdicts.energy.push("so H = Σ q'·p − L differs from T + U: H is not the energy.".into());
+        verdicts.energy.push("So H = Σ q'·p − L differs from T + U: H is not the energy.".into());
     }
 }

@@ -68,8 +68,10 @@ pub fn is_zero(pool: &Pool, e: ExprId) -> bool {
         if !out.iter().all(|v| v.is_finite()) {
             continue;
         }
-        let scale: f64 = 1.0 + out[1..].iter().map(|v| v.abs()).sum::<f64>();
-        if out[0].abs() > 1e-10 * scale {
+        // Relative to the size of the terms, with no absolute floor: a potential
+        // 1e-12*k*x^2 is small, not zero.
+        let scale: f64 = out[1..].iter().map(|v| v.abs()).sum::<f64>();
+        if out[0] != 0.0 && out[0].abs() > 1e-10 * scale {
             return false;
         }
         tested += 1;

@@ -107,6 +107,8 @@ pub struct Explanations {
     pub energy: Vec<String>,
     /// Why H is or is not conserved.
     pub conservation: Vec<String>,
+    /// Why H is not given in closed form, when it is not.
+    pub hamiltonian: Vec<String>,
 }
 
 impl DeriveReport {
@@ -154,6 +156,7 @@ impl DeriveReport {
             explanations: Explanations {
                 energy: d.verdicts.energy.clone(),
                 conservation: d.verdicts.conservation.clone(),
+                hamiltonian: d.verdicts.hamiltonian.clone(),
             },
         }
     }
