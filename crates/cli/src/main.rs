@@ -198,13 +198,22 @@ pub(crate) fn read_source(path: &Path) -> Result<String, Failure> {
 
 fn derive(path: &Path, format: Format, set: &[(String, f64)]) -> Result<(), Failure> {
     let source = read_source(path)?;
+    let start = std::time::Instant::now();
     let model = mech::Model::parse(&source, set).map_err(|e| Failure::model(path, &source, e))?;
     let derivation = mech::Derivation::new(model).map_err(|e| Failure::model(path, &source, e))?;
+    let derive_seconds = start.elapsed().as_secs_f64();
     let text = match format {
         Format::Json => {
             let report = mech::DeriveReport::new(&derivation);
+            let mut value =
+                serde_json::to_value(&report).map_err(|e| Failure::run(format!("cannot write JSON: {e}")))?;
+            // Extra field: parse + derivation time in this process (no start-up, no printing),
+            // the number comparable to an in-process anchor such as SymEngine.
+            if let serde_json::Value::Object(map) = &mut value {
+                map.insert("derive_seconds".into(), serde_json::json!(derive_seconds));
+            }
             let mut s =
-                serde_json::to_string_pretty(&report).map_err(|e| Failure::run(format!("cannot write JSON: {e}")))?;
+                serde_json::to_string_pretty(&value).map_err(|e| Failure::run(format!("cannot write JSON: {e}")))?;
             s.push('\n');
             s
         }
