@@ -198,7 +198,9 @@ impl Pool {
     /// The symbols occurring in `e`, in canonical order.
     pub fn symbols(&self, e: ExprId) -> Vec<Symbol> {
         let mut out: Vec<Symbol> = self.reachable(&[e]).into_iter().filter_map(|id| self.as_symbol(id)).collect();
-        out.sort_by(|a, b| self.name_str(a.name).cmp(self.name_str(b.name)).then(a.order.cmp(&b.order)));
+        out.sort_by(|a, b| {
+            crate::expr::natural_cmp(self.name_str(a.name), self.name_str(b.name)).then(a.order.cmp(&b.order))
+        });
         out
     }
 

@@ -970,7 +970,10 @@ impl Pool {
             (Node::Num(x), Node::Num(y)) => x.to_f64().total_cmp(&y.to_f64()),
             (Node::Sym(x), Node::Sym(y)) => {
                 let rank = |s: &Symbol| self.name_rank[s.name.0 as usize];
-                rank(x).cmp(&rank(y)).then(self.name_str(x.name).cmp(self.name_str(y.name))).then(x.order.cmp(&y.order))
+                rank(x)
+                    .cmp(&rank(y))
+                    .then(natural_cmp(self.name_str(x.name), self.name_str(y.name)))
+                    .then(x.order.cmp(&y.order))
             }
             (Node::Func(f, x), Node::Func(g, y)) => f.cmp(g).then_with(|| self.cmp(*x, *y)),
             (Node::Func(..), Node::Atan2(..)) => Ordering::Less,
@@ -1048,5 +1051,53 @@ fn fold_number_pow(b: Number, e: Number) -> Option<Number> {
             let v = b.to_f64().powf(e.to_f64());
             v.is_finite().then(|| Number::float(v))
         }
+    }
+}
+
+/// Orders names as people count: `x2` before `x10` (digit runs compare as numbers).
+pub(crate) fn natural_cmp(a: &str, b: &str) -> Ordering {
+    let (mut a, mut b) = (a.as_bytes(), b.as_bytes());
+    loop {
+        match (a.first(), b.first()) {
+            (None, None) => return Ordering::Equal,
+            (None, Some(_)) => return Ordering::Less,
+            (Some(_), None) => return Ordering::Greater,
+            (Some(x), Some(y)) if x.is_ascii_digit() && y.is_ascii_digit() => {
+                let da = a.iter().take_while(|c| c.is_ascii_digit()).count();
+                let db = b.iter().take_while(|c| c.is_ascii_digit()).count();
+                let (na, nb) = (&a[..da], &b[..db]);
+                // Compare digit runs as numbers: strip leading zeros, then length, then digits.
+                let trim = |n: &[u8]| -> usize { n.iter().take_while(|&&c| c == b'0').count() };
+                let (ta, tb) = (&na[trim(na)..], &nb[trim(nb)..]);
+                let o = ta.len().cmp(&tb.len()).then(ta.cmp(tb)).then(da.cmp(&db));
+                if o != Ordering::Equal {
+                    return o;
+                }
+                a = &a[da..];
+                b = &b[db..];
+            }
+            (Some(x), Some(y)) => {
+                if x != y {
+                    return x.cmp(y);
+                }
+                a = &a[1..];
+                b = &b[1..];
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_sort_as_people_count() {
+        assert_eq!(natural_cmp("x2", "x10"), Ordering::Less);
+        assert_eq!(natural_cmp("x10", "x9"), Ordering::Greater);
+        assert_eq!(natural_cmp("m1", "m1"), Ordering::Equal);
+        assert_eq!(natural_cmp("a", "b"), Ordering::Less);
+        assert_eq!(natural_cmp("th1", "th"), Ordering::Greater);
+        assert_eq!(natural_cmp("x01", "x1"), Ordering::Greater);
     }
 }
