@@ -89,6 +89,33 @@ impl StepControl {
     }
 }
 
+/// The start of an explicit method: `f0 = F(t0, y0)` (checked finite) and the
+/// first step, `h_init` (capped by `h_max`) or Hairer's estimate. `y1`, `f1` are
+/// scratch. Shared by the adaptive methods and the fixed-step guess.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn first_step<S: OdeSystem + ?Sized>(
+    system: &mut S,
+    control: &StepControl,
+    order: u32,
+    h_init: Option<f64>,
+    t0: f64,
+    y0: &[f64],
+    f0: &mut [f64],
+    y1: &mut [f64],
+    f1: &mut [f64],
+    stats: &mut Statistics,
+) -> Result<f64, SolveError> {
+    system.rhs(t0, y0, f0).map_err(|source| SolveError::Rhs { t: t0, source })?;
+    stats.rhs_evaluations += 1;
+    if let Some(index) = first_non_finite(f0) {
+        return Err(SolveError::NonFiniteState { t: t0, index });
+    }
+    match h_init {
+        Some(h) => Ok(h.min(control.h_max)),
+        None => initial_step(system, control, order, t0, y0, f0, y1, f1, stats),
+    }
+}
+
 /// Hairer's `hinit`: an initial step for a method of order `order` from the size of
 /// `f0 = F(t, y)` and a finite-difference estimate of the second derivative. Uses one
 /// right-hand-side evaluation; `y1`, `f1` are scratch.

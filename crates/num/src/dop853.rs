@@ -9,7 +9,7 @@
 //! the tests check the measured order (8) and a reference solution.
 #![allow(clippy::excessive_precision)] // Coefficients are quoted as published.
 
-use crate::adaptive::{initial_step, step_failure, StepControl};
+use crate::adaptive::{first_step, step_failure, StepControl};
 use crate::error::SolveError;
 use crate::method::Method;
 use crate::solver::{
@@ -257,17 +257,10 @@ impl<S: OdeSystem> Dop853<S> {
         let control = StepControl::new(config, 8, 0.333, 6.0);
         let mut k: [Vec<f64>; 16] = std::array::from_fn(|_| vec![0.0; n]);
         let mut stats = Statistics::default();
-        system.rhs(t0, y0, &mut k[0]).map_err(|source| SolveError::Rhs { t: t0, source })?;
-        stats.rhs_evaluations += 1;
-        if let Some(index) = first_non_finite(&k[0]) {
-            return Err(SolveError::NonFiniteState { t: t0, index });
-        }
         let mut y1 = vec![0.0; n];
         let mut y_stage = vec![0.0; n];
-        let h = match config.h_init {
-            Some(h) => h.min(control.h_max),
-            None => initial_step(&mut system, &control, 8, t0, y0, &k[0], &mut y1, &mut y_stage, &mut stats)?,
-        };
+        let h =
+            first_step(&mut system, &control, 8, config.h_init, t0, y0, &mut k[0], &mut y1, &mut y_stage, &mut stats)?;
         let cont = std::array::from_fn(|i| if i == 0 { y0.to_vec() } else { vec![0.0; n] });
         Ok(Dop853 { system, control, t: t0, t_old: t0, h, stop: None, y: y0.to_vec(), k, y1, y_stage, cont, stats })
     }

@@ -3,7 +3,7 @@
 //! embedded error estimate, a 4th-order continuous extension for dense output, and
 //! Hairer's PI step-size control. Enter with [`Dopri5::new`].
 
-use crate::adaptive::{initial_step, step_failure, StepControl};
+use crate::adaptive::{first_step, step_failure, StepControl};
 use crate::error::SolveError;
 use crate::method::Method;
 use crate::solver::{
@@ -77,17 +77,10 @@ impl<S: OdeSystem> Dopri5<S> {
         let control = StepControl::new(config, 5, 0.2, 10.0);
         let mut k: [Vec<f64>; 7] = std::array::from_fn(|_| vec![0.0; n]);
         let mut stats = Statistics::default();
-        system.rhs(t0, y0, &mut k[0]).map_err(|source| SolveError::Rhs { t: t0, source })?;
-        stats.rhs_evaluations += 1;
-        if let Some(index) = first_non_finite(&k[0]) {
-            return Err(SolveError::NonFiniteState { t: t0, index });
-        }
         let mut y1 = vec![0.0; n];
         let mut y_stage = vec![0.0; n];
-        let h = match config.h_init {
-            Some(h) => h.min(control.h_max),
-            None => initial_step(&mut system, &control, 5, t0, y0, &k[0], &mut y1, &mut y_stage, &mut stats)?,
-        };
+        let h =
+            first_step(&mut system, &control, 5, config.h_init, t0, y0, &mut k[0], &mut y1, &mut y_stage, &mut stats)?;
         let cont = std::array::from_fn(|i| if i == 0 { y0.to_vec() } else { vec![0.0; n] });
         Ok(Dopri5 { system, control, t: t0, t_old: t0, h, stop: None, y: y0.to_vec(), k, y1, y_stage, cont, stats })
     }

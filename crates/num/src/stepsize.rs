@@ -9,10 +9,10 @@
 //! meets the tolerance per step the way an adaptive method would *at the start*.
 //! States visited later may need smaller steps; check invariants along the run.
 
-use crate::adaptive::{initial_step, StepControl};
+use crate::adaptive::{first_step, StepControl};
 use crate::error::SolveError;
 use crate::solver::{check_len, Config, Solver, Statistics};
-use crate::system::{first_non_finite, OdeSystem};
+use crate::system::OdeSystem;
 
 /// An initial step guess for a method of order `order` (Hairer's `hinit`).
 pub(crate) fn guess_step<S: OdeSystem + ?Sized>(
@@ -27,15 +27,9 @@ pub(crate) fn guess_step<S: OdeSystem + ?Sized>(
     }
     let n = y0.len();
     let control = StepControl::new(config, order, 0.2, 10.0);
-    let mut f0 = vec![0.0; n];
-    system.rhs(t0, y0, &mut f0).map_err(|source| SolveError::Rhs { t: t0, source })?;
-    if let Some(index) = first_non_finite(&f0) {
-        return Err(SolveError::NonFiniteState { t: t0, index });
-    }
-    let mut y1 = vec![0.0; n];
-    let mut f1 = vec![0.0; n];
+    let (mut f0, mut y1, mut f1) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let mut stats = Statistics::default();
-    initial_step(system, &control, order, t0, y0, &f0, &mut y1, &mut f1, &mut stats)
+    first_step(system, &control, order, None, t0, y0, &mut f0, &mut y1, &mut f1, &mut stats)
 }
 
 /// Picks a fixed step for a method of order `order` so that the estimated local error
