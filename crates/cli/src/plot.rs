@@ -48,10 +48,10 @@ const WIDTH: u32 = 1280;
 const HEIGHT: u32 = 800;
 /// Drawing happens at `SCALE` times the figure's size, and the SVG's `viewBox` shrinks it back: plotters rounds
 /// coordinates to whole pixels, which would make curves visibly stair-stepped when a slide is zoomed.
-const SCALE: u32 = 4;
+pub(crate) const SCALE: u32 = 4;
 /// Phase portraits side by side only up to this many coordinates; beyond, the first coordinate alone.
 const MAX_PHASE: usize = 3;
-const FONT: &str = "sans-serif";
+pub(crate) const FONT: &str = "sans-serif";
 
 /// Tableau 10 without its yellow, which is faint on white.
 const PALETTE: [RGBColor; MAX_SERIES] = [
@@ -74,16 +74,17 @@ type Chart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<Coord, Coord>>
 type DrawResult = Result<(), Box<dyn Error>>;
 
 /// A length in figure pixels, as drawn at [`SCALE`].
-fn px(len: u32) -> u32 {
+pub(crate) fn px(len: u32) -> u32 {
     len * SCALE
 }
 
 /// Like [`px`], for positions.
-fn pos(len: i32) -> i32 {
+pub(crate) fn pos(len: i32) -> i32 {
     len * SCALE as i32
 }
 
-fn text_style(size: u32, color: &'static RGBColor, anchor: (HPos, VPos)) -> TextStyle<'static> {
+/// A text style of `size` figure pixels.
+pub(crate) fn text_style(size: u32, color: &'static RGBColor, anchor: (HPos, VPos)) -> TextStyle<'static> {
     TextStyle::from((FONT, px(size)).into_font()).color(color).pos(Pos::new(anchor.0, anchor.1))
 }
 

@@ -9,7 +9,7 @@
 //! of H is shown as log₁₀. Failed or missing runs are grey. Cells of equal colour
 //! in a row are drawn as one rectangle, which keeps a 200×200 map's file small.
 
-use crate::plot::nice_step;
+use crate::plot::{nice_step, pos, px, text_style, FONT};
 use mech::{Axis, SweepTable};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -18,9 +18,6 @@ use std::path::Path;
 
 const WIDTH: u32 = 960;
 const HEIGHT: u32 = 860;
-/// Drawn at `SCALE` times the size and shrunk by the `viewBox`: plotters rounds to whole pixels.
-const SCALE: u32 = 4;
-const FONT: &str = "sans-serif";
 const INK: RGBColor = RGBColor(0x22, 0x22, 0x22);
 const MUTED: RGBColor = RGBColor(0x66, 0x66, 0x66);
 const MISSING: RGBColor = RGBColor(0xbb, 0xbb, 0xbb);
@@ -38,18 +35,6 @@ const VIRIDIS: [(u8, u8, u8); 11] = [
     (0xbc, 0xdf, 0x27),
     (0xfd, 0xe7, 0x25),
 ];
-
-fn px(len: u32) -> u32 {
-    len * SCALE
-}
-
-fn pos(len: i32) -> i32 {
-    len * SCALE as i32
-}
-
-fn style(size: u32, color: &'static RGBColor, anchor: (HPos, VPos)) -> TextStyle<'static> {
-    TextStyle::from((FONT, px(size)).into_font()).color(color).pos(Pos::new(anchor.0, anchor.1))
-}
 
 /// The column a `--color` names: `lyapunov`, `drift`, a final coordinate or velocity (`a`, `a'`), or any column.
 fn column_of(color: &str) -> String {
@@ -192,7 +177,7 @@ fn render(table: &SweepTable, color: &str) -> Result<String, Box<dyn Error>> {
             subtitle
                 .push_str(&format!("; grey: {} failed or missing", failed + ax.count * ay.count - table.rows.len()));
         }
-        header.draw_text(&subtitle, &style(17, &MUTED, (HPos::Center, VPos::Top)), (center, pos(52)))?;
+        header.draw_text(&subtitle, &text_style(17, &MUTED, (HPos::Center, VPos::Top)), (center, pos(52)))?;
 
         let (left, right) = body.split_horizontally(px(WIDTH - 170));
         let mut chart = ChartBuilder::on(&left.margin(px(4), px(10), px(10), px(10)))
@@ -210,8 +195,8 @@ fn render(table: &SweepTable, color: &str) -> Result<String, Box<dyn Error>> {
             .y_label_formatter(&|v| tick(*v))
             .axis_style(MUTED.stroke_width(px(1)))
             .set_all_tick_mark_size(px(5))
-            .label_style(style(17, &INK, (HPos::Center, VPos::Top)))
-            .axis_desc_style(style(21, &INK, (HPos::Center, VPos::Top)))
+            .label_style(text_style(17, &INK, (HPos::Center, VPos::Top)))
+            .axis_desc_style(text_style(21, &INK, (HPos::Center, VPos::Top)))
             .draw()?;
         // One rectangle per run of equal colour along the first axis.
         let mut rects = Vec::new();
@@ -260,7 +245,7 @@ fn draw_colorbar(area: &Area, scale: &Scale, label: &str) -> Result<(), Box<dyn 
     };
     let first = (scale.lo / step).ceil() as i64;
     let last = (scale.hi / step).floor() as i64;
-    let text = style(16, &INK, (HPos::Left, VPos::Center));
+    let text = text_style(16, &INK, (HPos::Left, VPos::Center));
     for k in first..=last.min(first + 20) {
         let v = k as f64 * step;
         let y = bottom - (height * (v - scale.lo) / (scale.hi - scale.lo)).round() as i32;
@@ -271,7 +256,7 @@ fn draw_colorbar(area: &Area, scale: &Scale, label: &str) -> Result<(), Box<dyn 
         }
         area.draw_text(&label, &text, (x1 + pos(10), y))?;
     }
-    let note = style(14, &MUTED, (HPos::Left, VPos::Center));
+    let note = text_style(14, &MUTED, (HPos::Left, VPos::Center));
     if scale.clipped_hi {
         area.draw_text("and above", &note, (x0, top - pos(14)))?;
     }
