@@ -96,16 +96,23 @@ pub fn is_singular(pool: &Pool, m: &[Vec<ExprId>]) -> bool {
     let mut singular_everywhere = true;
     for p in &points {
         tape.eval(p, &mut out);
-        let a = nalgebra::DMatrix::from_row_slice(n, n, &out);
-        let scale = a.amax().max(f64::MIN_POSITIVE);
-        let lu = a.lu();
-        let u = lu.u();
-        let min_pivot = (0..n).map(|i| u[(i, i)].abs()).fold(f64::INFINITY, f64::min);
-        if min_pivot.is_finite() && min_pivot > 1e-10 * scale {
+        let scale = out.iter().fold(0.0f64, |a, v| a.max(v.abs())).max(f64::MIN_POSITIVE);
+        if smallest_pivot(&out, n).is_some_and(|p| p.is_finite() && p > 1e-10 * scale) {
             singular_everywhere = false;
         }
     }
     singular_everywhere
+}
+
+/// The smallest |pivot| of an LU with partial pivoting of the row-major n×n
+/// matrix `m` (zero for a singular one), or None when an entry is not finite.
+pub fn smallest_pivot(m: &[f64], n: usize) -> Option<f64> {
+    if m.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let lu = nalgebra::DMatrix::from_row_slice(n, n, m).lu();
+    let u = lu.u();
+    Some((0..n).map(|i| u[(i, i)].abs()).fold(f64::INFINITY, f64::min))
 }
 
 /// Replaces expressions that are numerically zero by the literal zero.

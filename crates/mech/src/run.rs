@@ -12,6 +12,7 @@
 use crate::derive::Derivation;
 use crate::dynamics::{Dynamics, Form, System};
 use crate::error::ModelError;
+use crate::probe;
 use num::{integrate, Config, Direction, Event, Method, ObservationKind, Output, SolveError, Solver, StopReason};
 use std::ops::ControlFlow;
 use std::time::Instant;
@@ -419,7 +420,7 @@ fn diagnose(system: &mut System, names: &[String], form: Form, y0: &[f64], t: f6
     // A step that cannot be taken near a state where M has lost most of its
     // smallest pivot (x^2 x'^2/2 with x → 0) is M becoming singular; the step
     // that fails may still be a little before the singular point.
-    if let (Some(p0), Some(p)) = (smallest_pivot(&m0, n), smallest_pivot(&m, n)) {
+    if let (Some(p0), Some(p)) = (probe::smallest_pivot(&m0, n), probe::smallest_pivot(&m, n)) {
         if p < 0.05 * p0 {
             return Some(format!(
                 "the mass matrix becomes singular at t ≈ {t} (its smallest pivot fell from {p0:.3e} at the start to {p:.3e}): the accelerations are undetermined there"
@@ -435,33 +436,6 @@ fn diagnose(system: &mut System, names: &[String], form: Form, y0: &[f64], t: f6
         .fold((0, 0.0f64), |best, (k, r)| if r > best.1 { (k, r) } else { best });
     (size > 1e3)
         .then(|| format!("the motion blew up at t = {t}: {} has grown to {:.3e}", component_name(k, names, form), y[k]))
-}
-
-/// The smallest pivot of an LU with partial pivoting (None if not finite).
-fn smallest_pivot(m: &[f64], n: usize) -> Option<f64> {
-    if m.iter().any(|v| !v.is_finite()) {
-        return None;
-    }
-    let mut a = m.to_vec();
-    let mut min = f64::INFINITY;
-    for col in 0..n {
-        let p = (col..n).max_by(|&i, &j| a[i * n + col].abs().total_cmp(&a[j * n + col].abs()))?;
-        for c in 0..n {
-            a.swap(col * n + c, p * n + c);
-        }
-        let piv = a[col * n + col];
-        min = min.min(piv.abs());
-        if piv == 0.0 {
-            return Some(0.0);
-        }
-        for r in col + 1..n {
-            let f = a[r * n + col] / piv;
-            for c in col..n {
-                a[r * n + c] -= f * a[col * n + c];
-            }
-        }
-    }
-    Some(min)
 }
 
 fn component_name(index: usize, names: &[String], form: Form) -> String {
