@@ -20,6 +20,7 @@
 
 mod derive;
 mod dynamics;
+pub mod euler;
 mod error;
 mod model;
 mod modes;
