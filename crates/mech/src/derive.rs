@@ -10,6 +10,7 @@
 use crate::error::ModelError;
 use crate::model::{Model, RANK_COORDINATE};
 use crate::probe::{self, Subst};
+use crate::quadratic::{self, Quadratic, Vars as QVars};
 use sym::{ExprId, NameId, Pool, Symbol};
 
 /// A quantity the derivation shows to be conserved.
@@ -126,15 +127,29 @@ impl Derivation {
         let _ = RANK_COORDINATE;
         let is_var = |s: Symbol| vars.is_var(s);
 
-        // T and U from particles, kinetic and potential; or L itself.
-        let (kinetic, potential) = if model.lagrangian.is_some() {
-            (None, None)
+        let vars_q = QVars { q: &q, qd: &qd, t, is_var: &is_var };
+
+        // T and U from particles, kinetic and potential; or L itself. When L is
+        // quadratic in the velocities (almost always) it is also held as
+        // (M, b, L₀), from which the rest is built without expanding L whole.
+        let simplify_forces = |pool: &mut Pool| -> (Option<ExprId>, Vec<ExprId>) {
+            let dissipation = model.dissipation.as_ref().map(|r| pool.simplify_in(r.expr, &is_var));
+            let forces = model
+                .forces
+                .iter()
+                .map(|f| match f {
+                    Some(f) => pool.simplify_in(f.expr, &is_var),
+                    None => pool.zero(),
+                })
+                .collect();
+            (dissipation, forces)
+        };
+        let (kinetic, potential, lagrangian, form) = if let Some(l) = &model.lagrangian {
+            let l = pool.simplify_in(l.expr, &is_var);
+            let form = Quadratic::split(pool, l, &vars_q);
+            (None, None, l, form)
         } else {
-            let mut t_terms = Vec::new();
             let mut u_terms = Vec::new();
-            if !model.particles.is_empty() {
-                t_terms.push(particle_kinetic(pool, &model, &q, &qd, t, &is_var));
-            }
             for part in &model.particles {
                 if let Some(g) = &model.gravity {
                     let height = part.position[part.position.len() - 1];
@@ -144,77 +159,123 @@ impl Derivation {
                     u_terms.push(u);
                 }
             }
-            if let Some(k) = &model.kinetic {
-                t_terms.push(k.expr);
-            }
             if let Some(u) = &model.potential {
                 u_terms.push(u.expr);
             }
-            let tt = pool.add(&t_terms);
             let uu = pool.add(&u_terms);
-            (Some(pool.simplify_in(tt, &is_var)), Some(pool.simplify_in(uu, &is_var)))
+            let uu = pool.simplify_in(uu, &is_var);
+            let k = model.kinetic.as_ref().map(|k| pool.simplify_in(k.expr, &is_var));
+            if model.particles.is_empty() {
+                let tt = k.unwrap_or_else(|| pool.zero());
+                let l = pool.sub(tt, uu);
+                let l = pool.simplify_in(l, &is_var);
+                let form = Quadratic::split(pool, l, &vars_q);
+                (Some(tt), Some(uu), l, form)
+            } else {
+                let masses: Vec<(ExprId, Vec<ExprId>)> =
+                    model.particles.iter().map(|p| (p.mass, p.position.clone())).collect();
+                let particle_form = quadratic::particles(pool, &masses, &vars_q);
+                let t_particles = particle_form.lagrangian(pool, &qd);
+                let tt = match k {
+                    Some(k) => pool.add2(t_particles, k),
+                    None => t_particles,
+                };
+                // The rest of L (T from `kinetic`, minus U) is small: split it.
+                let k0 = k.unwrap_or_else(|| pool.zero());
+                let rest = pool.sub(k0, uu);
+                let form = Quadratic::split(pool, rest, &vars_q).map(|rest_form| {
+                    let mut f = particle_form;
+                    f.add(pool, &rest_form, &is_var);
+                    f
+                });
+                let l = match &form {
+                    Some(f) => f.lagrangian(pool, &qd),
+                    None => {
+                        let l = pool.sub(tt, uu);
+                        pool.simplify_in(l, &is_var)
+                    }
+                };
+                (Some(tt), Some(uu), l, form)
+            }
         };
-        let lagrangian = match (&model.lagrangian, kinetic, potential) {
-            (Some(l), _, _) => pool.simplify_in(l.expr, &is_var),
-            (None, Some(tt), Some(uu)) => pool.sub(tt, uu),
-            _ => unreachable!("a model has a Lagrangian or energies"),
-        };
-        let lagrangian = pool.simplify_in(lagrangian, &is_var);
-        let dissipation = model.dissipation.as_ref().map(|r| pool.simplify_in(r.expr, &is_var));
-        let forces: Vec<ExprId> = model
-            .forces
-            .iter()
-            .map(|f| match f {
-                Some(f) => pool.simplify_in(f.expr, &is_var),
-                None => pool.zero(),
-            })
-            .collect();
+        let (dissipation, forces) = simplify_forces(pool);
 
         // Momenta and Euler–Lagrange equations.
-        let momenta: Vec<ExprId> = (0..n)
-            .map(|i| {
-                let d = pool.diff(lagrangian, qd[i]);
-                pool.simplify_in(d, &is_var)
-            })
-            .collect();
-        // M_ij = ∂p_i/∂q_j' and f_i = −(E_i at q'' = 0), each simplified while
-        // small; E_i = Σ M_ij q_j'' − f_i is assembled from them, so the long
-        // equations are never expanded as a whole.
         let mut mass_matrix = vec![vec![pool.zero(); n]; n];
         let mut forcing = Vec::with_capacity(n);
         let mut equations = Vec::with_capacity(n);
         let mut dl_dq = Vec::with_capacity(n);
-        for i in 0..n {
-            for j in 0..n {
-                mass_matrix[i][j] = if j < i {
-                    mass_matrix[j][i]
+        let momenta: Vec<ExprId>;
+        if let Some(form) = &form {
+            momenta = form.momenta(pool, &qd).into_iter().map(|p| polish(pool, p, &is_var)).collect();
+            mass_matrix.clone_from(&form.m);
+            let rows = form.forcing(pool, &vars_q);
+            for (i, row) in rows.into_iter().enumerate() {
+                dl_dq.push(pool.diff(lagrangian, q[i]));
+                // Dissipation and generalized forces: −∂R/∂q_i' + Q_i.
+                let mut extra = vec![forces[i]];
+                if let Some(r) = dissipation {
+                    let d = pool.diff(r, qd[i]);
+                    extra.push(pool.neg(d));
+                }
+                let extra = pool.add(&extra);
+                let f = if pool.is_zero(extra) {
+                    row
                 } else {
-                    let m = pool.diff(momenta[i], qd[j]);
-                    pool.simplify_in(m, &is_var)
+                    let extra = pool.simplify_in(extra, &is_var);
+                    pool.add2(row, extra)
                 };
+                forcing.push(f);
             }
-            // d/dt p_i without its q'' terms: Σ ∂p_i/∂q_k q_k' + ∂p_i/∂t.
-            let mut terms: Vec<ExprId> = Vec::with_capacity(n + 4);
-            for k in 0..n {
-                let d = pool.diff(momenta[i], q[k]);
-                if !pool.is_zero(d) {
-                    terms.push(pool.mul2(d, qd[k]));
+        } else {
+            momenta = (0..n)
+                .map(|i| {
+                    let d = pool.diff(lagrangian, qd[i]);
+                    pool.simplify_in(d, &is_var)
+                })
+                .collect();
+            // M_ij = ∂p_i/∂q_j' and f_i = −(E_i at q'' = 0), each simplified while
+            // small.
+            for i in 0..n {
+                for j in 0..n {
+                    mass_matrix[i][j] = if j < i {
+                        mass_matrix[j][i]
+                    } else {
+                        let m = pool.diff(momenta[i], qd[j]);
+                        pool.simplify_in(m, &is_var)
+                    };
+                }
+                // d/dt p_i without its q'' terms: Σ ∂p_i/∂q_k q_k' + ∂p_i/∂t.
+                let mut terms: Vec<ExprId> = Vec::with_capacity(n + 4);
+                for k in 0..n {
+                    let d = pool.diff(momenta[i], q[k]);
+                    if !pool.is_zero(d) {
+                        terms.push(pool.mul2(d, qd[k]));
+                    }
+                }
+                terms.push(pool.diff(momenta[i], t));
+                let dl = pool.diff(lagrangian, q[i]);
+                dl_dq.push(dl);
+                terms.push(pool.neg(dl));
+                if let Some(r) = dissipation {
+                    terms.push(pool.diff(r, qd[i]));
+                }
+                terms.push(pool.neg(forces[i]));
+                let rest = pool.add(&terms);
+                let f = pool.neg(rest);
+                forcing.push(simplify_bounded(pool, f, &is_var));
+            }
+        }
+        // E_i = Σ M_ij q_j'' − f_i is assembled from M and f, so the long
+        // equations are never expanded as a whole.
+        for i in 0..n {
+            let mut e_terms: Vec<ExprId> = Vec::with_capacity(n + 1);
+            for j in 0..n {
+                if !pool.is_zero(mass_matrix[i][j]) {
+                    e_terms.push(pool.mul2(mass_matrix[i][j], qdd[j]));
                 }
             }
-            terms.push(pool.diff(momenta[i], t));
-            let dl = pool.diff(lagrangian, q[i]);
-            dl_dq.push(dl);
-            terms.push(pool.neg(dl));
-            if let Some(r) = dissipation {
-                terms.push(pool.diff(r, qd[i]));
-            }
-            terms.push(pool.neg(forces[i]));
-            let rest = pool.add(&terms);
-            let f = pool.neg(rest);
-            let f = simplify_bounded(pool, f, &is_var);
-            forcing.push(f);
-            let mut e_terms: Vec<ExprId> = (0..n).map(|j| pool.mul2(mass_matrix[i][j], qdd[j])).collect();
-            e_terms.push(pool.neg(f));
+            e_terms.push(pool.neg(forcing[i]));
             equations.push(pool.add(&e_terms));
         }
         // M is singular when one of its blocks is (a chain of masses has a
@@ -263,10 +324,15 @@ impl Derivation {
         }
 
         // Energy function and the verdicts on H.
-        let mut h_terms: Vec<ExprId> = (0..n).map(|i| pool.mul2(qd[i], momenta[i])).collect();
-        h_terms.push(pool.neg(lagrangian));
-        let h_sum = pool.add(&h_terms);
-        let energy_function = pool.simplify_in(h_sum, &is_var);
+        let energy_function = match &form {
+            Some(form) => form.energy_function(pool, &qd),
+            None => {
+                let mut h_terms: Vec<ExprId> = (0..n).map(|i| pool.mul2(qd[i], momenta[i])).collect();
+                h_terms.push(pool.neg(lagrangian));
+                let h_sum = pool.add(&h_terms);
+                pool.simplify_in(h_sum, &is_var)
+            }
+        };
         let dl_dt = pool.diff(lagrangian, t);
         let explicit_time = !probe::is_zero(pool, dl_dt);
         let dissipative = dissipation.is_some_and(|r| !probe::is_zero(pool, r));
@@ -304,7 +370,7 @@ impl Derivation {
                 let zero_vel: Subst = qd.iter().map(|&v| (v, pool.zero())).collect();
                 let u0 = pool.substitute(uu, &zero_vel);
                 let e = pool.add2(tt, u0);
-                let e = pool.simplify_in(e, &is_var);
+                let e = if model.particles.is_empty() { pool.simplify_in(e, &is_var) } else { e };
                 let same = probe::are_equal(pool, energy_function, e);
                 explain_energy(pool, &mut verdicts, same, tt, uu, u0, &qd);
                 (Some(e), Some(same))
@@ -329,28 +395,24 @@ impl Derivation {
         }
 
         // The Hamiltonian, by the Legendre transform for L quadratic in q'.
-        // One walk over all of M: no velocity or acceleration of a coordinate in it.
-        let entries: Vec<ExprId> = mass_matrix.iter().flatten().copied().collect();
-        let quadratic = pool.reachable(&entries).into_iter().all(|id| match pool.as_symbol(id) {
-            Some(s) => s.order == 0 || !vars.names.contains(&s.name),
-            None => true,
-        });
-        let (hamiltonian, velocities, hamilton) = if !quadratic {
-            verdicts.hamiltonian.push(
-                "L is not quadratic in the velocities, so p = ∂L/∂q' cannot be solved for q' in closed form; H is not given.".into(),
-            );
-            (None, None, None)
-        } else {
-            let sys =
-                System { q: &q, qd: &qd, p: &p, lagrangian, dissipation, forces: &forces, mass_matrix: &mass_matrix };
-            match legendre(pool, &sys, &momenta, &is_var) {
-                Some((h, v, eqs)) => (Some(h), Some(v), Some(eqs)),
-                None => {
-                    verdicts.hamiltonian.push(format!(
-                        "M couples {} coordinates densely: H = ½(p − b)ᵀM⁻¹(p − b) − L₀ written out would be too long to print, so H and Hamilton's equations are left to numerics, which solve M q' = p − b at each step.",
-                        largest_block(pool, &mass_matrix)
-                    ));
-                    (None, None, None)
+        let (hamiltonian, velocities, hamilton) = match &form {
+            None => {
+                verdicts.hamiltonian.push(
+                    "L is not quadratic in the velocities, so p = ∂L/∂q' cannot be solved for q' in closed form; H is not given.".into(),
+                );
+                (None, None, None)
+            }
+            Some(form) => {
+                let sys = System { q: &q, qd: &qd, p: &p, form, dissipation, forces: &forces };
+                match legendre(pool, &sys, &is_var) {
+                    Some((h, v, eqs)) => (Some(h), Some(v), Some(eqs)),
+                    None => {
+                        verdicts.hamiltonian.push(format!(
+                            "M couples {} coordinates densely: H = ½(p − b)ᵀM⁻¹(p − b) − L₀ written out would be too long to print, so H and Hamilton's equations are left to numerics, which solve M q' = p − b at each step.",
+                            largest_block(pool, &mass_matrix)
+                        ));
+                        (None, None, None)
+                    }
                 }
             }
         };
@@ -408,10 +470,9 @@ struct System<'a> {
     q: &'a [ExprId],
     qd: &'a [ExprId],
     p: &'a [ExprId],
-    lagrangian: ExprId,
+    form: &'a Quadratic,
     dissipation: Option<ExprId>,
     forces: &'a [ExprId],
-    mass_matrix: &'a [Vec<ExprId>],
 }
 
 /// H(q, p, t), q'(q, p, t) and Hamilton's equations, for L quadratic in the
@@ -419,13 +480,18 @@ struct System<'a> {
 /// None when the result would be too long to print.
 type Legendre = (ExprId, Vec<ExprId>, Vec<(ExprId, ExprId)>);
 
-fn legendre(pool: &mut Pool, s: &System, momenta: &[ExprId], is_var: &dyn Fn(Symbol) -> bool) -> Option<Legendre> {
+fn legendre(pool: &mut Pool, s: &System, is_var: &dyn Fn(Symbol) -> bool) -> Option<Legendre> {
     let n = s.q.len();
-    let zero_vel: Subst = s.qd.iter().map(|&v| (v, pool.zero())).collect();
-    let b: Vec<ExprId> = momenta.iter().map(|&pi| pool.substitute(pi, &zero_vel)).collect();
-    let l0 = pool.substitute(s.lagrangian, &zero_vel);
+    let (b, l0) = (&s.form.b, s.form.l0);
     let shifted: Vec<ExprId> = (0..n).map(|i| pool.sub(s.p[i], b[i])).collect();
-    let v = solve_symbolic(pool, s.mass_matrix, &shifted, is_var)?;
+    let no_b = b.iter().all(|&x| pool.is_zero(x));
+    // With M⁻¹ in closed form (blocks of at most 3 coordinates) and b = 0, H is
+    // Σ c_ij p_i p_j − L₀ with each coefficient simplified on its own, and so are
+    // q' and ṗ: nothing long is ever expanded.
+    if let (true, Some(inv)) = (no_b, small_block_inverse(pool, &s.form.m, is_var)) {
+        return Some(legendre_structured(pool, s, &inv, is_var));
+    }
+    let v = solve_symbolic(pool, &s.form.m, &shifted, is_var)?;
     if v.iter().any(|&x| pool.tree_size(x) > MAX_PRINTED_TREE) {
         return None;
     }
@@ -440,13 +506,7 @@ fn legendre(pool: &mut Pool, s: &System, momenta: &[ExprId], is_var: &dyn Fn(Sym
     for i in 0..n {
         let dh = pool.diff(h, s.q[i]);
         let mut dp_terms = vec![pool.neg(dh)];
-        if let Some(r) = s.dissipation {
-            let dr = pool.diff(r, s.qd[i]);
-            let dr = pool.substitute(dr, &vel_subst);
-            dp_terms.push(pool.neg(dr));
-        }
-        let fq = pool.substitute(s.forces[i], &vel_subst);
-        dp_terms.push(fq);
+        dp_terms.push(nonconservative(pool, s, i, &vel_subst));
         let dp = pool.add(&dp_terms);
         let dp = simplify_bounded(pool, dp, is_var);
         if pool.tree_size(dp) > MAX_PRINTED_TREE {
@@ -457,12 +517,129 @@ fn legendre(pool: &mut Pool, s: &System, momenta: &[ExprId], is_var: &dyn Fn(Sym
     Some((h, v, eqs))
 }
 
+/// −∂R/∂q_i' + Q_i written in (q, p, t) by the velocity substitution.
+fn nonconservative(pool: &mut Pool, s: &System, i: usize, vel_subst: &Subst) -> ExprId {
+    let mut terms = Vec::new();
+    if let Some(r) = s.dissipation {
+        let dr = pool.diff(r, s.qd[i]);
+        let dr = pool.substitute(dr, vel_subst);
+        terms.push(pool.neg(dr));
+    }
+    terms.push(pool.substitute(s.forces[i], vel_subst));
+    pool.add(&terms)
+}
+
+/// H = Σ_{i≤j} c_ij p_i p_j − L₀ with c_ii = ½(M⁻¹)_ii, c_ij = (M⁻¹)_ij, for b = 0.
+fn legendre_structured(pool: &mut Pool, s: &System, inv: &[Vec<ExprId>], is_var: &dyn Fn(Symbol) -> bool) -> Legendre {
+    let n = s.q.len();
+    let half = pool.rational(1, 2);
+    // The coefficients of H, one per pair of momenta M couples.
+    let mut pairs: Vec<(usize, usize, ExprId)> = Vec::new();
+    for i in 0..n {
+        for j in i..n {
+            if pool.is_zero(inv[i][j]) {
+                continue;
+            }
+            let c = if i == j { pool.mul2(half, inv[i][i]) } else { inv[i][j] };
+            pairs.push((i, j, c));
+        }
+    }
+    let mut h_terms: Vec<ExprId> = Vec::with_capacity(pairs.len() + 1);
+    for &(i, j, c) in &pairs {
+        let mono = if i == j { pool.powi(s.p[i], 2) } else { pool.mul2(s.p[i], s.p[j]) };
+        h_terms.push(pool.mul2(c, mono));
+    }
+    h_terms.push(pool.neg(s.form.l0));
+    let h = pool.add(&h_terms);
+    let v: Vec<ExprId> = (0..n)
+        .map(|i| {
+            let coupled: Vec<usize> = (0..n).filter(|&j| !pool.is_zero(inv[i][j])).collect();
+            let terms: Vec<ExprId> = coupled.into_iter().map(|j| pool.mul2(inv[i][j], s.p[j])).collect();
+            pool.add(&terms)
+        })
+        .collect();
+    // ṗ_k = −∂H/∂q_k = ½ q'ᵀ (∂M/∂q_k) q' + ∂L₀/∂q_k with q' = M⁻¹p, since
+    // ∂M⁻¹/∂q = −M⁻¹ (∂M/∂q) M⁻¹: only the few nonzero ∂M_ij/∂q_k are formed.
+    let vel_subst: Subst = (0..n).map(|i| (s.qd[i], v[i])).collect();
+    let mut eqs = Vec::with_capacity(n);
+    for k in 0..n {
+        let mut terms = Vec::new();
+        for i in 0..n {
+            for j in i..n {
+                let mij = s.form.m[i][j];
+                if pool.free_of(mij, s.q[k]) {
+                    continue;
+                }
+                let d = pool.diff(mij, s.q[k]);
+                let d = if i == j { pool.mul2(half, d) } else { d };
+                let d = pool.simplify_in(d, is_var);
+                if !pool.is_zero(d) {
+                    terms.push(pool.mul(&[d, v[i], v[j]]));
+                }
+            }
+        }
+        let dl0 = pool.diff(s.form.l0, s.q[k]);
+        let extra = nonconservative(pool, s, k, &vel_subst);
+        let rest = pool.add2(dl0, extra);
+        terms.push(pool.simplify_in(rest, is_var));
+        eqs.push((v[k], pool.add(&terms)));
+    }
+    (h, v, eqs)
+}
+
+/// M⁻¹ entry by entry when every block M couples has at most 3 coordinates
+/// (1×1 blocks divide; 2×2 and 3×3 use the adjugate over the simplified
+/// determinant), each entry simplified; None for larger blocks.
+fn small_block_inverse(
+    pool: &mut Pool,
+    m: &[Vec<ExprId>],
+    is_var: &dyn Fn(Symbol) -> bool,
+) -> Option<Vec<Vec<ExprId>>> {
+    let n = m.len();
+    let blocks = blocks(pool, m);
+    if blocks.iter().any(|idx| idx.len() > 3) {
+        return None;
+    }
+    let mut inv = vec![vec![pool.zero(); n]; n];
+    for idx in blocks {
+        let a: Vec<Vec<ExprId>> = idx.iter().map(|&i| idx.iter().map(|&j| m[i][j]).collect()).collect();
+        if idx.len() == 1 {
+            let one = pool.one();
+            inv[idx[0]][idx[0]] = pool.div(one, a[0][0]);
+            continue;
+        }
+        let (adj, det) = adjugate(pool, &a, is_var);
+        for (r, &i) in idx.iter().enumerate() {
+            for (c, &j) in idx.iter().enumerate().skip(r) {
+                // Common monomial factors of the (factored) cofactor and
+                // determinant cancel in the canonical product.
+                inv[i][j] = pool.div(adj[r][c], det);
+                inv[j][i] = inv[i][j];
+            }
+        }
+    }
+    Some(inv)
+}
+
 /// Largest tree size of an expression that is simplified (beyond it, expansion
 /// would cost more than it saves).
 const MAX_SIMPLIFIED_TREE: u64 = 1500;
 
 /// Largest tree size of Hamilton's equations that is reported symbolically.
 const MAX_PRINTED_TREE: u64 = 20_000;
+
+/// Largest tree size of a momentum that is polished by simplification.
+const MAX_POLISHED_TREE: u64 = 80;
+
+/// Simplifies a result that is already collected when it is small enough for
+/// the factored form to be worth its cost.
+fn polish(pool: &mut Pool, e: ExprId, is_var: &dyn Fn(Symbol) -> bool) -> ExprId {
+    if pool.tree_size(e) > MAX_POLISHED_TREE {
+        e
+    } else {
+        pool.simplify_in(e, is_var)
+    }
+}
 
 /// Simplifies expressions of moderate size and keeps large ones as they are.
 fn simplify_bounded(pool: &mut Pool, e: ExprId, is_var: &dyn Fn(Symbol) -> bool) -> ExprId {
@@ -476,72 +653,6 @@ fn simplify_bounded(pool: &mut Pool, e: ExprId, is_var: &dyn Fn(Symbol) -> bool)
 /// The size of the largest block of coordinates coupled by M.
 fn largest_block(pool: &Pool, m: &[Vec<ExprId>]) -> usize {
     blocks(pool, m).iter().map(Vec::len).max().unwrap_or(0)
-}
-
-/// T of the particles by the notes' recipe: with x_k(q, t),
-/// T = ½ Σ_k m_k |Σ_i ∂x_k/∂q_i q_i' + ∂x_k/∂t|², assembled from the entries
-/// M_ij = Σ_k m_k ∂x_k/∂q_i · ∂x_k/∂q_j (each simplified while it is small).
-fn particle_kinetic(
-    pool: &mut Pool,
-    model: &crate::model::Model,
-    q: &[ExprId],
-    qd: &[ExprId],
-    t: ExprId,
-    is_var: &dyn Fn(Symbol) -> bool,
-) -> ExprId {
-    let n = q.len();
-    let mut m_entries: Vec<Vec<Vec<ExprId>>> = vec![vec![Vec::new(); n]; n];
-    let mut b_terms: Vec<Vec<ExprId>> = vec![Vec::new(); n];
-    let mut t0_terms = Vec::new();
-    for part in &model.particles {
-        let jac: Vec<Vec<ExprId>> =
-            part.position.iter().map(|&x| q.iter().map(|&qi| pool.diff(x, qi)).collect()).collect();
-        let dxdt: Vec<ExprId> = part.position.iter().map(|&x| pool.diff(x, t)).collect();
-        for i in 0..n {
-            for j in i..n {
-                let dots: Vec<ExprId> = (0..jac.len()).map(|d| pool.mul2(jac[d][i], jac[d][j])).collect();
-                let dot = pool.add(&dots);
-                if !pool.is_zero(dot) {
-                    let term = pool.mul2(part.mass, dot);
-                    m_entries[i][j].push(term);
-                }
-            }
-            let dots: Vec<ExprId> = (0..jac.len()).map(|d| pool.mul2(jac[d][i], dxdt[d])).collect();
-            let dot = pool.add(&dots);
-            if !pool.is_zero(dot) {
-                b_terms[i].push(pool.mul2(part.mass, dot));
-            }
-        }
-        let sq: Vec<ExprId> = dxdt.iter().map(|&s| pool.powi(s, 2)).collect();
-        let s2 = pool.add(&sq);
-        if !pool.is_zero(s2) {
-            t0_terms.push(pool.mul2(part.mass, s2));
-        }
-    }
-    let half = pool.rational(1, 2);
-    let mut terms = Vec::new();
-    for i in 0..n {
-        for j in i..n {
-            let entry = pool.add(&m_entries[i][j]);
-            let entry = pool.simplify_in(entry, is_var);
-            if pool.is_zero(entry) {
-                continue;
-            }
-            // ½ M_ii q_i'^2, and M_ij q_i' q_j' for i < j (the two symmetric halves).
-            let vel = if i == j { pool.powi(qd[i], 2) } else { pool.mul2(qd[i], qd[j]) };
-            let coeff = if i == j { pool.mul2(half, entry) } else { entry };
-            terms.push(pool.mul2(coeff, vel));
-        }
-        let b = pool.add(&b_terms[i]);
-        let b = pool.simplify_in(b, is_var);
-        if !pool.is_zero(b) {
-            terms.push(pool.mul2(b, qd[i]));
-        }
-    }
-    let t0 = pool.add(&t0_terms);
-    let t0 = pool.simplify_in(t0, is_var);
-    terms.push(pool.mul2(half, t0));
-    pool.add(&terms)
 }
 
 /// Solves M v = r symbolically for the Legendre transform, block by block:
@@ -611,6 +722,20 @@ fn blocks(pool: &Pool, m: &[Vec<ExprId>]) -> Vec<Vec<usize>> {
 
 fn adjugate_solve(pool: &mut Pool, a: &[Vec<ExprId>], r: &[ExprId], is_var: &dyn Fn(Symbol) -> bool) -> Vec<ExprId> {
     let k = a.len();
+    let (adj, det) = adjugate(pool, a, is_var);
+    (0..k)
+        .map(|i| {
+            let terms: Vec<ExprId> = (0..k).map(|j| pool.mul2(adj[i][j], r[j])).collect();
+            let num = pool.add(&terms);
+            let num = pool.simplify_in(num, is_var);
+            pool.div(num, det)
+        })
+        .collect()
+}
+
+/// The adjugate (entries simplified) and the simplified determinant of a 2×2 or 3×3 matrix.
+fn adjugate(pool: &mut Pool, a: &[Vec<ExprId>], is_var: &dyn Fn(Symbol) -> bool) -> (Vec<Vec<ExprId>>, ExprId) {
+    let k = a.len();
     let minor = |pool: &mut Pool, rows: [usize; 2], cols: [usize; 2]| {
         let x = pool.mul2(a[rows[0]][cols[0]], a[rows[1]][cols[1]]);
         let y = pool.mul2(a[rows[0]][cols[1]], a[rows[1]][cols[0]]);
@@ -633,24 +758,20 @@ fn adjugate_solve(pool: &mut Pool, a: &[Vec<ExprId>], r: &[ExprId], is_var: &dyn
                 _ => [0, 1],
             }
         };
+        // M is symmetric, and so is its adjugate.
         for i in 0..3 {
-            for j in 0..3 {
+            for j in i..3 {
                 let c = minor(pool, others(j), others(i));
-                adj[i][j] = if (i + j) % 2 == 0 { c } else { pool.neg(c) };
+                let c = if (i + j) % 2 == 0 { c } else { pool.neg(c) };
+                adj[i][j] = pool.simplify_in(c, is_var);
+                adj[j][i] = adj[i][j];
             }
         }
         let terms: Vec<ExprId> = (0..3).map(|j| pool.mul2(a[0][j], adj[j][0])).collect();
         det = pool.add(&terms);
     }
     let det = pool.simplify_in(det, is_var);
-    (0..k)
-        .map(|i| {
-            let terms: Vec<ExprId> = (0..k).map(|j| pool.mul2(adj[i][j], r[j])).collect();
-            let num = pool.add(&terms);
-            let num = pool.simplify_in(num, is_var);
-            pool.div(num, det)
-        })
-        .collect()
+    (adj, det)
 }
 
 /// Gaussian elimination; None as soon as a pivot is too long to print, since
@@ -728,5 +849,64 @@ fn explain_energy(
         verdicts.energy.push("So H = Σ q'·p − L equals T + U: H is the energy.".into());
     } else {
         verdicts.energy.push("So H = Σ q'·p − L differs from T + U: H is not the energy.".into());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Hamilton's equations as built (structured for small blocks) agree with
+    /// q' = ∂H/∂p and ṗ = −∂H/∂q − ∂R/∂q' + Q differentiated from H itself.
+    #[test]
+    fn hamilton_equations_are_the_derivatives_of_h() {
+        let triple = r#"
+coordinates = ["a", "b", "c", "x"]
+gravity = "g"
+dissipation = "k*x'^2/2"
+[parameters]
+m1 = 1.0
+m2 = 2.0
+m3 = 1.5
+l1 = 1.0
+l2 = 0.7
+l3 = 1.3
+g = 9.81
+k = 0.3
+[[particles]]
+mass = "m1"
+position = ["l1*sin(a)", "-l1*cos(a)"]
+[[particles]]
+mass = "m2"
+position = ["l1*sin(a) + l2*sin(b)", "-l1*cos(a) - l2*cos(b)"]
+[[particles]]
+mass = "m3"
+position = ["l1*sin(a) + l2*sin(b) + l3*sin(c)", "-l1*cos(a) - l2*cos(b) - l3*cos(c)"]
+[[particles]]
+mass = "m1"
+position = ["x", "x^2/2"]
+"#;
+        let model = Model::parse(triple, &[]).unwrap();
+        let mut d = Derivation::new(model).unwrap();
+        let h = d.hamiltonian.expect("H");
+        let eqs = d.hamilton.clone().expect("Hamilton's equations");
+        let velocities = d.velocities.clone().unwrap();
+        let pool = &mut d.model.pool;
+        let subst: Subst = d.qd.iter().copied().zip(velocities).collect();
+        for (k, (dq, dp)) in eqs.into_iter().enumerate() {
+            let want_dq = pool.diff(h, d.p[k]);
+            let e = pool.sub(dq, want_dq);
+            assert!(probe::is_zero(pool, e), "q'{k}");
+            let dh = pool.diff(h, d.q[k]);
+            let dr = match d.dissipation {
+                Some(r) => {
+                    let dr = pool.diff(r, d.qd[k]);
+                    pool.substitute(dr, &subst)
+                }
+                None => pool.zero(),
+            };
+            let sum = pool.add(&[dp, dh, dr]);
+            assert!(probe::is_zero(pool, sum), "p'{k}: {}", pool.display(sum));
+        }
     }
 }

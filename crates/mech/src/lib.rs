@@ -20,12 +20,13 @@
 
 mod derive;
 mod dynamics;
-pub mod euler;
 mod error;
+pub mod euler;
 mod model;
 mod modes;
 mod orbit;
 pub mod probe;
+mod quadratic;
 mod report;
 mod run;
 mod sweep;
