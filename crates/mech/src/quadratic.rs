@@ -270,6 +270,9 @@ fn support_of(pool: &Pool, e: ExprId, index: &FxHashMap<ExprId, usize>) -> Vec<u
     s
 }
 
+/// Dot products of Jacobian columns, each with the masses that share it.
+type Groups = Vec<(ExprId, Vec<ExprId>)>;
+
 /// T of point masses by the notes' recipe: with x_k(q, t),
 /// T = ½ Σ_k m_k |Σ_i ∂x_k/∂q_i q_i' + ∂x_k/∂t|², as a quadratic form:
 /// M_ij = Σ_k m_k ∂x_k/∂q_i · ∂x_k/∂q_j, b_i = Σ_k m_k ∂x_k/∂q_i · ∂x_k/∂t,
@@ -281,10 +284,10 @@ fn support_of(pool: &Pool, e: ExprId, index: &FxHashMap<ExprId, usize>) -> Vec<u
 pub fn particles(pool: &mut Pool, particles: &[(ExprId, Vec<ExprId>)], v: &Vars) -> Quadratic {
     let n = v.q.len();
     // For each entry: dot product → masses sharing it, in first-seen order.
-    let mut m_groups: Vec<Vec<Vec<(ExprId, Vec<ExprId>)>>> = vec![vec![Vec::new(); n]; n];
-    let mut b_groups: Vec<Vec<(ExprId, Vec<ExprId>)>> = vec![Vec::new(); n];
-    let mut t0_groups: Vec<(ExprId, Vec<ExprId>)> = Vec::new();
-    fn group(groups: &mut Vec<(ExprId, Vec<ExprId>)>, dot: ExprId, mass: ExprId) {
+    let mut m_groups: Vec<Vec<Groups>> = vec![vec![Vec::new(); n]; n];
+    let mut b_groups: Vec<Groups> = vec![Vec::new(); n];
+    let mut t0_groups: Groups = Vec::new();
+    fn group(groups: &mut Groups, dot: ExprId, mass: ExprId) {
         match groups.iter_mut().find(|(d, _)| *d == dot) {
             Some((_, masses)) => masses.push(mass),
             None => groups.push((dot, vec![mass])),
