@@ -20,8 +20,9 @@
 
 mod derive;
 mod dynamics;
-pub mod euler;
 mod error;
+pub mod euler;
+pub mod inertia;
 mod model;
 mod modes;
 mod orbit;
