@@ -642,7 +642,8 @@ pub fn principal(tensor: &[[f64; 3]; 3]) -> Principal {
         if lead < 0.0 {
             *a = a.map(|x| -x);
         }
-        *a = a.map(|x| if x == 0.0 { 0.0 } else { x });
+        // Round-off below 1e-14 of a unit vector is zero (and −0 is 0).
+        *a = a.map(|x| if x.abs() < 1e-14 { 0.0 } else { x });
     }
     let symmetry = match (same(moments[0], moments[1]), same(moments[1], moments[2])) {
         (true, true) => Symmetry::Spherical,

@@ -86,15 +86,15 @@ impl Shape {
     pub fn describe(self) -> &'static str {
         match self {
             Shape::Point => "point mass",
-            Shape::Rod => "thin rod along z: I_x = I_y = M L^2/12, I_z = 0",
-            Shape::Box => "solid box: I_x = M (b^2 + c^2)/12, and cyclically",
-            Shape::Sphere => "solid sphere: I = 2/5 M R^2",
-            Shape::Shell => "thin spherical shell: I = 2/3 M R^2",
+            Shape::Rod => "thin rod of length L along z: I_x = I_y = M L^2/12, I_z = 0",
+            Shape::Box => "solid box, edges a, b, c along x, y, z: I_x = M (b^2 + c^2)/12, and cyclically",
+            Shape::Sphere => "solid sphere of radius R: I = 2/5 M R^2",
+            Shape::Shell => "thin spherical shell of radius R: I = 2/3 M R^2",
             Shape::Cylinder => "solid cylinder, axis z: I_z = M R^2/2, I_x = I_y = M (3 R^2 + h^2)/12",
             Shape::Cone => "solid cone, axis z, about its CM (h/4 above the base): I_z = 3/10 M R^2, I_x = I_y = 3/80 M (4 R^2 + h^2)",
             Shape::Disk => "thin disk in the xy plane: I_z = M R^2/2, I_x = I_y = M R^2/4",
             Shape::Ring => "thin ring in the xy plane: I_z = M R^2, I_x = I_y = M R^2/2",
-            Shape::Ellipsoid => "solid ellipsoid: I_x = M (b^2 + c^2)/5, and cyclically",
+            Shape::Ellipsoid => "solid ellipsoid, semi-axes a, b, c along x, y, z: I_x = M (b^2 + c^2)/5, and cyclically",
         }
     }
 
