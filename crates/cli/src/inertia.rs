@@ -93,7 +93,37 @@ fn numbers(m: &[[f64; 3]; 3]) -> [[String; 3]; 3] {
     m.map(|row| row.map(num))
 }
 
+/// The report with numbers below the cubature's estimated error set to 0
+/// (round-off noise such as 1e-18 off the diagonal of a symmetric density).
+fn denoised(r: &InertiaReport) -> InertiaReport {
+    let mut r = r.clone();
+    if let Some(c) = r.cubature {
+        let clean = |x: &mut f64, noise: f64| {
+            if x.abs() <= noise {
+                *x = 0.0;
+            }
+        };
+        for x in r.tensor.iter_mut().chain(r.tensor_com.iter_mut()).flatten() {
+            clean(x, c.tensor_error);
+        }
+        for x in r.center_of_mass.iter_mut() {
+            clean(x, c.center_of_mass_error);
+        }
+        for part in r.parts.iter_mut().filter(|p| p.method == "adaptive cubature") {
+            for x in part.tensor.iter_mut().flatten() {
+                clean(x, c.tensor_error);
+            }
+            for x in part.center_of_mass.iter_mut() {
+                clean(x, c.center_of_mass_error);
+            }
+        }
+    }
+    r
+}
+
 fn text(body: &BodyFile, p: &MassProperties, point: [ExprId; 3], r: &InertiaReport) -> String {
+    let at_com = point == p.center_of_mass || r.about == r.center_of_mass;
+    let r = &denoised(r);
     let mut s = String::new();
     let _ = writeln!(s, "{} — inertia tensor (notes, Sec. 3.2.3)", r.name);
     let _ = writeln!(
@@ -147,7 +177,6 @@ fn text(body: &BodyFile, p: &MassProperties, point: [ExprId; 3], r: &InertiaRepo
     let _ = writeln!(s, "\nInertia tensor about the centre of mass, I_R = Σ [I_c + m (|d|² 1 − d dᵀ)], d = c − R:");
     exact_and_numeric(&mut s, r.tensor_com_exact.as_ref(), &r.tensor_com);
 
-    let at_com = r.about.iter().zip(&r.center_of_mass).all(|(a, b)| a == b) && point == p.center_of_mass;
     if !at_com {
         let rvec: [f64; 3] = std::array::from_fn(|a| r.center_of_mass[a] - r.about[a]);
         let p_exact = r.about_exact.as_ref().map(|e| format!("({})", e.join(", ")));
@@ -161,7 +190,7 @@ fn text(body: &BodyFile, p: &MassProperties, point: [ExprId; 3], r: &InertiaRepo
         let scale = r.tensor.iter().flatten().map(|x| x.abs()).fold(0.0, f64::max);
         let _ = writeln!(
             s,
-            "\nAdaptive cubature (nested Gauss–Kronrod 7/15, tolerance {} relative): estimated error of the tensor entries ≤ {} ({} relative), of the mass ≤ {}; {} density evaluations",
+            "\nAdaptive cubature (nested Gauss–Kronrod 7/15, tolerance {:e} relative): estimated error of the tensor entries ≤ {} ({} relative), of the mass ≤ {}; {} density evaluations; numbers below the estimated error are shown as 0",
             mech::inertia::CUBATURE_RTOL,
             num(c.tensor_error),
             num(if scale > 0.0 { c.tensor_error / scale } else { c.tensor_error }),

@@ -78,6 +78,8 @@ pub struct CubatureSummary {
     pub tensor_error: f64,
     /// Estimated absolute error of the mass.
     pub mass_error: f64,
+    /// Estimated absolute error of the centre of mass's coordinates.
+    pub center_of_mass_error: f64,
     /// Density evaluations.
     pub evaluations: u64,
     /// Whether every density met the tolerance [`CUBATURE_RTOL`].
@@ -264,11 +266,14 @@ impl BodyFile {
                         let acc = cubature.get_or_insert(CubatureSummary {
                             tensor_error: 0.0,
                             mass_error: 0.0,
+                            center_of_mass_error: 0.0,
                             evaluations: 0,
                             converged: true,
                         });
                         acc.tensor_error += s.tensor_error;
                         acc.mass_error += s.mass_error;
+                        // Weighted by the part's mass here, divided by the total below.
+                        acc.center_of_mass_error += s.center_of_mass_error * pool.eval(props.mass, &env).unwrap_or(0.0);
                         acc.evaluations += s.evaluations;
                         acc.converged &= s.converged;
                     }
@@ -301,6 +306,9 @@ impl BodyFile {
             let c = pool.mul2(first[a], inv);
             pool.simplify(c)
         });
+        if let Some(c) = &mut cubature {
+            c.center_of_mass_error /= m_value;
+        }
         let back = point_tensor(&mut pool, total, com);
         let tensor = mat_sub(&mut pool, &origin, &back);
         let tensor = simplify_matrix(&mut pool, &tensor);
@@ -324,7 +332,22 @@ impl BodyFile {
 /// `R·I·Rᵀ` with `R = Dᵀ`: the tensor of a part whose own axes are the body
 /// axes of the Euler rotation `D(α, β, γ)` (components r_body = Dᵀ·r_part).
 fn turn(pool: &mut Pool, i: &ExprMatrix, al: ExprId, be: ExprId, ga: ExprId) -> ExprMatrix {
-    let d = crate::euler::rotation(pool, al, be, ga);
+    // D in placeholder angles, then sin and cos of each replaced by exact
+    // values where the angle is a multiple of π/6 or π/4, so that
+    // `orientation = ["pi/2", "pi/2", 0]` turns a part exactly.
+    let names = ["inertia·α", "inertia·β", "inertia·γ"];
+    let holders = names.map(|n| pool.symbol(n));
+    let d = crate::euler::rotation(pool, holders[0], holders[1], holders[2]);
+    let mut map = rustc_hash::FxHashMap::default();
+    for (h, angle) in holders.into_iter().zip([al, be, ga]) {
+        map.insert(h, angle);
+        for f in [sym::Func::Sin, sym::Func::Cos] {
+            let key = pool.func(f, h);
+            let value = exact_trig(pool, f, angle).unwrap_or_else(|| pool.func(f, angle));
+            map.insert(key, value);
+        }
+    }
+    let d = d.map(|row| row.map(|e| pool.substitute(e, &map)));
     std::array::from_fn(|j| {
         std::array::from_fn(|k| {
             let mut terms = Vec::with_capacity(9);
@@ -339,6 +362,36 @@ fn turn(pool: &mut Pool, i: &ExprMatrix, al: ExprId, be: ExprId, ga: ExprId) -> 
             pool.simplify(sum)
         })
     })
+}
+
+/// sin or cos of `angle` exactly (0, ±1/2, ±sqrt(2)/2, ±sqrt(3)/2, ±1) when
+/// the angle is a rational multiple of π that is a multiple of π/6 or π/4.
+fn exact_trig(pool: &mut Pool, f: sym::Func, angle: ExprId) -> Option<ExprId> {
+    let (coeff, rest) = pool.split_coeff(angle);
+    let q = coeff.as_rational()?;
+    let in_pi = matches!(pool.node(rest), sym::Node::Pi) || (q.is_zero());
+    if !in_pi {
+        return None;
+    }
+    // The angle in twelfths of π.
+    let t = q.checked_mul(sym::Rational::new(12, 1)?).filter(|t| t.is_integer())?.numer();
+    if t % 2 != 0 && t % 3 != 0 {
+        return None;
+    }
+    let x = (t.rem_euclid(24) as f64) * std::f64::consts::PI / 12.0;
+    let v = if f == sym::Func::Sin { x.sin() } else { x.cos() };
+    let half = pool.rational(1, 2);
+    let (two, three) = (pool.int(2), pool.int(3));
+    let (r2, r3) = (pool.sqrt(two), pool.sqrt(three));
+    let candidates = [
+        (0.0, pool.zero()),
+        (0.5, half),
+        (0.5f64.sqrt(), pool.mul2(half, r2)),
+        (0.75f64.sqrt(), pool.mul2(half, r3)),
+        (1.0, pool.one()),
+    ];
+    let &(_, exact) = candidates.iter().find(|(c, _)| (v.abs() - c).abs() < 1e-12)?;
+    Some(if v < 0.0 { pool.neg(exact) } else { exact })
 }
 
 /// A density part's mass, centre of mass and tensor about it: exact for a
@@ -391,6 +444,9 @@ fn density_part(
             let summary = CubatureSummary {
                 tensor_error: 2.0 * e[4..].iter().sum::<f64>(),
                 mass_error: e[0],
+                center_of_mass_error: (e[1..4].iter().sum::<f64>()
+                    + e[0] * v[1..4].iter().map(|x| x.abs()).sum::<f64>() / v[0].abs())
+                    / v[0].abs(),
                 evaluations: m.evaluations,
                 converged: m.converged,
             };

@@ -82,8 +82,10 @@ pub struct NotFinite {
 }
 
 /// ∫ρ·(1, u, v, w, u², v², w², uv, uw, vw) over the box `region` (per axis
-/// [lower, upper]) to the relative tolerance `rtol` (relative to the mass, to
-/// mass × half-diagonal and to mass × half-diagonal² for the three groups).
+/// [lower, upper]) to the relative tolerance `rtol`: the summed error of the
+/// second moments stays below rtol·∫|ρ|·d²/12 (d the half-diagonal, so the
+/// tensor's error is below rtol·∫|ρ|·d²/6), the first moments' below
+/// rtol·∫|ρ|·d/3 and the mass's below rtol·∫|ρ|.
 pub fn moments(
     density: &mut dyn FnMut([f64; 3]) -> f64,
     region: [[f64; 2]; 3],
@@ -98,7 +100,9 @@ pub fn moments(
         return Err(bad);
     }
     let diag2 = half.iter().map(|h| h * h).sum::<f64>();
-    let scale = [pilot, pilot * diag2.sqrt(), pilot * diag2];
+    // Shares of the tolerance: the tensor sums up to twice the six second
+    // moments, the centre of mass three first moments.
+    let scale = [pilot, pilot * diag2.sqrt() / 3.0, pilot * diag2 / 12.0];
     for (k, t) in ctx.tol.iter_mut().enumerate() {
         *t = rtol * scale[group(k)];
     }

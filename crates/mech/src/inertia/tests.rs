@@ -119,3 +119,19 @@ fn gaussian_density_by_cubature() {
     let cub = p.cubature.unwrap();
     assert!(cub.converged && cub.tensor_error < 1e-8, "{cub:?}");
 }
+
+#[test]
+fn right_angles_turn_exactly() {
+    // A rod (along its part's z) laid on the body's x axis by α = β = π/2.
+    let p = props("[parameters]\nm = 1.0\nl = 2.0\n[[parts]]\nshape = \"rod\"\nmass = \"m\"\nsize = [\"l\"]\norientation = [\"pi/2\", \"pi/2\", 0]\n");
+    let t = p.tensor;
+    check_matrix(&p, &t, [["0", "0", "0"], ["0", "l^2*m/12", "0"], ["0", "0", "l^2*m/12"]]);
+    // 30° about z (α = π/6) of a box with edges 1, 2, 3 mixes x and y with sqrt(3).
+    let p = props("[[parts]]\nshape = \"box\"\nmass = 12\nsize = [1, 2, 3]\norientation = [\"pi/6\", 0, 0]\n");
+    assert!(
+        p.pool().display(p.tensor[0][1]).to_string().contains("sqrt(3)")
+            || p.pool().display(p.tensor[0][1]).to_string().contains("3^(1/2)"),
+        "{}",
+        p.pool().display(p.tensor[0][1])
+    );
+}
