@@ -47,6 +47,11 @@ use sym::{ExprId, ParseOptions, Pool};
 /// Relative tolerance of the adaptive cubature of non-polynomial densities.
 pub const CUBATURE_RTOL: f64 = 1e-10;
 
+/// A cubature that misses its tolerance is still reported (with a warning)
+/// while its estimated relative error of the tensor stays below this; beyond
+/// it the density is rejected as too singular to integrate.
+pub const CUBATURE_FAIL_RTOL: f64 = 1e-6;
+
 /// Principal moments closer than this (relative to the largest) count as
 /// equal when the body's symmetry is named and degenerate axes are chosen.
 pub const DEGENERACY_RTOL: f64 = 1e-9;
@@ -452,6 +457,19 @@ fn density_part(
             };
             if !(v[0] > 0.0) {
                 return Err(mass_error(span, name, v[0]));
+            }
+            let scale = (v[4] + v[5] + v[6]).abs();
+            let rel = summary.tensor_error / scale.max(f64::MIN_POSITIVE);
+            if !m.converged && (rel > CUBATURE_FAIL_RTOL || summary.mass_error > CUBATURE_FAIL_RTOL * v[0]) {
+                return Err(ModelError::at(
+                    span.clone(),
+                    format!(
+                        "the cubature of this density did not converge: estimated relative error {rel:.1e} of the tensor and {:.1e} of the mass after {} evaluations",
+                        summary.mass_error / v[0],
+                        m.evaluations
+                    ),
+                )
+                .with_help("the density may be singular or discontinuous in its region; split the region where it jumps, or check that ∫ρ dV is finite"));
             }
             // Central second moments C = S − m d dᵀ (d: the CM from the box's
             // centre), then I = tr(C) 1 − C, all in floats about the CM.

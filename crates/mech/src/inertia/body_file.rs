@@ -124,10 +124,11 @@ impl Reader<'_> {
                 if !x.is_finite() {
                     return Err(ModelError::at(v.span(), format!("{what} must be a finite number")));
                 }
-                return Ok(if x.fract() == 0.0 && x.abs() < 1e15 {
-                    self.pool.int(*x as i64)
-                } else {
-                    self.pool.float(*x)
+                let exact = self.source.get(v.span()).and_then(decimal);
+                return Ok(match exact {
+                    Some(r) => self.pool.number(sym::Number::Rational(r)),
+                    None if x.fract() == 0.0 && x.abs() < 1e15 => self.pool.int(*x as i64),
+                    None => self.pool.float(*x),
                 });
             }
             NumOrText::Text(s) => s,
@@ -329,6 +330,24 @@ impl Reader<'_> {
     }
 }
 
+/// A plain decimal literal (`0.7`, `-12.25`, `3`) as the exact rational it
+/// writes, so that a number in a body file stays exact like an expression.
+fn decimal(text: &str) -> Option<sym::Rational> {
+    let t = text.trim();
+    let (neg, digits) = match t.strip_prefix('-') {
+        Some(rest) => (true, rest),
+        None => (false, t.strip_prefix('+').unwrap_or(t)),
+    };
+    let (int, frac) = digits.split_once('.').unwrap_or((digits, ""));
+    let all = || int.chars().chain(frac.chars());
+    if int.is_empty() || !all().all(|c| c.is_ascii_digit()) || int.len() + frac.len() > 18 {
+        return None;
+    }
+    let num: i128 = format!("{int}{frac}").parse().ok()?;
+    let den = 10i128.checked_pow(frac.len() as u32)?;
+    sym::Rational::new(if neg { -num } else { num }, den)
+}
+
 /// Where the text of a TOML string value starts, if its characters map one to
 /// one onto the file (no escapes); otherwise errors point at the whole value.
 fn content_offset(source: &str, span: &Range<usize>, value: &str) -> Option<usize> {
@@ -444,6 +463,17 @@ mod tests {
         assert!(e.message.contains(message), "message: {}", e.message);
         let span = e.span.clone().expect("a span");
         assert_eq!(&source[span], at, "{}", e.message);
+    }
+
+    #[test]
+    fn decimals_stay_exact() {
+        let r = |n, d| sym::Rational::new(n, d);
+        assert_eq!(decimal("0.7"), r(7, 10));
+        assert_eq!(decimal("-12.25"), r(-49, 4));
+        assert_eq!(decimal("3"), r(3, 1));
+        assert_eq!(decimal("1e-3"), None);
+        assert_eq!(decimal("inf"), None);
+        assert_eq!(decimal("1_000"), None);
     }
 
     const HEAD: &str = "[parameters]\nM = 1.0\na = 2.0\n";

@@ -20,6 +20,14 @@ pub const N_MOMENTS: usize = 10;
 /// stays above the tolerance and is reported as such.
 const MAX_INTERVALS: usize = 24;
 
+/// Most density evaluations of one cubature (about a second of work); beyond
+/// it no interval is split further and the result is marked unconverged.
+const MAX_EVALUATIONS: u64 = 20_000_000;
+
+/// The error of an inner integral need not go below a few ulps of its value:
+/// beyond that, |K15 − G7| measures round-off, not the rule's error.
+const ROUND_OFF: f64 = 1e-14;
+
 /// Kronrod abscissae on [−1, 1] (positive half, descending; QUADPACK's qk15).
 const XGK: [f64; 8] = [
     0.991_455_371_120_812_6,
@@ -68,7 +76,7 @@ pub struct Moments {
     pub center: [f64; 3],
     /// Density evaluations used.
     pub evaluations: u64,
-    /// Whether every level met its tolerance within [`MAX_INTERVALS`].
+    /// Whether every level met its tolerance within [`MAX_INTERVALS`] and the evaluation budget.
     pub converged: bool,
 }
 
@@ -184,11 +192,11 @@ impl Ctx<'_> {
                     total.error[k] += e.error[k];
                 }
             }
-            let done = (0..N_MOMENTS).all(|k| total.error[k] <= tol[k]);
+            let done = (0..N_MOMENTS).all(|k| total.error[k] <= tol[k].max(ROUND_OFF * total.value[k].abs()));
             if done || self.bad.is_some() {
                 return total;
             }
-            if intervals.len() >= MAX_INTERVALS {
+            if intervals.len() >= MAX_INTERVALS || self.evaluations >= MAX_EVALUATIONS {
                 self.converged = false;
                 return total;
             }
