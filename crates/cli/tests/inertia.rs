@@ -402,3 +402,27 @@ fn a_bad_reference_point_exits_2() {
     assert_eq!(code, 2);
     assert!(stderr.contains("expected `com` or a point x,y,z"), "{stderr}");
 }
+
+#[test]
+fn every_body_example_runs_and_follows_the_contract() {
+    let dir = repo_root().join("examples/bodies");
+    let mut files: Vec<String> = std::fs::read_dir(&dir)
+        .expect("examples/bodies exists")
+        .map(|e| e.expect("a directory entry").file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".toml"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 5, "{files:?}");
+    for file in files {
+        let v = json(&[&format!("examples/bodies/{file}")]);
+        assert_eq!(v["format"], "lagrange.inertia/1", "{file}");
+        assert!(v["mass"].as_f64().unwrap() > 0.0, "{file}");
+        let t = matrix(&v["tensor"]);
+        let pm = vector(&v["principal_moments"]);
+        assert!(pm[0] <= pm[1] && pm[1] <= pm[2], "{file}: {pm:?}");
+        // The trace is invariant; a physical tensor obeys the triangle inequality I1 + I2 ≥ I3.
+        close(pm.iter().sum(), t[0][0] + t[1][1] + t[2][2], 1e-12);
+        assert!(pm[0] + pm[1] >= pm[2] * (1.0 - 1e-12), "{file}: {pm:?}");
+        assert!(v["tensor_exact"].is_array() || v["tensor_exact"].is_null(), "{file}");
+    }
+}

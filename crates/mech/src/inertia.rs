@@ -292,7 +292,7 @@ impl BodyFile {
         let total = pool.add(&masses);
         let total = pool.simplify(total);
         let m_value = pool.eval(total, &env).unwrap_or(f64::NAN);
-        if !(m_value > 0.0) {
+        if m_value.is_nan() || m_value <= 0.0 {
             return Err(ModelError::whole(format!("the body's total mass is {m_value}: expected a positive mass")));
         }
         let mut first = [pool.zero(); 3];
@@ -455,7 +455,7 @@ fn density_part(
                 evaluations: m.evaluations,
                 converged: m.converged,
             };
-            if !(v[0] > 0.0) {
+            if v[0].is_nan() || v[0] <= 0.0 {
                 return Err(mass_error(span, name, v[0]));
             }
             let scale = (v[4] + v[5] + v[6]).abs();
@@ -494,7 +494,7 @@ fn density_part(
     };
     let mass = moments[0];
     let m_value = pool.eval(mass, env).unwrap_or(f64::NAN);
-    if !(m_value > 0.0) {
+    if m_value.is_nan() || m_value <= 0.0 {
         return Err(mass_error(span, name, m_value));
     }
     let inv = pool.powi(mass, -1);

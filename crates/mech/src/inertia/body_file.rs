@@ -459,7 +459,7 @@ mod tests {
     /// The error's message and the text its span covers.
     #[track_caller]
     fn check_error(source: &str, message: &str, at: &str) {
-        let e = BodyFile::parse(source, &[]).err().expect("an error");
+        let e = BodyFile::parse(source, &[]).expect_err("an error");
         assert!(e.message.contains(message), "message: {}", e.message);
         let span = e.span.clone().expect("a span");
         assert_eq!(&source[span], at, "{}", e.message);
