@@ -571,6 +571,15 @@ impl MassProperties {
         simplify_matrix(pool, &sum)
     }
 
+    /// The tensor about `point` in numbers only (no expressions are built).
+    pub fn about_values(&self, point: [f64; 3]) -> [[f64; 3]; 3] {
+        let t = self.values(&self.tensor);
+        let m = self.value(self.mass);
+        let r: [f64; 3] = std::array::from_fn(|a| self.value(self.center_of_mass[a]) - point[a]);
+        let r2: f64 = r.iter().map(|x| x * x).sum();
+        std::array::from_fn(|j| std::array::from_fn(|k| t[j][k] + m * (if j == k { r2 } else { 0.0 } - r[j] * r[k])))
+    }
+
     /// Reads a reference point: `com` (the centre of mass) or three
     /// comma-separated numbers or expressions in the parameters (`0,0,0`,
     /// `a/2,0,0`). Error spans are byte ranges into `text`.
