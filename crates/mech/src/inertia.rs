@@ -23,9 +23,9 @@
 //! (`R·diag(I₁, I₂, I₃)·Rᵀ` with `R = Dᵀ`, `D` the notes' Euler rotation), or a
 //! density's moments integrated over its box, exactly when ρ is a polynomial in
 //! x, y, z and by adaptive cubature otherwise. The body's tensor about its
-//! centre of mass R is `Σ I_c + m (|d|² 1 − d dᵀ)`, d = c − R, built about the
-//! origin first and moved to R (one parallel-axis step per part, one for the
-//! body). Every quantity is an expression in a [`Pool`]; its number is its value
+//! centre of mass R is `Σ I_c + m (|d|² 1 − d dᵀ)`, d = c − R, built both about
+//! the origin and moved to R, and pairwise as `(1/M) Σ_{i<j} m_i m_j (|Δ|² 1 −
+//! Δ Δᵀ)`, Δ = c_i − c_j; each entry keeps the shorter form (the pairwise one on a tie). Every quantity is an expression in a [`Pool`]; its number is its value
 //! at the parameters. Numeric cubature enters as float constants, and then the
 //! results are marked inexact.
 
@@ -287,7 +287,6 @@ impl BodyFile {
             };
             parts.push(props);
         }
-        // About the origin first, then moved to the centre of mass.
         let masses: Vec<ExprId> = parts.iter().map(|p| p.mass).collect();
         let total = pool.add(&masses);
         let total = pool.simplify(total);
@@ -295,28 +294,58 @@ impl BodyFile {
         if m_value.is_nan() || m_value <= 0.0 {
             return Err(ModelError::whole(format!("the body's total mass is {m_value}: expected a positive mass")));
         }
-        let mut first = [pool.zero(); 3];
-        let mut origin = [[pool.zero(); 3]; 3];
-        for p in &parts {
-            for a in 0..3 {
-                let mc = pool.mul2(p.mass, p.center_of_mass[a]);
-                first[a] = pool.add2(first[a], mc);
-            }
-            let shift = point_tensor(&mut pool, p.mass, p.center_of_mass);
-            let about_origin = mat_add(&mut pool, &p.tensor, &shift);
-            origin = mat_add(&mut pool, &origin, &about_origin);
-        }
         let inv = pool.powi(total, -1);
         let com: [ExprId; 3] = std::array::from_fn(|a| {
-            let c = pool.mul2(first[a], inv);
+            let terms: Vec<ExprId> = parts.iter().map(|p| pool.mul2(p.mass, p.center_of_mass[a])).collect();
+            let first = pool.add(&terms);
+            let c = pool.mul2(first, inv);
             pool.simplify(c)
         });
         if let Some(c) = &mut cubature {
             c.center_of_mass_error /= m_value;
         }
+        // Two equal forms, and each entry keeps the shorter after simplification.
+        // About the origin, then moved to R: short when R is simple (one part, symmetric bodies).
+        let mut origin = [[pool.zero(); 3]; 3];
+        for p in &parts {
+            let shift = point_tensor(&mut pool, p.mass, p.center_of_mass);
+            let about_origin = mat_add(&mut pool, &p.tensor, &shift);
+            origin = mat_add(&mut pool, &origin, &about_origin);
+        }
         let back = point_tensor(&mut pool, total, com);
-        let tensor = mat_sub(&mut pool, &origin, &back);
-        let tensor = simplify_matrix(&mut pool, &tensor);
+        let moved = mat_sub(&mut pool, &origin, &back);
+        let moved = simplify_matrix(&mut pool, &moved);
+        // Pairwise: Σ m_i (|d_i|² 1 − d_i d_iᵀ) with d_i = c_i − R equals
+        // (1/M) Σ_{i<j} m_i m_j (|Δ|² 1 − Δ Δᵀ), Δ = c_i − c_j: no R, so no
+        // cancellation, and two masses give the reduced mass m₁m₂/(m₁ + m₂).
+        let mut tensor = [[pool.zero(); 3]; 3];
+        for p in &parts {
+            tensor = mat_add(&mut pool, &tensor, &p.tensor);
+        }
+        for i in 0..parts.len() {
+            for j in i + 1..parts.len() {
+                let delta: [ExprId; 3] =
+                    std::array::from_fn(|a| pool.sub(parts[i].center_of_mass[a], parts[j].center_of_mass[a]));
+                let delta = delta.map(|d| pool.simplify(d));
+                if delta.iter().all(|&d| pool.is_zero(d)) {
+                    continue;
+                }
+                let mu = pool.mul(&[parts[i].mass, parts[j].mass, inv]);
+                let pair = point_tensor(&mut pool, mu, delta);
+                tensor = mat_add(&mut pool, &tensor, &pair);
+            }
+        }
+        let pairwise = simplify_matrix(&mut pool, &tensor);
+        let tensor: ExprMatrix = std::array::from_fn(|j| {
+            std::array::from_fn(|k| {
+                let (a, b) = (moved[j][k], pairwise[j][k]);
+                if pool.tree_size(b) <= pool.tree_size(a) {
+                    b
+                } else {
+                    a
+                }
+            })
+        });
         for p in &mut parts {
             p.tensor = simplify_matrix(&mut pool, &p.tensor);
         }

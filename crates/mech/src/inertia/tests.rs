@@ -142,3 +142,13 @@ fn right_angles_turn_exactly() {
         p.pool().display(p.tensor[0][1])
     );
 }
+
+#[test]
+fn two_masses_give_the_reduced_mass() {
+    let src = "[parameters]\nm1 = 1.0\nm2 = 3.0\nl = 2.0\n[[parts]]\nshape = \"point\"\nmass = \"m1\"\n[[parts]]\nshape = \"point\"\nmass = \"m2\"\ncenter = [\"l\", 0, 0]\n";
+    let p = props(src);
+    assert_eq!(p.pool().display(p.center_of_mass[0]).to_string(), "l*m2/(m1 + m2)");
+    assert_eq!(p.pool().display(p.tensor[1][1]).to_string(), "l^2*m1*m2/(m1 + m2)");
+    assert!(p.pool().is_zero(p.tensor[0][0]));
+    close(p.value(p.tensor[2][2]), 3.0, 1e-15);
+}
