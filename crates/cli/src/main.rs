@@ -7,6 +7,7 @@
 
 mod diagnostics;
 mod format;
+mod inertia;
 mod modes;
 mod orbit;
 mod plot;
@@ -99,6 +100,8 @@ enum Command {
     Modes(modes::Args),
     /// A central-force orbit from the initial state: turning points, kind, period, apsidal angle.
     Orbit(orbit::Args),
+    /// The inertia tensor of a body file: mass, centre of mass, tensor about a point, principal axes.
+    Inertia(inertia::Args),
 }
 
 /// Summary formats of `simulate`.
@@ -140,6 +143,7 @@ fn main() -> ExitCode {
         Command::Sweep(args) => sweep::run(&args),
         Command::Modes(args) => modes::run(&args),
         Command::Orbit(args) => orbit::run(&args),
+        Command::Inertia(args) => inertia::run(&args),
         Command::Simulate { list_methods: true, .. } => write_stdout(&simulate::list_methods()),
         Command::Simulate {
             model,

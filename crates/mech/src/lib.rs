@@ -22,6 +22,7 @@ mod derive;
 mod dynamics;
 mod error;
 pub mod euler;
+pub mod inertia;
 mod model;
 mod modes;
 mod orbit;

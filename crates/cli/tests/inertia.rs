@@ -1,0 +1,428 @@
+//! `lagrange inertia` run through the real binary: the notes' cube about its
+//! centre and a corner (Sec. 3.2.3 b), every shape's standard moments, the
+//! cone's centre of mass, the parallel-axis theorem, a part turned by Euler
+//! angles, an exact polynomial density, numeric cubature of exp and Gaussian
+//! densities against closed forms, and bad input (exit 2 with file:line:col).
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn repo_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().expect("the repository root exists")
+}
+
+/// Exit code, stdout and stderr of `lagrange ARGS` run in the repository root.
+fn lagrange(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_lagrange"))
+        .args(args)
+        .current_dir(repo_root())
+        .output()
+        .unwrap_or_else(|e| panic!("cannot start lagrange {args:?}: {e}"));
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[track_caller]
+fn json(args: &[&str]) -> Value {
+    let mut all = vec!["inertia"];
+    all.extend_from_slice(args);
+    all.extend_from_slice(&["--format", "json"]);
+    let (code, stdout, stderr) = lagrange(&all);
+    assert_eq!(code, 0, "lagrange {all:?}\n{stdout}\n{stderr}");
+    serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("not JSON ({e}):\n{stdout}"))
+}
+
+/// A body file in a temporary directory.
+fn body(name: &str, text: &str) -> String {
+    let dir = std::env::temp_dir().join(format!("lagrange-inertia-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a temporary directory");
+    let path = dir.join(name);
+    std::fs::write(&path, text).expect("the body file is written");
+    path.display().to_string()
+}
+
+fn matrix(v: &Value) -> [[f64; 3]; 3] {
+    std::array::from_fn(|j| std::array::from_fn(|k| v[j][k].as_f64().expect("a number")))
+}
+
+fn vector(v: &Value) -> [f64; 3] {
+    std::array::from_fn(|k| v[k].as_f64().expect("a number"))
+}
+
+fn strings(v: &Value) -> Vec<Vec<String>> {
+    v.as_array()
+        .expect("rows")
+        .iter()
+        .map(|row| row.as_array().expect("a row").iter().map(|x| x.as_str().expect("a string").to_string()).collect())
+        .collect()
+}
+
+#[track_caller]
+fn close(got: f64, want: f64, rel: f64) {
+    assert!((got - want).abs() <= rel * want.abs().max(1e-12), "got {got}, want {want}");
+}
+
+#[track_caller]
+fn close_matrix(got: &[[f64; 3]; 3], want: &[[f64; 3]; 3], rel: f64) {
+    let scale = want.iter().flatten().map(|x| x.abs()).fold(0.0, f64::max);
+    for j in 0..3 {
+        for k in 0..3 {
+            assert!(
+                (got[j][k] - want[j][k]).abs() <= rel * scale,
+                "entry {j}{k}: got {}, want {}\n{got:?}",
+                got[j][k],
+                want[j][k]
+            );
+        }
+    }
+}
+
+fn diag(d: [f64; 3]) -> [[f64; 3]; 3] {
+    std::array::from_fn(|j| std::array::from_fn(|k| if j == k { d[j] } else { 0.0 }))
+}
+
+#[test]
+fn notes_cube_about_its_centre_and_a_corner() {
+    // M = 3, a = 2: M a² = 12.
+    let v = json(&["examples/bodies/cube.toml", "--set", "M=3", "--set", "a=2"]);
+    assert_eq!(v["format"], "lagrange.inertia/1");
+    for key in ["mass", "center_of_mass", "about", "tensor", "tensor_exact", "principal_moments", "principal_axes"] {
+        assert!(v.get(key).is_some(), "missing {key}");
+    }
+    close(v["mass"].as_f64().unwrap(), 3.0, 1e-15);
+    assert_eq!(vector(&v["center_of_mass"]), [1.0, 1.0, 1.0]);
+    assert_eq!(vector(&v["about"]), [1.0, 1.0, 1.0]);
+    let e = strings(&v["tensor_exact"]);
+    assert_eq!(e[0], ["M*a^2/6", "0", "0"]);
+    assert_eq!(e[1][1], "M*a^2/6");
+    assert_eq!(e[2][2], "M*a^2/6");
+    close_matrix(&matrix(&v["tensor"]), &diag([2.0; 3]), 1e-15);
+
+    let v = json(&["examples/bodies/cube.toml", "--set", "M=3", "--set", "a=2", "--about", "0,0,0"]);
+    let e = strings(&v["tensor_exact"]);
+    for j in 0..3 {
+        for k in 0..3 {
+            assert_eq!(e[j][k], if j == k { "2*M*a^2/3" } else { "-M*a^2/4" }, "{j}{k}");
+        }
+    }
+    let t = matrix(&v["tensor"]);
+    close_matrix(&t, &[[8.0, -3.0, -3.0], [-3.0, 8.0, -3.0], [-3.0, -3.0, 8.0]], 1e-15);
+    // Eigenvalues a²M (2/3 − 1/2) = 2 along (1,1,1) and a²M (2/3 + 1/4) = 11 twice.
+    let pm = vector(&v["principal_moments"]);
+    close(pm[0], 2.0, 1e-13);
+    close(pm[1], 11.0, 1e-13);
+    close(pm[2], 11.0, 1e-13);
+    let axes: Vec<[f64; 3]> = v["principal_axes"].as_array().unwrap().iter().map(vector).collect();
+    for k in 0..3 {
+        close(axes[0][k], 3f64.sqrt().recip(), 1e-12);
+    }
+    // Each axis is a unit eigenvector: I·n = λ n.
+    for (n, lam) in axes.iter().zip(pm) {
+        for j in 0..3 {
+            let tn: f64 = (0..3).map(|k| t[j][k] * n[k]).sum();
+            assert!((tn - lam * n[j]).abs() < 1e-12, "{n:?}");
+        }
+        close(n.iter().map(|x| x * x).sum::<f64>(), 1.0, 1e-14);
+    }
+}
+
+#[test]
+fn the_text_names_the_steps_and_the_symmetry() {
+    let (code, text, _) = lagrange(&["inertia", "examples/bodies/cube.toml", "--about", "0,0,0"]);
+    assert_eq!(code, 0);
+    for needle in ["cube: solid box", "M*a^2/6", "2*M*a^2/3", "-M*a^2/4", "Parallel-axis", "symmetric top", "I1 = "] {
+        assert!(text.contains(needle), "missing {needle:?} in\n{text}");
+    }
+    let (_, text, _) = lagrange(&["inertia", "examples/bodies/cube.toml"]);
+    assert!(text.contains("spherical top"), "{text}");
+    assert!(!text.contains("Parallel-axis"), "{text}");
+}
+
+/// The tensor about the centre of mass of one part of mass 2 with the given shape and size.
+fn one_part(shape: &str, size: &str) -> Value {
+    let text = format!(
+        "[parameters]\nM = 2.0\nR = 0.7\nh = 1.3\nL = 1.9\n[[parts]]\nshape = \"{shape}\"\nmass = \"M\"\n{size}center = [0.5, -1, 2]\n"
+    );
+    json(&[&body(&format!("{shape}.toml"), &text)])
+}
+
+#[test]
+fn every_shape_has_its_standard_moments() {
+    let (m, r, h, l) = (2.0, 0.7, 1.3, 1.9);
+    let cases: [(&str, &str, [f64; 3], &str); 9] = [
+        ("point", "", [0.0; 3], "0"),
+        ("rod", "size = [\"L\"]\n", [m * l * l / 12.0, m * l * l / 12.0, 0.0], "L^2*M/12"),
+        ("sphere", "size = [\"R\"]\n", [0.4 * m * r * r; 3], "2*M*R^2/5"),
+        ("shell", "size = [\"R\"]\n", [2.0 / 3.0 * m * r * r; 3], "2*M*R^2/3"),
+        (
+            "cylinder",
+            "size = [\"R\", \"h\"]\n",
+            [m * (3.0 * r * r + h * h) / 12.0, m * (3.0 * r * r + h * h) / 12.0, m * r * r / 2.0],
+            "M*(3*R^2 + h^2)/12",
+        ),
+        (
+            "cone",
+            "size = [\"R\", \"h\"]\n",
+            [3.0 / 80.0 * m * (4.0 * r * r + h * h), 3.0 / 80.0 * m * (4.0 * r * r + h * h), 0.3 * m * r * r],
+            "3*M*(4*R^2 + h^2)/80",
+        ),
+        ("disk", "size = [\"R\"]\n", [m * r * r / 4.0, m * r * r / 4.0, m * r * r / 2.0], "M*R^2/4"),
+        ("ring", "size = [\"R\"]\n", [m * r * r / 2.0, m * r * r / 2.0, m * r * r], "M*R^2/2"),
+        (
+            "box",
+            "size = [\"R\", \"h\", \"L\"]\n",
+            [m * (h * h + l * l) / 12.0, m * (r * r + l * l) / 12.0, m * (r * r + h * h) / 12.0],
+            "M*(L^2 + h^2)/12",
+        ),
+    ];
+    for (shape, size, want, exact_xx) in cases {
+        let v = one_part(shape, size);
+        close_matrix(&matrix(&v["tensor"]), &diag(want), 1e-14);
+        assert_eq!(vector(&v["center_of_mass"]), [0.5, -1.0, 2.0], "{shape}");
+        assert_eq!(strings(&v["tensor_exact"])[0][0], exact_xx, "{shape}");
+    }
+}
+
+#[test]
+fn cone_centre_is_h_over_4_above_the_base() {
+    // Base in z = 0, apex at z = h = 2, R = 1, M = 1.
+    let v = json(&["examples/bodies/cone.toml"]);
+    assert_eq!(vector(&v["center_of_mass"]), [0.0, 0.0, 0.5]);
+    // About the apex: I_x = 3/20 M R² + 3/5 M h² (a textbook result independent of the CM).
+    let v = json(&["examples/bodies/cone.toml", "--about", "0,0,h"]);
+    close_matrix(&matrix(&v["tensor"]), &diag([0.15 + 2.4, 0.15 + 2.4, 0.3]), 1e-14);
+    assert_eq!(strings(&v["tensor_exact"])[0][0], "3*M*(R^2 + 4*h^2)/20");
+    // About the centre of the base: I_x = M (3R²/20 + h²/10).
+    let v = json(&["examples/bodies/cone.toml", "--about", "0,0,0"]);
+    close(matrix(&v["tensor"])[0][0], 0.15 + 0.4, 1e-14);
+}
+
+#[test]
+fn parallel_axis_theorem_for_an_offset_sphere() {
+    // A sphere (M = 2, R = 0.5) centred at (1, 2, 3), about the origin and about (1, 0, -1).
+    let text = "[[parts]]\nshape = \"sphere\"\nmass = 2\nsize = [0.5]\ncenter = [1, 2, 3]\n";
+    let path = body("offset_sphere.toml", text);
+    let own = 0.4 * 2.0 * 0.25;
+    for (about, p) in [("0,0,0", [0.0, 0.0, 0.0]), ("1,0,-1", [1.0, 0.0, -1.0])] {
+        let v = json(&[&path, "--about", about]);
+        let r = [1.0 - p[0], 2.0 - p[1], 3.0 - p[2]];
+        let r2: f64 = r.iter().map(|x| x * x).sum();
+        let want: [[f64; 3]; 3] = std::array::from_fn(|j| {
+            std::array::from_fn(|k| if j == k { own + 2.0 * (r2 - r[j] * r[j]) } else { -2.0 * r[j] * r[k] })
+        });
+        close_matrix(&matrix(&v["tensor"]), &want, 1e-15);
+        assert_eq!(vector(&v["about"]), p);
+    }
+    // Two parts: the combined CM and the Steiner terms of each.
+    let text = "[[parts]]\nshape = \"point\"\nmass = 1\ncenter = [0, 0, 0]\n[[parts]]\nshape = \"point\"\nmass = 3\ncenter = [4, 0, 0]\n";
+    let v = json(&[&body("two_points.toml", text)]);
+    assert_eq!(vector(&v["center_of_mass"]), [3.0, 0.0, 0.0]);
+    // Reduced mass 3/4 times the distance² 16 = 12 about any axis ⊥ x through the CM.
+    close_matrix(&matrix(&v["tensor"]), &diag([0.0, 12.0, 12.0]), 1e-15);
+    assert_eq!(v["symmetry"], "symmetric");
+}
+
+/// The notes' rotation D = D_γ D_β D_α, written out here independently of the library.
+fn rotation(al: f64, be: f64, ga: f64) -> [[f64; 3]; 3] {
+    let (sa, ca) = al.sin_cos();
+    let (sb, cb) = be.sin_cos();
+    let (sg, cg) = ga.sin_cos();
+    let d_a = [[ca, sa, 0.0], [-sa, ca, 0.0], [0.0, 0.0, 1.0]];
+    let d_b = [[1.0, 0.0, 0.0], [0.0, cb, sb], [0.0, -sb, cb]];
+    let d_g = [[cg, sg, 0.0], [-sg, cg, 0.0], [0.0, 0.0, 1.0]];
+    let mul = |a: [[f64; 3]; 3], b: [[f64; 3]; 3]| -> [[f64; 3]; 3] {
+        std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
+    };
+    mul(d_g, mul(d_b, d_a))
+}
+
+#[test]
+fn a_turned_box_is_r_i_rt_with_the_same_principal_moments() {
+    let (al, be, ga) = (0.3, 1.1, -0.7);
+    let text = format!(
+        "[[parts]]\nshape = \"box\"\nmass = 12\nsize = [1, 2, 3]\ncenter = [1, 1, 1]\norientation = [{al}, {be}, {ga}]\n"
+    );
+    let v = json(&[&body("turned_box.toml", &text)]);
+    let own = [13.0, 10.0, 5.0];
+    let d = rotation(al, be, ga);
+    // R = Dᵀ: I = Dᵀ diag(own) D.
+    let want: [[f64; 3]; 3] =
+        std::array::from_fn(|j| std::array::from_fn(|k| (0..3).map(|a| d[a][j] * own[a] * d[a][k]).sum()));
+    close_matrix(&matrix(&v["tensor"]), &want, 1e-13);
+    assert!(want[0][1].abs() > 0.5, "the test turns the box enough to mix the axes");
+    let pm = vector(&v["principal_moments"]);
+    for (got, want) in pm.iter().zip([5.0, 10.0, 13.0]) {
+        close(*got, want, 1e-13);
+    }
+    // The axis of the smallest moment is the part's z axis, row 3 of D (up to sign).
+    let n = vector(&v["principal_axes"][0]);
+    let dot: f64 = (0..3).map(|k| n[k] * d[2][k]).sum();
+    close(dot.abs(), 1.0, 1e-12);
+    assert!(v["tensor_exact"].is_array(), "a turned part is still exact (in sin and cos of the angles)");
+}
+
+#[test]
+fn linear_density_is_integrated_exactly() {
+    // ρ = rho (1 + x/a) on [0,a]×[0,b]×[0,c] with rho = 2, a = 1, b = 2, c = 3. By hand:
+    // M = 3/2 rho a b c = 18, X = (∫ρx)/M = (5/6 rho a² b c)/M = 5a/9,
+    // ∫ρx² = 7/12 rho a³ b c = 7, ∫ρy² = 3/2 rho a c b³/3 = 24, ∫ρz² = 3/2 rho a b c³/3 = 54,
+    // so about the CM: I_xx = 24 + 54 − M(1 + 2.25) = 19.5,
+    // I_yy = 7 + 54 − M(25/81 + 2.25) = 61 − 18·(25/81) − 40.5, I_zz = 7 + 24 − 18·(25/81) − 18.
+    let v = json(&["examples/bodies/wedge_density.toml"]);
+    assert_eq!(v["mass_exact"], "3*a*b*c*rho/2");
+    assert_eq!(v["center_of_mass_exact"][0], "5*a/9");
+    close(v["mass"].as_f64().unwrap(), 18.0, 1e-15);
+    let x2 = 18.0 * 25.0 / 81.0;
+    close_matrix(&matrix(&v["tensor"]), &diag([19.5, 61.0 - x2 - 40.5, 31.0 - x2 - 18.0]), 1e-14);
+    assert_eq!(v["cubature"], Value::Null);
+    // About the origin, an off-diagonal product: −∫ρxy = −(5/6 rho a² b c)(b/2) = −10.
+    let v = json(&["examples/bodies/wedge_density.toml", "--about", "0,0,0"]);
+    close(matrix(&v["tensor"])[0][1], -10.0, 1e-14);
+}
+
+/// erf by its Taylor series (plenty for |x| ≤ 3 in a test).
+fn erf(x: f64) -> f64 {
+    let mut term = x;
+    let mut sum = x;
+    for n in 1..300 {
+        term *= -x * x / f64::from(n);
+        sum += term / f64::from(2 * n + 1);
+    }
+    sum * 2.0 / std::f64::consts::PI.sqrt()
+}
+
+#[test]
+fn gaussian_density_by_cubature_matches_the_closed_form() {
+    let (w, s) = (0.7f64, 1.0f64);
+    let g0 = std::f64::consts::PI.sqrt() * w * erf(s / w);
+    let g2 = w * w / 2.0 * (g0 - 2.0 * s * (-(s * s) / (w * w)).exp());
+    let v = json(&["examples/bodies/gaussian_density.toml"]);
+    close(v["mass"].as_f64().unwrap(), g0.powi(3), 1e-8);
+    close_matrix(&matrix(&v["tensor"]), &diag([2.0 * g0 * g0 * g2; 3]), 1e-8);
+    assert_eq!(v["tensor_exact"], Value::Null);
+    assert_eq!(v["mass_exact"], Value::Null);
+    let err = v["cubature"]["tensor_error"].as_f64().unwrap();
+    assert!(err > 0.0 && err < 1e-9, "{err}");
+    assert_eq!(v["cubature"]["converged"], true);
+    assert_eq!(v["symmetry"], "spherical");
+}
+
+#[test]
+fn exponential_density_by_cubature_with_an_offset_centre() {
+    // ρ = exp(x) on [0,1]³: M = e − 1, ∫xρ = 1, ∫x²ρ = e − 2, ∫y²ρ = (e − 1)/3, ∫xyρ = 1/2.
+    let text = "[[parts]]\nshape = \"density\"\ndensity = \"exp(x)\"\nregion = [[0, 1], [0, 1], [0, 1]]\n";
+    let v = json(&[&body("exp.toml", text), "--about", "0,0,0"]);
+    let e = std::f64::consts::E;
+    let m = e - 1.0;
+    close(v["mass"].as_f64().unwrap(), m, 1e-10);
+    let c = vector(&v["center_of_mass"]);
+    close(c[0], 1.0 / m, 1e-10);
+    close(c[1], 0.5, 1e-10);
+    let (xx, yy) = (e - 2.0, m / 3.0);
+    let want = [[2.0 * yy, -0.5, -0.5], [-0.5, xx + yy, -m / 4.0], [-0.5, -m / 4.0, xx + yy]];
+    close_matrix(&matrix(&v["tensor"]), &want, 1e-9);
+    assert_eq!(v["tensor_exact"], Value::Null);
+}
+
+/// A bad body file: exit 2, and stderr names the file, line and column and says what is wrong.
+#[track_caller]
+fn check_bad(name: &str, text: &str, line_col: &str, message: &str) {
+    let path = body(name, text);
+    let (code, stdout, stderr) = lagrange(&["inertia", &path]);
+    assert_eq!(code, 2, "{stdout}\n{stderr}");
+    assert!(stderr.contains(&format!("{path}:{line_col}: ")), "expected {path}:{line_col} in\n{stderr}");
+    assert!(stderr.contains(message), "expected {message:?} in\n{stderr}");
+}
+
+#[test]
+fn bad_bodies_exit_2_with_file_line_and_column() {
+    let head = "[parameters]\nM = 1.0\na = 1.0\n\n[[parts]]\n";
+    check_bad("unknown_shape.toml", &format!("{head}shape = \"cube\"\nmass = \"M\"\n"), "6:9", "unknown shape 'cube'");
+    check_bad("missing_size.toml", &format!("{head}shape = \"box\"\nmass = \"M\"\n"), "5:1", "has no `size`");
+    check_bad(
+        "negative_mass.toml",
+        &format!("{head}shape = \"sphere\"\nmass = \"-2*M\"\nsize = [\"a\"]\n"),
+        "7:8",
+        "expected a mass ≥ 0",
+    );
+    check_bad(
+        "two_components.toml",
+        &format!("{head}shape = \"box\"\nmass = \"M\"\nsize = [\"a\", \"a\"]\n"),
+        "8:8",
+        "has 3 components",
+    );
+    check_bad(
+        "center_components.toml",
+        &format!("{head}shape = \"sphere\"\nmass = \"M\"\nsize = [\"a\"]\ncenter = [0, 0]\n"),
+        "9:10",
+        "has 3 components",
+    );
+    check_bad(
+        "unknown_parameter.toml",
+        &format!("{head}shape = \"sphere\"\nmass = \"M\"\nsize = [\"2*b\"]\n"),
+        "8:12",
+        "unknown",
+    );
+    check_bad(
+        "infinite_density.toml",
+        &format!("{head}shape = \"density\"\ndensity = \"1/(x - 1/2)\"\nregion = [[0, \"a\"], [0, 1], [0, 1]]\n"),
+        "7:11",
+        "expected a finite value",
+    );
+    check_bad(
+        "singular_density.toml",
+        &format!("{head}shape = \"density\"\ndensity = \"1/x\"\nregion = [[0, \"a\"], [0, 1], [0, 1]]\n"),
+        "7:11",
+        "did not converge",
+    );
+    check_bad(
+        "density_with_mass.toml",
+        &format!("{head}shape = \"density\"\nmass = 2\ndensity = \"1\"\nregion = [[0, 1], [0, 1], [0, 1]]\n"),
+        "7:8",
+        "has no `mass`",
+    );
+    check_bad(
+        "unknown_key.toml",
+        &format!("{head}shape = \"point\"\nmass = 1\ncolour = \"red\"\n"),
+        "8:1",
+        "unknown field",
+    );
+}
+
+#[test]
+fn a_bad_reference_point_exits_2() {
+    let (code, _, stderr) = lagrange(&["inertia", "examples/bodies/cube.toml", "--about", "0,b,0"]);
+    assert_eq!(code, 2);
+    assert!(stderr.contains("--about:1:3"), "{stderr}");
+    let (code, _, stderr) = lagrange(&["inertia", "examples/bodies/cube.toml", "--about", "1,2"]);
+    assert_eq!(code, 2);
+    assert!(stderr.contains("expected `com` or a point x,y,z"), "{stderr}");
+}
+
+#[test]
+fn every_body_example_runs_and_follows_the_contract() {
+    let dir = repo_root().join("examples/bodies");
+    let mut files: Vec<String> = std::fs::read_dir(&dir)
+        .expect("examples/bodies exists")
+        .map(|e| e.expect("a directory entry").file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".toml"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 5, "{files:?}");
+    for file in files {
+        let v = json(&[&format!("examples/bodies/{file}")]);
+        assert_eq!(v["format"], "lagrange.inertia/1", "{file}");
+        assert!(v["mass"].as_f64().unwrap() > 0.0, "{file}");
+        let t = matrix(&v["tensor"]);
+        let pm = vector(&v["principal_moments"]);
+        assert!(pm[0] <= pm[1] && pm[1] <= pm[2], "{file}: {pm:?}");
+        // The trace is invariant; a physical tensor obeys the triangle inequality I1 + I2 ≥ I3.
+        close(pm.iter().sum(), t[0][0] + t[1][1] + t[2][2], 1e-12);
+        assert!(pm[0] + pm[1] >= pm[2] * (1.0 - 1e-12), "{file}: {pm:?}");
+        assert!(v["tensor_exact"].is_array() || v["tensor_exact"].is_null(), "{file}");
+    }
+}
