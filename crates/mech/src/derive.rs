@@ -89,6 +89,8 @@ pub struct Derivation {
     pub explicit_time: bool,
     /// Explanations of the verdicts.
     pub verdicts: Verdicts,
+    /// Each rigid body's angular velocity and angular momentum (body frame).
+    pub bodies: Vec<crate::body::BodyMotion>,
 }
 
 /// Symbols and the "is a variable" predicate used for collecting.
@@ -126,7 +128,8 @@ impl Derivation {
         let _ = RANK_COORDINATE;
         let is_var = |s: Symbol| vars.is_var(s);
 
-        // T and U from particles, kinetic and potential; or L itself.
+        // T and U from particles, bodies, kinetic and potential; or L itself.
+        let mut bodies = Vec::new();
         let (kinetic, potential) = if model.lagrangian.is_some() {
             (None, None)
         } else {
@@ -143,6 +146,13 @@ impl Derivation {
                 if let Some(u) = part.potential {
                     u_terms.push(u);
                 }
+            }
+            for body in &model.bodies {
+                let g = model.gravity.as_ref().map(|g| g.expr);
+                let terms = crate::body::terms(pool, body, &q, &qd, t, g);
+                t_terms.push(terms.kinetic);
+                u_terms.extend(terms.potential);
+                bodies.push(crate::body::motion(pool, body, &terms, &is_var));
             }
             if let Some(k) = &model.kinetic {
                 t_terms.push(k.expr);
@@ -383,6 +393,7 @@ impl Derivation {
             hamilton,
             explicit_time,
             verdicts,
+            bodies,
         })
     }
 

@@ -18,6 +18,7 @@
 //! assert_eq!(d.pool().display(d.momenta[0]).to_string(), "l^2*m*th'");
 //! ```
 
+pub mod body;
 mod derive;
 mod dynamics;
 pub mod euler;
@@ -30,6 +31,7 @@ mod report;
 mod run;
 mod sweep;
 
+pub use body::{Body, BodyMotion, BodyRecorder};
 pub use derive::{Conserved, Derivation, Verdicts};
 pub use dynamics::{invariants_of, Dynamics, Form, Invariant, System};
 pub use error::ModelError;
