@@ -328,7 +328,14 @@ pub struct BodyMotion {
 }
 
 /// The kinetic energy, gravity potential, ω and L of a body (see the module text).
-pub fn terms(pool: &mut Pool, body: &Body, q: &[ExprId], qd: &[ExprId], t: ExprId, gravity: Option<ExprId>) -> BodyTerms {
+pub fn terms(
+    pool: &mut Pool,
+    body: &Body,
+    q: &[ExprId],
+    qd: &[ExprId],
+    t: ExprId,
+    gravity: Option<ExprId>,
+) -> BodyTerms {
     let [a, b, c] = body.angles;
     let omega = euler::angular_velocity(pool, [q[a], q[b], q[c]], [qd[a], qd[b], qd[c]]);
     let d = euler::rotation(pool, q[a], q[b], q[c]);
@@ -450,32 +457,70 @@ pub fn gimbal_threshold(rtol: f64) -> f64 {
     (f64::EPSILON / rtol.max(1e-300)).sqrt().clamp(1e-6, 1e-3)
 }
 
-/// For each body, g = sin²β − s² (s from [`gimbal_threshold`]): a run must stop
-/// when g falls below zero. Returned with the body's name and β's name.
-pub fn gimbal_guards(d: &mut crate::Derivation, rtol: f64) -> Vec<(ExprId, String)> {
+/// A condition a run stops on, as a failure, before a body's Euler angles
+/// reach their gimbal singularity.
+#[derive(Debug, Clone)]
+pub struct GimbalGuard {
+    /// g = sin²β − s², which falls through zero where |sin β| reaches s.
+    pub expr: ExprId,
+    /// The index of β among the coordinates.
+    pub beta: usize,
+    /// s, from [`gimbal_threshold`].
+    pub threshold: f64,
+    /// The body's name.
+    pub body: String,
+    /// β's name.
+    pub beta_name: String,
+}
+
+impl GimbalGuard {
+    /// Whether the state is past the guard.
+    pub fn violated(&self, q: &[f64]) -> bool {
+        !(q[self.beta].sin().abs() >= self.threshold)
+    }
+
+    /// What happened at time t, in the user's terms.
+    pub fn message(&self, t: f64) -> String {
+        format!(
+            "body '{}' reached the gimbal singularity of its Euler angles at t = {t}: |sin {b}| fell below {:.1e} ({b} near 0 or π), where α and γ turn about the same axis and the angles' mass matrix (determinant ∝ sin²{b}) is singular, so the accelerations cannot be trusted. {}",
+            self.body,
+            self.threshold,
+            self.advice(),
+            b = self.beta_name
+        )
+    }
+
+    /// What to do about it.
+    pub fn advice(&self) -> String {
+        format!(
+            "Euler angles cannot follow a motion through {b} = 0 or π: tilt the fixed frame so that the body's 3-axis stays away from the fixed z axis, or end the run earlier (--until, --stop-when)",
+            b = self.beta_name
+        )
+    }
+}
+
+/// One [`GimbalGuard`] per body, for a run at relative tolerance `rtol`.
+pub fn gimbal_guards(d: &mut crate::Derivation, rtol: f64) -> Vec<GimbalGuard> {
     let s = gimbal_threshold(rtol);
     let bodies = d.model.bodies.clone();
     let pool = &mut d.model.pool;
     bodies
         .iter()
         .map(|b| {
-            let be = d.q[b.angles[1]];
-            let sb = pool.func(Func::Sin, be);
+            let beta = b.angles[1];
+            let sb = pool.func(Func::Sin, d.q[beta]);
             let sb2 = pool.powi(sb, 2);
             let s2 = pool.float(s * s);
-            let g = pool.sub(sb2, s2);
-            let beta = &d.model.coordinates[b.angles[1]].name;
-            let msg = format!(
-                "body '{}' reached the gimbal singularity of its Euler angles: |sin {beta}| fell below {s:.1e}, where α and γ turn about the same axis and the angles' mass matrix (determinant ∝ sin²{beta}) is singular, so the accelerations cannot be trusted",
-                b.name
-            );
-            (g, msg)
+            GimbalGuard {
+                expr: pool.sub(sb2, s2),
+                beta,
+                threshold: s,
+                body: b.name.clone(),
+                beta_name: d.model.coordinates[beta].name.clone(),
+            }
         })
         .collect()
 }
-
-/// The help that goes with a gimbal failure.
-pub const GIMBAL_HELP: &str = "Euler angles cannot describe a motion through β = 0 or π. Tilt the fixed frame so that the body's 3-axis stays away from the fixed z axis (e.g. start a top lying along the x axis: the polar angle of the symmetry axis measured from a horizontal axis), or stop the run before it gets there with --stop-when.";
 
 /// Evaluates the bodies' ω and L along a run: one tape over `[q, q', t, parameters]`.
 #[derive(Debug, Clone)]

@@ -21,8 +21,8 @@
 pub mod body;
 mod derive;
 mod dynamics;
-pub mod euler;
 mod error;
+pub mod euler;
 mod model;
 mod modes;
 mod orbit;
@@ -38,7 +38,7 @@ pub use error::ModelError;
 pub use model::{Coordinate, InitialValue, Located, Model, Parameter, Particle, MAX_FILE_BYTES};
 pub use modes::{normal_modes, Mode, ModeKind, Modes, ModesConfig, ModesError, ModesReport, SymbolicModes};
 pub use orbit::{Kepler, Orbit, OrbitError, OrbitKind, OrbitReport};
-pub use report::{DeriveReport, HamiltonEquations, NamedExpr, Ordered};
+pub use report::{BodyReport, DeriveReport, HamiltonEquations, NamedExpr, Ordered};
 pub use run::{choose_method, simulate, Audit, Row, RunConfig, RunError, RunReport, StopCondition};
 pub use sweep::{
     format_axes, merge, parse_axes, sweep, Axis, Grid, Shard, SweepConfig, SweepError, SweepTable, TableRow, Target,

@@ -197,7 +197,13 @@ impl Reader<'_> {
         self.expr_str(text.get_ref(), text.span(), scope, what)
     }
 
-    pub(crate) fn expr_str(&mut self, text: &str, span: Range<usize>, scope: Scope, what: &str) -> Result<Located, ModelError> {
+    pub(crate) fn expr_str(
+        &mut self,
+        text: &str,
+        span: Range<usize>,
+        scope: Scope,
+        what: &str,
+    ) -> Result<Located, ModelError> {
         let offset = content_offset(self.source, &span, text);
         let coordinates: Vec<String> = self.coordinates.iter().map(|c| c.name.clone()).collect();
         let parameters: Vec<String> = self.parameters.iter().map(|p| p.name.clone()).collect();
@@ -249,7 +255,12 @@ impl Reader<'_> {
         }
     }
 
-    pub(crate) fn num_or_expr(&mut self, v: &Spanned<NumOrText>, scope: Scope, what: &str) -> Result<Located, ModelError> {
+    pub(crate) fn num_or_expr(
+        &mut self,
+        v: &Spanned<NumOrText>,
+        scope: Scope,
+        what: &str,
+    ) -> Result<Located, ModelError> {
         match v.get_ref() {
             NumOrText::Num(x) => {
                 if !x.is_finite() {
@@ -431,7 +442,9 @@ impl Model {
             particles.push(Particle { mass, position, potential, span: p.span() });
         }
         let bodies = crate::body::read_all(&mut r, &raw.bodies)?;
-        if let (Some(_), Some(b), Some(p)) = (&gravity, raw.bodies.first(), particles.iter().find(|p| p.position.len() != 3)) {
+        if let (Some(_), Some(b), Some(p)) =
+            (&gravity, raw.bodies.first(), particles.iter().find(|p| p.position.len() != 3))
+        {
             let _ = b;
             return Err(ModelError::at(
                 p.span.clone(),
