@@ -12,6 +12,7 @@ mod orbit;
 mod plot;
 mod simulate;
 mod sweep;
+mod top;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use diagnostics::Failure;
@@ -99,6 +100,8 @@ enum Command {
     Modes(modes::Args),
     /// A central-force orbit from the initial state: turning points, kind, period, apsidal angle.
     Orbit(orbit::Args),
+    /// A symmetric top from the initial state: precession, nutation bounds, steady precession, sleeping top.
+    Top(top::Args),
 }
 
 /// Summary formats of `simulate`.
@@ -140,6 +143,7 @@ fn main() -> ExitCode {
         Command::Sweep(args) => sweep::run(&args),
         Command::Modes(args) => modes::run(&args),
         Command::Orbit(args) => orbit::run(&args),
+        Command::Top(args) => top::run(&args),
         Command::Simulate { list_methods: true, .. } => write_stdout(&simulate::list_methods()),
         Command::Simulate {
             model,
