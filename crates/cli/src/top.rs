@@ -89,7 +89,12 @@ fn text(d: &Derivation, t: &Top) -> String {
     if let Some(f) = &t.free {
         let _ = writeln!(s, "Free top ({}): Euler's equations give ω3 = const and ω1 + iω2 turning at", f.shape);
         let _ = writeln!(s, "  Ω = (I3 − I)/I·ω3 = {}   (body precession rate)", num(f.body_precession_rate));
-        let _ = writeln!(s, "  A = sqrt(ω1² + ω2²) = {}, |ω| = const, |L| = {}", num(f.transverse_omega), num(f.angular_momentum));
+        let _ = writeln!(
+            s,
+            "  A = sqrt(ω1² + ω2²) = {}, |ω| = const, |L| = {}",
+            num(f.transverse_omega),
+            num(f.angular_momentum)
+        );
         let _ = writeln!(
             s,
             "  inclination β0 = atan(I·A/(I3·ω3)) = {} rad = {}°   (the angle between L and the symmetry axis)",
@@ -112,10 +117,7 @@ fn text(d: &Derivation, t: &Top) -> String {
         let _ = writeln!(s, "Heavy top on a fixed pivot, M g S = {}:", num(h.mgs));
         let _ = writeln!(s, "  E' = E − p_{g}²/(2 I3) = {} = ½ I {b}'² + U_eff({b})", num(h.energy_prime));
         let _ = writeln!(s, "  U_eff({b}) = (p_{a} − p_{g} cos {b})²/(2 I sin²{b}) + M g S cos {b}");
-        let _ = writeln!(
-            s,
-            "  nutation between the turning angles (E' = U_eff, roots of the cubic in u = cos {b}):"
-        );
+        let _ = writeln!(s, "  nutation between the turning angles (E' = U_eff, roots of the cubic in u = cos {b}):");
         let _ = writeln!(
             s,
             "    {b}1 = {} rad ({}°), {b}2 = {} rad ({}°)",
@@ -125,16 +127,27 @@ fn text(d: &Derivation, t: &Top) -> String {
             num(h.beta_max.to_degrees())
         );
         let kind = match h.kind {
-            NutationKind::Steady => "none: E' is the minimum of U_eff, steady precession at a fixed inclination".to_string(),
-            NutationKind::Monotonic => format!("{a}' keeps its sign in [{b}1, {b}2]: monotonic precession (a wavy curve)"),
+            NutationKind::Steady => {
+                "none: E' is the minimum of U_eff, steady precession at a fixed inclination".to_string()
+            }
+            NutationKind::Monotonic => {
+                format!("{a}' keeps its sign in [{b}1, {b}2]: monotonic precession (a wavy curve)")
+            }
             NutationKind::Loops => format!(
                 "{a}' changes sign at {b} = {} inside [{b}1, {b}2]: the axis draws loops",
                 h.alpha_dot_zero.map_or("?".into(), num)
             ),
-            NutationKind::Cusps => format!("{a}' vanishes at a turning angle: the axis draws cusps (released without precession)"),
+            NutationKind::Cusps => {
+                format!("{a}' vanishes at a turning angle: the axis draws cusps (released without precession)")
+            }
         };
         let _ = writeln!(s, "    kind: {kind}");
-        let _ = writeln!(s, "    period {} , mean precession rate {a}' = {}", num(h.nutation_period), num(h.mean_precession_rate));
+        let _ = writeln!(
+            s,
+            "    period {} , mean precession rate {a}' = {}",
+            num(h.nutation_period),
+            num(h.mean_precession_rate)
+        );
         match h.steady_precession {
             Some([slow, fast]) => {
                 let _ = writeln!(
@@ -167,21 +180,20 @@ fn text(d: &Derivation, t: &Top) -> String {
 /// The symmetry axis in space, Dᵀe₃ = (sin β sin α, −sin β cos α, cos β), along
 /// a short simulation of the model.
 fn axis_path(d: &mut Derivation, t: &Top) -> Vec<[f64; 3]> {
-    let idx: Vec<usize> = t
-        .angle_names
-        .iter()
-        .map(|n| d.model.coordinates.iter().position(|c| &c.name == n).unwrap_or(0))
-        .collect();
+    let idx: Vec<usize> =
+        t.angle_names.iter().map(|n| d.model.coordinates.iter().position(|c| &c.name == n).unwrap_or(0)).collect();
     let until = match (&t.heavy, &t.free) {
         (Some(h), _) if h.nutation_period.is_finite() && h.nutation_period > 0.0 => {
             // Enough nutations to go once around, at most 40.
-            let around = if h.mean_precession_rate != 0.0 { 2.0 * PI / h.mean_precession_rate.abs() } else { f64::INFINITY };
+            let around =
+                if h.mean_precession_rate != 0.0 { 2.0 * PI / h.mean_precession_rate.abs() } else { f64::INFINITY };
             around.min(40.0 * h.nutation_period)
         }
         (_, Some(f)) if f.space_precession_rate > 0.0 => 2.0 * PI / f.space_precession_rate,
         _ => 10.0,
     };
-    let config = RunConfig { until, output: num::Output::Samples(4001), rtol: 1e-8, atol: 1e-11, ..RunConfig::default() };
+    let config =
+        RunConfig { until, output: num::Output::Samples(4001), rtol: 1e-8, atol: 1e-11, ..RunConfig::default() };
     let mut pts = Vec::new();
     let _ = mech::simulate(d, &config, |row| {
         let (al, be) = (row.q[idx[0]], row.q[idx[1]]);

@@ -41,8 +41,8 @@ pub use modes::{normal_modes, Mode, ModeKind, Modes, ModesConfig, ModesError, Mo
 pub use orbit::{Kepler, Orbit, OrbitError, OrbitKind, OrbitReport};
 pub use report::{BodyReport, DeriveReport, HamiltonEquations, NamedExpr, Ordered};
 pub use run::{choose_method, simulate, Audit, Row, RunConfig, RunError, RunReport, StopCondition};
-pub use top::{FreeTop, HeavyTop, Nutation, NutationKind, Top, TopError, TopKind, TopReport};
 pub use sweep::{
     format_axes, merge, parse_axes, sweep, Axis, Grid, Shard, SweepConfig, SweepError, SweepTable, TableRow, Target,
     CSV_MAGIC, DEFAULT_RTOL, LYAPUNOV_D0, LYAPUNOV_INTERVAL, MAX_RUNS,
 };
+pub use top::{FreeTop, HeavyTop, Nutation, NutationKind, Top, TopError, TopKind, TopReport};

@@ -172,7 +172,10 @@ impl Top {
         let model = &d.model;
         if model.bodies.len() != 1 {
             return Err(TopError::whole(
-                format!("`lagrange top` needs a model with exactly one rigid body; this one has {}", model.bodies.len()),
+                format!(
+                    "`lagrange top` needs a model with exactly one rigid body; this one has {}",
+                    model.bodies.len()
+                ),
                 "describe the top in one [[bodies]] table with inertia = [\"I\", \"I\", \"I3\"]",
             ));
         }
@@ -198,7 +201,8 @@ impl Top {
         }
         let scale = inertia[0][0].abs().max(inertia[2][2].abs());
         let off = [inertia[0][1], inertia[0][2], inertia[1][2]];
-        let symmetric = (inertia[0][0] - inertia[1][1]).abs() <= 1e-12 * scale && off.iter().all(|x| x.abs() <= 1e-12 * scale);
+        let symmetric =
+            (inertia[0][0] - inertia[1][1]).abs() <= 1e-12 * scale && off.iter().all(|x| x.abs() <= 1e-12 * scale);
         if !symmetric {
             return Err(TopError::at(
                 body.inertia_span.clone(),
@@ -242,7 +246,8 @@ impl Top {
         let (sb, cb) = angles[1].sin_cos();
         let p_gamma = i3 * omega[2];
         let p_alpha = i * rates[0] * sb * sb + p_gamma * cb;
-        let energy = 0.5 * (i * (rates[0] * rates[0] * sb * sb + rates[1] * rates[1]) + i3 * omega[2] * omega[2]) + mgs * cb;
+        let energy =
+            0.5 * (i * (rates[0] * rates[0] * sb * sb + rates[1] * rates[1]) + i3 * omega[2] * omega[2]) + mgs * cb;
         let angle_names = [a, b, gidx].map(|k| model.coordinates[k].name.clone());
         let mut top = Top {
             kind,
