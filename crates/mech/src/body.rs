@@ -476,7 +476,8 @@ pub struct GimbalGuard {
 impl GimbalGuard {
     /// Whether the state is past the guard.
     pub fn violated(&self, q: &[f64]) -> bool {
-        !(q[self.beta].sin().abs() >= self.threshold)
+        let s = q[self.beta].sin().abs();
+        s.is_nan() || s < self.threshold
     }
 
     /// What happened at time t, in the user's terms.
