@@ -144,7 +144,7 @@ fn text(d: &Derivation, t: &Top) -> String {
         let _ = writeln!(s, "    kind: {kind}");
         let _ = writeln!(
             s,
-            "    period {} , mean precession rate {a}' = {}",
+            "    nutation period {}, mean precession rate {a}' = {}",
             num(h.nutation_period),
             num(h.mean_precession_rate)
         );
@@ -206,12 +206,20 @@ fn axis_path(d: &mut Derivation, t: &Top) -> Vec<[f64; 3]> {
 fn figure(d: &mut Derivation, t: &Top) -> Result<String, Box<dyn Error>> {
     let path = axis_path(d, t);
     let b = t.angle_names[1].clone();
-    let (lo, hi) = (0.02, PI - 0.02);
+    // β around the allowed band (the whole range for a free top).
+    let (lo, hi) = match &t.heavy {
+        Some(h) => {
+            let w = (h.beta_max - h.beta_min).max(0.1);
+            ((h.beta_min - w).max(0.01), (h.beta_max + w).min(PI - 0.01))
+        }
+        None => ((t.angles[1] - 0.8).max(0.02), (t.angles[1] + 0.8).min(PI - 0.02)),
+    };
     let n = 800;
     let pot: Vec<(f64, f64)> = (0..=n).map(|i| lo + (hi - lo) * i as f64 / n as f64).map(|x| (x, t.u_eff(x))).collect();
     let level = t.heavy.as_ref().map_or(t.u_eff(t.angles[1]), |h| h.energy_prime);
     let umin = pot.iter().map(|p| p.1).fold(level, f64::min);
-    let spread = (level - umin).abs().max(1e-6 * (1.0 + level.abs()));
+    // At a minimum (steady motion) E' = min U_eff: show the well around it.
+    let spread = (level - umin).abs().max(0.25 * level.abs()).max(1e-6);
     let (ylo, yhi) = (umin - 0.3 * spread, level + 2.0 * spread);
     let mut svg = String::new();
     {
@@ -231,11 +239,22 @@ fn figure(d: &mut Derivation, t: &Top) -> Result<String, Box<dyn Error>> {
             .y_label_area_size(70)
             .build_cartesian_2d(lo..hi, ylo..yhi)?;
         c.configure_mesh().x_desc(b.as_str()).y_desc("U_eff").light_line_style(WHITE).draw()?;
-        let inside: Vec<(f64, f64)> = pot.into_iter().filter(|p| p.1.is_finite() && p.1 <= yhi && p.1 >= ylo).collect();
-        c.draw_series(inside.into_iter().map(|p| Circle::new(p, 1, BLUE.filled())))?;
+        // The curve, broken where it leaves the drawing.
+        let mut segment: Vec<(f64, f64)> = Vec::new();
+        for p in pot.into_iter().chain(std::iter::once((f64::NAN, f64::NAN))) {
+            if p.1.is_finite() && p.1 <= yhi && p.1 >= ylo {
+                segment.push(p);
+            } else if !segment.is_empty() {
+                c.draw_series(LineSeries::new(std::mem::take(&mut segment), BLUE.stroke_width(2)))?;
+            }
+        }
         c.draw_series(LineSeries::new(vec![(lo, level), (hi, level)], RED.stroke_width(1)))?;
-        if let Some(h) = &t.heavy {
-            for x in [h.beta_min, h.beta_max] {
+        let marks = match &t.heavy {
+            Some(h) => vec![h.beta_min, h.beta_max],
+            None => vec![t.angles[1]],
+        };
+        {
+            for x in marks {
                 c.draw_series(std::iter::once(Circle::new((x, level), 5, RED.filled())))?;
                 c.draw_series(LineSeries::new(vec![(x, ylo), (x, level)], RGBColor(0xbb, 0xbb, 0xbb)))?;
             }

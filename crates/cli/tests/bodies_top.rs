@@ -359,3 +359,17 @@ fn bad_bodies_exit_2_with_a_location() {
         assert!(at.starts_with(|c: char| c.is_ascii_digit()), "{to}: located: {}", r.stderr);
     }
 }
+
+#[test]
+fn top_plot_is_an_svg_with_both_panels() {
+    for model in ["examples/tops/heavy_top.toml", "examples/tops/free_symmetric_top.toml"] {
+        let svg = tmp(&format!("{}.svg", model.len()));
+        let r = lagrange(&["top", model, "--plot", svg.to_str().unwrap()]);
+        assert_eq!(r.code, Some(0), "{}", r.stderr);
+        let text = std::fs::read_to_string(&svg).unwrap();
+        assert!(text.starts_with("<svg") || text.contains("<svg"), "{model}: not an SVG");
+        assert!(text.contains("effective potential") && text.contains("symmetry axis on the unit sphere"));
+        // The axis path is drawn: many points, not an empty panel.
+        assert!(text.matches("<circle").count() > 1000, "{model}: the axis path has too few points");
+    }
+}
