@@ -216,6 +216,22 @@ fn heavy_top_nutation_agrees_with_simulate() {
     }
 }
 
+#[test]
+fn nutation_with_an_initial_beta_rate_and_a_hanging_top() {
+    // β' ≠ 0 at the start: neither turning angle is the initial β. S < 0: the
+    // centre of mass below the pivot (U_eff's cubic has a negative leading term).
+    let text = std::fs::read_to_string(repo_root().join("examples/tops/heavy_top.toml")).unwrap();
+    for (s, name) in [("0.5", "rate"), ("-0.5", "hanging")] {
+        let file = tmp(&format!("heavy_{name}.toml"));
+        let t = text.replace("\"be'\" = 0.0", "\"be'\" = 0.7").replace("S = 0.5 ", &format!("S = {s} "));
+        std::fs::write(&file, t).unwrap();
+        let top = json(&["top", file.to_str().unwrap(), "--format", "json"]);
+        let (b1, b2) = (top["nutation"]["beta_min"].as_f64().unwrap(), top["nutation"]["beta_max"].as_f64().unwrap());
+        assert!(b1 < 0.6 - 1e-3 && b2 > 0.6 + 1e-3, "{name}: [{b1}, {b2}] strictly around β₀ = 0.6");
+        check_nutation(&top, &[], &[file.to_str().unwrap()]);
+    }
+}
+
 /// β within [β₁, β₂], both reached at the rows where β' = 0, and the mean α̇.
 fn check_nutation(top: &Value, set: &[&str], file: &[&str]) {
     let (b1, b2) = (top["nutation"]["beta_min"].as_f64().unwrap(), top["nutation"]["beta_max"].as_f64().unwrap());
@@ -349,6 +365,9 @@ fn bad_bodies_exit_2_with_a_location() {
         ("inertia = [\"I\", \"I\", \"I3\"]", "inertia = [\"I\", \"I\", \"J3\"]", "J3"),
         ("position = [\"0\", \"0\", \"0\"]", "position = [\"0\", \"0\"]", "3 components"),
         ("center_of_mass = [\"0\", \"0\", \"S\"]", "center_of_mass = [\"0\", \"0\", \"be\"]", "be"),
+        ("[[bodies]]", "[[particles]]\nmass = 1\nposition = [\"0\", \"1\"]\n[[bodies]]", "3-D"),
+        ("angles = [\"al\", \"be\", \"ga\"]", "angles = [\"al\", \"be\", \"th\"]", "not a coordinate"),
+        ("mass = \"M\"", "mass = \"-M\"", "positive"),
     ] {
         let file = tmp("bad.toml");
         std::fs::write(&file, text.replace(from, to)).unwrap();

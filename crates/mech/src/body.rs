@@ -151,21 +151,6 @@ fn read(r: &mut Reader<'_>, b: &Spanned<RawBody>, index: usize) -> Result<Body, 
     };
     let position = three(r, &raw.position, Scope::Configuration, "position")?;
     let center_of_mass = three(r, &raw.center_of_mass, Scope::Parameters, "center_of_mass")?;
-    for &a in &angles {
-        let qa = r.pool.var(&r.coordinates[a].name, 0);
-        if position.iter().any(|&x| !r.pool.free_of(x, qa)) {
-            let span = raw.position.as_ref().map_or(b.span(), |p| p.span());
-            return Err(ModelError::at(
-                span,
-                format!(
-                    "the reference point depends on the Euler angle '{}': give the point the body turns about, or its centre of mass",
-                    r.coordinates[a].name
-                ),
-            )
-            .with_help("put the offset from the reference point to the centre of mass into `center_of_mass` (body frame)"));
-        }
-    }
-
     let (inertia, principal) = read_inertia(r, &raw.inertia)?;
 
     // Numeric sanity at the parameters' values: M > 0, I positive definite.
@@ -598,13 +583,14 @@ mod tests {
                 }
             }
         }
-        let position = ["x", "0.3*x^2", "t"];
+        // The reference point moves with a coordinate, an Euler angle and the time.
+        let position = ["x + 0.2*sin(be)", "0.3*x^2", "t"];
         let tensor: Vec<String> = inertia
             .iter()
             .map(|row| format!("[{}]", row.iter().map(|v| format!("{v:?}")).collect::<Vec<_>>().join(", ")))
             .collect();
         let body_model = format!(
-            "coordinates = [\"x\", \"al\", \"be\", \"ga\"]\ngravity = \"g\"\n[parameters]\ng = 9.81\n[[bodies]]\nmass = {total:?}\ninertia = [{}]\nangles = [\"al\", \"be\", \"ga\"]\nposition = [\"x\", \"0.3*x^2\", \"t\"]\ncenter_of_mass = [{:?}, {:?}, {:?}]\n",
+            "coordinates = [\"x\", \"al\", \"be\", \"ga\"]\ngravity = \"g\"\n[parameters]\ng = 9.81\n[[bodies]]\nmass = {total:?}\ninertia = [{}]\nangles = [\"al\", \"be\", \"ga\"]\nposition = [\"x + 0.2*sin(be)\", \"0.3*x^2\", \"t\"]\ncenter_of_mass = [{:?}, {:?}, {:?}]\n",
             tensor.join(", "),
             com[0],
             com[1],
@@ -651,11 +637,11 @@ mod tests {
                 assert!((a - b).abs() < 1e-10 * (1.0 + b.abs()), "{what}: body {a} vs particles {b}");
             }
             // L about the reference point, body components: Σ m r_k × v_k with
-            // v_k = D v_ref + ω × r_k (body components), v_ref = (x', 0.6 x x', 1).
+            // v_k = D v_ref + ω × r_k (body components), v_ref = (x' + 0.2 cos β β', 0.6 x x', 1).
             let [x, al, be, ga, xd, ald, bed, gad, _] = state;
             let dm = euler::rotation_f64(al, be, ga);
             let w = euler::angular_velocity_f64(be, ga, [ald, bed, gad]);
-            let v_ref = [xd, 0.6 * x * xd, 1.0];
+            let v_ref = [xd + 0.2 * be.cos() * bed, 0.6 * x * xd, 1.0];
             let vb: Vec<f64> = (0..3).map(|i| (0..3).map(|j| dm[i][j] * v_ref[j]).sum()).collect();
             let cross = |a: [f64; 3], b: [f64; 3]| {
                 [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
@@ -679,6 +665,27 @@ mod tests {
                 assert!((a - b).abs() < 1e-10 * (1.0 + b.abs()), "p_{i}: {a} vs {b}");
             }
         }
+    }
+
+    #[test]
+    fn several_bodies_get_prefixed_columns_and_their_own_angles() {
+        let body = |name: &str, a: &str| {
+            format!("[[bodies]]\nname = \"{name}\"\nmass = 1\ninertia = [1, 2, 3]\nangles = [\"{a}1\", \"{a}2\", \"{a}3\"]\n")
+        };
+        let text = format!(
+            "coordinates = [\"a1\", \"a2\", \"a3\", \"b1\", \"b2\", \"b3\"]\n{}{}",
+            body("left", "a"),
+            body("right", "b")
+        );
+        let d = Derivation::new(Model::parse(&text, &[]).unwrap()).unwrap();
+        let cols = column_names(&d.bodies);
+        assert_eq!(cols[0], "left_omega1");
+        assert_eq!(cols[11], "right_L3");
+        let shared = text.replace("[\"b1\", \"b2\", \"b3\"]", "[\"b1\", \"a2\", \"b3\"]");
+        let e = Model::parse(&shared, &[]).unwrap_err();
+        assert!(e.message.contains("already an Euler angle of body 'left'"), "{}", e.message);
+        let single = column_names(&d.bodies[..1]);
+        assert_eq!(single, ["omega1", "omega2", "omega3", "L1", "L2", "L3"]);
     }
 
     #[test]
