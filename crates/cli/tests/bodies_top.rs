@@ -392,3 +392,38 @@ fn top_plot_is_an_svg_with_both_panels() {
         assert!(text.matches("<circle").count() > 1000, "{model}: the axis path has too few points");
     }
 }
+
+#[test]
+fn euler_equations_with_the_gravity_torque_along_a_heavy_top() {
+    // N = r_cm × F in body components: S e₃ × (−Mg D e_z) = MgS sin β (cos γ, −sin γ, 0),
+    // the notes' N₁, N₂ with U = MgS cos β (N₃ = −∂U/∂γ = 0).
+    let csv = tmp("heavy_euler.csv");
+    let r = lagrange(&[
+        "simulate",
+        "examples/tops/heavy_top.toml",
+        "--set",
+        "I3=0.4",
+        "--until",
+        "3",
+        "--samples",
+        "6001",
+        "--out",
+        csv.to_str().unwrap(),
+    ]);
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let (c, _) = read_csv(&csv);
+    let (i, i3, mgs) = (1.0, 0.4, 9.81 * 0.5);
+    let (w1, w2, w3) = (&c["omega1"], &c["omega2"], &c["omega3"]);
+    let dt = c["t"][1] - c["t"][0];
+    let mut worst = 0.0f64;
+    for k in 1..w1.len() - 1 {
+        let d = |w: &Vec<f64>| (w[k + 1] - w[k - 1]) / (2.0 * dt);
+        let (be, ga) = (c["be"][k], c["ga"][k]);
+        let n = [mgs * be.sin() * ga.cos(), -mgs * be.sin() * ga.sin(), 0.0];
+        let e1 = i * d(w1) - (i - i3) * w2[k] * w3[k] - n[0];
+        let e2 = i * d(w2) - (i3 - i) * w3[k] * w1[k] - n[1];
+        let e3 = i3 * d(w3) - n[2];
+        worst = worst.max(e1.abs()).max(e2.abs()).max(e3.abs());
+    }
+    assert!(worst < 1e-3, "Euler's equations with torque: residual {worst}");
+}
