@@ -34,6 +34,15 @@ pub fn text(d: &Derivation) -> String {
             let _ = writeln!(o, "generalized force   Q_{} = {}", names[i], s(*f));
         }
     }
+    for b in &d.bodies {
+        let _ = writeln!(o, "\nrigid body '{}' (body frame, notes A.5)", b.name);
+        for k in 0..3 {
+            let _ = writeln!(o, "  angular velocity  ω{} = {}", k + 1, s(b.omega[k]));
+        }
+        for k in 0..3 {
+            let _ = writeln!(o, "  angular momentum  L{} = {}", k + 1, s(b.angular_momentum[k]));
+        }
+    }
 
     let _ = writeln!(o, "\ngeneralized momenta p_q = ∂L/∂q'");
     for i in 0..n {

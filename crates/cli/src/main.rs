@@ -13,6 +13,7 @@ mod orbit;
 mod plot;
 mod simulate;
 mod sweep;
+mod top;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use diagnostics::Failure;
@@ -102,6 +103,8 @@ enum Command {
     Orbit(orbit::Args),
     /// The inertia tensor of a body file: mass, centre of mass, tensor about a point, principal axes.
     Inertia(inertia::Args),
+    /// A symmetric top from the initial state: precession, nutation bounds, steady precession, sleeping top.
+    Top(top::Args),
 }
 
 /// Summary formats of `simulate`.
@@ -144,6 +147,7 @@ fn main() -> ExitCode {
         Command::Modes(args) => modes::run(&args),
         Command::Orbit(args) => orbit::run(&args),
         Command::Inertia(args) => inertia::run(&args),
+        Command::Top(args) => top::run(&args),
         Command::Simulate { list_methods: true, .. } => write_stdout(&simulate::list_methods()),
         Command::Simulate {
             model,

@@ -111,6 +111,9 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     let mut plot_data = PlotKeeper::new(n);
     let progress = progress_bar(opts.until);
     let inv_names: Vec<String> = mech::invariants_of(&derivation).into_iter().map(|i| i.name).collect();
+    // Rigid bodies: ω and L per body as extra columns.
+    let mut bodies = mech::BodyRecorder::new(&mut derivation);
+    let mut body_values = vec![0.0; bodies.as_ref().map_or(0, |b| b.columns().len())];
 
     let result = mech::simulate(&mut derivation, &config, |row| {
         if let Some(w) = csv.as_mut() {
@@ -120,6 +123,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
                     cols.extend(names.iter().cloned());
                     cols.extend(names.iter().map(|c| format!("{c}'")));
                     cols.extend(inv_names.iter().cloned());
+                    cols.extend(bodies.iter().flat_map(|b| b.columns().iter().cloned()));
                     if with_events {
                         cols.push("event".into());
                     }
@@ -127,7 +131,10 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
                     header_written = true;
                 }
                 write!(w, "{}", row.t)?;
-                for v in row.q.iter().chain(row.qd).chain(row.invariants) {
+                if let Some(b) = bodies.as_mut() {
+                    b.eval(row.t, row.q, row.qd, &mut body_values);
+                }
+                for v in row.q.iter().chain(row.qd).chain(row.invariants).chain(&body_values) {
                     write!(w, ",{v}")?;
                 }
                 if with_events {

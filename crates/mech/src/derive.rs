@@ -90,6 +90,8 @@ pub struct Derivation {
     pub explicit_time: bool,
     /// Explanations of the verdicts.
     pub verdicts: Verdicts,
+    /// Each rigid body's angular velocity and angular momentum (body frame).
+    pub bodies: Vec<crate::body::BodyMotion>,
 }
 
 /// Symbols and the "is a variable" predicate used for collecting.
@@ -129,7 +131,7 @@ impl Derivation {
 
         let vars_q = QVars { q: &q, qd: &qd, t, is_var: &is_var };
 
-        // T and U from particles, kinetic and potential; or L itself. When L is
+        // T and U from particles, bodies, kinetic and potential; or L itself. When L is
         // quadratic in the velocities (almost always) it is also held as
         // (M, b, L₀), from which the rest is built without expanding L whole.
         let simplify_forces = |pool: &mut Pool| -> (Option<ExprId>, Vec<ExprId>) {
@@ -144,6 +146,7 @@ impl Derivation {
                 .collect();
             (dissipation, forces)
         };
+        let mut bodies = Vec::new();
         let (kinetic, potential, lagrangian, form) = if let Some(l) = &model.lagrangian {
             let l = pool.simplify_in(l.expr, &is_var);
             let form = Quadratic::split(pool, l, &vars_q);
@@ -159,12 +162,29 @@ impl Derivation {
                     u_terms.push(u);
                 }
             }
+            // Rigid bodies' T is small and quadratic in the rates: it joins `kinetic`.
+            let mut k_terms = Vec::new();
+            for body in &model.bodies {
+                let g = model.gravity.as_ref().map(|g| g.expr);
+                let terms = crate::body::terms(pool, body, &q, &qd, t, g);
+                k_terms.push(terms.kinetic);
+                u_terms.extend(terms.potential);
+                bodies.push(crate::body::motion(pool, body, &terms, &is_var));
+            }
+            if let Some(k) = &model.kinetic {
+                k_terms.push(k.expr);
+            }
             if let Some(u) = &model.potential {
                 u_terms.push(u.expr);
             }
             let uu = pool.add(&u_terms);
             let uu = pool.simplify_in(uu, &is_var);
-            let k = model.kinetic.as_ref().map(|k| pool.simplify_in(k.expr, &is_var));
+            let k = if k_terms.is_empty() {
+                None
+            } else {
+                let k = pool.add(&k_terms);
+                Some(pool.simplify_in(k, &is_var))
+            };
             if model.particles.is_empty() {
                 let tt = k.unwrap_or_else(|| pool.zero());
                 let l = pool.sub(tt, uu);
@@ -445,6 +465,7 @@ impl Derivation {
             hamilton,
             explicit_time,
             verdicts,
+            bodies,
         })
     }
 

@@ -18,6 +18,7 @@
 //! assert_eq!(d.pool().display(d.momenta[0]).to_string(), "l^2*m*th'");
 //! ```
 
+pub mod body;
 mod derive;
 mod dynamics;
 mod error;
@@ -31,16 +32,19 @@ mod quadratic;
 mod report;
 mod run;
 mod sweep;
+mod top;
 
+pub use body::{Body, BodyMotion, BodyRecorder};
 pub use derive::{Conserved, Derivation, Verdicts};
 pub use dynamics::{invariants_of, Dynamics, Form, Invariant, System};
 pub use error::ModelError;
 pub use model::{Coordinate, InitialValue, Located, Model, Parameter, Particle, MAX_FILE_BYTES};
 pub use modes::{normal_modes, Mode, ModeKind, Modes, ModesConfig, ModesError, ModesReport, SymbolicModes};
 pub use orbit::{Kepler, Orbit, OrbitError, OrbitKind, OrbitReport};
-pub use report::{DeriveReport, HamiltonEquations, NamedExpr, Ordered};
+pub use report::{BodyReport, DeriveReport, HamiltonEquations, NamedExpr, Ordered};
 pub use run::{choose_method, simulate, Audit, Row, RunConfig, RunError, RunReport, StopCondition};
 pub use sweep::{
     format_axes, merge, parse_axes, sweep, Axis, Grid, Shard, SweepConfig, SweepError, SweepTable, TableRow, Target,
     CSV_MAGIC, DEFAULT_RTOL, LYAPUNOV_D0, LYAPUNOV_INTERVAL, MAX_RUNS,
 };
+pub use top::{FreeTop, HeavyTop, Nutation, NutationKind, Top, TopError, TopKind, TopReport};

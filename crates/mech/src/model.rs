@@ -112,6 +112,8 @@ pub struct Model {
     pub forces: Vec<Option<Located>>,
     /// Initial values from `[initial]`.
     pub initial: Vec<InitialValue>,
+    /// Rigid bodies (`[[bodies]]`).
+    pub bodies: Vec<crate::body::Body>,
 }
 
 #[derive(Deserialize)]
@@ -132,7 +134,8 @@ struct RawModel {
     forces: BTreeMap<Spanned<String>, Spanned<String>>,
     #[serde(default)]
     initial: BTreeMap<Spanned<String>, Spanned<NumOrText>>,
-    bodies: Option<Spanned<IgnoredAny>>,
+    #[serde(default)]
+    bodies: Vec<Spanned<crate::body::RawBody>>,
     constraints: Option<Spanned<IgnoredAny>>,
 }
 
@@ -146,14 +149,14 @@ struct RawParticle {
 
 #[derive(Deserialize, Clone)]
 #[serde(untagged)]
-enum NumOrText {
+pub(crate) enum NumOrText {
     Num(f64),
     Text(String),
 }
 
 /// What an expression may refer to, by context.
 #[derive(Clone, Copy, PartialEq)]
-enum Scope {
+pub(crate) enum Scope {
     /// Parameters only (masses, gravity, initial values).
     Parameters,
     /// Coordinates and time (positions).
@@ -173,11 +176,11 @@ impl Scope {
 }
 
 /// Reading state: the source text and the names declared so far.
-struct Reader<'a> {
-    source: &'a str,
-    pool: Pool,
-    coordinates: Vec<Coordinate>,
-    parameters: Vec<Parameter>,
+pub(crate) struct Reader<'a> {
+    pub(crate) source: &'a str,
+    pub(crate) pool: Pool,
+    pub(crate) coordinates: Vec<Coordinate>,
+    pub(crate) parameters: Vec<Parameter>,
 }
 
 impl Reader<'_> {
@@ -194,7 +197,13 @@ impl Reader<'_> {
         self.expr_str(text.get_ref(), text.span(), scope, what)
     }
 
-    fn expr_str(&mut self, text: &str, span: Range<usize>, scope: Scope, what: &str) -> Result<Located, ModelError> {
+    pub(crate) fn expr_str(
+        &mut self,
+        text: &str,
+        span: Range<usize>,
+        scope: Scope,
+        what: &str,
+    ) -> Result<Located, ModelError> {
         let offset = content_offset(self.source, &span, text);
         let coordinates: Vec<String> = self.coordinates.iter().map(|c| c.name.clone()).collect();
         let parameters: Vec<String> = self.parameters.iter().map(|p| p.name.clone()).collect();
@@ -246,7 +255,12 @@ impl Reader<'_> {
         }
     }
 
-    fn num_or_expr(&mut self, v: &Spanned<NumOrText>, scope: Scope, what: &str) -> Result<Located, ModelError> {
+    pub(crate) fn num_or_expr(
+        &mut self,
+        v: &Spanned<NumOrText>,
+        scope: Scope,
+        what: &str,
+    ) -> Result<Located, ModelError> {
         match v.get_ref() {
             NumOrText::Num(x) => {
                 if !x.is_finite() {
@@ -260,7 +274,7 @@ impl Reader<'_> {
 }
 
 /// A float from the file, kept exact when it is an integer (`2` → 2, `0.5` → 0.5).
-fn number_expr(pool: &mut Pool, x: f64) -> ExprId {
+pub(crate) fn number_expr(pool: &mut Pool, x: f64) -> ExprId {
     if x.fract() == 0.0 && x.abs() < 1e15 {
         pool.int(x as i64)
     } else {
@@ -293,7 +307,7 @@ fn content_offset(source: &str, span: &Range<usize>, value: &str) -> Option<usiz
     None
 }
 
-fn check_identifier(name: &Spanned<String>, what: &str) -> Result<(), ModelError> {
+pub(crate) fn check_identifier(name: &Spanned<String>, what: &str) -> Result<(), ModelError> {
     let n = name.get_ref();
     let mut chars = n.chars();
     let ok = matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
@@ -328,11 +342,6 @@ impl Model {
                 None => ModelError::whole(message),
             }
         })?;
-        if let Some(b) = &raw.bodies {
-            return Err(ModelError::at(b.span(), "rigid bodies ([[bodies]]) are not supported yet").with_help(
-                "describe the body by point masses in [[particles]], or give its kinetic energy in `kinetic`",
-            ));
-        }
         if let Some(c) = &raw.constraints {
             return Err(ModelError::at(c.span(), "constraints ([[constraints]]) are not supported yet")
                 .with_help("eliminate the constraint by choosing generalized coordinates that satisfy it"));
@@ -432,6 +441,16 @@ impl Model {
             }
             particles.push(Particle { mass, position, potential, span: p.span() });
         }
+        let bodies = crate::body::read_all(&mut r, &raw.bodies)?;
+        if let (Some(_), Some(b), Some(p)) =
+            (&gravity, raw.bodies.first(), particles.iter().find(|p| p.position.len() != 3))
+        {
+            let _ = b;
+            return Err(ModelError::at(
+                p.span.clone(),
+                "with [[bodies]], gravity acts along −z: give the particles 3-D (x, y, z) positions",
+            ));
+        }
         let lagrangian = raw.lagrangian.as_ref().map(|l| r.expr(l, Scope::State, "the Lagrangian")).transpose()?;
         let kinetic = raw.kinetic.as_ref().map(|l| r.expr(l, Scope::State, "the kinetic energy")).transpose()?;
         let potential = raw.potential.as_ref().map(|l| r.expr(l, Scope::State, "the potential")).transpose()?;
@@ -447,6 +466,9 @@ impl Model {
                 let _ = l;
                 return Err(ModelError::at(p.span(), "give either `lagrangian` or [[particles]], not both"));
             }
+            if let Some(b) = raw.bodies.first() {
+                return Err(ModelError::at(b.span(), "give either `lagrangian` or [[bodies]], not both"));
+            }
             if let Some(g) = &raw.gravity {
                 return Err(ModelError::at(
                     g.span(),
@@ -454,11 +476,11 @@ impl Model {
                 ));
             }
         }
-        if lagrangian.is_none() && kinetic.is_none() && particles.is_empty() {
+        if lagrangian.is_none() && kinetic.is_none() && particles.is_empty() && bodies.is_empty() {
             return Err(ModelError::whole("the model has no kinetic energy")
                 .with_help("give [[particles]] with positions, `kinetic` and `potential`, or `lagrangian`"));
         }
-        if gravity.is_some() && particles.is_empty() {
+        if gravity.is_some() && particles.is_empty() && bodies.is_empty() {
             let g = raw.gravity.as_ref().map(|g| g.span()).unwrap_or(0..0);
             return Err(ModelError::at(g, "`gravity` acts on [[particles]], and the model has none"));
         }
@@ -510,6 +532,7 @@ impl Model {
             dissipation,
             forces,
             initial,
+            bodies,
         })
     }
 

@@ -98,6 +98,20 @@ pub struct DeriveReport {
     pub explicit_time: bool,
     /// Explanations of the verdicts, sentence by sentence (extra field).
     pub explanations: Explanations,
+    /// Each rigid body's body-frame ω and L (extra field; absent without bodies).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub bodies: Vec<BodyReport>,
+}
+
+/// A rigid body's angular velocity and angular momentum, body components.
+#[derive(Debug, Clone, Serialize)]
+pub struct BodyReport {
+    /// The body's name.
+    pub name: String,
+    /// (ω₁, ω₂, ω₃) in (q, q').
+    pub angular_velocity: [String; 3],
+    /// (L₁, L₂, L₃) about the reference point.
+    pub angular_momentum: [String; 3],
 }
 
 /// The teaching text behind the verdicts.
@@ -158,6 +172,15 @@ impl DeriveReport {
                 conservation: d.verdicts.conservation.clone(),
                 hamiltonian: d.verdicts.hamiltonian.clone(),
             },
+            bodies: d
+                .bodies
+                .iter()
+                .map(|b| BodyReport {
+                    name: b.name.clone(),
+                    angular_velocity: b.omega.map(s),
+                    angular_momentum: b.angular_momentum.map(s),
+                })
+                .collect(),
         }
     }
 }

@@ -197,6 +197,21 @@ pub fn simulate(
         ))));
     }
     let (q0, qd0) = d.model.initial_state().map_err(RunError::Input)?;
+    // The events' indices: stop conditions, crossings, then one guard per body.
+    let guards = crate::body::gimbal_guards(d, config.rtol);
+    if let Some(g) = guards.iter().find(|g| g.violated(&q0)) {
+        let span =
+            d.model.initial.iter().find(|iv| iv.coord == g.beta && iv.order == 0).map(|iv| iv.value.span.clone());
+        let e = crate::ModelError {
+            message: format!(
+                "the initial state is at the gimbal singularity of body '{}': |sin {}| < {:.1e}",
+                g.body, g.beta_name, g.threshold
+            ),
+            span,
+            help: Some(g.advice()),
+        };
+        return Err(RunError::Input(e));
+    }
     let dynamics = Dynamics::new(d);
     let (method, form) = choose_method(d, &dynamics, config.method).map_err(RunError::Input)?;
     let n = dynamics.n_coords();
@@ -256,6 +271,8 @@ pub fn simulate(
         dt = Some(h);
     }
 
+    // Rigid bodies: a terminal event before the Euler angles' gimbal singularity.
+    let first_guard = config.stop_when.len() + config.crossings.len();
     // Stop conditions, each compiled over [q, q', t, params].
     let param_syms: Vec<ExprId> = d.model.parameters.iter().map(|p| d.model.pool.symbol(&p.name)).collect();
     let mut inputs: Vec<ExprId> = d.q.clone();
@@ -296,6 +313,13 @@ pub fn simulate(
         );
     }
 
+    for g in &guards {
+        let (beta, s2) = (g.beta, g.threshold * g.threshold);
+        events.push(
+            Event::new(move |_t, y| y[beta].sin().powi(2) - s2).with_direction(Direction::Falling).with_terminal(true),
+        );
+    }
+
     // The audit, row by row.
     let n_inv = inv_names.len();
     let mut qd = vec![0.0; n];
@@ -330,17 +354,23 @@ pub fn simulate(
         last_q.copy_from_slice(&obs.y[..n]);
         last_qd.copy_from_slice(&qd);
         last_inv.copy_from_slice(&inv);
-        on_row(&Row {
+        let flow = on_row(&Row {
             t: obs.t,
             q: &obs.y[..n],
             qd: &qd,
             invariants: &inv,
             is_event: matches!(obs.kind, ObservationKind::Event { .. }),
             event: match obs.kind {
-                ObservationKind::Event { index } => Some(conditions[index].0.text.as_str()),
+                ObservationKind::Event { index } if index < first_guard => Some(conditions[index].0.text.as_str()),
                 _ => None,
             },
-        })
+        });
+        // The row is kept; past a gimbal guard the run ends as a failure.
+        if let Some(g) = guards.iter().find(|g| g.violated(&obs.y[..n])) {
+            row_error = Some(g.message(obs.t));
+            return ControlFlow::Break(());
+        }
+        flow
     });
 
     let stats = solver.statistics();
@@ -390,6 +420,13 @@ pub fn simulate(
     match result {
         Ok(summary) => {
             report.t_final = summary.t;
+            if let StopReason::Event { index } = summary.stop {
+                if index >= first_guard {
+                    let message = guards[index - first_guard].message(summary.t);
+                    report.failure = Some(message.clone());
+                    return Err(RunError::Failed { message, report: Box::new(report) });
+                }
+            }
             report.stopped_by = match summary.stop {
                 StopReason::Event { index } => Some(conditions[index].0.text.clone()),
                 StopReason::Observer => row_error.clone().or(Some("stopped by the caller".into())),
@@ -403,7 +440,13 @@ pub fn simulate(
         }
         Err(e) => {
             let at = (solver.t(), solver.state().to_vec());
-            let message = describe_failure(&e, &names, form, &mut probe_system, &y0, at);
+            // A body near its gimbal singularity: say so rather than only "singular".
+            let near = guards.iter().min_by(|a, b| at.1[a.beta].sin().abs().total_cmp(&at.1[b.beta].sin().abs()));
+            let gimbal = near.filter(|g| at.1[g.beta].sin().abs() < 0.1).map(|g| g.message(at.0));
+            let message = match gimbal {
+                Some(m) => format!("{m} ({e})"),
+                None => describe_failure(&e, &names, form, &mut probe_system, &y0, at),
+            };
             report.failure = Some(message.clone());
             Err(RunError::Failed { message, report: Box::new(report) })
         }
