@@ -89,6 +89,8 @@ pub struct Derivation {
     pub explicit_time: bool,
     /// Explanations of the verdicts.
     pub verdicts: Verdicts,
+    /// The constraints and the equations with multipliers (empty without `[[constraints]]`).
+    pub constraints: crate::constraint::Constraints,
 }
 
 /// Symbols and the "is a variable" predicate used for collecting.
@@ -356,7 +358,7 @@ impl Derivation {
         };
 
         model.pool = pool_owned;
-        Ok(Derivation {
+        let mut derivation = Derivation {
             model,
             q,
             qd,
@@ -383,7 +385,10 @@ impl Derivation {
             hamilton,
             explicit_time,
             verdicts,
-        })
+            constraints: Default::default(),
+        };
+        crate::constraint::attach(&mut derivation)?;
+        Ok(derivation)
     }
 
     /// The pool holding every expression.

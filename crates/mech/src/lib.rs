@@ -18,6 +18,8 @@
 //! assert_eq!(d.pool().display(d.momenta[0]).to_string(), "l^2*m*th'");
 //! ```
 
+mod constrained;
+mod constraint;
 mod derive;
 mod dynamics;
 pub mod euler;
@@ -30,6 +32,7 @@ mod report;
 mod run;
 mod sweep;
 
+pub use constraint::{Constraint, ConstraintKind, ConstraintSpec, Constraints};
 pub use derive::{Conserved, Derivation, Verdicts};
 pub use dynamics::{invariants_of, Dynamics, Form, Invariant, System};
 pub use error::ModelError;

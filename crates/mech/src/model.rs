@@ -112,6 +112,8 @@ pub struct Model {
     pub forces: Vec<Option<Located>>,
     /// Initial values from `[initial]`.
     pub initial: Vec<InitialValue>,
+    /// Constraints from `[[constraints]]`, in file order.
+    pub constraints: Vec<crate::constraint::ConstraintSpec>,
 }
 
 #[derive(Deserialize)]
@@ -133,7 +135,8 @@ struct RawModel {
     #[serde(default)]
     initial: BTreeMap<Spanned<String>, Spanned<NumOrText>>,
     bodies: Option<Spanned<IgnoredAny>>,
-    constraints: Option<Spanned<IgnoredAny>>,
+    #[serde(default)]
+    constraints: Vec<Spanned<crate::constraint::RawConstraint>>,
 }
 
 #[derive(Deserialize)]
@@ -293,7 +296,7 @@ fn content_offset(source: &str, span: &Range<usize>, value: &str) -> Option<usiz
     None
 }
 
-fn check_identifier(name: &Spanned<String>, what: &str) -> Result<(), ModelError> {
+pub(crate) fn check_identifier(name: &Spanned<String>, what: &str) -> Result<(), ModelError> {
     let n = name.get_ref();
     let mut chars = n.chars();
     let ok = matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
@@ -332,10 +335,6 @@ impl Model {
             return Err(ModelError::at(b.span(), "rigid bodies ([[bodies]]) are not supported yet").with_help(
                 "describe the body by point masses in [[particles]], or give its kinetic energy in `kinetic`",
             ));
-        }
-        if let Some(c) = &raw.constraints {
-            return Err(ModelError::at(c.span(), "constraints ([[constraints]]) are not supported yet")
-                .with_help("eliminate the constraint by choosing generalized coordinates that satisfy it"));
         }
         let mut r = Reader { source, pool: Pool::default(), coordinates: Vec::new(), parameters: Vec::new() };
 
@@ -497,6 +496,23 @@ impl Model {
             initial.push(InitialValue { coord, order, value });
         }
 
+        // Constraints (read by `constraint.rs`).
+        let mut constraints = Vec::new();
+        for (k, c) in raw.constraints.iter().enumerate() {
+            let spec = crate::constraint::read_spec(c, k, &constraints, &mut |text, scope_state, what| {
+                let scope = if scope_state { Scope::State } else { Scope::Configuration };
+                r.expr(text, scope, what)
+            })?;
+            if r.is_coordinate(&spec.name) || r.is_parameter(&spec.name) {
+                return Err(ModelError::at(
+                    spec.name_span.clone(),
+                    format!("constraint '{}' has the name of a coordinate or parameter", spec.name),
+                )
+                .with_help("give the constraint a name of its own"));
+            }
+            constraints.push(spec);
+        }
+
         Ok(Model {
             pool: r.pool,
             name: raw.name.unwrap_or_else(|| "unnamed model".into()),
@@ -510,6 +526,7 @@ impl Model {
             dissipation,
             forces,
             initial,
+            constraints,
         })
     }
 

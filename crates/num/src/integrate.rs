@@ -4,7 +4,7 @@
 
 use std::ops::ControlFlow;
 
-use crate::error::SolveError;
+use crate::error::{RhsError, SolveError};
 use crate::root::brent;
 use crate::solver::{check_len, Solver, StepOutcome};
 
@@ -133,6 +133,37 @@ pub fn integrate<V: Solver + ?Sized>(
     t_end: f64,
     output: Output,
     events: &mut [Event<'_>],
+    observer: impl FnMut(&Observation<'_>) -> ControlFlow<()>,
+) -> Result<Summary, SolveError> {
+    drive(solver, t_end, output, events, None, observer)
+}
+
+/// A post-step map of the state: `project(t, y)` replaces `y` in place (e.g. by
+/// its projection onto a constraint manifold).
+pub type Projection<'a> = &'a mut dyn FnMut(f64, &mut [f64]) -> Result<(), RhsError>;
+
+/// [`integrate`] with a projection after every accepted step: the solver continues
+/// from `project(t, y)` ([`Solver::set_state`]), events are located on the projected
+/// step ends, and samples come from the step's dense output as it was computed (the
+/// observer may project them too). This keeps an invariant manifold, such as the
+/// constraints of a mechanical system, satisfied to round-off over long runs.
+pub fn integrate_projected<V: Solver + ?Sized>(
+    solver: &mut V,
+    t_end: f64,
+    output: Output,
+    events: &mut [Event<'_>],
+    project: Projection<'_>,
+    observer: impl FnMut(&Observation<'_>) -> ControlFlow<()>,
+) -> Result<Summary, SolveError> {
+    drive(solver, t_end, output, events, Some(project), observer)
+}
+
+fn drive<V: Solver + ?Sized>(
+    solver: &mut V,
+    t_end: f64,
+    output: Output,
+    events: &mut [Event<'_>],
+    mut project: Option<Projection<'_>>,
     mut observer: impl FnMut(&Observation<'_>) -> ControlFlow<()>,
 ) -> Result<Summary, SolveError> {
     let t0 = solver.t();
@@ -191,6 +222,11 @@ pub fn integrate<V: Solver + ?Sized>(
         let outcome = solver.step()?;
         let t_a = solver.step_start();
         let t_b = solver.t();
+        if let Some(project) = project.as_mut() {
+            y.copy_from_slice(solver.state());
+            project(t_b, &mut y).map_err(|source| SolveError::Rhs { t: t_b, source })?;
+            solver.set_state(&y)?;
+        }
         // Events in this step.
         found.clear();
         for (k, ev) in events.iter_mut().enumerate() {
