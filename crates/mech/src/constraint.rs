@@ -221,7 +221,7 @@ pub(crate) fn attach(d: &mut Derivation) -> Result<(), ModelError> {
             true
         } else {
             lost.push(format!(
-                "{q} is cyclic, but the constraint force of {} acts on it (A has a {q} column), so p_{q} is not conserved.",
+                "{q} is cyclic, but the constraint force of {} acts on it (its column of A is not zero), so p_{q} is not conserved.",
                 acted.join(", ")
             ));
             false
@@ -230,7 +230,7 @@ pub(crate) fn attach(d: &mut Derivation) -> Result<(), ModelError> {
     set.explanation.extend(lost);
     if d.hamilton.is_some() {
         set.explanation.push(
-            "Hamilton's equations above are those of L alone; with the constraints, p' gains the constraint force Aᵀλ."
+            "Hamilton's equations are given for L alone: with the constraints, p' = −∂H/∂q + Aᵀλ."
                 .into(),
         );
     }
