@@ -12,7 +12,9 @@
 //! `Δq = −Aᵀ(AAᵀ)⁻¹f`, iterated to round-off), then velocities onto
 //! `A q' + a_t = 0` (one exact linear projection). Without it the residual of an
 //! index-reduced system drifts (linearly in t for the velocities, quadratically
-//! for the positions); with it the residual stays at round-off over any run.
+//! for the positions); with it the residual stays at round-off over any run. An
+//! integrable velocity constraint whose integral F is known is held at position
+//! level too, at F = F(q(0), 0), so it keeps its holonomic meaning over long runs.
 //!
 //! M and f come from the kernel of [`Dynamics`]; A, c, a_t and f(q, t) are this
 //! module's kernels. Entry point: [`simulate`] (called by `run.rs` for models with
@@ -78,6 +80,12 @@ pub struct ConstrainedSystem {
     m: usize,
     /// Indices of the holonomic constraints.
     holonomic: Vec<usize>,
+    /// Indices of the constraints kept at position level by the projection: the
+    /// holonomic ones, then the integrable velocity constraints with a known
+    /// integral F (whose gradient is their row of A), kept at F = F(t = 0).
+    positional: Vec<usize>,
+    /// What each positional constraint's expression must equal (0, or F(t = 0)).
+    levels: Vec<f64>,
     /// `[A (m×n), c (m)]` from `[q, q', t, params]`.
     accel: Kernel,
     /// `[A (m×n), a_t (m), f_h (holonomic count)]` from `[q, q', t, params]`.
@@ -111,17 +119,23 @@ impl ConstrainedSystem {
         let mut geo_out = a;
         geo_out.extend(list.iter().map(|c| c.time_term));
         let holonomic: Vec<usize> = (0..m).filter(|&k| list[k].kind == ConstraintKind::Holonomic).collect();
-        geo_out.extend(holonomic.iter().map(|&k| list[k].expr));
+        let integrals: Vec<usize> = (0..m)
+            .filter(|&k| list[k].kind == ConstraintKind::Velocity && list[k].integral.is_some())
+            .collect();
+        let positional: Vec<usize> = holonomic.iter().chain(&integrals).copied().collect();
+        geo_out.extend(positional.iter().map(|&k| list[k].integral.unwrap_or(list[k].expr)));
         let compile = |outs: &[ExprId]| Kernel::new(Tape::compile(pool, outs, &input_syms).expect("model symbols are inputs"));
         let accel = compile(&accel_out);
         let geometry = compile(&geo_out);
         let inputs = dynamics.input_template().to_vec();
-        let mh = holonomic.len();
+        let mh = positional.len();
         ConstrainedSystem {
             dynamics,
             n,
             m,
             holonomic,
+            levels: vec![0.0; positional.len()],
+            positional,
             accel,
             geometry,
             inputs,
@@ -197,20 +211,30 @@ impl ConstrainedSystem {
         solved.map_err(RhsError::from)
     }
 
+    /// Keeps the integrals of integrable velocity constraints at their values at (t, y).
+    pub fn fix_integral_levels(&mut self, t: f64, y: &[f64]) {
+        let (n, m) = (self.n, self.m);
+        self.geometry_at(t, &y[..n]);
+        let n_holonomic = self.holonomic.len();
+        for h in n_holonomic..self.positional.len() {
+            self.levels[h] = self.geo[m * n + m + h];
+        }
+    }
+
     /// Projects `y = [q, q']` onto the constraint manifold at time t.
     pub fn project(&mut self, t: f64, y: &mut [f64]) -> Result<(), RhsError> {
         let (n, m) = (self.n, self.m);
-        let mh = self.holonomic.len();
-        let holonomic = self.holonomic.clone();
+        let mh = self.positional.len();
+        let positional = self.positional.clone();
         let mut dq = vec![0.0; n];
         if mh > 0 {
             for _ in 0..8 {
                 self.geometry_at(t, &y[..n]);
-                let f: Vec<f64> = self.geo[m * n + m..].to_vec();
+                let f: Vec<f64> = self.geo[m * n + m..].iter().zip(&self.levels).map(|(f, l)| f - l).collect();
                 if f.iter().all(|&v| v == 0.0) {
                     break;
                 }
-                self.min_norm_correction(&holonomic, &f, &mut dq)?;
+                self.min_norm_correction(&positional, &f, &mut dq)?;
                 let size = y[..n].iter().fold(1.0f64, |a, v| a.max(v.abs()));
                 for i in 0..n {
                     y[i] -= dq[i];
@@ -378,6 +402,7 @@ pub(crate) fn simulate(
             )),
         ));
     }
+    system.fix_integral_levels(0.0, &y0);
     system.project(0.0, &mut y0).map_err(|e| RunError::Input(ModelError::whole(format!("at t = 0: {e}"))))?;
 
     let solver_config =
