@@ -166,7 +166,8 @@ fn constraints_text(d: &Derivation, o: &mut String) {
     let s = |e: ExprId| pool.display(e).to_string();
     let names = d.coordinate_names();
     let set = &d.constraints;
-    let _ = writeln!(o, "\nconstraints (A = ∂f/∂q for f(q, t) = 0; the velocity coefficients for a(q, t)·q' + a_t = 0)");
+    let _ =
+        writeln!(o, "\nconstraints (A = ∂f/∂q for f(q, t) = 0; the velocity coefficients for a(q, t)·q' + a_t = 0)");
     for c in &set.list {
         let tags = [
             Some(c.kind.name()),
@@ -199,7 +200,10 @@ fn constraints_text(d: &Derivation, o: &mut String) {
     for (i, &e) in set.multiplier_equations.iter().enumerate() {
         let _ = writeln!(o, "  {:<label_w$} {} = 0", format!("{}:", names[i]), s(e));
     }
-    let _ = writeln!(o, "  with the constraints differentiated to A q'' = c (index reduction), q'' and λ follow at each instant.");
+    let _ = writeln!(
+        o,
+        "  with the constraints differentiated to A q'' = c (index reduction), q'' and λ follow at each instant."
+    );
     let _ = writeln!(o, "\nconstraint forces  Q = Aᵀλ (generalized)");
     for (i, &f) in set.generalized_forces.iter().enumerate() {
         let _ = writeln!(o, "  Q_{} = {}", names[i], s(f));

@@ -124,12 +124,10 @@ fn the_cartesian_pendulum_feels_the_tension_of_its_rod() {
     ]);
     let s = json(&r.stdout);
     let c = Csv::read(csv.path());
-    assert_eq!(
-        c.header,
-        ["t", "x", "y", "x'", "y'", "H", "lambda_rod", "force_rod", "residual_rod", "residual_rod'"]
-    );
+    assert_eq!(c.header, ["t", "x", "y", "x'", "y'", "H", "lambda_rod", "force_rod", "residual_rod", "residual_rod'"]);
     let (m, l, g) = (1.0, 1.0, 9.81);
-    let (ix, iy, ivx, ivy, iforce, ilam) = (c.col("x"), c.col("y"), c.col("x'"), c.col("y'"), c.col("force_rod"), c.col("lambda_rod"));
+    let (ix, iy, ivx, ivy, iforce, ilam) =
+        (c.col("x"), c.col("y"), c.col("x'"), c.col("y'"), c.col("force_rod"), c.col("lambda_rod"));
     let (ires, ivres) = (c.col("residual_rod"), c.col("residual_rod'"));
     let mut worst_tension = 0.0f64;
     let mut worst_residual = 0.0f64;
@@ -330,7 +328,8 @@ fn bad_constraints_exit_2_with_the_place() {
     bad(&["derive", with_velocity.path()], &["'x'' is not allowed here", "coordinates and the time t"]);
     let clash = TempFile::with_text("clash", &PENDULUM.replace("[[constraints]]\n", "[[constraints]]\nname = \"l\"\n"));
     bad(&["derive", clash.path()], &["constraint 'l' has the name of a coordinate or parameter"]);
-    let both = TempFile::with_text("both", &PENDULUM.replace("[[constraints]]\n", "[[constraints]]\nvelocity = \"x'\"\n"));
+    let both =
+        TempFile::with_text("both", &PENDULUM.replace("[[constraints]]\n", "[[constraints]]\nvelocity = \"x'\"\n"));
     bad(&["derive", both.path()], &["either `holonomic` or `velocity`"]);
     bad(&["simulate", good.path(), "--until", "1", "--method", "gauss6"], &["cannot run a model with constraints"]);
 }

@@ -119,12 +119,12 @@ impl ConstrainedSystem {
         let mut geo_out = a;
         geo_out.extend(list.iter().map(|c| c.time_term));
         let holonomic: Vec<usize> = (0..m).filter(|&k| list[k].kind == ConstraintKind::Holonomic).collect();
-        let integrals: Vec<usize> = (0..m)
-            .filter(|&k| list[k].kind == ConstraintKind::Velocity && list[k].integral.is_some())
-            .collect();
+        let integrals: Vec<usize> =
+            (0..m).filter(|&k| list[k].kind == ConstraintKind::Velocity && list[k].integral.is_some()).collect();
         let positional: Vec<usize> = holonomic.iter().chain(&integrals).copied().collect();
         geo_out.extend(positional.iter().map(|&k| list[k].integral.unwrap_or(list[k].expr)));
-        let compile = |outs: &[ExprId]| Kernel::new(Tape::compile(pool, outs, &input_syms).expect("model symbols are inputs"));
+        let compile =
+            |outs: &[ExprId]| Kernel::new(Tape::compile(pool, outs, &input_syms).expect("model symbols are inputs"));
         let accel = compile(&accel_out);
         let geometry = compile(&geo_out);
         let inputs = dynamics.input_template().to_vec();
@@ -245,9 +245,8 @@ impl ConstrainedSystem {
             }
         }
         self.geometry_at(t, &y[..n]);
-        let r: Vec<f64> = (0..m)
-            .map(|k| (0..n).map(|j| self.geo[k * n + j] * y[n + j]).sum::<f64>() + self.geo[m * n + k])
-            .collect();
+        let r: Vec<f64> =
+            (0..m).map(|k| (0..n).map(|j| self.geo[k * n + j] * y[n + j]).sum::<f64>() + self.geo[m * n + k]).collect();
         let all: Vec<usize> = (0..m).collect();
         self.min_norm_correction(&all, &r, &mut dq)?;
         for i in 0..n {
@@ -405,8 +404,7 @@ pub(crate) fn simulate(
     system.fix_integral_levels(0.0, &y0);
     system.project(0.0, &mut y0).map_err(|e| RunError::Input(ModelError::whole(format!("at t = 0: {e}"))))?;
 
-    let solver_config =
-        Config { rtol: config.rtol, atol: config.atol, h_max: Some(config.until), ..Config::default() };
+    let solver_config = Config { rtol: config.rtol, atol: config.atol, h_max: Some(config.until), ..Config::default() };
     let mut solver = method
         .build(system.clone(), 0.0, &y0, &solver_config)
         .map_err(|e| RunError::Input(ModelError::whole(e.to_string())))?;

@@ -65,13 +65,16 @@ pub struct ConstraintSpec {
     pub expr: Located,
 }
 
+/// Parses an expression of a constraint: `(text, velocities_allowed, what)`.
+pub(crate) type ParseExpr<'a> = &'a mut dyn FnMut(&Spanned<String>, bool, &str) -> Result<Located, ModelError>;
+
 /// Reads one `[[constraints]]` table. `parse(text, velocities_allowed, what)`
 /// parses an expression in the model's names.
 pub(crate) fn read_spec(
     raw: &Spanned<RawConstraint>,
     index: usize,
     previous: &[ConstraintSpec],
-    parse: &mut dyn FnMut(&Spanned<String>, bool, &str) -> Result<Located, ModelError>,
+    parse: ParseExpr<'_>,
 ) -> Result<ConstraintSpec, ModelError> {
     let c = raw.get_ref();
     let (name, name_span) = match &c.name {
@@ -165,6 +168,22 @@ impl Constraints {
     }
 }
 
+impl Derivation {
+    /// An error (with the place of the first constraint) for analyses that do not
+    /// take constraints into account yet, so that they never answer for the
+    /// unconstrained system silently. `what` names the analysis (`lagrange modes`).
+    pub fn reject_constraints(&self, what: &str) -> Result<(), ModelError> {
+        match self.constraints.list.first() {
+            None => Ok(()),
+            Some(c) => Err(ModelError::at(
+                c.span.clone(),
+                format!("{what} does not handle [[constraints]] yet: it would analyse the unconstrained system"),
+            )
+            .with_help("use `lagrange derive` and `lagrange simulate`, which enforce constraints with multipliers, or eliminate the constraint by generalized coordinates")),
+        }
+    }
+}
+
 /// Derives the constraints of `d.model` and amends the verdicts: a constraint
 /// whose force does work makes H not conserved; a momentum on which a
 /// constraint force acts is not conserved.
@@ -229,10 +248,8 @@ pub(crate) fn attach(d: &mut Derivation) -> Result<(), ModelError> {
     });
     set.explanation.extend(lost);
     if d.hamilton.is_some() {
-        set.explanation.push(
-            "Hamilton's equations are given for L alone: with the constraints, p' = −∂H/∂q + Aᵀλ."
-                .into(),
-        );
+        set.explanation
+            .push("Hamilton's equations are given for L alone: with the constraints, p' = −∂H/∂q + Aᵀλ.".into());
     }
     d.constraints = set;
     Ok(())
@@ -255,14 +272,13 @@ fn derive_all(
         let span = spec.expr.span.clone();
         let (jacobian, time_term) = match spec.kind {
             ConstraintKind::Holonomic => {
-                let jac: Vec<ExprId> = d
-                    .q
-                    .iter()
-                    .map(|&q| {
-                        let j = pool.diff(e, q);
-                        pool.simplify_in(j, &is_var)
-                    })
-                    .collect();
+                let jac: Vec<ExprId> =
+                    d.q.iter()
+                        .map(|&q| {
+                            let j = pool.diff(e, q);
+                            pool.simplify_in(j, &is_var)
+                        })
+                        .collect();
                 let at = pool.diff(e, d.t);
                 (jac, pool.simplify_in(at, &is_var))
             }
@@ -286,15 +302,14 @@ fn derive_all(
                         }
                     }
                 }
-                let jac: Vec<ExprId> = d
-                    .qd
-                    .iter()
-                    .map(|&v| {
-                        let j = pool.diff(e, v);
-                        let j = pool.substitute(j, &zero_vel);
-                        pool.simplify_in(j, &is_var)
-                    })
-                    .collect();
+                let jac: Vec<ExprId> =
+                    d.qd.iter()
+                        .map(|&v| {
+                            let j = pool.diff(e, v);
+                            let j = pool.substitute(j, &zero_vel);
+                            pool.simplify_in(j, &is_var)
+                        })
+                        .collect();
                 let at = pool.substitute(e, &zero_vel);
                 (jac, pool.simplify_in(at, &is_var))
             }
@@ -368,8 +383,7 @@ fn derive_all(
             list[k].integral = integral(pool, &forms[k], &z, &is_var);
         }
     }
-    let velocity_idx: Vec<usize> =
-        (0..list.len()).filter(|&k| list[k].kind == ConstraintKind::Velocity).collect();
+    let velocity_idx: Vec<usize> = (0..list.len()).filter(|&k| list[k].kind == ConstraintKind::Velocity).collect();
     // The set: the forms of all constraints (holonomic ones are exact) annihilate
     // a distribution that must be involutive.
     let all: Vec<usize> = (0..list.len()).collect();
@@ -721,7 +735,8 @@ velocity = "y' - R*sin(ph)*ps'"
 
     #[test]
     fn a_nonlinear_velocity_constraint_is_rejected() {
-        let text = "coordinates = [\"x\", \"y\"]\nkinetic = \"x'^2/2 + y'^2/2\"\n[[constraints]]\nvelocity = \"x'^2 - y'\"\n";
+        let text =
+            "coordinates = [\"x\", \"y\"]\nkinetic = \"x'^2/2 + y'^2/2\"\n[[constraints]]\nvelocity = \"x'^2 - y'\"\n";
         let err = Derivation::new(Model::parse(text, &[]).unwrap()).unwrap_err();
         assert!(err.message.contains("not linear"), "{}", err.message);
         assert_eq!(err.span.map(|s| &text[s]), Some("\"x'^2 - y'\""));

@@ -223,8 +223,7 @@ impl DeriveReport {
                     explanation: c.explanation.clone(),
                 })
                 .collect(),
-            multiplier_equations: (!d.constraints.is_empty())
-                .then(|| by_coord(&d.constraints.multiplier_equations)),
+            multiplier_equations: (!d.constraints.is_empty()).then(|| by_coord(&d.constraints.multiplier_equations)),
             constraint_forces: (!d.constraints.is_empty()).then(|| by_coord(&d.constraints.generalized_forces)),
             cartesian_constraint_forces: d
                 .constraints
