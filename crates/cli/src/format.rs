@@ -248,6 +248,19 @@ pub fn latex(d: &Derivation) -> String {
         let _ = writeln!(o, "H &= {}", l(h));
     }
     let _ = writeln!(o, "\\end{{align*}}");
+    if !d.constraints.is_empty() {
+        // The constraints and the equations with multipliers.
+        let _ = writeln!(o, "\\begin{{align*}}");
+        for c in &d.constraints.list {
+            let _ = writeln!(o, "0 &= {} \\\\  % constraint {} ({})", l(c.expr), c.name, c.kind.name());
+        }
+        let eqs = &d.constraints.multiplier_equations;
+        for (i, &e) in eqs.iter().enumerate() {
+            let sep = if i + 1 < eqs.len() { " \\\\" } else { "" };
+            let _ = writeln!(o, "0 &= {}{}  % with multipliers, for ${}$", l(e), sep, qtex[i]);
+        }
+        let _ = writeln!(o, "\\end{{align*}}");
+    }
     if let Some(eqs) = &d.hamilton {
         let _ = writeln!(o, "\\begin{{align*}}");
         for (i, &(dq, dp)) in eqs.iter().enumerate() {

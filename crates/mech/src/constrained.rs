@@ -97,8 +97,57 @@ pub struct ConstrainedSystem {
     kkt: Vec<f64>,
     sol: Vec<f64>,
     lu: LinearSolver,
-    small: Vec<f64>,
-    small_rhs: Vec<f64>,
+    projection: Projection,
+}
+
+/// Scratch space of the projection, allocated once.
+#[derive(Debug, Clone)]
+struct Projection {
+    all_rows: Vec<usize>,
+    residual: Vec<f64>,
+    gram: Vec<f64>,
+    mu: Vec<f64>,
+    dq: Vec<f64>,
+    lu_positions: LinearSolver,
+    lu_velocities: LinearSolver,
+}
+
+/// Which rows of A a correction uses (the solvers are sized for each).
+#[derive(Clone, Copy)]
+enum RowsOf {
+    Positions,
+    All,
+}
+
+/// The minimum-norm correction `Bᵀ(BBᵀ)⁻¹r` for the rows B of A (row-major in
+/// `geo`, n columns) that `which` names, and the residual `p.residual[..rows]`,
+/// into `p.dq`.
+fn min_norm_correction(
+    geo: &[f64],
+    n: usize,
+    positional: &[usize],
+    p: &mut Projection,
+    which: RowsOf,
+) -> Result<(), RhsError> {
+    let (rows, lu) = match which {
+        RowsOf::Positions => (positional, &mut p.lu_positions),
+        RowsOf::All => (&p.all_rows[..], &mut p.lu_velocities),
+    };
+    let k = rows.len();
+    let gram = &mut p.gram[..k * k];
+    for (i, &ri) in rows.iter().enumerate() {
+        for (j, &rj) in rows.iter().enumerate() {
+            gram[i * k + j] = (0..n).map(|c| geo[ri * n + c] * geo[rj * n + c]).sum();
+        }
+    }
+    lu.factor(gram).map_err(RhsError::from)?;
+    let mu = &mut p.mu[..k];
+    mu.copy_from_slice(&p.residual[..k]);
+    lu.solve_in_place(mu).map_err(RhsError::from)?;
+    for (j, d) in p.dq.iter_mut().enumerate() {
+        *d = rows.iter().enumerate().map(|(i, &ri)| geo[ri * n + j] * mu[i]).sum();
+    }
+    Ok(())
 }
 
 impl ConstrainedSystem {
@@ -145,8 +194,15 @@ impl ConstrainedSystem {
             kkt: vec![0.0; (n + m) * (n + m)],
             sol: vec![0.0; n + m],
             lu: LinearSolver::new(n + m).with_pivot_threshold(0.0),
-            small: vec![0.0; m * m],
-            small_rhs: vec![0.0; m],
+            projection: Projection {
+                all_rows: (0..m).collect(),
+                residual: vec![0.0; m],
+                gram: vec![0.0; m * m],
+                mu: vec![0.0; m],
+                dq: vec![0.0; n],
+                lu_positions: LinearSolver::new(mh).with_pivot_threshold(0.0),
+                lu_velocities: LinearSolver::new(m).with_pivot_threshold(0.0),
+            },
         }
     }
 
@@ -185,32 +241,6 @@ impl ConstrainedSystem {
         self.geometry.eval(&self.inputs, &mut self.geo);
     }
 
-    /// Solves (B Bᵀ) μ = r for the rows `rows` of A and returns Bᵀμ in `out`.
-    fn min_norm_correction(&mut self, rows: &[usize], r: &[f64], out: &mut [f64]) -> Result<(), RhsError> {
-        let (n, k) = (self.n, rows.len());
-        let a = |row: usize, j: usize| self.geo[row * n + j];
-        let mut gram = std::mem::take(&mut self.small);
-        gram.resize(k * k, 0.0);
-        for (i, &ri) in rows.iter().enumerate() {
-            for (j, &rj) in rows.iter().enumerate() {
-                gram[i * k + j] = (0..n).map(|c| a(ri, c) * a(rj, c)).sum();
-            }
-        }
-        let mut lu = LinearSolver::new(k).with_pivot_threshold(0.0);
-        let factored = lu.factor(&gram[..k * k]);
-        self.small = gram;
-        factored.map_err(RhsError::from)?;
-        let mut mu = std::mem::take(&mut self.small_rhs);
-        mu.resize(k, 0.0);
-        mu[..k].copy_from_slice(r);
-        let solved = lu.solve_in_place(&mut mu[..k]);
-        for (j, o) in out.iter_mut().enumerate() {
-            *o = rows.iter().enumerate().map(|(i, &ri)| self.geo[ri * n + j] * mu[i]).sum();
-        }
-        self.small_rhs = mu;
-        solved.map_err(RhsError::from)
-    }
-
     /// Keeps the integrals of integrable velocity constraints at their values at (t, y).
     pub fn fix_integral_levels(&mut self, t: f64, y: &[f64]) {
         let (n, m) = (self.n, self.m);
@@ -221,36 +251,39 @@ impl ConstrainedSystem {
         }
     }
 
-    /// Projects `y = [q, q']` onto the constraint manifold at time t.
+    /// Projects `y = [q, q']` onto the constraint manifold at time t. Allocates
+    /// nothing: it runs after every step.
     pub fn project(&mut self, t: f64, y: &mut [f64]) -> Result<(), RhsError> {
         let (n, m) = (self.n, self.m);
         let mh = self.positional.len();
-        let positional = self.positional.clone();
-        let mut dq = vec![0.0; n];
         if mh > 0 {
             for _ in 0..8 {
                 self.geometry_at(t, &y[..n]);
-                let f: Vec<f64> = self.geo[m * n + m..].iter().zip(&self.levels).map(|(f, l)| f - l).collect();
-                if f.iter().all(|&v| v == 0.0) {
+                let p = &mut self.projection;
+                for (h, r) in p.residual[..mh].iter_mut().enumerate() {
+                    *r = self.geo[m * n + m + h] - self.levels[h];
+                }
+                if p.residual[..mh].iter().all(|&v| v == 0.0) {
                     break;
                 }
-                self.min_norm_correction(&positional, &f, &mut dq)?;
+                min_norm_correction(&self.geo, n, &self.positional, p, RowsOf::Positions)?;
                 let size = y[..n].iter().fold(1.0f64, |a, v| a.max(v.abs()));
                 for i in 0..n {
-                    y[i] -= dq[i];
+                    y[i] -= p.dq[i];
                 }
-                if dq.iter().all(|v| v.abs() <= 2.0 * f64::EPSILON * size) {
+                if p.dq.iter().all(|v| v.abs() <= 2.0 * f64::EPSILON * size) {
                     break;
                 }
             }
         }
         self.geometry_at(t, &y[..n]);
-        let r: Vec<f64> =
-            (0..m).map(|k| (0..n).map(|j| self.geo[k * n + j] * y[n + j]).sum::<f64>() + self.geo[m * n + k]).collect();
-        let all: Vec<usize> = (0..m).collect();
-        self.min_norm_correction(&all, &r, &mut dq)?;
+        let p = &mut self.projection;
+        for k in 0..m {
+            p.residual[k] = (0..n).map(|j| self.geo[k * n + j] * y[n + j]).sum::<f64>() + self.geo[m * n + k];
+        }
+        min_norm_correction(&self.geo, n, &self.positional, p, RowsOf::All)?;
         for i in 0..n {
-            y[n + i] -= dq[i];
+            y[n + i] -= p.dq[i];
         }
         if let Some(index) = y.iter().position(|v| !v.is_finite()) {
             return Err(RhsError::NonFinite { index });
@@ -259,9 +292,10 @@ impl ConstrainedSystem {
     }
 
     /// The residuals at (q, q', t): per constraint, f (holonomic) or A q' + a_t
-    /// (velocity) into `position`, and A q' + a_t into `velocity`; also the size of
-    /// each constraint's terms (for relative tests) into `scale`.
-    fn residuals(&mut self, t: f64, y: &[f64], position: &mut [f64], velocity: &mut [f64], scale: &mut [f64]) {
+    /// (velocity) into `position`, and A q' + a_t into `velocity`; `scale` gets the
+    /// size of each constraint's terms at position and at velocity level (at least
+    /// 1), for relative tests.
+    fn residuals(&mut self, t: f64, y: &[f64], position: &mut [f64], velocity: &mut [f64], scale: &mut [(f64, f64)]) {
         let (n, m) = (self.n, self.m);
         self.geometry_at(t, &y[..n]);
         let qsize = y[..n].iter().fold(1.0f64, |a, v| a.max(v.abs()));
@@ -269,15 +303,16 @@ impl ConstrainedSystem {
             let row = &self.geo[k * n..(k + 1) * n];
             let at = self.geo[m * n + k];
             velocity[k] = row.iter().zip(&y[n..]).map(|(a, v)| a * v).sum::<f64>() + at;
-            let vel_scale = row.iter().zip(&y[n..]).map(|(a, v)| (a * v).abs()).sum::<f64>() + at.abs();
+            let vel_scale = 1.0f64.max(row.iter().zip(&y[n..]).map(|(a, v)| (a * v).abs()).sum::<f64>() + at.abs());
             match self.holonomic.iter().position(|&h| h == k) {
                 Some(h) => {
                     position[k] = self.geo[m * n + m + h];
-                    scale[k] = 1.0f64.max(row.iter().fold(0.0f64, |a, v| a.max(v.abs())) * qsize);
+                    let pos_scale = 1.0f64.max(row.iter().fold(0.0f64, |a, v| a.max(v.abs())) * qsize);
+                    scale[k] = (pos_scale, vel_scale);
                 }
                 None => {
                     position[k] = velocity[k];
-                    scale[k] = 1.0f64.max(vel_scale);
+                    scale[k] = (vel_scale, vel_scale);
                 }
             }
         }
@@ -290,7 +325,7 @@ impl ConstrainedSystem {
         let lambda: Vec<f64> = self.sol[n..].to_vec();
         let mut pos = vec![0.0; m];
         let mut vel = vec![0.0; m];
-        let mut scale = vec![0.0; m];
+        let mut scale = vec![(0.0, 0.0); m];
         self.residuals(t, y, &mut pos, &mut vel, &mut scale);
         let mut c = 0;
         for k in 0..m {
@@ -377,12 +412,12 @@ pub(crate) fn simulate(
 
     // Initial values: round-off is projected away, anything more is an error.
     let mut y0: Vec<f64> = q0.iter().chain(&qd0).copied().collect();
-    let (mut pos, mut vel, mut scale) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
+    let (mut pos, mut vel, mut scale) = (vec![0.0; m], vec![0.0; m], vec![(0.0, 0.0); m]);
     system.residuals(0.0, &y0, &mut pos, &mut vel, &mut scale);
     for k in 0..m {
-        let (what, r) = if pos[k].abs() > INITIAL_TOLERANCE * scale[k] {
+        let (what, r) = if pos[k].abs() > INITIAL_TOLERANCE * scale[k].0 {
             ("", pos[k])
-        } else if vel[k].abs() > INITIAL_TOLERANCE * scale[k].max(1.0) {
+        } else if vel[k].abs() > INITIAL_TOLERANCE * scale[k].1 {
             (" at velocity level (A q' + a_t)", vel[k])
         } else {
             continue;

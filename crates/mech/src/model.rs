@@ -503,12 +503,15 @@ impl Model {
                 let scope = if scope_state { Scope::State } else { Scope::Configuration };
                 r.expr(text, scope, what)
             })?;
-            if r.is_coordinate(&spec.name) || r.is_parameter(&spec.name) {
+            let multiplier = format!("lambda_{}", spec.name);
+            if r.is_coordinate(&spec.name) || r.is_parameter(&spec.name) || r.is_parameter(&multiplier) {
                 return Err(ModelError::at(
                     spec.name_span.clone(),
                     format!("constraint '{}' has the name of a coordinate or parameter", spec.name),
                 )
-                .with_help("give the constraint a name of its own"));
+                .with_help(format!(
+                    "give the constraint a name of its own (its multiplier is called {multiplier}, which must not be a parameter either)"
+                )));
             }
             constraints.push(spec);
         }

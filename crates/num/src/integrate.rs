@@ -382,7 +382,8 @@ mod tests {
             assert!(projected < 4.0 * f64::EPSILON, "{method}: projected runs stay on the circle ({projected:e})");
         }
         // Methods that carry more than the state from step to step refuse.
-        let mut gauss = Method::Gauss4.build(Oscillator, 0.0, &[1.0, 0.0], &Config { dt: Some(0.1), ..config }).unwrap();
+        let mut gauss =
+            Method::Gauss4.build(Oscillator, 0.0, &[1.0, 0.0], &Config { dt: Some(0.1), ..config }).unwrap();
         let mut project = |_t: f64, _y: &mut [f64]| Ok(());
         let err = integrate_projected(&mut gauss, 1.0, Output::EveryStep, &mut [], &mut project, |_| {
             ControlFlow::Continue(())
