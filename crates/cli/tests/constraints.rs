@@ -7,7 +7,7 @@
 //!   x² + y² = l² stays at round-off;
 //! - the bead on a rotating wire (ph = om t, rheonomic): the multiplier is the
 //!   torque N r of the wire's normal force N = 2 m om r', r = r0 cosh(om t), and H
-//!   is not conserved (the constraint does work);
+//!   is not conserved (the constraint does work) while H − W is;
 //! - the rolling disk: its two constraints are not integrable, the disk rolls
 //!   without slipping to round-off, its energy is conserved, and its contact point
 //!   runs on the circle of radius R ps'/ph' the notes derive;
@@ -196,6 +196,14 @@ fn the_wire_pushes_the_bead_with_the_coriolis_force() {
     assert_eq!(h["conserved"], false);
     let e_final = 0.5 * m * ((om * (om * 3.0).sinh()).powi(2) + ((om * 3.0).cosh() * om).powi(2));
     assert!((num(&h["final"]) - e_final).abs() < 1e-8 * e_final, "{h}");
+    // The work of the wire is all that changes H: H − W stays at H(0) = m om² r0²/2 = 1.
+    let hw = &s["invariants"]["H-W"];
+    assert_eq!(hw["conserved"], true);
+    assert!(num(&hw["max_rel_drift"]) < 1e-9, "{hw}");
+    let (ih, iw) = (c.col("H"), c.col("W_constraints"));
+    for row in &c.rows {
+        assert!((row[ih] - row[iw] - 1.0).abs() < 1e-9 * row[ih], "H - W at t = {}", row[0]);
+    }
     let d = json(&ok(&["derive", "examples/constraints/rotating_wire.toml", "--format", "json"]).stdout);
     assert_eq!(d["constraints"][0]["rheonomic"], true);
     assert_eq!(d["hamiltonian_conserved"], false);

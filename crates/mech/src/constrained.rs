@@ -58,7 +58,9 @@ pub struct ConstraintAudit {
 /// The CSV columns a constrained run adds, in the order of [`Row::constraints`]:
 /// per constraint `lambda_NAME`, `force_NAME` (|Aᵀλ|), `residual_NAME` (f for a
 /// holonomic constraint, A q' + a_t for a velocity one) and, for a holonomic
-/// constraint, `residual_NAME'` (its time derivative A q' + a_t).
+/// constraint, `residual_NAME'` (its time derivative A q' + a_t); then, when the
+/// constraints do work on a system whose H would be conserved,
+/// `W_constraints` = ∫ Aᵀλ·q' dt (so that H − W is conserved).
 pub fn constraint_columns(d: &Derivation) -> Vec<String> {
     let mut cols = Vec::new();
     for c in &d.constraints.list {
@@ -68,6 +70,9 @@ pub fn constraint_columns(d: &Derivation) -> Vec<String> {
         if c.kind == ConstraintKind::Holonomic {
             cols.push(format!("residual_{}'", c.name));
         }
+    }
+    if d.constraints.work_balances_h {
+        cols.push("W_constraints".into());
     }
     cols
 }
@@ -80,6 +85,8 @@ pub struct ConstrainedSystem {
     m: usize,
     /// Indices of the holonomic constraints.
     holonomic: Vec<usize>,
+    /// Whether the state carries W = ∫ Aᵀλ·q' dt as a last component.
+    work: bool,
     /// Indices of the constraints kept at position level by the projection: the
     /// holonomic ones, then the integrable velocity constraints with a known
     /// integral F (whose gradient is their row of A), kept at F = F(t = 0).
@@ -165,6 +172,7 @@ impl ConstrainedSystem {
         let a: Vec<ExprId> = list.iter().flat_map(|c| c.jacobian.iter().copied()).collect();
         let mut accel_out = a.clone();
         accel_out.extend(list.iter().map(|c| c.acceleration_rhs));
+        accel_out.extend(list.iter().map(|c| c.time_term));
         let mut geo_out = a;
         geo_out.extend(list.iter().map(|c| c.time_term));
         let holonomic: Vec<usize> = (0..m).filter(|&k| list[k].kind == ConstraintKind::Holonomic).collect();
@@ -183,13 +191,14 @@ impl ConstrainedSystem {
             n,
             m,
             holonomic,
+            work: d.constraints.work_balances_h,
             levels: vec![0.0; positional.len()],
             positional,
             accel,
             geometry,
             inputs,
             mf: vec![0.0; n * n + n],
-            ac: vec![0.0; m * n + m],
+            ac: vec![0.0; m * n + 2 * m],
             geo: vec![0.0; m * n + m + mh],
             kkt: vec![0.0; (n + m) * (n + m)],
             sol: vec![0.0; n + m],
@@ -209,7 +218,7 @@ impl ConstrainedSystem {
     /// Solves the saddle-point system at (q, q', t): q'' in `sol[..n]`, λ in `sol[n..]`.
     fn solve(&mut self, t: f64, y: &[f64]) -> Result<(), RhsError> {
         let (n, m) = (self.n, self.m);
-        self.inputs[..2 * n].copy_from_slice(y);
+        self.inputs[..2 * n].copy_from_slice(&y[..2 * n]);
         self.inputs[2 * n] = t;
         self.dynamics.eval_mass_forcing(&self.inputs, &mut self.mf);
         self.accel.eval(&self.inputs, &mut self.ac);
@@ -226,7 +235,7 @@ impl ConstrainedSystem {
             }
         }
         self.sol[..n].copy_from_slice(&self.mf[n * n..]);
-        self.sol[n..].copy_from_slice(&self.ac[m * n..]);
+        self.sol[n..].copy_from_slice(&self.ac[m * n..m * n + m]);
         self.lu.factor(&self.kkt).map_err(RhsError::from)?;
         self.lu.solve_in_place(&mut self.sol).map_err(RhsError::from)?;
         Ok(())
@@ -302,8 +311,9 @@ impl ConstrainedSystem {
         for k in 0..m {
             let row = &self.geo[k * n..(k + 1) * n];
             let at = self.geo[m * n + k];
-            velocity[k] = row.iter().zip(&y[n..]).map(|(a, v)| a * v).sum::<f64>() + at;
-            let vel_scale = 1.0f64.max(row.iter().zip(&y[n..]).map(|(a, v)| (a * v).abs()).sum::<f64>() + at.abs());
+            velocity[k] = row.iter().zip(&y[n..2 * n]).map(|(a, v)| a * v).sum::<f64>() + at;
+            let vel_scale =
+                1.0f64.max(row.iter().zip(&y[n..2 * n]).map(|(a, v)| (a * v).abs()).sum::<f64>() + at.abs());
             match self.holonomic.iter().position(|&h| h == k) {
                 Some(h) => {
                     position[k] = self.geo[m * n + m + h];
@@ -339,20 +349,28 @@ impl ConstrainedSystem {
                 c += 1;
             }
         }
+        if self.work {
+            out[c] = y[2 * n];
+        }
         Ok(())
     }
 }
 
 impl OdeSystem for ConstrainedSystem {
     fn dim(&self) -> usize {
-        2 * self.n
+        2 * self.n + usize::from(self.work)
     }
 
     fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), RhsError> {
         let n = self.n;
         self.solve(t, y)?;
-        dy[..n].copy_from_slice(&y[n..]);
-        dy[n..].copy_from_slice(&self.sol[..n]);
+        dy[..n].copy_from_slice(&y[n..2 * n]);
+        dy[n..2 * n].copy_from_slice(&self.sol[..n]);
+        if self.work {
+            // dW/dt = Aᵀλ·q' = −Σ λ_k a_t,k on the constraints.
+            let m = self.m;
+            dy[2 * n] = -(0..m).map(|k| self.sol[n + k] * self.ac[m * n + m + k]).sum::<f64>();
+        }
         if let Some(index) = dy.iter().position(|v| !v.is_finite()) {
             return Err(RhsError::NonFinite { index });
         }
@@ -412,6 +430,9 @@ pub(crate) fn simulate(
 
     // Initial values: round-off is projected away, anything more is an error.
     let mut y0: Vec<f64> = q0.iter().chain(&qd0).copied().collect();
+    if d.constraints.work_balances_h {
+        y0.push(0.0);
+    }
     let (mut pos, mut vel, mut scale) = (vec![0.0; m], vec![0.0; m], vec![(0.0, 0.0); m]);
     system.residuals(0.0, &y0, &mut pos, &mut vel, &mut scale);
     for k in 0..m {
@@ -462,7 +483,7 @@ pub(crate) fn simulate(
         let mut out = [0.0];
         events.push(
             Event::new(move |t, y| {
-                values[..2 * n].copy_from_slice(y);
+                values[..2 * n].copy_from_slice(&y[..2 * n]);
                 values[2 * n] = t;
                 tape.eval(&values, &mut out);
                 out[0]
@@ -491,7 +512,12 @@ pub(crate) fn simulate(
             max_force: 0.0,
         })
         .collect();
-    let mut row_y = vec![0.0; 2 * n];
+    let work = d.constraints.work_balances_h;
+    let mut row_y = vec![0.0; 2 * n + usize::from(work)];
+    // H − W, audited when the constraints' work is all that changes H.
+    // Its relative drift is measured against the largest |H| of the run: H and W
+    // grow together, and their difference cannot be better than H's own digits.
+    let (mut hw_initial, mut hw_last, mut hw_abs, mut h_size) = (None::<f64>, 0.0, 0.0f64, 0.0f64);
     let mut last_y = y0.clone();
     let mut last_inv = vec![0.0; n_inv];
     let mut last_t = 0.0;
@@ -507,7 +533,8 @@ pub(crate) fn simulate(
             row_error = Some(format!("at t = {}: {e}", obs.t));
             return ControlFlow::Break(());
         }
-        let (q, qd) = row_y.split_at(n);
+        let (q, rest) = row_y.split_at(n);
+        let qd = &rest[..n];
         inv_dynamics.eval_invariants(obs.t, q, qd, &mut inv);
         let init = initial.get_or_insert_with(|| inv.clone());
         let interpolated_event = matches!(obs.kind, ObservationKind::Event { .. });
@@ -531,6 +558,13 @@ pub(crate) fn simulate(
             } else {
                 audit.max_abs_velocity_residual = audit.max_abs_residual;
             }
+        }
+        if work && !interpolated_event {
+            let hw = inv[0] - row_y[2 * n];
+            let h0 = *hw_initial.get_or_insert(hw);
+            hw_abs = hw_abs.max((hw - h0).abs());
+            h_size = h_size.max(inv[0].abs());
+            hw_last = hw;
         }
         last_t = obs.t;
         last_y.copy_from_slice(&row_y);
@@ -561,6 +595,17 @@ pub(crate) fn simulate(
             max_rel_drift: max_rel[k],
         })
         .collect();
+    let mut inv_audits = inv_audits;
+    if let Some(h0) = hw_initial {
+        inv_audits.push(Audit {
+            name: "H-W".into(),
+            conserved: true,
+            initial: h0,
+            final_value: hw_last,
+            max_abs_drift: hw_abs,
+            max_rel_drift: if h_size > 0.0 { hw_abs / h_size } else { hw_abs },
+        });
+    }
     let mut warnings = Vec::new();
     let explained = (1e3 * config.rtol).max(1e-12);
     for a in &inv_audits {
@@ -591,7 +636,7 @@ pub(crate) fn simulate(
         rhs_evaluations: stats.rhs_evaluations,
         t_final: last_t,
         final_q: last_y[..n].to_vec(),
-        final_qd: last_y[n..].to_vec(),
+        final_qd: last_y[n..2 * n].to_vec(),
         invariants: inv_audits,
         stopped_by: None,
         warnings,

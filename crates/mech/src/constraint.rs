@@ -159,6 +159,10 @@ pub struct Constraints {
     pub cartesian_forces: Option<Vec<Vec<ExprId>>>,
     /// The teaching text about the set (degrees of freedom, integrability, work).
     pub explanation: Vec<String>,
+    /// True when H would be conserved but for the work W of the constraint forces
+    /// (L free of t, no dissipation or forces, a constraint with a_t ≠ 0): then
+    /// H − W is conserved, and runs audit it.
+    pub work_balances_h: bool,
 }
 
 impl Constraints {
@@ -215,6 +219,7 @@ pub(crate) fn attach(d: &mut Derivation) -> Result<(), ModelError> {
     let working: Vec<&str> = set.list.iter().filter(|c| c.does_work).map(|c| c.name.as_str()).collect();
     if !working.is_empty() && d.hamiltonian_conserved {
         d.hamiltonian_conserved = false;
+        set.work_balances_h = true;
         d.conserved.retain(|c| c.name != "H");
         d.verdicts.conservation.retain(|s| !s.starts_with("L does not depend explicitly on t"));
         d.verdicts.conservation.push(format!(
@@ -224,6 +229,10 @@ pub(crate) fn attach(d: &mut Derivation) -> Result<(), ModelError> {
             if working.len() == 1 { "s" } else { "" },
             if working.len() == 1 { "its" } else { "their" }
         ));
+        d.verdicts.conservation.push(
+            "H − W is conserved instead, W = ∫ Aᵀλ·q' dt the work of the constraint forces (simulate audits it as H-W)."
+                .into(),
+        );
     } else if working.is_empty() && d.hamiltonian_conserved {
         d.verdicts.conservation.push(
             "The constraints do not depend on t: their forces do no work (Aᵀλ·q' = −λ·a_t = 0), so H stays conserved."
@@ -460,6 +469,7 @@ fn derive_all(
         generalized_forces: Vec::new(),
         cartesian_forces: None,
         explanation,
+        work_balances_h: false,
     })
 }
 
