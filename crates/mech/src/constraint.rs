@@ -419,7 +419,7 @@ fn derive_all(
                     c.name
                 )),
                 _ => s.push(format!(
-                    "{}: {e} = 0 restricts the velocities and is not integrable: ω ∧ dω ≠ 0 (Frobenius), so no f(q, t) = 0 is equivalent to it. It is nonholonomic: it does not reduce the configurations that can be reached.",
+                    "{}: {e} = 0 restricts the velocities and, on its own, is not integrable: ω ∧ dω ≠ 0 (Frobenius), so no f(q, t) = 0 is equivalent to it. It is nonholonomic: it does not reduce the configurations that can be reached.",
                     c.name
                 )),
             },
@@ -730,6 +730,21 @@ velocity = "y' - R*sin(ph)*ps'"
         // Only p_ph survives: the constraint forces act on x, y and ps.
         let names: Vec<&str> = d.conserved.iter().map(|c| c.name.as_str()).collect();
         assert_eq!(names, ["p_ph", "H"]);
+    }
+
+    #[test]
+    fn a_set_can_be_integrable_when_its_members_are_not() {
+        // dz − y dx alone is not integrable (ω ∧ dω = dz∧dx∧dy), but with dy = 0
+        // the free directions shrink to ∂x + y ∂z: y = c and z − c x = const.
+        let d = derive(
+            "coordinates = [\"x\", \"y\", \"z\"]\nkinetic = \"x'^2/2 + y'^2/2 + z'^2/2\"\n[[constraints]]\nvelocity = \"z' - y*x'\"\n[[constraints]]\nvelocity = \"y'\"\n",
+        );
+        let c = &d.constraints;
+        assert_eq!(c.list[0].integrable, Some(false));
+        assert_eq!(c.list[1].integrable, Some(true));
+        assert_eq!(d.pool().display(c.list[1].integral.unwrap()).to_string(), "y");
+        assert_eq!(c.integrable, Some(true));
+        assert_eq!(c.degrees_of_freedom, 1);
     }
 
     #[test]
