@@ -209,7 +209,7 @@ fn constraints_text(d: &Derivation, o: &mut String) {
         let _ = writeln!(o, "  Q_{} = {}", names[i], s(f));
     }
     if let Some(parts) = &set.cartesian_forces {
-        let _ = writeln!(o, "  Cartesian, on each particle (its position is given by the coordinates themselves):");
+        let _ = writeln!(o, "  Cartesian, on each particle (F with Q = (∂x/∂q)ᵀF):");
         for (k, f) in parts.iter().enumerate() {
             let comps: Vec<String> = f.iter().map(|&e| s(e)).collect();
             let _ = writeln!(o, "    particle {}: F = ({})", k + 1, comps.join(", "));

@@ -153,9 +153,10 @@ pub struct Constraints {
     pub multiplier_equations: Vec<ExprId>,
     /// Σ_k λ_k A_ki per coordinate: the generalized constraint force Aᵀλ.
     pub generalized_forces: Vec<ExprId>,
-    /// The Cartesian constraint force on each particle, when every coordinate is a
-    /// Cartesian component of exactly one particle (positions that are the
-    /// coordinates themselves): per particle, its components.
+    /// The Cartesian constraint force on each particle, per particle its
+    /// components, when it is determined by Q = (∂x/∂q)ᵀF: the positions are the
+    /// coordinates themselves, or have as many components as there are
+    /// coordinates (n ≤ 3) with ∂x/∂q invertible.
     pub cartesian_forces: Option<Vec<Vec<ExprId>>>,
     /// The teaching text about the set (degrees of freedom, integrability, work).
     pub explanation: Vec<String>,
@@ -212,7 +213,12 @@ pub(crate) fn attach(d: &mut Derivation) -> Result<(), ModelError> {
         let eq = pool.sub(d.equations[i], force);
         set.multiplier_equations.push(eq);
     }
-    set.cartesian_forces = cartesian_forces(d, &set.generalized_forces);
+    set.cartesian_forces = cartesian_forces(d, &set.generalized_forces).or_else(|| {
+        let mut pool = std::mem::take(&mut d.model.pool);
+        let f = cartesian_forces_square(&mut pool, d, &set.generalized_forces);
+        d.model.pool = pool;
+        f
+    });
     let pool = &mut d.model.pool;
 
     // What the constraint forces change in the verdicts.
@@ -663,9 +669,92 @@ fn cartesian_forces(d: &Derivation, generalized: &[ExprId]) -> Option<Vec<Vec<Ex
     used.iter().all(|&u| u).then_some(forces)
 }
 
+/// The Cartesian constraint forces when the particles' components x(q, t) are as
+/// many as the coordinates (n ≤ 3) and ∂x/∂q is invertible: Q = (∂x/∂q)ᵀ F then
+/// determines F = (∂x/∂q)⁻ᵀ Q, by the adjugate over the simplified determinant.
+fn cartesian_forces_square(pool: &mut Pool, d: &Derivation, generalized: &[ExprId]) -> Option<Vec<Vec<ExprId>>> {
+    let n = d.q.len();
+    let xs: Vec<ExprId> = d.model.particles.iter().flat_map(|p| p.position.iter().copied()).collect();
+    if d.model.particles.is_empty() || xs.len() != n || n > 3 {
+        return None;
+    }
+    let names: Vec<NameId> = d.model.coordinates.iter().map(|c| pool.name(&c.name)).collect();
+    let t_name = pool.name("t");
+    let is_var = |s: Symbol| s.name == t_name || names.contains(&s.name);
+    // jt[i][a] = ∂x_a/∂q_i: the matrix of Q = Jᵀ F.
+    let jt: Vec<Vec<ExprId>> = (0..n).map(|i| xs.iter().map(|&x| pool.diff(x, d.q[i])).collect()).collect();
+    if probe::is_singular(pool, &jt) {
+        return None;
+    }
+    let minor = |pool: &mut Pool, rows: [usize; 2], cols: [usize; 2]| {
+        let x = pool.mul2(jt[rows[0]][cols[0]], jt[rows[1]][cols[1]]);
+        let y = pool.mul2(jt[rows[0]][cols[1]], jt[rows[1]][cols[0]]);
+        pool.sub(x, y)
+    };
+    // adj[a][i] = cofactor C_ia of jt.
+    let mut adj = vec![vec![pool.zero(); n]; n];
+    let det = match n {
+        1 => {
+            adj[0][0] = pool.one();
+            jt[0][0]
+        }
+        2 => {
+            adj[0][0] = jt[1][1];
+            adj[1][1] = jt[0][0];
+            adj[0][1] = pool.neg(jt[0][1]);
+            adj[1][0] = pool.neg(jt[1][0]);
+            minor(pool, [0, 1], [0, 1])
+        }
+        _ => {
+            let others = |i: usize| -> [usize; 2] {
+                match i {
+                    0 => [1, 2],
+                    1 => [0, 2],
+                    _ => [0, 1],
+                }
+            };
+            for a in 0..3 {
+                for i in 0..3 {
+                    let c = minor(pool, others(i), others(a));
+                    adj[a][i] = if (a + i) % 2 == 0 { c } else { pool.neg(c) };
+                }
+            }
+            let terms: Vec<ExprId> = (0..3).map(|j| pool.mul2(jt[0][j], adj[j][0])).collect();
+            pool.add(&terms)
+        }
+    };
+    let det = pool.simplify_in(det, &is_var);
+    let mut flat = Vec::with_capacity(n);
+    for row in adj.iter().take(n) {
+        let terms: Vec<ExprId> = (0..n).map(|i| pool.mul2(row[i], generalized[i])).collect();
+        let num = pool.add(&terms);
+        let num = pool.simplify_in(num, &is_var);
+        let f = pool.div(num, det);
+        flat.push(pool.simplify_in(f, &is_var));
+    }
+    let mut forces = Vec::new();
+    let mut k = 0;
+    for p in &d.model.particles {
+        forces.push(flat[k..k + p.position.len()].to_vec());
+        k += p.position.len();
+    }
+    Some(forces)
+}
+
 #[cfg(test)]
 mod tests {
     use crate::{Derivation, Model};
+
+    #[test]
+    fn the_cartesian_force_of_a_bead_on_a_rotating_wire() {
+        let d = derive(
+            "coordinates = [\"r\", \"ph\"]\n[parameters]\nm = 1.0\nom = 2.0\n[[particles]]\nmass = \"m\"\nposition = [\"r*cos(ph)\", \"r*sin(ph)\"]\n[[constraints]]\nholonomic = \"ph - om*t\"\n",
+        );
+        let f = d.constraints.cartesian_forces.as_ref().expect("2 components for 2 coordinates");
+        let shown: Vec<String> = f[0].iter().map(|&e| d.pool().display(e).to_string()).collect();
+        // Perpendicular to the wire, of size λ/r (the torque λ over the arm r).
+        assert_eq!(shown, ["-lambda_c1*sin(ph)/r", "lambda_c1*cos(ph)/r"]);
+    }
 
     fn derive(text: &str) -> Derivation {
         Derivation::new(Model::parse(text, &[]).unwrap()).unwrap()
