@@ -13,7 +13,22 @@ pub fn text(d: &Derivation) -> String {
     let n = names.len();
     let mut o = String::new();
     let _ = writeln!(o, "{}", d.model.name);
-    let _ = writeln!(o, "{} degree{} of freedom: {}", n, if n == 1 { "" } else { "s" }, names.join(", "));
+    if d.constraints.is_empty() {
+        let _ = writeln!(o, "{} degree{} of freedom: {}", n, if n == 1 { "" } else { "s" }, names.join(", "));
+    } else {
+        let k = d.constraints.degrees_of_freedom;
+        let _ = writeln!(
+            o,
+            "{} coordinate{}: {}; {} constraint{}: {} degree{} of freedom",
+            n,
+            if n == 1 { "" } else { "s" },
+            names.join(", "),
+            d.constraints.list.len(),
+            if d.constraints.list.len() == 1 { "" } else { "s" },
+            k,
+            if k == 1 { "" } else { "s" }
+        );
+    }
     if !d.model.parameters.is_empty() {
         let ps: Vec<String> = d.model.parameters.iter().map(|p| format!("{} = {}", p.name, p.value)).collect();
         let _ = writeln!(o, "parameters: {}", ps.join(", "));
@@ -78,6 +93,10 @@ pub fn text(d: &Derivation) -> String {
         );
     }
 
+    if !d.constraints.is_empty() {
+        constraints_text(d, &mut o);
+    }
+
     let _ = writeln!(o, "\ncyclic coordinates");
     if d.cyclic.is_empty() {
         let _ = writeln!(o, "  none: L depends on every coordinate");
@@ -91,7 +110,13 @@ pub fn text(d: &Derivation) -> String {
                 names[i],
                 names[i],
                 s(d.momenta[i]),
-                if conserved { "is conserved" } else { "would be conserved, but dissipation or a force acts on it" }
+                if conserved {
+                    "is conserved"
+                } else if d.constraints.list.iter().any(|c| !pool.is_zero(c.jacobian[i])) {
+                    "would be conserved, but a constraint force acts on it"
+                } else {
+                    "would be conserved, but dissipation or a force acts on it"
+                }
             );
         }
     }
@@ -143,6 +168,64 @@ pub fn text(d: &Derivation) -> String {
     o
 }
 
+/// The constraints section: each constraint with its row of A and its verdicts,
+/// the equations with multipliers, and the constraint forces.
+fn constraints_text(d: &Derivation, o: &mut String) {
+    let pool = d.pool();
+    let s = |e: ExprId| pool.display(e).to_string();
+    let names = d.coordinate_names();
+    let set = &d.constraints;
+    let _ =
+        writeln!(o, "\nconstraints (A = ∂f/∂q for f(q, t) = 0; the velocity coefficients for a(q, t)·q' + a_t = 0)");
+    for c in &set.list {
+        let tags = [
+            Some(c.kind.name()),
+            Some(if c.rheonomic { "rheonomic" } else { "scleronomic" }),
+            match (c.kind, c.integrable) {
+                (mech::ConstraintKind::Velocity, Some(true)) => Some("integrable"),
+                (mech::ConstraintKind::Velocity, _) => Some("not integrable"),
+                _ => None,
+            },
+        ];
+        let tags: Vec<&str> = tags.into_iter().flatten().collect();
+        let _ = writeln!(o, "  {}: {} = 0   ({})", c.name, s(c.expr), tags.join(", "));
+        let row: Vec<String> = c.jacobian.iter().map(|&e| s(e)).collect();
+        let _ = writeln!(
+            o,
+            "    A row = [{}]{}",
+            row.join(", "),
+            if pool.is_zero(c.time_term) { String::new() } else { format!(",  a_t = {}", s(c.time_term)) }
+        );
+        for line in &c.explanation {
+            let _ = writeln!(o, "    {line}");
+        }
+    }
+    for line in &set.explanation {
+        let _ = writeln!(o, "  {line}");
+    }
+    let lambdas: Vec<String> = set.list.iter().map(|c| s(c.multiplier)).collect();
+    let _ = writeln!(o, "\nequations with multipliers  M q'' = f + Aᵀλ,  λ = ({})", lambdas.join(", "));
+    let label_w = names.iter().map(|n| n.chars().count()).max().unwrap_or(1) + 1;
+    for (i, &e) in set.multiplier_equations.iter().enumerate() {
+        let _ = writeln!(o, "  {:<label_w$} {} = 0", format!("{}:", names[i]), s(e));
+    }
+    let _ = writeln!(
+        o,
+        "  with the constraints differentiated to A q'' = c (index reduction), q'' and λ follow at each instant."
+    );
+    let _ = writeln!(o, "\nconstraint forces  Q = Aᵀλ (generalized)");
+    for (i, &f) in set.generalized_forces.iter().enumerate() {
+        let _ = writeln!(o, "  Q_{} = {}", names[i], s(f));
+    }
+    if let Some(parts) = &set.cartesian_forces {
+        let _ = writeln!(o, "  Cartesian, on each particle (F with Q = (∂x/∂q)ᵀF):");
+        for (k, f) in parts.iter().enumerate() {
+            let comps: Vec<String> = f.iter().map(|&e| s(e)).collect();
+            let _ = writeln!(o, "    particle {}: F = ({})", k + 1, comps.join(", "));
+        }
+    }
+}
+
 /// The derivation as LaTeX (an `align*` environment per section).
 pub fn latex(d: &Derivation) -> String {
     let pool = d.pool();
@@ -174,6 +257,19 @@ pub fn latex(d: &Derivation) -> String {
         let _ = writeln!(o, "H &= {}", l(h));
     }
     let _ = writeln!(o, "\\end{{align*}}");
+    if !d.constraints.is_empty() {
+        // The constraints and the equations with multipliers.
+        let _ = writeln!(o, "\\begin{{align*}}");
+        for c in &d.constraints.list {
+            let _ = writeln!(o, "0 &= {} \\\\  % constraint {} ({})", l(c.expr), c.name, c.kind.name());
+        }
+        let eqs = &d.constraints.multiplier_equations;
+        for (i, &e) in eqs.iter().enumerate() {
+            let sep = if i + 1 < eqs.len() { " \\\\" } else { "" };
+            let _ = writeln!(o, "0 &= {}{}  % with multipliers, for ${}$", l(e), sep, qtex[i]);
+        }
+        let _ = writeln!(o, "\\end{{align*}}");
+    }
     if let Some(eqs) = &d.hamilton {
         let _ = writeln!(o, "\\begin{{align*}}");
         for (i, &(dq, dp)) in eqs.iter().enumerate() {

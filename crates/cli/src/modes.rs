@@ -53,6 +53,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let source = crate::read_source(path)?;
     let model = mech::Model::parse(&source, &args.set).map_err(|e| Failure::model(path, &source, e))?;
     let mut d = Derivation::new(model).map_err(|e| Failure::model(path, &source, e))?;
+    d.reject_constraints("`lagrange modes`").map_err(|e| Failure::model(path, &source, e))?;
     let config = ModesConfig { at: args.at.clone() };
     let modes = mech::normal_modes(&mut d, &config).map_err(|e| failure(path, &source, e))?;
     if !modes.stable && !args.allow_unstable {

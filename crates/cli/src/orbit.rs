@@ -37,6 +37,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let source = crate::read_source(path)?;
     let model = mech::Model::parse(&source, &args.set).map_err(|e| Failure::model(path, &source, e))?;
     let mut d = Derivation::new(model).map_err(|e| Failure::model(path, &source, e))?;
+    d.reject_constraints("`lagrange orbit`").map_err(|e| Failure::model(path, &source, e))?;
     let mut orbit = Orbit::new(&mut d).map_err(|e| failure(path, &source, e))?;
     if let Some(svg) = &args.plot {
         let text = figure(&d, &mut orbit).map_err(|e| Failure::input(svg, format!("cannot draw the plot: {e}")))?;

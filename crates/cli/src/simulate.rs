@@ -114,6 +114,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     // Rigid bodies: ω and L per body as extra columns.
     let mut bodies = mech::BodyRecorder::new(&mut derivation);
     let mut body_values = vec![0.0; bodies.as_ref().map_or(0, |b| b.columns().len())];
+    let constraint_cols = mech::constraint_columns(&derivation);
 
     let result = mech::simulate(&mut derivation, &config, |row| {
         if let Some(w) = csv.as_mut() {
@@ -124,6 +125,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
                     cols.extend(names.iter().map(|c| format!("{c}'")));
                     cols.extend(inv_names.iter().cloned());
                     cols.extend(bodies.iter().flat_map(|b| b.columns().iter().cloned()));
+                    cols.extend(constraint_cols.iter().cloned());
                     if with_events {
                         cols.push("event".into());
                     }
@@ -134,7 +136,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
                 if let Some(b) = bodies.as_mut() {
                     b.eval(row.t, row.q, row.qd, &mut body_values);
                 }
-                for v in row.q.iter().chain(row.qd).chain(row.invariants).chain(&body_values) {
+                for v in row.q.iter().chain(row.qd).chain(row.invariants).chain(&body_values).chain(row.constraints) {
                     write!(w, ",{v}")?;
                 }
                 if with_events {
@@ -280,6 +282,24 @@ fn summary_json(r: &RunReport, names: &[String]) -> String {
         "warnings": r.warnings,
         "wall_seconds": r.wall_seconds,
     });
+    let mut v = v;
+    if !r.constraints.is_empty() {
+        let mut cs = serde_json::Map::new();
+        for c in &r.constraints {
+            cs.insert(
+                c.name.clone(),
+                json!({
+                    "kind": c.kind.name(),
+                    "max_abs_residual": c.max_abs_residual,
+                    "max_abs_velocity_residual": c.max_abs_velocity_residual,
+                    "final_lambda": c.final_lambda,
+                    "max_force": c.max_force,
+                }),
+            );
+        }
+        v["constraints"] = serde_json::Value::Object(cs);
+        v["stabilization"] = json!("projection after every step (positions by Gauss-Newton, then velocities)");
+    }
     let mut s = serde_json::to_string_pretty(&v).unwrap_or_default();
     s.push('\n');
     s
@@ -335,6 +355,26 @@ fn summary_text(r: &RunReport, names: &[String], d: &Derivation) -> String {
             ));
         }
         s.push_str("  (* conserved according to the derivation)\n");
+    }
+    if !r.constraints.is_empty() {
+        s.push_str("constraints (the state is projected onto them after every step)\n");
+        s.push_str("  name        kind        max |residual|  max |residual'|      max |Aᵀλ|        final λ\n");
+        for c in &r.constraints {
+            let vel = if c.kind == mech::ConstraintKind::Holonomic {
+                format!("{:>15.3e}", c.max_abs_velocity_residual)
+            } else {
+                format!("{:>15}", "-")
+            };
+            s.push_str(&format!(
+                "  {:<10}  {:<10} {:>15.3e}  {} {:>14.6e} {:>14.6e}\n",
+                c.name,
+                c.kind.name(),
+                c.max_abs_residual,
+                vel,
+                c.max_force,
+                c.final_lambda
+            ));
+        }
     }
     s
 }

@@ -99,6 +99,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let source = crate::read_source(path)?;
     let model = mech::Model::parse(&source, &args.set).map_err(|e| Failure::model(path, &source, e))?;
     let mut derivation = Derivation::new(model).map_err(|e| Failure::model(path, &source, e))?;
+    derivation.reject_constraints("`lagrange sweep`").map_err(|e| Failure::model(path, &source, e))?;
     let grid = Grid::parse(args.grid.as_deref().unwrap_or_default(), &derivation.model).map_err(usage)?;
     if args.heatmap.is_some() {
         let mut columns: Vec<String> = vec!["t_final".into(), "energy_drift".into()];

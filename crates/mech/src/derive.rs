@@ -92,6 +92,8 @@ pub struct Derivation {
     pub verdicts: Verdicts,
     /// Each rigid body's angular velocity and angular momentum (body frame).
     pub bodies: Vec<crate::body::BodyMotion>,
+    /// The constraints and the equations with multipliers (empty without `[[constraints]]`).
+    pub constraints: crate::constraint::Constraints,
 }
 
 /// Symbols and the "is a variable" predicate used for collecting.
@@ -438,7 +440,7 @@ impl Derivation {
         };
 
         model.pool = pool_owned;
-        Ok(Derivation {
+        let mut derivation = Derivation {
             model,
             q,
             qd,
@@ -466,7 +468,10 @@ impl Derivation {
             explicit_time,
             verdicts,
             bodies,
-        })
+            constraints: Default::default(),
+        };
+        crate::constraint::attach(&mut derivation)?;
+        Ok(derivation)
     }
 
     /// The pool holding every expression.

@@ -54,20 +54,20 @@ pub struct Invariant {
 /// One group of expressions evaluated together: native code from the JIT, or
 /// the tape interpreter where the JIT is not available on this machine.
 #[derive(Debug, Clone)]
-enum Kernel {
+pub(crate) enum Kernel {
     Native(Arc<Compiled>),
     Interpreted(Tape),
 }
 
 impl Kernel {
-    fn new(tape: Tape) -> Kernel {
+    pub(crate) fn new(tape: Tape) -> Kernel {
         match Compiled::new(&tape) {
             Ok(native) => Kernel::Native(Arc::new(native)),
             Err(_) => Kernel::Interpreted(tape),
         }
     }
 
-    fn eval(&mut self, inputs: &[f64], outputs: &mut [f64]) {
+    pub(crate) fn eval(&mut self, inputs: &[f64], outputs: &mut [f64]) {
         match self {
             Kernel::Native(native) => native.eval(inputs, outputs),
             Kernel::Interpreted(tape) => tape.eval(inputs, outputs),
@@ -201,6 +201,17 @@ impl Dynamics {
             work: vec![0.0; n],
             factored_once: false,
         }
+    }
+
+    /// Evaluates M (row-major, n²) and f (n) at `inputs` = `[q, q', t, parameters]`
+    /// (the constrained runs of `constrained.rs` reuse this kernel).
+    pub(crate) fn eval_mass_forcing(&mut self, inputs: &[f64], out: &mut [f64]) {
+        self.mass_forcing.eval(inputs, out);
+    }
+
+    /// The input template `[q, q', t, parameters]` with the parameters' values.
+    pub(crate) fn input_template(&self) -> &[f64] {
+        &self.inputs
     }
 
     /// Evaluates the invariants at (q, q', t) into `out`.

@@ -19,6 +19,8 @@
 //! ```
 
 pub mod body;
+mod constrained;
+mod constraint;
 mod derive;
 mod dynamics;
 mod error;
@@ -35,13 +37,15 @@ mod sweep;
 mod top;
 
 pub use body::{Body, BodyMotion, BodyRecorder};
+pub use constrained::{constraint_columns, ConstrainedSystem, ConstraintAudit, INITIAL_TOLERANCE};
+pub use constraint::{Constraint, ConstraintKind, ConstraintSpec, Constraints};
 pub use derive::{Conserved, Derivation, Verdicts};
 pub use dynamics::{invariants_of, Dynamics, Form, Invariant, System};
 pub use error::ModelError;
 pub use model::{Coordinate, InitialValue, Located, Model, Parameter, Particle, MAX_FILE_BYTES};
 pub use modes::{normal_modes, Mode, ModeKind, Modes, ModesConfig, ModesError, ModesReport, SymbolicModes};
 pub use orbit::{Kepler, Orbit, OrbitError, OrbitKind, OrbitReport};
-pub use report::{BodyReport, DeriveReport, HamiltonEquations, NamedExpr, Ordered};
+pub use report::{BodyReport, ConstraintReport, DeriveReport, HamiltonEquations, NamedExpr, Ordered};
 pub use run::{choose_method, simulate, Audit, Row, RunConfig, RunError, RunReport, StopCondition};
 pub use sweep::{
     format_axes, merge, parse_axes, sweep, Axis, Grid, Shard, SweepConfig, SweepError, SweepTable, TableRow, Target,

@@ -7,7 +7,6 @@
 //! re-reads the text.
 
 use crate::error::ModelError;
-use serde::de::IgnoredAny;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::ops::Range;
@@ -114,6 +113,8 @@ pub struct Model {
     pub initial: Vec<InitialValue>,
     /// Rigid bodies (`[[bodies]]`).
     pub bodies: Vec<crate::body::Body>,
+    /// Constraints from `[[constraints]]`, in file order.
+    pub constraints: Vec<crate::constraint::ConstraintSpec>,
 }
 
 #[derive(Deserialize)]
@@ -136,7 +137,8 @@ struct RawModel {
     initial: BTreeMap<Spanned<String>, Spanned<NumOrText>>,
     #[serde(default)]
     bodies: Vec<Spanned<crate::body::RawBody>>,
-    constraints: Option<Spanned<IgnoredAny>>,
+    #[serde(default)]
+    constraints: Vec<Spanned<crate::constraint::RawConstraint>>,
 }
 
 #[derive(Deserialize)]
@@ -342,10 +344,6 @@ impl Model {
                 None => ModelError::whole(message),
             }
         })?;
-        if let Some(c) = &raw.constraints {
-            return Err(ModelError::at(c.span(), "constraints ([[constraints]]) are not supported yet")
-                .with_help("eliminate the constraint by choosing generalized coordinates that satisfy it"));
-        }
         let mut r = Reader { source, pool: Pool::default(), coordinates: Vec::new(), parameters: Vec::new() };
 
         // Coordinates.
@@ -519,6 +517,26 @@ impl Model {
             initial.push(InitialValue { coord, order, value });
         }
 
+        // Constraints (read by `constraint.rs`).
+        let mut constraints = Vec::new();
+        for (k, c) in raw.constraints.iter().enumerate() {
+            let spec = crate::constraint::read_spec(c, k, &constraints, &mut |text, scope_state, what| {
+                let scope = if scope_state { Scope::State } else { Scope::Configuration };
+                r.expr(text, scope, what)
+            })?;
+            let multiplier = format!("lambda_{}", spec.name);
+            if r.is_coordinate(&spec.name) || r.is_parameter(&spec.name) || r.is_parameter(&multiplier) {
+                return Err(ModelError::at(
+                    spec.name_span.clone(),
+                    format!("constraint '{}' has the name of a coordinate or parameter", spec.name),
+                )
+                .with_help(format!(
+                    "give the constraint a name of its own (its multiplier is called {multiplier}, which must not be a parameter either)"
+                )));
+            }
+            constraints.push(spec);
+        }
+
         Ok(Model {
             pool: r.pool,
             name: raw.name.unwrap_or_else(|| "unnamed model".into()),
@@ -533,6 +551,7 @@ impl Model {
             forces,
             initial,
             bodies,
+            constraints,
         })
     }
 

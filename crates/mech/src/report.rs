@@ -101,6 +101,29 @@ pub struct DeriveReport {
     /// Each rigid body's body-frame ω and L (extra field; absent without bodies).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub bodies: Vec<BodyReport>,
+    /// The constraints (extra field, present only with `[[constraints]]`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub constraints: Vec<ConstraintReport>,
+    /// With constraints: the equations of motion with multipliers,
+    /// `E_q − Σ_k lambda_k A_kq` per coordinate (each `= 0`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub multiplier_equations: Option<Ordered<String>>,
+    /// With constraints: the generalized constraint force `Aᵀλ` per coordinate.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub constraint_forces: Option<Ordered<String>>,
+    /// With constraints and particles whose positions are the coordinates: the
+    /// Cartesian constraint force on each particle.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cartesian_constraint_forces: Option<Vec<Vec<String>>>,
+    /// With constraints: the degrees of freedom left (n − independent constraints).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub degrees_of_freedom: Option<usize>,
+    /// With velocity constraints: whether together they are integrable.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub constraints_integrable: Option<bool>,
+    /// With constraints: the teaching text about the set.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub constraint_explanations: Vec<String>,
 }
 
 /// A rigid body's angular velocity and angular momentum, body components.
@@ -112,6 +135,31 @@ pub struct BodyReport {
     pub angular_velocity: [String; 3],
     /// (L₁, L₂, L₃) about the reference point.
     pub angular_momentum: [String; 3],
+}
+
+/// One constraint in the report.
+#[derive(Debug, Clone, Serialize)]
+pub struct ConstraintReport {
+    /// Its name.
+    pub name: String,
+    /// `holonomic` or `velocity`.
+    pub kind: &'static str,
+    /// The expression that vanishes, as written.
+    pub expr: String,
+    /// Its row of A, one entry per coordinate.
+    pub jacobian: Vec<String>,
+    /// The time term a_t.
+    pub time_term: String,
+    /// Whether it depends explicitly on t.
+    pub rheonomic: bool,
+    /// Whether it is integrable on its own (true for holonomic ones).
+    pub integrable: Option<bool>,
+    /// F with the constraint equivalent to F = const, when found.
+    pub integral: Option<String>,
+    /// The multiplier's symbol.
+    pub multiplier: String,
+    /// The teaching text.
+    pub explanation: Vec<String>,
 }
 
 /// The teaching text behind the verdicts.
@@ -181,6 +229,33 @@ impl DeriveReport {
                     angular_momentum: b.angular_momentum.map(s),
                 })
                 .collect(),
+            constraints: d
+                .constraints
+                .list
+                .iter()
+                .map(|c| ConstraintReport {
+                    name: c.name.clone(),
+                    kind: c.kind.name(),
+                    expr: s(c.expr),
+                    jacobian: c.jacobian.iter().map(|&e| s(e)).collect(),
+                    time_term: s(c.time_term),
+                    rheonomic: c.rheonomic,
+                    integrable: c.integrable,
+                    integral: c.integral.map(s),
+                    multiplier: s(c.multiplier),
+                    explanation: c.explanation.clone(),
+                })
+                .collect(),
+            multiplier_equations: (!d.constraints.is_empty()).then(|| by_coord(&d.constraints.multiplier_equations)),
+            constraint_forces: (!d.constraints.is_empty()).then(|| by_coord(&d.constraints.generalized_forces)),
+            cartesian_constraint_forces: d
+                .constraints
+                .cartesian_forces
+                .as_ref()
+                .map(|fs| fs.iter().map(|f| f.iter().map(|&e| s(e)).collect()).collect()),
+            degrees_of_freedom: (!d.constraints.is_empty()).then_some(d.constraints.degrees_of_freedom),
+            constraints_integrable: d.constraints.integrable,
+            constraint_explanations: d.constraints.explanation.clone(),
         }
     }
 }

@@ -82,6 +82,9 @@ pub struct Row<'a> {
     pub is_event: bool,
     /// The condition of a stop or crossing row, as the user wrote it.
     pub event: Option<&'a str>,
+    /// With constraints: λ, |Aᵀλ| and the residuals, in the order of
+    /// [`crate::constraint_columns`] (empty otherwise).
+    pub constraints: &'a [f64],
 }
 
 /// The audit of one invariant.
@@ -138,6 +141,8 @@ pub struct RunReport {
     pub pilot_rhs_evaluations: usize,
     /// Wall-clock seconds of the integration (compilation included).
     pub wall_seconds: f64,
+    /// With constraints: the audit of each constraint (empty otherwise).
+    pub constraints: Vec<crate::constrained::ConstraintAudit>,
 }
 
 /// Why a run did not complete.
@@ -189,6 +194,9 @@ pub fn simulate(
     config: &RunConfig,
     mut on_row: impl FnMut(&Row<'_>) -> ControlFlow<()>,
 ) -> Result<RunReport, RunError> {
+    if !d.constraints.is_empty() {
+        return crate::constrained::simulate(d, config, on_row);
+    }
     let start = Instant::now();
     if !(config.until.is_finite() && config.until > 0.0) {
         return Err(RunError::Input(ModelError::whole(format!(
@@ -364,6 +372,7 @@ pub fn simulate(
                 ObservationKind::Event { index } if index < first_guard => Some(conditions[index].0.text.as_str()),
                 _ => None,
             },
+            constraints: &[],
         });
         // The row is kept; past a gimbal guard the run ends as a failure.
         if let Some(g) = guards.iter().find(|g| g.violated(&obs.y[..n])) {
@@ -415,6 +424,7 @@ pub fn simulate(
         failure: None,
         pilot_rhs_evaluations: pilot_rhs,
         wall_seconds: 0.0,
+        constraints: Vec::new(),
     };
     report.wall_seconds = start.elapsed().as_secs_f64();
     match result {

@@ -225,6 +225,15 @@ impl<S: OdeSystem> Solver for Dopri5<S> {
         }
     }
 
+    fn set_state(&mut self, y: &[f64]) -> Result<(), SolveError> {
+        check_len(self.y.len(), y.len())?;
+        self.y.copy_from_slice(y);
+        // The first stage of the next step is F(t, y) at the new state.
+        self.stats.rhs_evaluations += 1;
+        let t = self.t;
+        self.system.rhs(t, &self.y, &mut self.k[0]).map_err(|source| SolveError::Rhs { t, source })
+    }
+
     fn interpolate(&self, t: f64, out: &mut [f64]) -> Result<(), SolveError> {
         check_len(self.y.len(), out.len())?;
         check_interpolation(t, self.t_old, self.t)?;

@@ -181,6 +181,13 @@ pub enum SolveError {
         /// The method name.
         method: &'static str,
     },
+    /// [`crate::Solver::set_state`] was called on a method that cannot restart from a
+    /// replaced state (its steps carry more than the state from one to the next).
+    #[error("method {method} cannot continue from a projected state; use dop853 or dopri5")]
+    RestartUnsupported {
+        /// The method name.
+        method: &'static str,
+    },
     /// The method name is unknown.
     #[error("unknown method {name:?}; known methods: {known}")]
     UnknownMethod {

@@ -61,7 +61,8 @@ pub use dopri5::Dopri5;
 pub use error::{LinalgError, RhsError, SolveError};
 pub use gauss::Gauss;
 pub use integrate::{
-    integrate, integrate_to, Direction, Event, Observation, ObservationKind, Output, StopReason, Summary,
+    integrate, integrate_projected, integrate_to, Direction, Event, Observation, ObservationKind, Output, Projection,
+    StopReason, Summary,
 };
 pub use linalg::{LinearSolver, DEFAULT_PIVOT_RATIO};
 pub use method::Method;

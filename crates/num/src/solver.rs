@@ -148,6 +148,15 @@ pub trait Solver {
     /// Makes the solver land exactly on `t_stop` (the step that would pass it is
     /// shortened). `t_stop` must not lie before [`t`](Solver::t).
     fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolveError>;
+    /// Replaces the state at the current time, e.g. by its projection onto a
+    /// constraint manifold after a step, and continues from it as from an initial
+    /// value (one evaluation of the right-hand side for the first-same-as-last
+    /// methods). The dense output of the last step is left as it was. Methods whose
+    /// steps carry more than the state return [`SolveError::RestartUnsupported`].
+    fn set_state(&mut self, y: &[f64]) -> Result<(), SolveError> {
+        let _ = y;
+        Err(SolveError::RestartUnsupported { method: self.method().name() })
+    }
 }
 
 impl<S: Solver + ?Sized> Solver for Box<S> {
@@ -177,6 +186,9 @@ impl<S: Solver + ?Sized> Solver for Box<S> {
     }
     fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolveError> {
         (**self).set_stop_time(t_stop)
+    }
+    fn set_state(&mut self, y: &[f64]) -> Result<(), SolveError> {
+        (**self).set_state(y)
     }
 }
 

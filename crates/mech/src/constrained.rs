@@ -1,0 +1,714 @@
+//! Constrained dynamics, numerically: `M q'' = f + Aᵀλ` with the constraints
+//! differentiated to acceleration level (index reduction), solved for q'' and λ
+//! together at every evaluation,
+//!
+//! ```text
+//! [ M  −Aᵀ ] [ q'' ]   [ f ]
+//! [ A   0  ] [ λ   ] = [ c ],   c = −(Σ_j ∂g/∂q_j q_j' + ∂g/∂t),  g = A q' + a_t,
+//! ```
+//!
+//! and kept on the constraint manifold by projection after every step: positions
+//! by Gauss–Newton on the holonomic `f(q, t) = 0` (minimum-norm corrections
+//! `Δq = −Aᵀ(AAᵀ)⁻¹f`, iterated to round-off), then velocities onto
+//! `A q' + a_t = 0` (one exact linear projection). Without it the residual of an
+//! index-reduced system drifts (linearly in t for the velocities, quadratically
+//! for the positions); with it the residual stays at round-off over any run. An
+//! integrable velocity constraint whose integral F is known is held at position
+//! level too, at F = F(q(0), 0), so it keeps its holonomic meaning over long runs.
+//!
+//! M and f come from the kernel of [`Dynamics`]; A, c, a_t and f(q, t) are this
+//! module's kernels. Entry point: [`simulate`] (called by `run.rs` for models with
+//! `[[constraints]]`). Initial values must satisfy the constraints: a residual
+//! beyond round-off (`INITIAL_TOLERANCE`) is bad input (exit 2) naming the
+//! constraint and by how much; within it the state is projected silently.
+
+use crate::constraint::ConstraintKind;
+use crate::derive::Derivation;
+use crate::dynamics::{Dynamics, Form, Kernel};
+use crate::error::ModelError;
+use crate::run::{Audit, Row, RunConfig, RunError, RunReport};
+use num::{integrate_projected, Config, Event, LinearSolver, Method, ObservationKind, OdeSystem, RhsError, Solver};
+use num::{SolveError, StopReason};
+use std::ops::ControlFlow;
+use std::time::Instant;
+use sym::{ExprId, Tape};
+
+/// The largest initial residual (relative to the size of the constraint's
+/// terms) that is taken for round-off and projected away; beyond it the
+/// initial values are rejected.
+pub const INITIAL_TOLERANCE: f64 = 1e-9;
+
+/// The audit of one constraint along a run.
+#[derive(Debug, Clone)]
+pub struct ConstraintAudit {
+    /// Its name.
+    pub name: String,
+    /// Holonomic or velocity.
+    pub kind: ConstraintKind,
+    /// Largest |f(q, t)| (holonomic) or |A q' + a_t| (velocity) over the rows.
+    pub max_abs_residual: f64,
+    /// Largest |A q' + a_t| over the rows (for a holonomic constraint, df/dt).
+    pub max_abs_velocity_residual: f64,
+    /// The multiplier λ at the last row.
+    pub final_lambda: f64,
+    /// Largest |Aᵀλ| over the rows.
+    pub max_force: f64,
+}
+
+/// The CSV columns a constrained run adds, in the order of [`Row::constraints`]:
+/// per constraint `lambda_NAME`, `force_NAME` (|Aᵀλ|), `residual_NAME` (f for a
+/// holonomic constraint, A q' + a_t for a velocity one) and, for a holonomic
+/// constraint, `residual_NAME'` (its time derivative A q' + a_t); then, when the
+/// constraints do work on a system whose H would be conserved,
+/// `W_constraints` = ∫ Aᵀλ·q' dt (so that H − W is conserved).
+pub fn constraint_columns(d: &Derivation) -> Vec<String> {
+    let mut cols = Vec::new();
+    for c in &d.constraints.list {
+        cols.push(format!("lambda_{}", c.name));
+        cols.push(format!("force_{}", c.name));
+        cols.push(format!("residual_{}", c.name));
+        if c.kind == ConstraintKind::Holonomic {
+            cols.push(format!("residual_{}'", c.name));
+        }
+    }
+    if d.constraints.work_balances_h {
+        cols.push("W_constraints".into());
+    }
+    cols
+}
+
+/// The compiled constrained system in the Lagrange form `[q, q']`.
+#[derive(Debug, Clone)]
+pub struct ConstrainedSystem {
+    dynamics: Dynamics,
+    n: usize,
+    m: usize,
+    /// Indices of the holonomic constraints.
+    holonomic: Vec<usize>,
+    /// Whether the state carries W = ∫ Aᵀλ·q' dt as a last component.
+    work: bool,
+    /// Indices of the constraints kept at position level by the projection: the
+    /// holonomic ones, then the integrable velocity constraints with a known
+    /// integral F (whose gradient is their row of A), kept at F = F(t = 0).
+    positional: Vec<usize>,
+    /// What each positional constraint's expression must equal (0, or F(t = 0)).
+    levels: Vec<f64>,
+    /// `[A (m×n), c (m)]` from `[q, q', t, params]`.
+    accel: Kernel,
+    /// `[A (m×n), a_t (m), f_h (holonomic count)]` from `[q, q', t, params]`.
+    geometry: Kernel,
+    inputs: Vec<f64>,
+    mf: Vec<f64>,
+    ac: Vec<f64>,
+    geo: Vec<f64>,
+    kkt: Vec<f64>,
+    sol: Vec<f64>,
+    lu: LinearSolver,
+    projection: Projection,
+}
+
+/// Scratch space of the projection, allocated once.
+#[derive(Debug, Clone)]
+struct Projection {
+    all_rows: Vec<usize>,
+    residual: Vec<f64>,
+    gram: Vec<f64>,
+    mu: Vec<f64>,
+    dq: Vec<f64>,
+    lu_positions: LinearSolver,
+    lu_velocities: LinearSolver,
+}
+
+/// Which rows of A a correction uses (the solvers are sized for each).
+#[derive(Clone, Copy)]
+enum RowsOf {
+    Positions,
+    All,
+}
+
+/// The minimum-norm correction `Bᵀ(BBᵀ)⁻¹r` for the rows B of A (row-major in
+/// `geo`, n columns) that `which` names, and the residual `p.residual[..rows]`,
+/// into `p.dq`.
+fn min_norm_correction(
+    geo: &[f64],
+    n: usize,
+    positional: &[usize],
+    p: &mut Projection,
+    which: RowsOf,
+) -> Result<(), RhsError> {
+    let (rows, lu) = match which {
+        RowsOf::Positions => (positional, &mut p.lu_positions),
+        RowsOf::All => (&p.all_rows[..], &mut p.lu_velocities),
+    };
+    let k = rows.len();
+    let gram = &mut p.gram[..k * k];
+    for (i, &ri) in rows.iter().enumerate() {
+        for (j, &rj) in rows.iter().enumerate() {
+            gram[i * k + j] = (0..n).map(|c| geo[ri * n + c] * geo[rj * n + c]).sum();
+        }
+    }
+    lu.factor(gram).map_err(RhsError::from)?;
+    let mu = &mut p.mu[..k];
+    mu.copy_from_slice(&p.residual[..k]);
+    lu.solve_in_place(mu).map_err(RhsError::from)?;
+    for (j, d) in p.dq.iter_mut().enumerate() {
+        *d = rows.iter().enumerate().map(|(i, &ri)| geo[ri * n + j] * mu[i]).sum();
+    }
+    Ok(())
+}
+
+impl ConstrainedSystem {
+    /// Compiles the constraint kernels of a derivation next to its dynamics.
+    pub fn new(d: &mut Derivation, dynamics: Dynamics) -> ConstrainedSystem {
+        let n = d.q.len();
+        let list = d.constraints.list.clone();
+        let m = list.len();
+        let param_syms: Vec<ExprId> = d.model.parameters.iter().map(|p| d.model.pool.symbol(&p.name)).collect();
+        let mut input_syms: Vec<ExprId> = d.q.clone();
+        input_syms.extend(&d.qd);
+        input_syms.push(d.t);
+        input_syms.extend(&param_syms);
+        let pool = &mut d.model.pool;
+        let a: Vec<ExprId> = list.iter().flat_map(|c| c.jacobian.iter().copied()).collect();
+        let mut accel_out = a.clone();
+        accel_out.extend(list.iter().map(|c| c.acceleration_rhs));
+        accel_out.extend(list.iter().map(|c| c.time_term));
+        let mut geo_out = a;
+        geo_out.extend(list.iter().map(|c| c.time_term));
+        let holonomic: Vec<usize> = (0..m).filter(|&k| list[k].kind == ConstraintKind::Holonomic).collect();
+        let integrals: Vec<usize> =
+            (0..m).filter(|&k| list[k].kind == ConstraintKind::Velocity && list[k].integral.is_some()).collect();
+        let positional: Vec<usize> = holonomic.iter().chain(&integrals).copied().collect();
+        geo_out.extend(positional.iter().map(|&k| list[k].integral.unwrap_or(list[k].expr)));
+        let compile =
+            |outs: &[ExprId]| Kernel::new(Tape::compile(pool, outs, &input_syms).expect("model symbols are inputs"));
+        let accel = compile(&accel_out);
+        let geometry = compile(&geo_out);
+        let inputs = dynamics.input_template().to_vec();
+        let mh = positional.len();
+        ConstrainedSystem {
+            dynamics,
+            n,
+            m,
+            holonomic,
+            work: d.constraints.work_balances_h,
+            levels: vec![0.0; positional.len()],
+            positional,
+            accel,
+            geometry,
+            inputs,
+            mf: vec![0.0; n * n + n],
+            ac: vec![0.0; m * n + 2 * m],
+            geo: vec![0.0; m * n + m + mh],
+            kkt: vec![0.0; (n + m) * (n + m)],
+            sol: vec![0.0; n + m],
+            lu: LinearSolver::new(n + m).with_pivot_threshold(0.0),
+            projection: Projection {
+                all_rows: (0..m).collect(),
+                residual: vec![0.0; m],
+                gram: vec![0.0; m * m],
+                mu: vec![0.0; m],
+                dq: vec![0.0; n],
+                lu_positions: LinearSolver::new(mh).with_pivot_threshold(0.0),
+                lu_velocities: LinearSolver::new(m).with_pivot_threshold(0.0),
+            },
+        }
+    }
+
+    /// Solves the saddle-point system at (q, q', t): q'' in `sol[..n]`, λ in `sol[n..]`.
+    fn solve(&mut self, t: f64, y: &[f64]) -> Result<(), RhsError> {
+        let (n, m) = (self.n, self.m);
+        self.inputs[..2 * n].copy_from_slice(&y[..2 * n]);
+        self.inputs[2 * n] = t;
+        self.dynamics.eval_mass_forcing(&self.inputs, &mut self.mf);
+        self.accel.eval(&self.inputs, &mut self.ac);
+        let w = n + m;
+        self.kkt.fill(0.0);
+        for i in 0..n {
+            self.kkt[i * w..i * w + n].copy_from_slice(&self.mf[i * n..(i + 1) * n]);
+        }
+        for k in 0..m {
+            for j in 0..n {
+                let a = self.ac[k * n + j];
+                self.kkt[(n + k) * w + j] = a;
+                self.kkt[j * w + n + k] = -a;
+            }
+        }
+        self.sol[..n].copy_from_slice(&self.mf[n * n..]);
+        self.sol[n..].copy_from_slice(&self.ac[m * n..m * n + m]);
+        self.lu.factor(&self.kkt).map_err(RhsError::from)?;
+        self.lu.solve_in_place(&mut self.sol).map_err(RhsError::from)?;
+        Ok(())
+    }
+
+    /// Evaluates A, a_t and the holonomic f at (q, t) into `geo`.
+    fn geometry_at(&mut self, t: f64, q: &[f64]) {
+        let n = self.n;
+        self.inputs[..n].copy_from_slice(q);
+        self.inputs[n..2 * n].fill(0.0);
+        self.inputs[2 * n] = t;
+        self.geometry.eval(&self.inputs, &mut self.geo);
+    }
+
+    /// Keeps the integrals of integrable velocity constraints at their values at (t, y).
+    pub fn fix_integral_levels(&mut self, t: f64, y: &[f64]) {
+        let (n, m) = (self.n, self.m);
+        self.geometry_at(t, &y[..n]);
+        let n_holonomic = self.holonomic.len();
+        for h in n_holonomic..self.positional.len() {
+            self.levels[h] = self.geo[m * n + m + h];
+        }
+    }
+
+    /// Projects `y = [q, q']` onto the constraint manifold at time t. Allocates
+    /// nothing: it runs after every step.
+    pub fn project(&mut self, t: f64, y: &mut [f64]) -> Result<(), RhsError> {
+        let (n, m) = (self.n, self.m);
+        let mh = self.positional.len();
+        if mh > 0 {
+            for _ in 0..8 {
+                self.geometry_at(t, &y[..n]);
+                let p = &mut self.projection;
+                for (h, r) in p.residual[..mh].iter_mut().enumerate() {
+                    *r = self.geo[m * n + m + h] - self.levels[h];
+                }
+                if p.residual[..mh].iter().all(|&v| v == 0.0) {
+                    break;
+                }
+                min_norm_correction(&self.geo, n, &self.positional, p, RowsOf::Positions)?;
+                let size = y[..n].iter().fold(1.0f64, |a, v| a.max(v.abs()));
+                for i in 0..n {
+                    y[i] -= p.dq[i];
+                }
+                if p.dq.iter().all(|v| v.abs() <= 2.0 * f64::EPSILON * size) {
+                    break;
+                }
+            }
+        }
+        self.geometry_at(t, &y[..n]);
+        let p = &mut self.projection;
+        for k in 0..m {
+            p.residual[k] = (0..n).map(|j| self.geo[k * n + j] * y[n + j]).sum::<f64>() + self.geo[m * n + k];
+        }
+        min_norm_correction(&self.geo, n, &self.positional, p, RowsOf::All)?;
+        for i in 0..n {
+            y[n + i] -= p.dq[i];
+        }
+        if let Some(index) = y.iter().position(|v| !v.is_finite()) {
+            return Err(RhsError::NonFinite { index });
+        }
+        Ok(())
+    }
+
+    /// The residuals at (q, q', t): per constraint, f (holonomic) or A q' + a_t
+    /// (velocity) into `position`, and A q' + a_t into `velocity`; `scale` gets the
+    /// size of each constraint's terms at position and at velocity level (at least
+    /// 1), for relative tests.
+    fn residuals(&mut self, t: f64, y: &[f64], position: &mut [f64], velocity: &mut [f64], scale: &mut [(f64, f64)]) {
+        let (n, m) = (self.n, self.m);
+        self.geometry_at(t, &y[..n]);
+        let qsize = y[..n].iter().fold(1.0f64, |a, v| a.max(v.abs()));
+        for k in 0..m {
+            let row = &self.geo[k * n..(k + 1) * n];
+            let at = self.geo[m * n + k];
+            velocity[k] = row.iter().zip(&y[n..2 * n]).map(|(a, v)| a * v).sum::<f64>() + at;
+            let vel_scale =
+                1.0f64.max(row.iter().zip(&y[n..2 * n]).map(|(a, v)| (a * v).abs()).sum::<f64>() + at.abs());
+            match self.holonomic.iter().position(|&h| h == k) {
+                Some(h) => {
+                    position[k] = self.geo[m * n + m + h];
+                    let pos_scale = 1.0f64.max(row.iter().fold(0.0f64, |a, v| a.max(v.abs())) * qsize);
+                    scale[k] = (pos_scale, vel_scale);
+                }
+                None => {
+                    position[k] = velocity[k];
+                    scale[k] = (vel_scale, vel_scale);
+                }
+            }
+        }
+    }
+
+    /// The constraint columns of a row (see [`constraint_columns`]) at (q, q', t).
+    fn columns(&mut self, t: f64, y: &[f64], out: &mut [f64]) -> Result<(), RhsError> {
+        let (n, m) = (self.n, self.m);
+        self.solve(t, y)?;
+        let lambda: Vec<f64> = self.sol[n..].to_vec();
+        let mut pos = vec![0.0; m];
+        let mut vel = vec![0.0; m];
+        let mut scale = vec![(0.0, 0.0); m];
+        self.residuals(t, y, &mut pos, &mut vel, &mut scale);
+        let mut c = 0;
+        for k in 0..m {
+            let norm = (0..n).map(|j| self.geo[k * n + j].powi(2)).sum::<f64>().sqrt();
+            out[c] = lambda[k];
+            out[c + 1] = (lambda[k] * norm).abs();
+            out[c + 2] = pos[k];
+            c += 3;
+            if self.holonomic.contains(&k) {
+                out[c] = vel[k];
+                c += 1;
+            }
+        }
+        if self.work {
+            out[c] = y[2 * n];
+        }
+        Ok(())
+    }
+}
+
+impl OdeSystem for ConstrainedSystem {
+    fn dim(&self) -> usize {
+        2 * self.n + usize::from(self.work)
+    }
+
+    fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), RhsError> {
+        let n = self.n;
+        self.solve(t, y)?;
+        dy[..n].copy_from_slice(&y[n..2 * n]);
+        dy[n..2 * n].copy_from_slice(&self.sol[..n]);
+        if self.work {
+            // dW/dt = Aᵀλ·q' = −Σ λ_k a_t,k on the constraints.
+            let m = self.m;
+            dy[2 * n] = -(0..m).map(|k| self.sol[n + k] * self.ac[m * n + m + k]).sum::<f64>();
+        }
+        if let Some(index) = dy.iter().position(|v| !v.is_finite()) {
+            return Err(RhsError::NonFinite { index });
+        }
+        Ok(())
+    }
+}
+
+/// Runs a model with constraints (see the module documentation). Methods: DOP853
+/// (default) and DOPRI5, which restart cheaply from a projected state.
+pub(crate) fn simulate(
+    d: &mut Derivation,
+    config: &RunConfig,
+    mut on_row: impl FnMut(&Row<'_>) -> ControlFlow<()>,
+) -> Result<RunReport, RunError> {
+    let start = Instant::now();
+    if !(config.until.is_finite() && config.until > 0.0) {
+        return Err(RunError::Input(ModelError::whole(format!(
+            "--until must be a positive time, not {}",
+            config.until
+        ))));
+    }
+    let method = match config.method {
+        None => Method::Dop853,
+        Some(m @ (Method::Dop853 | Method::Dopri5)) => m,
+        Some(m) => {
+            return Err(RunError::Input(
+                ModelError::whole(format!(
+                    "method '{}' cannot run a model with constraints: the state is projected onto the constraints after every step, and only the explicit Runge–Kutta methods restart from a projected state",
+                    m.name()
+                ))
+                .with_help("use dop853 (the default) or dopri5"),
+            ));
+        }
+    };
+    let set = &d.constraints;
+    let (m, n) = (set.list.len(), d.q.len());
+    if set.independent < m {
+        return Err(RunError::Input(
+            ModelError::whole(format!(
+                "the {m} constraints are not independent (A has rank {}): their multipliers are not determined",
+                set.independent
+            ))
+            .with_help("drop the constraints that follow from the others"),
+        ));
+    }
+    let (q0, qd0) = d.model.initial_state().map_err(RunError::Input)?;
+    let dynamics = Dynamics::new(d);
+    let conserved: Vec<bool> = dynamics
+        .invariants()
+        .iter()
+        .map(|inv| if inv.name == "H" { d.hamiltonian_conserved } else { inv.name != "E" })
+        .collect();
+    let inv_names: Vec<String> = dynamics.invariants().iter().map(|i| i.name.clone()).collect();
+    let mut inv_dynamics = dynamics.clone();
+    let mut system = ConstrainedSystem::new(d, dynamics);
+    let list = d.constraints.list.clone();
+
+    // Initial values: round-off is projected away, anything more is an error.
+    let mut y0: Vec<f64> = q0.iter().chain(&qd0).copied().collect();
+    if d.constraints.work_balances_h {
+        y0.push(0.0);
+    }
+    let (mut pos, mut vel, mut scale) = (vec![0.0; m], vec![0.0; m], vec![(0.0, 0.0); m]);
+    system.residuals(0.0, &y0, &mut pos, &mut vel, &mut scale);
+    for k in 0..m {
+        let (what, r) = if pos[k].abs() > INITIAL_TOLERANCE * scale[k].0 {
+            ("", pos[k])
+        } else if vel[k].abs() > INITIAL_TOLERANCE * scale[k].1 {
+            (" at velocity level (A q' + a_t)", vel[k])
+        } else {
+            continue;
+        };
+        let c = &list[k];
+        return Err(RunError::Input(
+            ModelError::at(
+                c.span.clone(),
+                format!(
+                    "the initial values violate the constraint '{}'{what}: its residual at t = 0 is {r:.3e}, not 0",
+                    c.name
+                ),
+            )
+            .with_help(format!(
+                "give [initial] values that satisfy the constraint (velocities too: A q' + a_t = 0); residuals up to {INITIAL_TOLERANCE:.0e} of the terms' size are taken for round-off and projected away"
+            )),
+        ));
+    }
+    system.fix_integral_levels(0.0, &y0);
+    system.project(0.0, &mut y0).map_err(|e| RunError::Input(ModelError::whole(format!("at t = 0: {e}"))))?;
+
+    let solver_config = Config { rtol: config.rtol, atol: config.atol, h_max: Some(config.until), ..Config::default() };
+    let mut solver = method
+        .build(system.clone(), 0.0, &y0, &solver_config)
+        .map_err(|e| RunError::Input(ModelError::whole(e.to_string())))?;
+
+    // Stop conditions and crossings over [q, q', t, params].
+    let param_syms: Vec<ExprId> = d.model.parameters.iter().map(|p| d.model.pool.symbol(&p.name)).collect();
+    let mut inputs: Vec<ExprId> = d.q.clone();
+    inputs.extend(&d.qd);
+    inputs.push(d.t);
+    inputs.extend(&param_syms);
+    let mut values = vec![0.0; 2 * n + 1];
+    values.extend(d.model.parameters.iter().map(|p| p.value));
+    let conditions: Vec<(&crate::run::StopCondition, bool)> =
+        config.stop_when.iter().map(|c| (c, true)).chain(config.crossings.iter().map(|c| (c, false))).collect();
+    let mut events: Vec<Event<'_>> = Vec::new();
+    for &(cond, terminal) in &conditions {
+        let mut tape = Tape::compile(&d.model.pool, &[cond.expr], &inputs)
+            .map_err(|e| RunError::Input(ModelError::whole(format!("in the condition '{}': {e}", cond.text))))?;
+        let mut values = values.clone();
+        let mut out = [0.0];
+        events.push(
+            Event::new(move |t, y| {
+                values[..2 * n].copy_from_slice(&y[..2 * n]);
+                values[2 * n] = t;
+                tape.eval(&values, &mut out);
+                out[0]
+            })
+            .with_direction(cond.direction)
+            .with_terminal(terminal),
+        );
+    }
+
+    // The audit, row by row.
+    let n_inv = inv_names.len();
+    let n_cols = constraint_columns(d).len();
+    let mut inv = vec![0.0; n_inv];
+    let mut cols = vec![0.0; n_cols];
+    let mut initial: Option<Vec<f64>> = None;
+    let mut max_abs = vec![0.0f64; n_inv];
+    let mut max_rel = vec![0.0f64; n_inv];
+    let mut audits: Vec<ConstraintAudit> = list
+        .iter()
+        .map(|c| ConstraintAudit {
+            name: c.name.clone(),
+            kind: c.kind,
+            max_abs_residual: 0.0,
+            max_abs_velocity_residual: 0.0,
+            final_lambda: 0.0,
+            max_force: 0.0,
+        })
+        .collect();
+    let work = d.constraints.work_balances_h;
+    let mut row_y = vec![0.0; 2 * n + usize::from(work)];
+    // H − W, audited when the constraints' work is all that changes H.
+    // Its relative drift is measured against the largest |H| of the run: H and W
+    // grow together, and their difference cannot be better than H's own digits.
+    let (mut hw_initial, mut hw_last, mut hw_abs, mut h_size) = (None::<f64>, 0.0, 0.0f64, 0.0f64);
+    let mut last_y = y0.clone();
+    let mut last_inv = vec![0.0; n_inv];
+    let mut last_t = 0.0;
+    let mut row_error: Option<String> = None;
+    let mut projector = system.clone();
+    let mut row_system = system;
+    let mut project = |t: f64, y: &mut [f64]| projector.project(t, y);
+    let result = integrate_projected(&mut solver, config.until, config.output, &mut events, &mut project, |obs| {
+        // Samples come from the step's dense output: project them too.
+        row_y.copy_from_slice(obs.y);
+        let r = row_system.project(obs.t, &mut row_y).and_then(|_| row_system.columns(obs.t, &row_y, &mut cols));
+        if let Err(e) = r {
+            row_error = Some(format!("at t = {}: {e}", obs.t));
+            return ControlFlow::Break(());
+        }
+        let (q, rest) = row_y.split_at(n);
+        let qd = &rest[..n];
+        inv_dynamics.eval_invariants(obs.t, q, qd, &mut inv);
+        let init = initial.get_or_insert_with(|| inv.clone());
+        let interpolated_event = matches!(obs.kind, ObservationKind::Event { .. });
+        for k in (0..n_inv).filter(|_| !interpolated_event) {
+            let a = (inv[k] - init[k]).abs();
+            if a.is_finite() {
+                max_abs[k] = max_abs[k].max(a);
+                let scale = init[k].abs();
+                max_rel[k] = max_rel[k].max(if scale > 0.0 { a / scale } else { a });
+            }
+        }
+        let mut c = 0;
+        for (k, audit) in audits.iter_mut().enumerate() {
+            audit.final_lambda = cols[c];
+            audit.max_force = audit.max_force.max(cols[c + 1]);
+            audit.max_abs_residual = audit.max_abs_residual.max(cols[c + 2].abs());
+            c += 3;
+            if list[k].kind == ConstraintKind::Holonomic {
+                audit.max_abs_velocity_residual = audit.max_abs_velocity_residual.max(cols[c].abs());
+                c += 1;
+            } else {
+                audit.max_abs_velocity_residual = audit.max_abs_residual;
+            }
+        }
+        if work && !interpolated_event {
+            let hw = inv[0] - row_y[2 * n];
+            let h0 = *hw_initial.get_or_insert(hw);
+            hw_abs = hw_abs.max((hw - h0).abs());
+            h_size = h_size.max(inv[0].abs());
+            hw_last = hw;
+        }
+        last_t = obs.t;
+        last_y.copy_from_slice(&row_y);
+        last_inv.copy_from_slice(&inv);
+        on_row(&Row {
+            t: obs.t,
+            q,
+            qd,
+            invariants: &inv,
+            is_event: interpolated_event,
+            event: match obs.kind {
+                ObservationKind::Event { index } => Some(conditions[index].0.text.as_str()),
+                _ => None,
+            },
+            constraints: &cols,
+        })
+    });
+
+    let stats = solver.statistics();
+    let initial = initial.unwrap_or_else(|| last_inv.clone());
+    let inv_audits: Vec<Audit> = (0..n_inv)
+        .map(|k| Audit {
+            name: inv_names[k].clone(),
+            conserved: conserved[k],
+            initial: initial[k],
+            final_value: last_inv[k],
+            max_abs_drift: max_abs[k],
+            max_rel_drift: max_rel[k],
+        })
+        .collect();
+    let mut inv_audits = inv_audits;
+    if let Some(h0) = hw_initial {
+        inv_audits.push(Audit {
+            name: "H-W".into(),
+            conserved: true,
+            initial: h0,
+            final_value: hw_last,
+            max_abs_drift: hw_abs,
+            max_rel_drift: if h_size > 0.0 { hw_abs / h_size } else { hw_abs },
+        });
+    }
+    let mut warnings = Vec::new();
+    let explained = (1e3 * config.rtol).max(1e-12);
+    for a in &inv_audits {
+        if a.conserved && a.max_rel_drift > explained {
+            warnings.push(format!(
+                "{} is conserved, but drifted by {:.3e} (relative), more than the tolerance explains ({:.1e})",
+                a.name, a.max_rel_drift, explained
+            ));
+        }
+    }
+    for a in &audits {
+        if a.max_abs_residual > 1e-9 || a.max_abs_velocity_residual > 1e-9 {
+            warnings.push(format!(
+                "the constraint {} is violated by up to {:.3e} despite the projection",
+                a.name,
+                a.max_abs_residual.max(a.max_abs_velocity_residual)
+            ));
+        }
+    }
+    let mut report = RunReport {
+        method,
+        form: Form::Lagrange,
+        dt: None,
+        rtol: config.rtol,
+        atol: config.atol,
+        steps: stats.steps,
+        rejected: stats.rejected,
+        rhs_evaluations: stats.rhs_evaluations,
+        t_final: last_t,
+        final_q: last_y[..n].to_vec(),
+        final_qd: last_y[n..2 * n].to_vec(),
+        invariants: inv_audits,
+        stopped_by: None,
+        warnings,
+        failure: None,
+        pilot_rhs_evaluations: 0,
+        wall_seconds: start.elapsed().as_secs_f64(),
+        constraints: audits,
+    };
+    match result {
+        Ok(summary) => {
+            report.t_final = summary.t;
+            report.stopped_by = match summary.stop {
+                StopReason::Event { index } => Some(conditions[index].0.text.clone()),
+                StopReason::Observer => row_error.clone().or(Some("stopped by the caller".into())),
+                StopReason::Finished => None,
+            };
+            if let Some(message) = row_error {
+                report.failure = Some(message.clone());
+                return Err(RunError::Failed { message, report: Box::new(report) });
+            }
+            Ok(report)
+        }
+        Err(e) => {
+            let message = match &e {
+                SolveError::Rhs { t, source: RhsError::Singular { detail } } => format!(
+                    "the constrained equations became singular at t = {t} ({detail}): the constraints are no longer independent there"
+                ),
+                other => other.to_string(),
+            };
+            report.failure = Some(message.clone());
+            Err(RunError::Failed { message, report: Box::new(report) })
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Model;
+
+    const PENDULUM: &str = r#"
+coordinates = ["x", "y"]
+gravity = "g"
+[parameters]
+m = 2.0
+l = 1.5
+g = 9.81
+[[particles]]
+mass = "m"
+position = ["x", "y"]
+[[constraints]]
+holonomic = "x^2 + y^2 - l^2"
+"#;
+
+    #[test]
+    fn the_saddle_point_solve_gives_the_tension() {
+        let mut d = Derivation::new(Model::parse(PENDULUM, &[]).unwrap()).unwrap();
+        let dynamics = Dynamics::new(&mut d);
+        let mut sys = ConstrainedSystem::new(&mut d, dynamics);
+        let (m, l, g) = (2.0, 1.5, 9.81);
+        let th: f64 = 0.4;
+        let om = 1.3;
+        let y = [l * th.sin(), -l * th.cos(), l * th.cos() * om, l * th.sin() * om];
+        let mut out = [0.0; 4];
+        sys.columns(0.0, &y, &mut out).unwrap();
+        let tension = m * g * th.cos() + m * l * om * om;
+        assert!((out[1] - tension).abs() < 1e-12 * tension, "{out:?} vs {tension}");
+        assert!(out[2].abs() < 1e-15 && out[3].abs() < 1e-15);
+        // A perturbed state is projected back onto the circle and its tangent.
+        let mut z = [y[0] * 1.01, y[1], y[2] + 0.1, y[3]];
+        sys.project(0.0, &mut z).unwrap();
+        assert!((z[0].hypot(z[1]) - l).abs() < 1e-15);
+        assert!((z[0] * z[2] + z[1] * z[3]).abs() < 1e-14);
+    }
+}

@@ -1,0 +1,858 @@
+//! Constraints and their forces with Lagrange multipliers (notes 2.2.1, 2.6.3,
+//! appendix A.3): the `[[constraints]]` of a model, their Jacobian `A`, the
+//! equations `M q'' = f + Aᵀλ`, and whether a velocity constraint is integrable
+//! (holonomic in disguise).
+//!
+//! A holonomic constraint `f(q, t) = 0` has the row `A = ∂f/∂q` and the time term
+//! `a_t = ∂f/∂t`; a velocity constraint `a(q, t)·q' + a_t = 0` has `A = a`. Both
+//! are the Pfaffian form `ω = Σ A_i dq_i + a_t dt` on the extended space (q, t).
+//! Integrability is Frobenius' condition: `ω ∧ dω = 0` for one form, and for the
+//! set `dω_k` vanishing on the space the forms annihilate (the distribution is
+//! involutive), decided exactly where the forms are closed and otherwise at
+//! random points ([`crate::probe`]).
+//!
+//! Entry points: [`read_spec`] (called by the model reader) and [`attach`]
+//! (called at the end of [`crate::Derivation::new`]); the numbers of a run are in
+//! `constrained.rs`.
+
+use crate::derive::Derivation;
+use crate::error::ModelError;
+use crate::model::Located;
+use crate::probe::{self, Subst};
+use serde::Deserialize;
+use std::ops::Range;
+use sym::{ExprId, NameId, Pool, Symbol, Tape};
+use toml::Spanned;
+
+/// A `[[constraints]]` table as written.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawConstraint {
+    name: Option<Spanned<String>>,
+    holonomic: Option<Spanned<String>>,
+    velocity: Option<Spanned<String>>,
+}
+
+/// Which kind of constraint a model states.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ConstraintKind {
+    /// `f(q, t) = 0`.
+    Holonomic,
+    /// `a(q, t)·q' + a_t = 0`.
+    Velocity,
+}
+
+impl ConstraintKind {
+    /// `holonomic` or `velocity`, as in the model file and the JSON report.
+    pub fn name(self) -> &'static str {
+        match self {
+            ConstraintKind::Holonomic => "holonomic",
+            ConstraintKind::Velocity => "velocity",
+        }
+    }
+}
+
+/// A constraint as the model file states it.
+#[derive(Debug, Clone)]
+pub struct ConstraintSpec {
+    /// Its name (`c1`, `c2`, … by default).
+    pub name: String,
+    /// Where the name is (the table when the name is the default).
+    pub name_span: Range<usize>,
+    /// Holonomic or velocity.
+    pub kind: ConstraintKind,
+    /// The expression that vanishes, with its place in the file.
+    pub expr: Located,
+}
+
+/// Parses an expression of a constraint: `(text, velocities_allowed, what)`.
+pub(crate) type ParseExpr<'a> = &'a mut dyn FnMut(&Spanned<String>, bool, &str) -> Result<Located, ModelError>;
+
+/// Reads one `[[constraints]]` table. `parse(text, velocities_allowed, what)`
+/// parses an expression in the model's names.
+pub(crate) fn read_spec(
+    raw: &Spanned<RawConstraint>,
+    index: usize,
+    previous: &[ConstraintSpec],
+    parse: ParseExpr<'_>,
+) -> Result<ConstraintSpec, ModelError> {
+    let c = raw.get_ref();
+    let (name, name_span) = match &c.name {
+        Some(n) => {
+            crate::model::check_identifier(n, "constraint")?;
+            (n.get_ref().clone(), n.span())
+        }
+        None => (format!("c{}", index + 1), raw.span()),
+    };
+    if previous.iter().any(|p| p.name == name) {
+        return Err(ModelError::at(name_span, format!("constraint '{name}' is named twice"))
+            .with_help("each constraint needs a name of its own (default c1, c2, … in file order)"));
+    }
+    let (kind, text) = match (&c.holonomic, &c.velocity) {
+        (Some(h), None) => (ConstraintKind::Holonomic, h),
+        (None, Some(v)) => (ConstraintKind::Velocity, v),
+        (Some(_), Some(v)) => {
+            return Err(ModelError::at(v.span(), "a constraint is either `holonomic` or `velocity`, not both")
+                .with_help("give each constraint its own [[constraints]] table"))
+        }
+        (None, None) => {
+            return Err(ModelError::at(raw.span(), "the constraint has neither `holonomic` nor `velocity`")
+                .with_help("write holonomic = \"f(q, t)\" (f = 0) or velocity = \"a(q, t)·q' + a_t\""))
+        }
+    };
+    let what = format!("the {} constraint '{name}'", kind.name());
+    let expr = parse(text, kind == ConstraintKind::Velocity, &what)?;
+    Ok(ConstraintSpec { name, name_span, kind, expr })
+}
+
+/// A constraint with what the derivation makes of it.
+#[derive(Debug, Clone)]
+pub struct Constraint {
+    /// Its name.
+    pub name: String,
+    /// Holonomic or velocity.
+    pub kind: ConstraintKind,
+    /// The expression as written (f, or a·q' + a_t).
+    pub expr: ExprId,
+    /// The row of A: ∂f/∂q, or the velocity coefficients a.
+    pub jacobian: Vec<ExprId>,
+    /// The time term a_t (∂f/∂t for a holonomic constraint).
+    pub time_term: ExprId,
+    /// The constraint at velocity level, g = A·q' + a_t (= df/dt when holonomic).
+    pub velocity_form: ExprId,
+    /// The right-hand side c of the acceleration-level constraint A q'' = c.
+    pub acceleration_rhs: ExprId,
+    /// Whether it depends explicitly on t.
+    pub rheonomic: bool,
+    /// Whether its force does work (a_t ≠ 0: Σ Q·q' = −λ a_t).
+    pub does_work: bool,
+    /// Whether it is integrable on its own (holonomic ones are).
+    pub integrable: Option<bool>,
+    /// F(q, t) with dF = ω (the constraint is F = const), when found.
+    pub integral: Option<ExprId>,
+    /// The teaching text, sentence by sentence.
+    pub explanation: Vec<String>,
+    /// The Lagrange multiplier's symbol (`lambda_NAME`).
+    pub multiplier: ExprId,
+    /// Where the constraint's expression is in the model file.
+    pub span: Range<usize>,
+}
+
+/// The constraints of a derivation and the equations with multipliers.
+#[derive(Debug, Clone, Default)]
+pub struct Constraints {
+    /// The constraints in file order.
+    pub list: Vec<Constraint>,
+    /// The number of independent constraints (the rank of A at generic points).
+    pub independent: usize,
+    /// n − independent: the degrees of freedom of the velocities.
+    pub degrees_of_freedom: usize,
+    /// Whether the velocity constraints together are integrable (None without any).
+    pub integrable: Option<bool>,
+    /// E_i − Σ_k λ_k A_ki per coordinate: the equations of motion with multipliers.
+    pub multiplier_equations: Vec<ExprId>,
+    /// Σ_k λ_k A_ki per coordinate: the generalized constraint force Aᵀλ.
+    pub generalized_forces: Vec<ExprId>,
+    /// The Cartesian constraint force on each particle, per particle its
+    /// components, when it is determined by Q = (∂x/∂q)ᵀF: the positions are the
+    /// coordinates themselves, or have as many components as there are
+    /// coordinates (n ≤ 3) with ∂x/∂q invertible.
+    pub cartesian_forces: Option<Vec<Vec<ExprId>>>,
+    /// The teaching text about the set (degrees of freedom, integrability, work).
+    pub explanation: Vec<String>,
+    /// True when H would be conserved but for the work W of the constraint forces
+    /// (L free of t, no dissipation or forces, a constraint with a_t ≠ 0): then
+    /// H − W is conserved, and runs audit it.
+    pub work_balances_h: bool,
+}
+
+impl Constraints {
+    /// True when the model has no constraints.
+    pub fn is_empty(&self) -> bool {
+        self.list.is_empty()
+    }
+}
+
+impl Derivation {
+    /// An error (with the place of the first constraint) for analyses that do not
+    /// take constraints into account yet, so that they never answer for the
+    /// unconstrained system silently. `what` names the analysis (`lagrange modes`).
+    pub fn reject_constraints(&self, what: &str) -> Result<(), ModelError> {
+        match self.constraints.list.first() {
+            None => Ok(()),
+            Some(c) => Err(ModelError::at(
+                c.span.clone(),
+                format!("{what} does not handle [[constraints]] yet: it would analyse the unconstrained system"),
+            )
+            .with_help("use `lagrange derive` and `lagrange simulate`, which enforce constraints with multipliers, or eliminate the constraint by generalized coordinates")),
+        }
+    }
+}
+
+/// Derives the constraints of `d.model` and amends the verdicts: a constraint
+/// whose force does work makes H not conserved; a momentum on which a
+/// constraint force acts is not conserved.
+pub(crate) fn attach(d: &mut Derivation) -> Result<(), ModelError> {
+    if d.model.constraints.is_empty() {
+        return Ok(());
+    }
+    let specs = d.model.constraints.clone();
+    let n = d.q.len();
+    let names: Vec<String> = d.model.coordinates.iter().map(|c| c.name.clone()).collect();
+    let mut pool = std::mem::take(&mut d.model.pool);
+    let result = derive_all(&mut pool, d, &specs, &names);
+    d.model.pool = pool;
+    let mut set = result?;
+    let pool = &mut d.model.pool;
+
+    // Equations with multipliers: E_i − Σ_k λ_k A_ki = 0.
+    for i in 0..n {
+        let terms: Vec<ExprId> = set.list.iter().map(|c| pool.mul2(c.multiplier, c.jacobian[i])).collect();
+        let force = pool.add(&terms);
+        set.generalized_forces.push(force);
+        let eq = pool.sub(d.equations[i], force);
+        set.multiplier_equations.push(eq);
+    }
+    set.cartesian_forces = cartesian_forces(d, &set.generalized_forces).or_else(|| {
+        let mut pool = std::mem::take(&mut d.model.pool);
+        let f = cartesian_forces_square(&mut pool, d, &set.generalized_forces);
+        d.model.pool = pool;
+        f
+    });
+    let pool = &mut d.model.pool;
+
+    // What the constraint forces change in the verdicts.
+    let working: Vec<&str> = set.list.iter().filter(|c| c.does_work).map(|c| c.name.as_str()).collect();
+    if !working.is_empty() && d.hamiltonian_conserved {
+        d.hamiltonian_conserved = false;
+        set.work_balances_h = true;
+        d.conserved.retain(|c| c.name != "H");
+        d.verdicts.conservation.retain(|s| !s.starts_with("L does not depend explicitly on t"));
+        d.verdicts.conservation.push(format!(
+            "L does not depend on t, but the constraint{} {} depend{} explicitly on the time: {} force does work, dH/dt = Σ λ·Aq' = −Σ λ a_t ≠ 0.",
+            if working.len() == 1 { "" } else { "s" },
+            working.join(", "),
+            if working.len() == 1 { "s" } else { "" },
+            if working.len() == 1 { "its" } else { "their" }
+        ));
+        d.verdicts.conservation.push(
+            "H − W is conserved instead, W = ∫ Aᵀλ·q' dt the work of the constraint forces (simulate audits it as H-W)."
+                .into(),
+        );
+    } else if working.is_empty() && d.hamiltonian_conserved {
+        d.verdicts.conservation.push(
+            "The constraints do not depend on t: their forces do no work (Aᵀλ·q' = −λ·a_t = 0), so H stays conserved."
+                .into(),
+        );
+    }
+    let mut lost = Vec::new();
+    d.conserved.retain(|c| {
+        let Some(q) = c.name.strip_prefix("p_") else { return true };
+        let Some(i) = names.iter().position(|nm| nm == q) else { return true };
+        let acted: Vec<&str> =
+            set.list.iter().filter(|k| !pool.is_zero(k.jacobian[i])).map(|k| k.name.as_str()).collect();
+        if acted.is_empty() {
+            true
+        } else {
+            lost.push(format!(
+                "{q} is cyclic, but the constraint force of {} acts on it (its column of A is not zero), so p_{q} is not conserved.",
+                acted.join(", ")
+            ));
+            false
+        }
+    });
+    set.explanation.extend(lost);
+    if d.hamilton.is_some() {
+        set.explanation
+            .push("Hamilton's equations are given for L alone: with the constraints, p' = −∂H/∂q + Aᵀλ.".into());
+    }
+    d.constraints = set;
+    Ok(())
+}
+
+fn derive_all(
+    pool: &mut Pool,
+    d: &Derivation,
+    specs: &[crate::constraint::ConstraintSpec],
+    names: &[String],
+) -> Result<Constraints, ModelError> {
+    let n = d.q.len();
+    let var_names: Vec<NameId> = names.iter().map(|c| pool.name(c)).collect();
+    let t_name = pool.name("t");
+    let is_var = |s: Symbol| s.name == t_name || var_names.contains(&s.name);
+    let zero_vel: Subst = d.qd.iter().map(|&v| (v, pool.zero())).collect();
+    let mut list = Vec::new();
+    for spec in specs {
+        let e = spec.expr.expr;
+        let span = spec.expr.span.clone();
+        let (jacobian, time_term) = match spec.kind {
+            ConstraintKind::Holonomic => {
+                let jac: Vec<ExprId> =
+                    d.q.iter()
+                        .map(|&q| {
+                            let j = pool.diff(e, q);
+                            pool.simplify_in(j, &is_var)
+                        })
+                        .collect();
+                let at = pool.diff(e, d.t);
+                (jac, pool.simplify_in(at, &is_var))
+            }
+            ConstraintKind::Velocity => {
+                // Linear in q': every second velocity derivative vanishes.
+                for i in 0..n {
+                    let di = pool.diff(e, d.qd[i]);
+                    for j in i..n {
+                        let dij = pool.diff(di, d.qd[j]);
+                        if !probe::is_zero(pool, dij) {
+                            return Err(ModelError::at(
+                                span,
+                                format!(
+                                    "the velocity constraint '{}' is not linear in the velocities: ∂²/∂{}'∂{}' ≠ 0",
+                                    spec.name, names[i], names[j]
+                                ),
+                            )
+                            .with_help(
+                                "a velocity constraint has the form a(q, t)·q' + a_t = 0 (Pfaffian); Lagrange multipliers need it linear in q'",
+                            ));
+                        }
+                    }
+                }
+                let jac: Vec<ExprId> =
+                    d.qd.iter()
+                        .map(|&v| {
+                            let j = pool.diff(e, v);
+                            let j = pool.substitute(j, &zero_vel);
+                            pool.simplify_in(j, &is_var)
+                        })
+                        .collect();
+                let at = pool.substitute(e, &zero_vel);
+                (jac, pool.simplify_in(at, &is_var))
+            }
+        };
+        let jacobian: Vec<ExprId> = jacobian.into_iter().map(|j| probe::zero_if_vanishing(pool, j)).collect();
+        let time_term = probe::zero_if_vanishing(pool, time_term);
+        if jacobian.iter().all(|&j| pool.is_zero(j)) {
+            let msg = match spec.kind {
+                ConstraintKind::Holonomic => format!(
+                    "the holonomic constraint '{}' does not depend on the coordinates: it restricts nothing (or is never satisfied)",
+                    spec.name
+                ),
+                ConstraintKind::Velocity => format!(
+                    "the velocity constraint '{}' contains no velocity: write a condition on the coordinates as `holonomic`",
+                    spec.name
+                ),
+            };
+            return Err(ModelError::at(span, msg));
+        }
+        // g = A·q' + a_t and A q'' = c = −(Σ ∂g/∂q_j q_j' + ∂g/∂t).
+        let mut g_terms: Vec<ExprId> = (0..n).map(|i| pool.mul2(jacobian[i], d.qd[i])).collect();
+        g_terms.push(time_term);
+        let velocity_form = pool.add(&g_terms);
+        let mut c_terms: Vec<ExprId> = (0..n)
+            .map(|j| {
+                let dg = pool.diff(velocity_form, d.q[j]);
+                pool.mul2(dg, d.qd[j])
+            })
+            .collect();
+        c_terms.push(pool.diff(velocity_form, d.t));
+        let c_sum = pool.add(&c_terms);
+        let c_neg = pool.neg(c_sum);
+        let acceleration_rhs = pool.simplify_in(c_neg, &is_var);
+        let de_dt = pool.diff(e, d.t);
+        let rheonomic = !probe::is_zero(pool, de_dt);
+        let does_work = !pool.is_zero(time_term);
+        let multiplier = pool.symbol(&format!("lambda_{}", spec.name));
+        list.push(Constraint {
+            name: spec.name.clone(),
+            kind: spec.kind,
+            expr: e,
+            jacobian,
+            time_term,
+            velocity_form,
+            acceleration_rhs,
+            rheonomic,
+            does_work,
+            integrable: None,
+            integral: None,
+            explanation: Vec::new(),
+            multiplier,
+            span,
+        });
+    }
+
+    // Integrability, one by one and as a set.
+    let forms: Vec<Vec<ExprId>> =
+        list.iter().map(|c| c.jacobian.iter().copied().chain([c.time_term]).collect()).collect();
+    let mut z: Vec<ExprId> = d.q.clone();
+    z.push(d.t);
+    for k in 0..list.len() {
+        if list[k].kind == ConstraintKind::Holonomic {
+            list[k].integrable = Some(true);
+            list[k].integral = Some(list[k].expr);
+            continue;
+        }
+        let closed = is_closed(pool, &forms[k], &z);
+        let integrable = closed || involutive(pool, &forms[k..=k], &z, &[0]);
+        list[k].integrable = Some(integrable);
+        if closed {
+            list[k].integral = integral(pool, &forms[k], &z, &is_var);
+        }
+    }
+    let velocity_idx: Vec<usize> = (0..list.len()).filter(|&k| list[k].kind == ConstraintKind::Velocity).collect();
+    // The set: the forms of all constraints (holonomic ones are exact) annihilate
+    // a distribution that must be involutive.
+    let all: Vec<usize> = (0..list.len()).collect();
+    let set_integrable = (!velocity_idx.is_empty()).then(|| involutive(pool, &forms, &z, &all));
+    let independent = generic_rank(pool, &list.iter().map(|c| c.jacobian.clone()).collect::<Vec<_>>());
+
+    // The teaching text.
+    for c in &mut list {
+        let e = pool.display(c.expr).to_string();
+        let mut s = Vec::new();
+        match c.kind {
+            ConstraintKind::Holonomic => {
+                s.push(format!("{}: {e} = 0 restricts the configuration: it is holonomic.", c.name));
+            }
+            ConstraintKind::Velocity => match (c.integrable, c.integral) {
+                (Some(true), Some(f)) => s.push(format!(
+                    "{}: {e} = 0 restricts the velocities, but it is integrable: it says d/dt ({}) = 0, the holonomic constraint {} = const in disguise.",
+                    c.name,
+                    pool.display(f),
+                    pool.display(f)
+                )),
+                (Some(true), None) => s.push(format!(
+                    "{}: {e} = 0 restricts the velocities, and it is integrable (ω ∧ dω = 0, Frobenius): an integrating factor makes it exact, so it is holonomic in disguise; its integral was not found in closed form.",
+                    c.name
+                )),
+                _ => s.push(format!(
+                    "{}: {e} = 0 restricts the velocities and, on its own, is not integrable: ω ∧ dω ≠ 0 (Frobenius), so no f(q, t) = 0 is equivalent to it. It is nonholonomic: it does not reduce the configurations that can be reached.",
+                    c.name
+                )),
+            },
+        }
+        if c.rheonomic {
+            s.push(format!(
+                "It depends explicitly on the time (rheonomic){}.",
+                if c.does_work { "; its force does work on the system (a_t ≠ 0)" } else { "" }
+            ));
+        } else {
+            s.push("It does not depend on the time (scleronomic); its force does no work.".into());
+        }
+        c.explanation = s;
+    }
+    let m = list.len();
+    let n_holonomic = list.iter().filter(|c| c.kind == ConstraintKind::Holonomic).count();
+    let mut explanation = vec![format!(
+        "{n} coordinate{} and {independent} independent constraint{}{}: {} degree{} of freedom remain{}.",
+        if n == 1 { "" } else { "s" },
+        if independent == 1 { "" } else { "s" },
+        if independent < m { format!(" (of {m})") } else { String::new() },
+        n.saturating_sub(independent),
+        if n.saturating_sub(independent) == 1 { "" } else { "s" },
+        if n.saturating_sub(independent) == 1 { "s" } else { "" },
+    )];
+    if n_holonomic < m && set_integrable != Some(true) {
+        explanation.push(format!(
+            "The nonholonomic constraints restrict the velocities only: the configuration still needs {} coordinate{} (n minus the holonomic constraints), but only {} independent velocities are free.",
+            n - n_holonomic.min(n),
+            if n - n_holonomic.min(n) == 1 { "" } else { "s" },
+            n.saturating_sub(independent)
+        ));
+    }
+    if velocity_idx.len() >= 2 {
+        explanation.push(match set_integrable {
+            Some(true) => "Together the velocity constraints are integrable: the space they leave free is involutive (dω_k ∧ ω_1 ∧ … ∧ ω_m = 0 for each k).".into(),
+            _ => "Together the velocity constraints are not integrable: Lie brackets of motions they allow leave the allowed space (dω_k ∧ ω_1 ∧ … ∧ ω_m ≠ 0).".into(),
+        });
+    }
+    explanation.push("The equations of motion read M q'' = f + Aᵀλ, with A the constraint Jacobian (one row per constraint) and λ the multipliers; Aᵀλ is the generalized constraint force.".into());
+    Ok(Constraints {
+        list,
+        independent,
+        degrees_of_freedom: n.saturating_sub(independent),
+        integrable: set_integrable,
+        multiplier_equations: Vec::new(),
+        generalized_forces: Vec::new(),
+        cartesian_forces: None,
+        explanation,
+        work_balances_h: false,
+    })
+}
+
+/// dω = 0 exactly (after simplification) or at random points.
+fn is_closed(pool: &mut Pool, form: &[ExprId], z: &[ExprId]) -> bool {
+    let dim = z.len();
+    for i in 0..dim {
+        for j in i + 1..dim {
+            let a = pool.diff(form[j], z[i]);
+            let b = pool.diff(form[i], z[j]);
+            let w = pool.sub(a, b);
+            if !probe::is_zero(pool, w) {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// The 2-forms dω_k (antisymmetric matrices over z) of the given forms.
+fn exterior_derivatives(pool: &mut Pool, forms: &[Vec<ExprId>], z: &[ExprId]) -> Vec<Vec<ExprId>> {
+    let dim = z.len();
+    forms
+        .iter()
+        .map(|form| {
+            let mut w = vec![pool.zero(); dim * dim];
+            for i in 0..dim {
+                for j in i + 1..dim {
+                    let a = pool.diff(form[j], z[i]);
+                    let b = pool.diff(form[i], z[j]);
+                    let v = pool.sub(a, b);
+                    w[i * dim + j] = v;
+                    w[j * dim + i] = pool.neg(v);
+                }
+            }
+            w
+        })
+        .collect()
+}
+
+/// Frobenius at random points: for the forms `forms[k]` (k in `which`), every
+/// dω_k vanishes on the space all of them annihilate: Nᵀ dω_k N = 0 with N a
+/// basis of that space. Points where something is not finite are skipped; with
+/// none left the answer is true only if every dω_k is symbolically zero.
+fn involutive(pool: &mut Pool, forms: &[Vec<ExprId>], z: &[ExprId], which: &[usize]) -> bool {
+    let dim = z.len();
+    let chosen: Vec<Vec<ExprId>> = which.iter().map(|&k| forms[k].clone()).collect();
+    let dws = exterior_derivatives(pool, &chosen, z);
+    let mut roots: Vec<ExprId> = chosen.iter().flatten().copied().collect();
+    roots.extend(dws.iter().flatten());
+    if dws.iter().flatten().all(|&w| pool.is_zero(w)) {
+        return true;
+    }
+    let (inputs, points) = probe::random_points(pool, &roots, 6, 0x5eed_00a3);
+    let Ok(mut tape) = Tape::compile(pool, &roots, &inputs) else { return false };
+    let m = chosen.len();
+    let mut out = vec![0.0; roots.len()];
+    let mut tested = 0;
+    for p in &points {
+        tape.eval(p, &mut out);
+        if !out.iter().all(|v| v.is_finite()) {
+            continue;
+        }
+        let omega = &out[..m * dim];
+        let Some(basis) = null_space(omega, m, dim) else { continue };
+        for k in 0..m {
+            let w = &out[m * dim + k * dim * dim..m * dim + (k + 1) * dim * dim];
+            let scale = w.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            if scale == 0.0 {
+                continue;
+            }
+            for a in &basis {
+                for b in &basis {
+                    let mut s = 0.0;
+                    for i in 0..dim {
+                        for j in 0..dim {
+                            s += a[i] * w[i * dim + j] * b[j];
+                        }
+                    }
+                    if s.abs() > 1e-8 * scale {
+                        return false;
+                    }
+                }
+            }
+        }
+        tested += 1;
+    }
+    tested > 0
+}
+
+/// An orthonormal basis of {v : Ω v = 0} for the row-major m×dim matrix Ω.
+fn null_space(omega: &[f64], m: usize, dim: usize) -> Option<Vec<Vec<f64>>> {
+    let mut square = nalgebra::DMatrix::zeros(dim, dim);
+    for i in 0..m {
+        for j in 0..dim {
+            square[(i, j)] = omega[i * dim + j];
+        }
+    }
+    let svd = square.svd(false, true);
+    let v_t = svd.v_t?;
+    let smax = svd.singular_values.iter().fold(0.0f64, |a, &s| a.max(s));
+    let basis = (0..dim)
+        .filter(|&r| svd.singular_values[r] <= 1e-9 * smax)
+        .map(|r| (0..dim).map(|j| v_t[(r, j)]).collect())
+        .collect();
+    Some(basis)
+}
+
+/// The rank of the matrix of expressions at generic (random) points.
+fn generic_rank(pool: &Pool, rows: &[Vec<ExprId>]) -> usize {
+    let m = rows.len();
+    let n = rows.first().map_or(0, Vec::len);
+    let roots: Vec<ExprId> = rows.iter().flatten().copied().collect();
+    let (inputs, points) = probe::random_points(pool, &roots, 4, 0x5eed_00a4);
+    let Ok(mut tape) = Tape::compile(pool, &roots, &inputs) else { return m };
+    let mut out = vec![0.0; roots.len()];
+    let mut rank = 0;
+    for p in &points {
+        tape.eval(p, &mut out);
+        if !out.iter().all(|v| v.is_finite()) {
+            continue;
+        }
+        let a = nalgebra::DMatrix::from_row_slice(m, n, &out);
+        rank = rank.max(a.rank(1e-9 * a.amax().max(f64::MIN_POSITIVE)));
+    }
+    if rank == 0 {
+        m.min(n)
+    } else {
+        rank
+    }
+}
+
+/// F with dF = ω for a closed form, by the homotopy formula
+/// F(z) = ∫₀¹ Σ ω_i(s z) z_i ds, the integral taken by Boole's rule (exact for
+/// integrands of degree ≤ 5 in s), and kept only if ∂F/∂z_i = ω_i checks out.
+fn integral(pool: &mut Pool, form: &[ExprId], z: &[ExprId], is_var: &dyn Fn(Symbol) -> bool) -> Option<ExprId> {
+    let weights = [7, 32, 12, 32, 7];
+    let mut terms = Vec::new();
+    for (k, &w) in weights.iter().enumerate() {
+        let s = pool.rational(k as i64, 4);
+        let scaled: Subst = z.iter().map(|&zi| (zi, pool.mul2(s, zi))).collect();
+        let g: Vec<ExprId> = form
+            .iter()
+            .zip(z)
+            .map(|(&a, &zi)| {
+                let a_s = pool.substitute(a, &scaled);
+                pool.mul2(a_s, zi)
+            })
+            .collect();
+        let g = pool.add(&g);
+        let c = pool.rational(w, 90);
+        terms.push(pool.mul2(c, g));
+    }
+    let f = pool.add(&terms);
+    let f = pool.simplify_in(f, is_var);
+    if pool.is_zero(f) {
+        return None;
+    }
+    for (i, &zi) in z.iter().enumerate() {
+        let df = pool.diff(f, zi);
+        let r = pool.sub(df, form[i]);
+        if !probe::is_zero(pool, r) {
+            return None;
+        }
+    }
+    Some(f)
+}
+
+/// The Cartesian constraint forces, when the coordinates are the particles'
+/// Cartesian components themselves (position = ["x", "y"]): then the force on
+/// a particle is the generalized force on its coordinates.
+fn cartesian_forces(d: &Derivation, generalized: &[ExprId]) -> Option<Vec<Vec<ExprId>>> {
+    let particles = &d.model.particles;
+    if particles.is_empty() {
+        return None;
+    }
+    let mut used = vec![false; d.q.len()];
+    let mut forces = Vec::new();
+    for part in particles {
+        let mut f = Vec::new();
+        for &x in &part.position {
+            let i = d.q.iter().position(|&q| q == x)?;
+            if used[i] {
+                return None;
+            }
+            used[i] = true;
+            f.push(generalized[i]);
+        }
+        forces.push(f);
+    }
+    used.iter().all(|&u| u).then_some(forces)
+}
+
+/// The Cartesian constraint forces when the particles' components x(q, t) are as
+/// many as the coordinates (n ≤ 3) and ∂x/∂q is invertible: Q = (∂x/∂q)ᵀ F then
+/// determines F = (∂x/∂q)⁻ᵀ Q, by the adjugate over the simplified determinant.
+fn cartesian_forces_square(pool: &mut Pool, d: &Derivation, generalized: &[ExprId]) -> Option<Vec<Vec<ExprId>>> {
+    let n = d.q.len();
+    let xs: Vec<ExprId> = d.model.particles.iter().flat_map(|p| p.position.iter().copied()).collect();
+    if d.model.particles.is_empty() || xs.len() != n || n > 3 {
+        return None;
+    }
+    let names: Vec<NameId> = d.model.coordinates.iter().map(|c| pool.name(&c.name)).collect();
+    let t_name = pool.name("t");
+    let is_var = |s: Symbol| s.name == t_name || names.contains(&s.name);
+    // jt[i][a] = ∂x_a/∂q_i: the matrix of Q = Jᵀ F.
+    let jt: Vec<Vec<ExprId>> = (0..n).map(|i| xs.iter().map(|&x| pool.diff(x, d.q[i])).collect()).collect();
+    if probe::is_singular(pool, &jt) {
+        return None;
+    }
+    let minor = |pool: &mut Pool, rows: [usize; 2], cols: [usize; 2]| {
+        let x = pool.mul2(jt[rows[0]][cols[0]], jt[rows[1]][cols[1]]);
+        let y = pool.mul2(jt[rows[0]][cols[1]], jt[rows[1]][cols[0]]);
+        pool.sub(x, y)
+    };
+    // adj[a][i] = cofactor C_ia of jt.
+    let mut adj = vec![vec![pool.zero(); n]; n];
+    let det = match n {
+        1 => {
+            adj[0][0] = pool.one();
+            jt[0][0]
+        }
+        2 => {
+            adj[0][0] = jt[1][1];
+            adj[1][1] = jt[0][0];
+            adj[0][1] = pool.neg(jt[0][1]);
+            adj[1][0] = pool.neg(jt[1][0]);
+            minor(pool, [0, 1], [0, 1])
+        }
+        _ => {
+            let others = |i: usize| -> [usize; 2] {
+                match i {
+                    0 => [1, 2],
+                    1 => [0, 2],
+                    _ => [0, 1],
+                }
+            };
+            for a in 0..3 {
+                for i in 0..3 {
+                    let c = minor(pool, others(i), others(a));
+                    adj[a][i] = if (a + i) % 2 == 0 { c } else { pool.neg(c) };
+                }
+            }
+            let terms: Vec<ExprId> = (0..3).map(|j| pool.mul2(jt[0][j], adj[j][0])).collect();
+            pool.add(&terms)
+        }
+    };
+    let det = pool.simplify_in(det, &is_var);
+    let mut flat = Vec::with_capacity(n);
+    for row in adj.iter().take(n) {
+        let terms: Vec<ExprId> = (0..n).map(|i| pool.mul2(row[i], generalized[i])).collect();
+        let num = pool.add(&terms);
+        let num = pool.simplify_in(num, &is_var);
+        let f = pool.div(num, det);
+        flat.push(pool.simplify_in(f, &is_var));
+    }
+    let mut forces = Vec::new();
+    let mut k = 0;
+    for p in &d.model.particles {
+        forces.push(flat[k..k + p.position.len()].to_vec());
+        k += p.position.len();
+    }
+    Some(forces)
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::{Derivation, Model};
+
+    #[test]
+    fn the_cartesian_force_of_a_bead_on_a_rotating_wire() {
+        let d = derive(
+            "coordinates = [\"r\", \"ph\"]\n[parameters]\nm = 1.0\nom = 2.0\n[[particles]]\nmass = \"m\"\nposition = [\"r*cos(ph)\", \"r*sin(ph)\"]\n[[constraints]]\nholonomic = \"ph - om*t\"\n",
+        );
+        let f = d.constraints.cartesian_forces.as_ref().expect("2 components for 2 coordinates");
+        let shown: Vec<String> = f[0].iter().map(|&e| d.pool().display(e).to_string()).collect();
+        // Perpendicular to the wire, of size λ/r (the torque λ over the arm r).
+        assert_eq!(shown, ["-lambda_c1*sin(ph)/r", "lambda_c1*cos(ph)/r"]);
+    }
+
+    fn derive(text: &str) -> Derivation {
+        Derivation::new(Model::parse(text, &[]).unwrap()).unwrap()
+    }
+
+    #[track_caller]
+    fn check_integrable(coords: &str, constraint: &str, expect: Option<&str>) {
+        let text = format!(
+            "coordinates = [{coords}]\nkinetic = \"x'^2/2 + y'^2/2\"\n[[constraints]]\nvelocity = \"{constraint}\"\n"
+        );
+        let d = derive(&text);
+        let c = &d.constraints.list[0];
+        match expect {
+            Some(integral) => {
+                assert_eq!(c.integrable, Some(true), "{constraint}");
+                let got = c.integral.map(|f| d.pool().display(f).to_string());
+                assert_eq!(got.as_deref(), Some(integral), "{constraint}");
+            }
+            None => assert_eq!(c.integrable, Some(false), "{constraint}"),
+        }
+    }
+
+    #[test]
+    fn integrability_of_single_velocity_constraints() {
+        check_integrable("\"x\", \"y\"", "x' - y'", Some("x - y"));
+        check_integrable("\"x\", \"y\"", "y*x' + x*y'", Some("x*y"));
+        check_integrable("\"x\", \"y\"", "2*x*x' + 2*y*y'", Some("x^2 + y^2"));
+    }
+
+    #[test]
+    fn an_integrating_factor_is_integrable_without_an_integral() {
+        // y dx − x dy: not closed, but y⁻² makes it d(x/y).
+        let d = derive(
+            "coordinates = [\"x\", \"y\"]\nkinetic = \"x'^2/2 + y'^2/2\"\n[[constraints]]\nvelocity = \"y*x' - x*y'\"\n",
+        );
+        assert_eq!(d.constraints.list[0].integrable, Some(true));
+    }
+
+    const DISK: &str = r#"
+coordinates = ["x", "y", "ph", "ps"]
+kinetic = "m/2*(x'^2 + y'^2) + I/2*ps'^2 + J/2*ph'^2"
+[parameters]
+m = 1.0
+I = 0.5
+J = 0.25
+R = 1.0
+[[constraints]]
+velocity = "x' - R*cos(ph)*ps'"
+[[constraints]]
+velocity = "y' - R*sin(ph)*ps'"
+"#;
+
+    #[test]
+    fn the_rolling_disk_is_nonholonomic() {
+        let d = derive(DISK);
+        let c = &d.constraints;
+        assert_eq!(c.list[0].integrable, Some(false));
+        assert_eq!(c.list[1].integrable, Some(false));
+        assert_eq!(c.integrable, Some(false));
+        assert_eq!(c.independent, 2);
+        assert_eq!(c.degrees_of_freedom, 2);
+        // Only p_ph survives: the constraint forces act on x, y and ps.
+        let names: Vec<&str> = d.conserved.iter().map(|c| c.name.as_str()).collect();
+        assert_eq!(names, ["p_ph", "H"]);
+    }
+
+    #[test]
+    fn a_set_can_be_integrable_when_its_members_are_not() {
+        // dz − y dx alone is not integrable (ω ∧ dω = dz∧dx∧dy), but with dy = 0
+        // the free directions shrink to ∂x + y ∂z: y = c and z − c x = const.
+        let d = derive(
+            "coordinates = [\"x\", \"y\", \"z\"]\nkinetic = \"x'^2/2 + y'^2/2 + z'^2/2\"\n[[constraints]]\nvelocity = \"z' - y*x'\"\n[[constraints]]\nvelocity = \"y'\"\n",
+        );
+        let c = &d.constraints;
+        assert_eq!(c.list[0].integrable, Some(false));
+        assert_eq!(c.list[1].integrable, Some(true));
+        assert_eq!(d.pool().display(c.list[1].integral.unwrap()).to_string(), "y");
+        assert_eq!(c.integrable, Some(true));
+        assert_eq!(c.degrees_of_freedom, 1);
+    }
+
+    #[test]
+    fn a_rheonomic_constraint_does_work() {
+        let d = derive(
+            "coordinates = [\"r\", \"ph\"]\nkinetic = \"m/2*(r'^2 + r^2*ph'^2)\"\n[parameters]\nm = 1.0\nom = 2.0\n[[constraints]]\nholonomic = \"ph - om*t\"\n",
+        );
+        let c = &d.constraints.list[0];
+        assert!(c.rheonomic && c.does_work);
+        assert!(!d.hamiltonian_conserved);
+        assert_eq!(d.pool().display(c.time_term).to_string(), "-om");
+    }
+
+    #[test]
+    fn a_nonlinear_velocity_constraint_is_rejected() {
+        let text =
+            "coordinates = [\"x\", \"y\"]\nkinetic = \"x'^2/2 + y'^2/2\"\n[[constraints]]\nvelocity = \"x'^2 - y'\"\n";
+        let err = Derivation::new(Model::parse(text, &[]).unwrap()).unwrap_err();
+        assert!(err.message.contains("not linear"), "{}", err.message);
+        assert_eq!(err.span.map(|s| &text[s]), Some("\"x'^2 - y'\""));
+    }
+}
