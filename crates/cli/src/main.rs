@@ -204,10 +204,25 @@ pub(crate) fn read_source(path: &Path) -> Result<String, Failure> {
     String::from_utf8(bytes).map_err(|e| Failure::input(path, format!("the file is not UTF-8 text: {e}")))
 }
 
+/// Parses a model file's text; the files it names (body files of `[[bodies]]`)
+/// are read relative to the model file's folder.
+pub(crate) fn parse_model(path: &Path, source: &str, set: &[(String, f64)]) -> Result<mech::Model, Failure> {
+    let folder = path.parent().unwrap_or(Path::new("."));
+    let files = |name: &str| -> Result<String, String> {
+        let file = folder.join(name);
+        let bytes = std::fs::read(&file).map_err(|e| format!("{}: {e}", file.display()))?;
+        if bytes.len() > mech::MAX_FILE_BYTES {
+            return Err(format!("{} is {} bytes; the limit is {}", file.display(), bytes.len(), mech::MAX_FILE_BYTES));
+        }
+        String::from_utf8(bytes).map_err(|e| format!("{} is not UTF-8 text: {e}", file.display()))
+    };
+    mech::Model::parse_with(source, set, &files).map_err(|e| Failure::model(path, source, e))
+}
+
 fn derive(path: &Path, format: Format, set: &[(String, f64)]) -> Result<(), Failure> {
     let source = read_source(path)?;
     let start = std::time::Instant::now();
-    let model = mech::Model::parse(&source, set).map_err(|e| Failure::model(path, &source, e))?;
+    let model = parse_model(path, &source, set)?;
     let derivation = mech::Derivation::new(model).map_err(|e| Failure::model(path, &source, e))?;
     let derive_seconds = start.elapsed().as_secs_f64();
     let text = match format {

@@ -51,7 +51,7 @@ const MAX_PRINTED_SHAPE: usize = 8;
 pub fn run(args: &Args) -> Result<(), Failure> {
     let path = &args.model;
     let source = crate::read_source(path)?;
-    let model = mech::Model::parse(&source, &args.set).map_err(|e| Failure::model(path, &source, e))?;
+    let model = crate::parse_model(path, &source, &args.set)?;
     let mut d = Derivation::new(model).map_err(|e| Failure::model(path, &source, e))?;
     d.reject_constraints("`lagrange modes`").map_err(|e| Failure::model(path, &source, e))?;
     let config = ModesConfig { at: args.at.clone() };

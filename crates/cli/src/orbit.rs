@@ -35,7 +35,7 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<(), Failure> {
     let path = &args.model;
     let source = crate::read_source(path)?;
-    let model = mech::Model::parse(&source, &args.set).map_err(|e| Failure::model(path, &source, e))?;
+    let model = crate::parse_model(path, &source, &args.set)?;
     let mut d = Derivation::new(model).map_err(|e| Failure::model(path, &source, e))?;
     d.reject_constraints("`lagrange orbit`").map_err(|e| Failure::model(path, &source, e))?;
     let mut orbit = Orbit::new(&mut d).map_err(|e| failure(path, &source, e))?;

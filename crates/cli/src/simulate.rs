@@ -49,7 +49,7 @@ pub fn list_methods() -> String {
 pub fn run(opts: &Options) -> Result<(), Failure> {
     let source = crate::read_source(&opts.model)?;
     let path = &opts.model;
-    let model = mech::Model::parse(&source, &opts.set).map_err(|e| Failure::model(path, &source, e))?;
+    let model = crate::parse_model(path, &source, &opts.set)?;
     let mut derivation = Derivation::new(model).map_err(|e| Failure::model(path, &source, e))?;
 
     let method = match &opts.method {

@@ -97,7 +97,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         None => None,
     };
     let source = crate::read_source(path)?;
-    let model = mech::Model::parse(&source, &args.set).map_err(|e| Failure::model(path, &source, e))?;
+    let model = crate::parse_model(path, &source, &args.set)?;
     let mut derivation = Derivation::new(model).map_err(|e| Failure::model(path, &source, e))?;
     derivation.reject_constraints("`lagrange sweep`").map_err(|e| Failure::model(path, &source, e))?;
     let grid = Grid::parse(args.grid.as_deref().unwrap_or_default(), &derivation.model).map_err(usage)?;

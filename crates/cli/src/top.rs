@@ -36,7 +36,7 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<(), Failure> {
     let path = &args.model;
     let source = crate::read_source(path)?;
-    let model = mech::Model::parse(&source, &args.set).map_err(|e| Failure::model(path, &source, e))?;
+    let model = crate::parse_model(path, &source, &args.set)?;
     let mut d = Derivation::new(model).map_err(|e| Failure::model(path, &source, e))?;
     let top = Top::new(&d).map_err(|e| failure(path, &source, e))?;
     if let Some(svg) = &args.plot {

@@ -427,3 +427,46 @@ fn euler_equations_with_the_gravity_torque_along_a_heavy_top() {
     }
     assert!(worst < 1e-3, "Euler's equations with torque: residual {worst}");
 }
+
+/// A body whose inertia is a body file (`lagrange inertia`): the solid cone on
+/// its apex gets I = 3/20 M R² + 3/5 M h², I3 = 3/10 M R² about the pivot and
+/// S = 3h/4 from the file, and `top` reads them back.
+#[test]
+fn a_body_file_gives_mass_centre_and_inertia() {
+    let (m, r, h, g) = (1.0, 0.5, 1.0, 9.81);
+    let i1 = 3.0 / 20.0 * m * r * r + 3.0 / 5.0 * m * h * h;
+    let i3 = 3.0 / 10.0 * m * r * r;
+    let s = 0.75 * h;
+    let d = json(&["derive", "examples/tops/cone_top.toml", "--format", "json"]);
+    let mut pool = sym::Pool::default();
+    let env: HashMap<&str, f64> = [("be", 0.7), ("g", g)].into_iter().collect();
+    let mm = &d["mass_matrix"];
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1.0);
+    assert!(close(eval(&mut pool, mm[1][1].as_str().unwrap(), &env), i1));
+    assert!(close(eval(&mut pool, mm[2][2].as_str().unwrap(), &env), i3));
+    // M_αα = I sin²β + I3 cos²β, U = M g S cos β.
+    let want = i1 * 0.7f64.sin().powi(2) + i3 * 0.7f64.cos().powi(2);
+    assert!(close(eval(&mut pool, mm[0][0].as_str().unwrap(), &env), want));
+    assert!(close(eval(&mut pool, d["potential"].as_str().unwrap(), &env), m * g * s * 0.7f64.cos()));
+    let top = json(&["top", "examples/tops/cone_top.toml", "--format", "json"]);
+    assert_eq!(top["kind"], "heavy");
+    assert!(close(top["p_gamma"].as_f64().unwrap(), i3 * 40.0));
+
+    // A mass that contradicts the file, and a file that is not there: exit 2 at the place.
+    let text = std::fs::read_to_string(repo_root().join("examples/tops/cone_top.toml")).unwrap();
+    let dir = repo_root().join("examples/tops");
+    let bad = text.replace("name = \"cone\"\n", "name = \"cone\"\nmass = 2.0\n");
+    let path = dir.join(format!("bad-mass-{}.toml", std::process::id()));
+    std::fs::write(&path, bad).unwrap();
+    let run = lagrange(&["derive", path.to_str().unwrap()]);
+    std::fs::remove_file(&path).unwrap();
+    assert_eq!(run.code, Some(2), "{}", run.stderr);
+    assert!(run.stderr.contains("mass is 2 here but 1 in its body file"), "{}", run.stderr);
+    assert!(run.stderr.contains(":13:"), "{}", run.stderr);
+    let missing = text.replace("cone_top_body.toml", "no_such_body.toml");
+    let path = tmp("missing-body.toml");
+    std::fs::write(&path, missing).unwrap();
+    let run = lagrange(&["derive", path.to_str().unwrap()]);
+    assert_eq!(run.code, Some(2), "{}", run.stderr);
+    assert!(run.stderr.contains("cannot read the body file 'no_such_body.toml'"), "{}", run.stderr);
+}

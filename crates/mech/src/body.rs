@@ -26,7 +26,7 @@
 
 use crate::error::ModelError;
 use crate::euler;
-use crate::model::{NumOrText, Reader, Scope};
+use crate::model::{Located, NumOrText, Reader, Scope};
 use crate::probe;
 use serde::Deserialize;
 use std::ops::Range;
@@ -61,7 +61,7 @@ pub struct Body {
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawBody {
     name: Option<Spanned<String>>,
-    mass: Spanned<NumOrText>,
+    mass: Option<Spanned<NumOrText>>,
     inertia: Spanned<toml::Value>,
     angles: Spanned<Vec<Spanned<String>>>,
     position: Option<Spanned<Vec<Spanned<NumOrText>>>>,
@@ -105,7 +105,22 @@ fn read(r: &mut Reader<'_>, b: &Spanned<RawBody>, index: usize) -> Result<Body, 
         }
         None => format!("body{}", index + 1),
     };
-    let mass = r.num_or_expr(&raw.mass, Scope::Parameters, "the body's mass")?;
+    // A body file gives the mass, the centre of mass and the tensor at once.
+    let file = match raw.inertia.get_ref() {
+        toml::Value::String(s) if s.trim_end().ends_with(".toml") => {
+            Some(load_body_file(r, s.trim_end(), raw.inertia.span())?)
+        }
+        _ => None,
+    };
+    let mass = match (&raw.mass, &file) {
+        (Some(m), _) => r.num_or_expr(m, Scope::Parameters, "the body's mass")?,
+        (None, Some(f)) => Located { expr: crate::model::number_expr(&mut r.pool, f.mass), span: raw.inertia.span() },
+        (None, None) => {
+            return Err(ModelError::at(b.span(), "the body has no `mass`").with_help(
+                "give mass = \"M\" (a number or an expression in the parameters), or a body file as `inertia`",
+            ))
+        }
+    };
 
     // Angles: three distinct coordinates.
     let angles_raw = raw.angles.get_ref();
@@ -150,8 +165,25 @@ fn read(r: &mut Reader<'_>, b: &Spanned<RawBody>, index: usize) -> Result<Body, 
         Ok(out)
     };
     let position = three(r, &raw.position, Scope::Configuration, "position")?;
-    let center_of_mass = three(r, &raw.center_of_mass, Scope::Parameters, "center_of_mass")?;
-    let (inertia, principal) = read_inertia(r, &raw.inertia)?;
+    let mut center_of_mass = three(r, &raw.center_of_mass, Scope::Parameters, "center_of_mass")?;
+    let (inertia, principal) = match &file {
+        Some(f) => {
+            agree_with_file(r, mass.expr, f.mass, mass.span.clone(), "mass")?;
+            match &raw.center_of_mass {
+                Some(c) => {
+                    for k in 0..3 {
+                        let what = format!("centre of mass component {}", k + 1);
+                        agree_with_file(r, center_of_mass[k], f.center_of_mass[k], c.span(), &what)?;
+                    }
+                }
+                None => center_of_mass = f.center_of_mass.map(|x| crate::model::number_expr(&mut r.pool, x)),
+            }
+            let tensor = f.tensor.map(|row| row.map(|x| crate::model::number_expr(&mut r.pool, x)));
+            let diagonal = (0..3).all(|i| (0..3).all(|j| i == j || f.tensor[i][j] == 0.0));
+            (tensor, diagonal)
+        }
+        None => read_inertia(r, &raw.inertia)?,
+    };
 
     // Numeric sanity at the parameters' values: M > 0, I positive definite.
     let values = |r: &Reader<'_>, e: ExprId| {
@@ -189,6 +221,53 @@ fn read(r: &mut Reader<'_>, b: &Spanned<RawBody>, index: usize) -> Result<Body, 
     })
 }
 
+/// What a body file says about a body, as numbers at the file's own parameters.
+struct FileBody {
+    mass: f64,
+    center_of_mass: [f64; 3],
+    /// The tensor about the file's origin (the body's reference point), body axes.
+    tensor: [[f64; 3]; 3],
+}
+
+/// Reads and evaluates the body file `name` (see `lagrange inertia`): its
+/// origin is the body's reference point and its axes are the body axes.
+fn load_body_file(r: &mut Reader<'_>, name: &str, span: Range<usize>) -> Result<FileBody, ModelError> {
+    let text = (r.files)(name)
+        .map_err(|e| ModelError::at(span.clone(), format!("cannot read the body file '{name}': {e}")))?;
+    let nested = |e: ModelError| {
+        let place = match &e.span {
+            Some(s) => {
+                let before = &text[..s.start.min(text.len())];
+                let line = before.matches('\n').count() + 1;
+                let col = before.chars().rev().take_while(|&c| c != '\n').count() + 1;
+                format!("{name}:{line}:{col}")
+            }
+            None => name.to_string(),
+        };
+        let mut err = ModelError::at(span.clone(), format!("in the body file {place}: {}", e.message));
+        err.help = e.help;
+        err
+    };
+    let body = crate::inertia::BodyFile::parse(&text, &[]).map_err(nested)?;
+    let props = body.mass_properties().map_err(nested)?;
+    Ok(FileBody {
+        mass: props.value(props.mass),
+        center_of_mass: props.center_of_mass.map(|c| props.value(c)),
+        tensor: props.about_values([0.0; 3]),
+    })
+}
+
+/// A value the model gives beside a body file must be the file's (to 1e-9 relative).
+fn agree_with_file(r: &Reader<'_>, given: ExprId, want: f64, span: Range<usize>, what: &str) -> Result<(), ModelError> {
+    let env = |n: &str| r.parameters.iter().find(|p| p.name == n).map(|p| p.value);
+    match r.pool.eval(given, &env) {
+        Ok(v) if (v - want).abs() <= 1e-9 * want.abs().max(1.0) => Ok(()),
+        Ok(v) => Err(ModelError::at(span, format!("the body's {what} is {v} here but {want} in its body file"))
+            .with_help(format!("leave the {what} out to take it from the body file"))),
+        Err(e) => Err(ModelError::at(span, e.to_string())),
+    }
+}
+
 /// Leading principal minors all positive.
 fn positive_definite(m: &[[f64; 3]; 3]) -> bool {
     let d1 = m[0][0];
@@ -203,11 +282,6 @@ fn read_inertia(r: &mut Reader<'_>, v: &Spanned<toml::Value>) -> Result<([[ExprI
     let span = v.span();
     let expected = "expected three principal moments [\"I1\", \"I2\", \"I3\"] or a 3×3 tensor [[..], [..], [..]]";
     match v.get_ref() {
-        toml::Value::String(s) if s.trim_end().ends_with(".toml") => Err(ModelError::at(
-            span,
-            format!("an inertia read from a body file ('{s}') is not supported yet"),
-        )
-        .with_help("compute it with `lagrange inertia BODY` and write the moments here, e.g. inertia = [\"I1\", \"I1\", \"I3\"]")),
         toml::Value::Array(rows) if rows.len() == 3 && rows.iter().all(|x| x.is_array()) => {
             let mut cursor = span.start;
             let mut m = [[r.pool.zero(); 3]; 3];

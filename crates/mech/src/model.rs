@@ -177,9 +177,22 @@ impl Scope {
     }
 }
 
+/// Reads a file a model names (e.g. a body file for a rigid body's inertia) by
+/// the name written in the model; the error is a sentence. The library does no
+/// IO of its own: the caller decides where names point (the command line reads
+/// them relative to the model file).
+pub type FileReader<'a> = dyn Fn(&str) -> Result<String, String> + 'a;
+
+/// The reader of a model given as text alone: it names no files.
+fn no_files(name: &str) -> Result<String, String> {
+    Err(format!("this model was given as text, so the file '{name}' cannot be read"))
+}
+
 /// Reading state: the source text and the names declared so far.
 pub(crate) struct Reader<'a> {
     pub(crate) source: &'a str,
+    /// Reads a file the model names (a body file), relative to the model.
+    pub(crate) files: &'a FileReader<'a>,
     pub(crate) pool: Pool,
     pub(crate) coordinates: Vec<Coordinate>,
     pub(crate) parameters: Vec<Parameter>,
@@ -331,6 +344,12 @@ impl Model {
     /// Reads a model file's text. `overrides` are `--set name=value` pairs,
     /// applied to `[parameters]` (an unknown name is an error).
     pub fn parse(source: &str, overrides: &[(String, f64)]) -> Result<Model, ModelError> {
+        Model::parse_with(source, overrides, &no_files)
+    }
+
+    /// [`Model::parse`] for a model that may name other files (body files in
+    /// `[[bodies]]`), which `files` reads.
+    pub fn parse_with(source: &str, overrides: &[(String, f64)], files: &FileReader) -> Result<Model, ModelError> {
         if source.len() > MAX_FILE_BYTES {
             return Err(ModelError::whole(format!(
                 "the model file is {} bytes; the limit is {MAX_FILE_BYTES}",
@@ -344,7 +363,7 @@ impl Model {
                 None => ModelError::whole(message),
             }
         })?;
-        let mut r = Reader { source, pool: Pool::default(), coordinates: Vec::new(), parameters: Vec::new() };
+        let mut r = Reader { source, files, pool: Pool::default(), coordinates: Vec::new(), parameters: Vec::new() };
 
         // Coordinates.
         let coords = raw.coordinates.as_ref().ok_or_else(|| {
@@ -561,6 +580,7 @@ impl Model {
     pub fn parse_state_expr(&mut self, text: &str, what: &str) -> Result<ExprId, ModelError> {
         let mut r = Reader {
             source: text,
+            files: &no_files,
             pool: std::mem::take(&mut self.pool),
             coordinates: self.coordinates.clone(),
             parameters: self.parameters.clone(),
