@@ -10,7 +10,7 @@ What it does, in order:
    the systems of ../shared/bench/README.md;
 2. times `target/release/lagrange derive FILE --format json` on each (median of
    --repeats runs; wall clock, and CPU time of the child from os.wait4), building the
-   binary with `cargo build --release` first if it is missing;
+   binary with `cargo build --release` first (a no-op when it is fresh);
 3. runs the anchors ../shared/bench/sympy_derive.py and symengine_derive.py on the same
    sizes (installing their pinned requirements into a venv under ${TMPDIR:-/tmp} if the
    current Python cannot import them);
@@ -109,7 +109,8 @@ def chain_model(n: int) -> str:
 
 
 def ensure_binary(binary: Path, build: bool) -> bool:
-    if binary.exists():
+    # Cargo does nothing when the binary is fresh; a stale one would measure old code.
+    if binary.exists() and not build:
         return True
     if not build:
         log(f"{binary} is missing (and --no-build was given)")
@@ -144,9 +145,11 @@ def run_once(binary: Path, model: Path, timeout: float) -> dict:
         stdout = out.read()
         size = len(stdout)
         try:
-            derive_s = json.loads(stdout).get("derive_seconds")
+            parsed = json.loads(stdout)
+            derive_s = parsed.get("derive_seconds")
+            equations_s = parsed.get("equations_seconds")
         except (ValueError, AttributeError):
-            derive_s = None
+            derive_s = equations_s = None
         err.seek(0)
         stderr = err.read().decode("utf-8", "replace")
     return {
@@ -154,6 +157,7 @@ def run_once(binary: Path, model: Path, timeout: float) -> dict:
         "cpu_s": usage.ru_utime + usage.ru_stime,
         "max_rss_kb": usage.ru_maxrss,
         "derive_s": derive_s,
+        "equations_s": equations_s,
         "exit_code": proc.returncode,
         "output_bytes": size,
         "timed_out": wall >= timeout,
@@ -181,6 +185,8 @@ def measure_ours(binary: Path, models: list[tuple[str, int, Path]], repeats: int
             "cpu_s": statistics.median(r["cpu_s"] for r in ok) if ok else None,
             "derive_s": statistics.median(r["derive_s"] for r in ok if r["derive_s"] is not None)
             if any(r["derive_s"] is not None for r in ok) else None,
+            "equations_s": statistics.median(r["equations_s"] for r in ok if r["equations_s"] is not None)
+            if any(r["equations_s"] is not None for r in ok) else None,
             "max_rss_kb": max(r["max_rss_kb"] for r in runs),
             "output_bytes": runs[-1]["output_bytes"],
             "repeats": len(runs),
@@ -316,9 +322,10 @@ def fmt_ratio(anchor: float | None, ours: float | None) -> str:
 
 def table(ours: list[dict], sympy: dict, symengine: dict) -> tuple[str, list[dict]]:
     rows = [
-        "| system | N | lagrange process (CPU) | lagrange in-process | SymPy (CPU) | SymEngine (wall) "
-        "| SymPy / lagrange process | SymEngine / lagrange in-process |",
-        "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
+        "| system | N | lagrange process (CPU) | lagrange in-process: all | lagrange in-process: L, M, f "
+        "| SymPy (CPU) | SymEngine (wall) | SymPy / lagrange process | SymEngine / lagrange all "
+        "| SymEngine / lagrange L, M, f |",
+        "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
     ]
     ratios = []
     for record in ours:
@@ -327,9 +334,10 @@ def table(ours: list[dict], sympy: dict, symengine: dict) -> tuple[str, list[dic
         sp_t = sympy.get(key)
         se_t = symengine.get(key)
         inproc = record.get("derive_s")
+        eqs = record.get("equations_s")
         rows.append(
-            f"| {key[0]} | {key[1]} | {fmt_s(mine)} | {fmt_s(inproc)} | {fmt_s(sp_t)} | {fmt_s(se_t)} "
-            f"| {fmt_ratio(sp_t, mine)} | {fmt_ratio(se_t, inproc)} |"
+            f"| {key[0]} | {key[1]} | {fmt_s(mine)} | {fmt_s(inproc)} | {fmt_s(eqs)} | {fmt_s(sp_t)} "
+            f"| {fmt_s(se_t)} | {fmt_ratio(sp_t, mine)} | {fmt_ratio(se_t, inproc)} | {fmt_ratio(se_t, eqs)} |"
         )
         ratios.append(
             {
@@ -344,6 +352,8 @@ def table(ours: list[dict], sympy: dict, symengine: dict) -> tuple[str, list[dic
                 "symengine_over_lagrange": se_t / mine if se_t and mine else None,
                 "lagrange_in_process_s": inproc,
                 "symengine_over_lagrange_in_process": se_t / inproc if se_t and inproc else None,
+                "lagrange_equations_s": eqs,
+                "symengine_over_lagrange_equations": se_t / eqs if se_t and eqs else None,
             }
         )
     return "\n".join(rows), ratios
@@ -500,7 +510,8 @@ def main(argv=None) -> int:
     print(
         "lagrange process: whole `derive --format json` process, CPU seconds (median); lagrange in-process: "
         "parse + derivation (M, f, momenta, H, Hamilton's equations, verdicts) inside the process, wall "
-        "seconds (the JSON field derive_seconds). SymPy: build L + "
+        "seconds (the JSON field derive_seconds); L, M, f: parse + L, M and f only, the steps the SymEngine "
+        "script times (the JSON field equations_seconds). SymPy: build L + "
         "LagrangesMethod M, f (no lambdify), CPU seconds. SymEngine: L + M, f, wall seconds. "
         f"Same machine, same run. JSON lines: {out_path}"
     )

@@ -90,6 +90,9 @@ pub struct Derivation {
     pub explicit_time: bool,
     /// Explanations of the verdicts.
     pub verdicts: Verdicts,
+    /// Seconds spent from the model to L, M and f (the equations of motion), the
+    /// part of [`Derivation::new`] comparable with a CAS that derives only those.
+    pub equations_seconds: f64,
     /// Each rigid body's angular velocity and angular momentum (body frame).
     pub bodies: Vec<crate::body::BodyMotion>,
     /// The constraints and the equations with multipliers (empty without `[[constraints]]`).
@@ -112,6 +115,7 @@ impl Vars {
 impl Derivation {
     /// Derives everything from a model. Fails on a singular mass matrix.
     pub fn new(mut model: Model) -> Result<Derivation, ModelError> {
+        let started = std::time::Instant::now();
         let n = model.n_coords();
         // The pool is taken out of the model while the model's other parts are read.
         let mut pool_owned = std::mem::take(&mut model.pool);
@@ -300,6 +304,7 @@ impl Derivation {
             e_terms.push(pool.neg(forcing[i]));
             equations.push(pool.add(&e_terms));
         }
+        let equations_seconds = started.elapsed().as_secs_f64();
         // M is singular when one of its blocks is (a chain of masses has a
         // thousand 1×1 blocks, not one 1000×1000 matrix to factor).
         let singular = blocks(pool, &mass_matrix).iter().any(|idx| {
@@ -468,6 +473,7 @@ impl Derivation {
             explicit_time,
             verdicts,
             bodies,
+            equations_seconds,
             constraints: Default::default(),
         };
         crate::constraint::attach(&mut derivation)?;
