@@ -360,7 +360,7 @@ fn bad_bodies_exit_2_with_a_location() {
             "inertia = [[\"I\", 0, 1], [0, \"I\", 0], [0, 0, \"I3\"]]",
             "not symmetric",
         ),
-        ("inertia = [\"I\", \"I\", \"I3\"]", "inertia = \"top_body.toml\"", "not supported yet"),
+        ("inertia = [\"I\", \"I\", \"I3\"]", "inertia = \"top_body.toml\"", "cannot read the body file"),
         ("inertia = [\"I\", \"I\", \"I3\"]", "inertia = [\"I\", \"-I\", \"I3\"]", "positive definite"),
         ("inertia = [\"I\", \"I\", \"I3\"]", "inertia = [\"I\", \"I\", \"J3\"]", "J3"),
         ("position = [\"0\", \"0\", \"0\"]", "position = [\"0\", \"0\"]", "3 components"),
