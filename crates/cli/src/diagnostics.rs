@@ -75,7 +75,8 @@ impl Failure {
                 let (line, col) = line_col(source, span.start);
                 let mut out = format!("error: {file}:{line}:{col}: {message}\n");
                 let mut report = Report::build(ReportKind::Error, (file.as_str(), span.clone()))
-                    .with_config(ariadne::Config::default().with_color(false))
+                    // Spans are byte offsets (TOML and our parser); ariadne counts characters by default.
+                    .with_config(ariadne::Config::default().with_color(false).with_index_type(ariadne::IndexType::Byte))
                     .with_message(message)
                     .with_label(Label::new((file.as_str(), span.clone())).with_message(short(message)));
                 if let Some(h) = help {
