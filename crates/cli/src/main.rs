@@ -6,6 +6,7 @@
 //! message naming file, line and column; 1 a run that failed midway.
 
 mod diagnostics;
+mod extremal;
 mod format;
 mod modes;
 mod orbit;
@@ -99,6 +100,8 @@ enum Command {
     Modes(modes::Args),
     /// A central-force orbit from the initial state: turning points, kind, period, apsidal angle.
     Orbit(orbit::Args),
+    /// The extremal of a functional ∫ f(y, y', x) dx between fixed ends: Euler equation, path, value, second variation.
+    Extremal(extremal::Args),
 }
 
 /// Summary formats of `simulate`.
@@ -140,6 +143,7 @@ fn main() -> ExitCode {
         Command::Sweep(args) => sweep::run(&args),
         Command::Modes(args) => modes::run(&args),
         Command::Orbit(args) => orbit::run(&args),
+        Command::Extremal(args) => extremal::run(&args),
         Command::Simulate { list_methods: true, .. } => write_stdout(&simulate::list_methods()),
         Command::Simulate {
             model,

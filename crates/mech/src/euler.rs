@@ -51,11 +51,7 @@ pub fn rotation(pool: &mut Pool, al: ExprId, be: ExprId, ga: ExprId) -> ExprMatr
 }
 
 /// The body-frame angular velocity (ω₁, ω₂, ω₃) from the angles and their rates.
-pub fn angular_velocity(
-    pool: &mut Pool,
-    [_al, be, ga]: [ExprId; 3],
-    [ald, bed, gad]: [ExprId; 3],
-) -> [ExprId; 3] {
+pub fn angular_velocity(pool: &mut Pool, [_al, be, ga]: [ExprId; 3], [ald, bed, gad]: [ExprId; 3]) -> [ExprId; 3] {
     let (sb, cb) = (pool.func(Func::Sin, be), pool.func(Func::Cos, be));
     let (sg, cg) = (pool.func(Func::Sin, ga), pool.func(Func::Cos, ga));
     let a1 = pool.mul(&[ald, sb, sg]);
