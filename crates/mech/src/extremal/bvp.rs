@@ -18,8 +18,8 @@
 //! is then followed in `u = (s/D)^λ`, in which it is smooth, and it starts
 //! at s0 = 1e-8·D with the series, the value of [0, s0] integrated along it
 //! by tanh-sinh quadrature (the integrand may be singular at s = 0). Either way each member is integrated with
-//! DOP853 until it crosses the line through the end point perpendicular to the
-//! chord; the offset along that line is the miss. A scan of the parameter
+//! DOP853 until it reaches x1 (a curve that turns back, cos φ < 0, is no graph
+//! y(x) and is dropped); y(x1) − y1 is the miss. A scan of the parameter
 //! brackets every zero of the miss, and Brent's method solves each.
 //!
 //! Entry point: [`solve`].
@@ -186,8 +186,6 @@ struct Family<'a> {
     num: &'a mut Numeric,
     start: [f64; 2],
     end: [f64; 2],
-    /// Unit vector along the chord.
-    e: [f64; 2],
     /// Chord length.
     d: f64,
     kind: Start,
@@ -299,14 +297,11 @@ impl Family<'_> {
         let (sigma0, z0, scale, exponent) = self.handover(a)?;
         let config = self.config();
         let sigma_max = self.sigma_max();
-        let [x0, y0] = self.start;
-        let (e, d) = (self.e, self.d);
+        let [x1, y1] = self.end;
         let curve = Curve { num: &mut *self.num, scale, exponent };
         let mut solver = Method::Dop853.build(curve, sigma0, &z0, &config).ok()?;
         let mut events = [
-            Event::new(move |_, z: &[f64]| (z[0] - x0) * e[0] + (z[1] - y0) * e[1] - d)
-                .with_direction(Direction::Rising)
-                .with_terminal(true),
+            Event::new(move |_, z: &[f64]| z[0] - x1).with_direction(Direction::Rising).with_terminal(true),
             Event::new(|_, z: &[f64]| z[2].cos()).with_direction(Direction::Falling).with_terminal(true),
         ];
         let mut hit: Option<(f64, [f64; 2])> = None;
@@ -317,8 +312,8 @@ impl Family<'_> {
             ControlFlow::Continue(())
         })
         .ok()?;
-        let (sigma_end, [x, y]) = hit?;
-        let miss = -(x - x0) * e[1] + (y - y0) * e[0];
+        let (sigma_end, [_, y]) = hit?;
+        let miss = y - y1;
         Some(Shot { miss, sigma_end })
     }
 
@@ -341,7 +336,8 @@ impl Family<'_> {
         }
         let mut conjugate = None;
         let mut value = f64::NAN;
-        num::integrate(&mut solver, sigma_end, Output::Samples(n), &mut events, |o| {
+        let n_samples = n.saturating_sub(path.len()).max(2);
+        num::integrate(&mut solver, sigma_end, Output::Samples(n_samples), &mut events, |o| {
             match o.kind {
                 ObservationKind::Event { .. } => {
                     if conjugate.is_none() && o.t > sigma0 {
@@ -448,7 +444,7 @@ pub fn solve(num: &mut Numeric, start: [f64; 2], end: [f64; 2], n_points: usize)
     let mut shots = 0;
     let mut divergent = false;
     for kind in kinds {
-        let mut fam = Family { num: &mut *num, start, end, e: [dx / d, dy / d], d, kind, shots: 0 };
+        let mut fam = Family { num: &mut *num, start, end, d, kind, shots: 0 };
         let grid = scan_grid(kind);
         let misses: Vec<Option<Shot>> = grid.iter().map(|&a| fam.shoot(a)).collect();
         let mut roots: Vec<(f64, f64)> = Vec::new();
