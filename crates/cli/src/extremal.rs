@@ -108,18 +108,15 @@ fn text(r: &ExtremalReport) -> String {
         }
     }
     let _ = writeln!(s);
-    match (r.endpoints, r.departure) {
-        ("singular_start" | "singular_end", Some([phi0, lambda])) => {
-            let which = if r.endpoints == "singular_start" { "start" } else { "end" };
-            let _ = writeln!(
-                s,
-                "The {which} is a singular point (f or {y}'' is infinite there): the extremal leaves it at the angle {}° \
-                 with φ − φ0 ∝ s^{} (local series), and the path is followed by arc length",
-                num(phi0.to_degrees()),
-                num(lambda)
-            );
-        }
-        _ => {}
+    if let (Some([phi0, lambda]), true) = (r.departure, r.endpoints != "regular") {
+        let which = if r.endpoints == "singular_start" { "start" } else { "end" };
+        let _ = writeln!(
+            s,
+            "The {which} is a singular point (f or {y}'' is infinite there): the extremal leaves it at the angle {}° \
+             with φ − φ0 ∝ s^{} (local series), and the path is followed by arc length",
+            num(phi0.to_degrees()),
+            num(lambda)
+        );
     }
     let _ = writeln!(
         s,
@@ -130,7 +127,8 @@ fn text(r: &ExtremalReport) -> String {
     for (k, e) in r.extremals.iter().enumerate() {
         let slope = e.start_slope.map_or("vertical".to_string(), |m| format!("{y}'({}) = {}", num(x0), num(m)));
         let mark = if k == 0 { "  ← lowest, reported" } else { "" };
-        let _ = writeln!(s, "  J = {}   start: {slope}{mark}", num(e.value));
+        let conj = e.conjugate_point.map_or(String::new(), |c| format!(" (conjugate point at {x} = {})", num(c)));
+        let _ = writeln!(s, "  J = {}   start: {slope}{conj}{mark}", num(e.value));
     }
     if r.extremals.len() > 1 {
         let _ = writeln!(s, "  (the Euler equation only makes J stationary; of several extremals the lowest is kept)");
@@ -138,8 +136,12 @@ fn text(r: &ExtremalReport) -> String {
     let n = r.path.len();
     let pick = |i: usize| r.path[i];
     let _ = writeln!(s, "\nPath ({n} points; --format json lists them all):");
+    // Round-off next to zero (1e-15 where the path crosses x = 0) would read as data.
+    let tidy = |v: f64, scale: f64| if v.abs() < 1e-12 * scale { 0.0 } else { v };
+    let scale = x0.abs().max(x1.abs()).max(y0.abs()).max(y1.abs());
     for i in [0, n / 4, n / 2, 3 * n / 4, n - 1] {
         let [px, py] = pick(i);
+        let (px, py) = (tidy(px, scale), tidy(py, scale));
         let _ = writeln!(s, "  {x} = {:<14} {y} = {}", num(px), num(py));
     }
     let ymin = r.path.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);

@@ -167,8 +167,8 @@ fn goldschmidt_rings_too_far_apart_have_no_extremal() {
 #[test]
 fn oscillator_action_stops_being_a_minimum_after_half_a_period() {
     // ω = sqrt(k/m) = 2: the conjugate point of t = 0 is π/ω = π/2.
-    let (m, k) = (1.0, 4.0);
-    let omega: f64 = (k / m as f64).sqrt();
+    let (m, k): (f64, f64) = (1.0, 4.0);
+    let omega: f64 = (k / m).sqrt();
     for t_end in [1.0, 1.5, 2.0, 3.0] {
         let set = format!("T={t_end}");
         let v = json(&["examples/extremal/oscillator_action.toml", "--check-minimum", "--set", "k=4", "--set", &set]);

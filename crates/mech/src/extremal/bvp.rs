@@ -29,7 +29,7 @@ use super::quadrature::tanh_sinh;
 use num::{Config, Direction, Event, Method, ObservationKind, OdeSystem, Output, RhsError};
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::ops::ControlFlow;
-use sym::{ExprId, Pool, Tape};
+use sym::{Compiled, ExprId, Pool, Tape};
 
 /// Relative tolerance of the integrations: near the round-off limit, so that
 /// the extremal and its value are good to about 1e-11.
@@ -52,6 +52,8 @@ const MAX_STEPS: usize = 20_000;
 /// f and y'' with their derivatives, compiled, at (x, y, y') for given parameters.
 pub struct Numeric {
     tape: Tape,
+    /// The tape as native code, when cranelift supports the host.
+    jit: Option<Compiled>,
     inputs: Vec<f64>,
     out: [f64; 7],
 }
@@ -90,7 +92,8 @@ impl Numeric {
         let tape = Tape::compile(pool, &roots, &inputs)?;
         let mut values = vec![0.0; 3];
         values.extend(params.iter().map(|p| p.1));
-        Ok(Numeric { tape, inputs: values, out: [0.0; 7] })
+        let jit = Compiled::new(&tape).ok();
+        Ok(Numeric { tape, jit, inputs: values, out: [0.0; 7] })
     }
 
     /// Everything at (x, y, y').
@@ -98,7 +101,10 @@ impl Numeric {
         self.inputs[0] = x;
         self.inputs[1] = y;
         self.inputs[2] = p;
-        self.tape.eval(&self.inputs, &mut self.out);
+        match &self.jit {
+            Some(jit) => jit.eval(&self.inputs, &mut self.out),
+            None => self.tape.eval(&self.inputs, &mut self.out),
+        }
         let o = self.out;
         Point { f: o[0], acc: o[1], acc_x: o[2], acc_y: o[3], acc_p: o[4], legendre: o[5], first_integral: o[6] }
     }
@@ -190,6 +196,8 @@ struct Family<'a> {
     d: f64,
     kind: Start,
     shots: usize,
+    /// Integrate the value over the series start too (the final trace).
+    with_value: bool,
 }
 
 /// The end of one shot.
@@ -217,7 +225,8 @@ impl Family<'_> {
                 };
                 // ∫ f·cos φ ds over [0, s0] along the series; the integrand may be
                 // singular at s = 0 (the brachistochrone's 1/sqrt(y)).
-                let (v0, _) = tanh_sinh(density, 0.0, s0, 1e-13);
+                // Shots only need the miss; the value is integrated on the final trace.
+                let v0 = if self.with_value { tanh_sinh(density, 0.0, s0, 1e-13).0 } else { 0.0 };
                 let state = [x0 + s0 * cs, y0 + s0 * sn, phi0 + a * u0, v0, 0.0, 0.0, u0];
                 (u0, state, self.d / lambda, 1.0 / lambda - 1.0)
             }
@@ -319,6 +328,7 @@ impl Family<'_> {
 
     /// The full member `a` to `sigma_end`, sampled at `n` points, with its conjugate point.
     fn trace(&mut self, a: f64, sigma_end: f64, n: usize) -> Option<Candidate> {
+        self.with_value = true;
         let series_end = self.initial(a).0;
         let (sigma0, z0, scale, exponent) = self.handover(a)?;
         let config = self.config();
@@ -444,7 +454,7 @@ pub fn solve(num: &mut Numeric, start: [f64; 2], end: [f64; 2], n_points: usize)
     let mut shots = 0;
     let mut divergent = false;
     for kind in kinds {
-        let mut fam = Family { num: &mut *num, start, end, d, kind, shots: 0 };
+        let mut fam = Family { num: &mut *num, start, end, d, kind, shots: 0, with_value: false };
         let grid = scan_grid(kind);
         let misses: Vec<Option<Shot>> = grid.iter().map(|&a| fam.shoot(a)).collect();
         let mut roots: Vec<(f64, f64)> = Vec::new();
