@@ -113,17 +113,12 @@ fn text(r: &ExtremalReport) -> String {
         let _ = writeln!(
             s,
             "The {which} is a singular point (f or {y}'' is infinite there): the extremal leaves it at the angle {}° \
-             with φ − φ0 ∝ s^{} (local series), and the path is followed by arc length",
-            num(phi0.to_degrees()),
-            num(lambda)
+             with φ − φ0 ∝ s^{lambda:.4} (local series), and the path is followed by arc length",
+            num(phi0.to_degrees())
         );
     }
-    let _ = writeln!(
-        s,
-        "Extremals through both ends (shooting on the initial angle, {} trial paths): {}",
-        r.shots,
-        r.extremals.len()
-    );
+    let on = if r.departure.is_some() { "the coefficient of the series" } else { "the initial angle" };
+    let _ = writeln!(s, "Extremals through both ends (shooting on {on}, {} trial paths): {}", r.shots, r.extremals.len());
     for (k, e) in r.extremals.iter().enumerate() {
         let slope = e.start_slope.map_or("vertical".to_string(), |m| format!("{y}'({}) = {}", num(x0), num(m)));
         let mark = if k == 0 { "  ← lowest, reported" } else { "" };

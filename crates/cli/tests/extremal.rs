@@ -110,6 +110,8 @@ fn check_brachistochrone(file: &Path, x1: f64, y1: f64, g: f64) {
     assert_eq!(v["endpoints"], "singular_start");
     assert_eq!(v["minimum"], true);
     assert!(v["straight_line_value"].as_f64().unwrap() > time);
+    assert_eq!(path(&v).len(), 201);
+    close(v["departure"][0].as_f64().unwrap(), PI / 2.0, 1e-12);
     // Every point lies on the cycloid: θ from x (monotone), then y.
     for [x, y] in path(&v) {
         let theta = bisect(|t| a * (t - t.sin()) - x, 0.0, theta1 + 1e-6);
@@ -152,8 +154,13 @@ fn catenary_two_extremals_and_the_lower_one() {
     // The shallow one is a minimum; the deep one has a conjugate point inside.
     assert_eq!(v["minimum"], true);
     assert!(v["conjugate_point"].is_null());
+    // The conjugate point is where neighbouring catenaries through the start meet the
+    // deep one again: y(x; a) = a·cosh((x − b)/a) with b = x0 + a·acosh(y0/a), ∂y/∂a = 0.
     let c = ext[1]["conjugate_point"].as_f64().expect("the deep catenary has a conjugate point");
-    assert!(c > -h && c < h);
+    let y = |x: f64, a: f64| a * ((x + h - a * (r / a).acosh()) / a).cosh();
+    let dy_da = |x: f64| (y(x, deep * (1.0 + 1e-6)) - y(x, deep * (1.0 - 1e-6))) / (2e-6 * deep);
+    let want = bisect(dy_da, -h + 1e-3, h);
+    close(c, want, 1e-6);
 }
 
 #[test]
