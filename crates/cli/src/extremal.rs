@@ -118,7 +118,8 @@ fn text(r: &ExtremalReport) -> String {
         );
     }
     let on = if r.departure.is_some() { "the coefficient of the series" } else { "the initial angle" };
-    let _ = writeln!(s, "Extremals through both ends (shooting on {on}, {} trial paths): {}", r.shots, r.extremals.len());
+    let _ =
+        writeln!(s, "Extremals through both ends (shooting on {on}, {} trial paths): {}", r.shots, r.extremals.len());
     for (k, e) in r.extremals.iter().enumerate() {
         let slope = e.start_slope.map_or("vertical".to_string(), |m| format!("{y}'({}) = {}", num(x0), num(m)));
         let mark = if k == 0 { "  ← lowest, reported" } else { "" };

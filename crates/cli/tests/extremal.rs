@@ -136,6 +136,26 @@ fn brachistochrone_dips_below_a_low_end() {
 }
 
 #[test]
+fn brachistochrone_ending_on_the_singular_line_is_solved_from_the_end() {
+    // The mirror image of the default example: from (0, 0.8) down to the cusp at (1, 0).
+    let text = "independent = \"x\"\nunknown = \"y\"\nintegrand = \"sqrt((1 + y'^2)/(2*g*y))\"\n\
+                [parameters]\ng = 9.81\n[boundary]\nstart = [0, 0.8]\nend = [1, 0]\n";
+    let file = temp("mirror.toml", text);
+    let v = json(&[file.to_str().unwrap(), "--check-minimum", "--points", "51"]);
+    let (a, theta1) = cycloid(1.0, 0.8);
+    close(v["value"].as_f64().unwrap(), (a / 9.81).sqrt() * theta1, 1e-8);
+    assert_eq!(v["endpoints"], "singular_end");
+    assert_eq!(v["minimum"], true);
+    let p = path(&v);
+    assert_eq!(p.len(), 51);
+    assert_eq!(p[50], [1.0, 0.0]);
+    for [x, y] in p {
+        let theta = bisect(|t| a * (t - t.sin()) - (1.0 - x), 0.0, theta1 + 1e-6);
+        assert!((a * (1.0 - theta.cos()) - y).abs() < 1e-8, "({x}, {y}) is off the cycloid");
+    }
+}
+
+#[test]
 fn catenary_two_extremals_and_the_lower_one() {
     let v = json(&["examples/extremal/catenary.toml", "--check-minimum"]);
     // a·cosh(h/a) = R with R = 1, h = 0.5: the shallow and the deep catenary.
