@@ -521,3 +521,50 @@ fn scan_grid(kind: Start) -> Vec<f64> {
     grid.sort_by(f64::total_cmp);
     grid
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn numeric(pool: &mut Pool, f: &str, params: &[(&str, f64)]) -> Numeric {
+        let f = pool.parse(f).unwrap();
+        let e = Euler::new(pool, f, "x", "y").unwrap();
+        let params: Vec<(ExprId, f64)> = params.iter().map(|(n, v)| (pool.symbol(n), *v)).collect();
+        Numeric::new(pool, f, &e, &params).unwrap()
+    }
+
+    #[track_caller]
+    fn check_departures(f: &str, start: [f64; 2], expect: &[(f64, f64)]) {
+        let mut pool = Pool::default();
+        let mut num = numeric(&mut pool, f, &[("g", 9.81)]);
+        assert!(is_singular(&mut num, start, 1.0));
+        let got = departures(&mut num, start, 1.0);
+        assert_eq!(got.len(), expect.len(), "{got:?}");
+        for ((phi, lambda), (want_phi, want_lambda)) in got.iter().zip(expect) {
+            assert!((phi - want_phi).abs() < 1e-12, "{got:?}");
+            assert!((lambda - want_lambda).abs() < 1e-5, "{got:?}");
+        }
+    }
+
+    #[test]
+    fn singular_starts_leave_where_the_curvature_is_finite() {
+        // Brachistochrone: φ − π/2 ∝ sqrt(s) up and down from y = 0 (the upward one has y < 0,
+        // where f is not real; its shots fail).
+        check_departures("sqrt((1 + y'^2)/(2*g*y))", [0.0, 0.0], &[(-FRAC_PI_2, 0.5), (FRAC_PI_2, 0.5)]);
+        // A catenary cannot touch the axis: κ = cos φ/y repels every direction.
+        check_departures("y*sqrt(1 + y'^2)", [0.0, 0.0], &[]);
+    }
+
+    #[test]
+    fn straight_line_is_the_only_shortest_path() {
+        let mut pool = Pool::default();
+        let mut num = numeric(&mut pool, "sqrt(1 + y'^2)", &[]);
+        let s = solve(&mut num, [0.0, 1.0], [2.0, -1.0], 11).unwrap();
+        assert_eq!(s.candidates.len(), 1);
+        let c = &s.candidates[0];
+        assert!((c.value - 8f64.sqrt()).abs() < 1e-13);
+        assert!((c.initial_angle + PI / 4.0).abs() < 1e-13);
+        assert!(c.conjugate.is_none());
+        assert_eq!(c.path.len(), 11);
+    }
+}
