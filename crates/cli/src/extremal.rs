@@ -157,8 +157,14 @@ fn text(r: &ExtremalReport) -> String {
     let _ = writeln!(s, "  {verdict}");
     if let Some(sv) = &r.second_variation {
         let _ = writeln!(s, "\nSecond variation (notes, appendix A.2):");
-        let _ = writeln!(s, "  δ²J = ∫ (P η'^2 + Q η^2) d{x} with P = ∂²f/∂{y}'² = {}", r.legendre);
-        let _ = writeln!(s, "  and Q = ∂²f/∂{y}² − d/d{x} ∂²f/∂{y}∂{y}' = {}", r.jacobi_q);
+        let _ = writeln!(
+            s,
+            "  J[{y} + αη] = J[{y}] + α²/2·∫ (P η'^2 + Q η^2) d{x} + O(α³), the η η' term integrated by parts,"
+        );
+        let _ = writeln!(s, "  with P = ∂²f/∂{y}'² = {}", r.legendre);
+        let _ = writeln!(s, "  and  Q = ∂²f/∂{y}² − d/d{x} ∂²f/∂{y}∂{y}' = {}", r.jacobi_q);
+        let _ =
+            writeln!(s, "  (for f = m/2·{y}'^2 − U({y}) this is the notes' I₂ = ∫ (m η'^2 + F'({y}) η^2), F = −U')");
         let _ = writeln!(
             s,
             "  Legendre: P ranges over [{}, {}] along the path: {}",
@@ -188,7 +194,13 @@ fn text(r: &ExtremalReport) -> String {
         let _ = writeln!(
             s,
             "  Verdict: {}",
-            if sv.minimum { "a (weak) minimum — P > 0 and no conjugate point" } else { "not a minimum" }
+            if sv.minimum {
+                "a (weak) minimum — P > 0 and no conjugate point"
+            } else if sv.legendre {
+                "not a minimum — past the conjugate point some variations lower J while others raise it (a saddle)"
+            } else {
+                "not a minimum"
+            }
         );
     }
     s
