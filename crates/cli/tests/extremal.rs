@@ -133,6 +133,12 @@ fn brachistochrone_dips_below_a_low_end() {
     let (_, theta1) = cycloid(2.0, 0.4);
     assert!(theta1 > PI);
     check_brachistochrone(&file, 2.0, 0.4, 1.62);
+    // Close to the next cusp (θ1 ≈ 5.47), where neighbouring members end in the cusp
+    // before reaching x1, and a steep one (θ1 ≈ 0.15) that stays nearly vertical.
+    for (name, x1, y1) in [("cusp.toml", 1.0, 0.05), ("steep.toml", 0.1, 2.0)] {
+        let file = temp(name, &text.replace("end = [2.0, 0.4]", &format!("end = [{x1}, {y1}]")));
+        check_brachistochrone(&file, x1, y1, 1.62);
+    }
 }
 
 #[test]

@@ -16,7 +16,7 @@
 //! where the curvature stays finite, with the local (Frobenius) series
 //! `φ = φ0 + c·(s/D)^λ`, λ = dg/dφ at φ0 for `g(φ) = s·κ` on the ray; the curve
 //! is then followed in `u = (s/D)^λ`, in which it is smooth, and it starts
-//! at s0 = 1e-8·D with the series, the value of [0, s0] integrated along it
+//! where the series has turned the tangent by 1e-4, the value of [0, s0] integrated along it
 //! by tanh-sinh quadrature (the integrand may be singular at s = 0). Either way each member is integrated with
 //! DOP853 until it reaches x1 (a curve that turns back, cos φ < 0, is no graph
 //! y(x) and is dropped); y(x1) − y1 is the miss. A scan of the parameter
@@ -34,8 +34,12 @@ use sym::{Compiled, ExprId, Pool, Tape};
 /// Relative tolerance of the integrations: near the round-off limit, so that
 /// the extremal and its value are good to about 1e-11.
 const RTOL: f64 = 1e-12;
-/// Where the series start of a singular end point hands over, in units of D.
-const SINGULAR_S0: f64 = 1e-8;
+/// How far the series turns the tangent before the integration takes over (radians).
+const PSI_START: f64 = 1e-4;
+/// Bounds on where it hands over, u0 = (s0/D)^λ.
+const U0_MIN: f64 = 1e-6;
+/// See [`U0_MIN`].
+const U0_MAX: f64 = 1e-2;
 /// Longest curve followed, in units of the chord length D.
 const MAX_LENGTH: f64 = 50.0;
 /// Largest accepted miss of a solved extremal, in units of D.
@@ -46,8 +50,10 @@ const VERTICAL_COS: f64 = 0.01;
 const VERTICAL_TURN: f64 = 0.02;
 /// Runge–Kutta steps up to there (geometric: each about 2.5% of σ for σ0 = 1e-6).
 const VERTICAL_STEPS: usize = 400;
+/// Bisections toward the edge of the members that reach x1.
+const EDGE_BISECTIONS: usize = 40;
 /// Most steps of one integration (a smooth extremal needs a few hundred).
-const MAX_STEPS: usize = 20_000;
+const MAX_STEPS: usize = 5_000;
 
 /// f and y'' with their derivatives, compiled, at (x, y, y') for given parameters.
 pub struct Numeric {
@@ -213,21 +219,32 @@ impl Family<'_> {
         match self.kind {
             Start::Regular => (0.0, [x0, y0, a, 0.0, 0.0, 0.0, 1.0], 1.0, 0.0),
             Start::Singular { phi0, lambda } => {
-                let s0 = SINGULAR_S0 * self.d;
-                let u0 = SINGULAR_S0.powf(lambda);
-                let (sn, cs) = phi0.sin_cos();
+                // Start where the series has turned the tangent by PSI_START: closer in,
+                // y'' would be evaluated at slopes where it has lost its digits.
+                let u0 = if a == 0.0 { U0_MAX } else { (PSI_START / a.abs()).clamp(U0_MIN, U0_MAX) };
                 let d = self.d;
+                let s0 = d * u0.powf(1.0 / lambda);
+                let (sn, cs) = phi0.sin_cos();
+                // The series to first order in φ − φ0 = a·(s/D)^λ: the position bends off the
+                // ray by a·s·(s/D)^λ/(1 + λ) along the normal (−sin φ0, cos φ0).
+                let at = move |s: f64| {
+                    let bend = a * s * (s / d).powf(lambda) / (1.0 + lambda);
+                    [x0 + s * cs - bend * sn, y0 + s * sn + bend * cs, phi0 + a * (s / d).powf(lambda)]
+                };
                 let num = &mut *self.num;
                 let density = |s: f64| {
-                    let phi = phi0 + a * (s / d).powf(lambda);
+                    let [x, y, phi] = at(s);
                     let (sp, cp) = phi.sin_cos();
-                    num.at(x0 + s * cs, y0 + s * sn, sp / cp).f * cp
+                    num.at(x, y, sp / cp).f * cp
                 };
                 // ∫ f·cos φ ds over [0, s0] along the series; the integrand may be
                 // singular at s = 0 (the brachistochrone's 1/sqrt(y)).
                 // Shots only need the miss; the value is integrated on the final trace.
                 let v0 = if self.with_value { tanh_sinh(density, 0.0, s0, 1e-13).0 } else { 0.0 };
-                let state = [x0 + s0 * cs, y0 + s0 * sn, phi0 + a * u0, v0, 0.0, 0.0, u0];
+                let [x, y, phi] = at(s0);
+                // The variation with a: δφ = u0 and the bend's δ-position.
+                let bend_a = s0 * u0 / (1.0 + lambda);
+                let state = [x, y, phi, v0, -bend_a * sn, bend_a * cs, u0];
                 (u0, state, self.d / lambda, 1.0 / lambda - 1.0)
             }
         }
@@ -297,7 +314,19 @@ impl Family<'_> {
     }
 
     fn config(&self) -> Config {
-        Config { rtol: RTOL, atol: RTOL * 1e-2 * self.d.max(1e-300), max_steps: MAX_STEPS, ..Config::default() }
+        // Steps of at most 1/32 of the curve's natural scale keep the dense output,
+        // which locates x = x1, as accurate as the steps themselves.
+        let scale = match self.kind {
+            Start::Regular => self.d,
+            Start::Singular { .. } => 1.0,
+        };
+        Config {
+            rtol: RTOL,
+            atol: RTOL * 1e-2 * self.d.max(1e-300),
+            max_steps: MAX_STEPS,
+            h_max: Some(scale / 32.0),
+            ..Config::default()
+        }
     }
 
     /// Integrates member `a` to the perpendicular through the end; None if it never gets there as a graph.
@@ -314,13 +343,13 @@ impl Family<'_> {
             Event::new(|_, z: &[f64]| z[2].cos()).with_direction(Direction::Falling).with_terminal(true),
         ];
         let mut hit: Option<(f64, [f64; 2])> = None;
-        num::integrate(&mut solver, sigma_max, Output::EveryStep, &mut events, |o| {
+        let r = num::integrate(&mut solver, sigma_max, Output::EveryStep, &mut events, |o| {
             if o.kind == (ObservationKind::Event { index: 0 }) {
                 hit = Some((o.t, [o.y[0], o.y[1]]));
             }
             ControlFlow::Continue(())
-        })
-        .ok()?;
+        });
+        r.ok()?;
         let (sigma_end, [_, y]) = hit?;
         let miss = y - y1;
         Some(Shot { miss, sigma_end })
@@ -459,18 +488,19 @@ pub fn solve(num: &mut Numeric, start: [f64; 2], end: [f64; 2], n_points: usize)
         let misses: Vec<Option<Shot>> = grid.iter().map(|&a| fam.shoot(a)).collect();
         let mut roots: Vec<(f64, f64)> = Vec::new();
         for k in 0..grid.len() - 1 {
-            let (Some(sa), Some(sb)) = (&misses[k], &misses[k + 1]) else { continue };
-            if sa.miss.signum() == sb.miss.signum() && sa.miss != 0.0 {
-                continue;
-            }
-            let root = num::brent(
-                |a| fam.shoot(a).map(|s| s.miss).ok_or(()),
-                grid[k],
-                grid[k + 1],
-                sa.miss,
-                sb.miss,
-                1e-15 * grid[k].abs().max(1.0),
-            );
+            let bracket = match (&misses[k], &misses[k + 1]) {
+                (Some(sa), Some(sb)) if sa.miss.signum() != sb.miss.signum() || sa.miss == 0.0 => {
+                    Some((grid[k], sa.miss, grid[k + 1], sb.miss))
+                }
+                // The family stops reaching x1 between these members (a cusp, a turn):
+                // the solution may sit right at that edge, so close in on it.
+                (Some(sa), None) => edge(&mut fam, grid[k], sa.miss, grid[k + 1]),
+                (None, Some(sb)) => edge(&mut fam, grid[k + 1], sb.miss, grid[k]),
+                _ => None,
+            };
+            let Some((lo, m_lo, hi, m_hi)) = bracket else { continue };
+            let root =
+                num::brent(|a| fam.shoot(a).map(|s| s.miss).ok_or(()), lo, hi, m_lo, m_hi, 1e-15 * lo.abs().max(1.0));
             let Ok(root) = root else { continue };
             let Some(shot) = fam.shoot(root) else { continue };
             if shot.miss.abs() <= MISS_TOL * d && !roots.iter().any(|r| (r.0 - root).abs() < 1e-9) {
@@ -493,6 +523,20 @@ pub fn solve(num: &mut Numeric, start: [f64; 2], end: [f64; 2], n_points: usize)
     }
     candidates.sort_by(|a, b| a.value.total_cmp(&b.value));
     Ok(Solution { candidates, shots })
+}
+
+/// Bisects between member `good` (which reaches x1 with miss `m_good`) and `bad`
+/// (which does not) for a member whose miss has the other sign: a bracket.
+fn edge(fam: &mut Family<'_>, mut good: f64, mut m_good: f64, mut bad: f64) -> Option<(f64, f64, f64, f64)> {
+    for _ in 0..EDGE_BISECTIONS {
+        let mid = 0.5 * (good + bad);
+        match fam.shoot(mid) {
+            Some(s) if s.miss.signum() != m_good.signum() => return Some((good, m_good, mid, s.miss)),
+            Some(s) => (good, m_good) = (mid, s.miss),
+            None => bad = mid,
+        }
+    }
+    None
 }
 
 /// The parameters scanned for sign changes of the miss.
