@@ -6,6 +6,7 @@
 //! message naming file, line and column; 1 a run that failed midway.
 
 mod diagnostics;
+mod extremal;
 mod format;
 mod inertia;
 mod modes;
@@ -105,6 +106,8 @@ enum Command {
     Inertia(inertia::Args),
     /// A symmetric top from the initial state: precession, nutation bounds, steady precession, sleeping top.
     Top(top::Args),
+    /// The extremal of a functional ∫ f(y, y', x) dx between fixed ends: Euler equation, path, value, second variation.
+    Extremal(extremal::Args),
 }
 
 /// Summary formats of `simulate`.
@@ -148,6 +151,7 @@ fn main() -> ExitCode {
         Command::Orbit(args) => orbit::run(&args),
         Command::Inertia(args) => inertia::run(&args),
         Command::Top(args) => top::run(&args),
+        Command::Extremal(args) => extremal::run(&args),
         Command::Simulate { list_methods: true, .. } => write_stdout(&simulate::list_methods()),
         Command::Simulate {
             model,

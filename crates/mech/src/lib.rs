@@ -25,6 +25,7 @@ mod derive;
 mod dynamics;
 mod error;
 pub mod euler;
+mod extremal;
 pub mod inertia;
 mod model;
 mod modes;
@@ -42,6 +43,10 @@ pub use constraint::{Constraint, ConstraintKind, ConstraintSpec, Constraints};
 pub use derive::{Conserved, Derivation, Verdicts};
 pub use dynamics::{invariants_of, Dynamics, Form, Invariant, System};
 pub use error::ModelError;
+pub use extremal::{
+    extremal, tanh_sinh, Candidate, Euler, EulerError, ExtremalConfig, ExtremalError, ExtremalReport, ExtremalSummary,
+    Problem, SecondVariation, Start, EXTREMAL_FORMAT,
+};
 pub use model::{Coordinate, InitialValue, Located, Model, Parameter, Particle, MAX_FILE_BYTES};
 pub use modes::{normal_modes, Mode, ModeKind, Modes, ModesConfig, ModesError, ModesReport, SymbolicModes};
 pub use orbit::{Kepler, Orbit, OrbitError, OrbitKind, OrbitReport};
