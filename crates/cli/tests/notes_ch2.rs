@@ -1065,9 +1065,10 @@ fn bad_singular_mass_matrix() {
 }
 
 #[test]
-fn bad_bodies_not_supported() {
-    let run = derive_bad("bodies_unsupported.toml");
-    assert_located(&run, "bodies_unsupported.toml", None, None);
+fn bad_body_file_missing() {
+    // Line 13 is `inertia = "top_body.toml"`, a body file that is not there.
+    let run = derive_bad("body_file_missing.toml");
+    assert_located(&run, "body_file_missing.toml", Some(13), None);
 }
 
 #[test]

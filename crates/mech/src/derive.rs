@@ -230,14 +230,14 @@ impl Derivation {
         let mut mass_matrix = vec![vec![pool.zero(); n]; n];
         let mut forcing = Vec::with_capacity(n);
         let mut equations = Vec::with_capacity(n);
-        let mut dl_dq = Vec::with_capacity(n);
+        let mut dl_dq: Vec<ExprId> = Vec::with_capacity(n);
         let momenta: Vec<ExprId>;
         if let Some(form) = &form {
             momenta = form.momenta(pool, &qd).into_iter().map(|p| polish(pool, p, &is_var)).collect();
             mass_matrix.clone_from(&form.m);
             let rows = form.forcing(pool, &vars_q);
+            dl_dq = form.coordinate_gradient(pool, &q, &qd);
             for (i, row) in rows.into_iter().enumerate() {
-                dl_dq.push(pool.diff(lagrangian, q[i]));
                 // Dissipation and generalized forces: −∂R/∂q_i' + Q_i.
                 let mut extra = vec![forces[i]];
                 if let Some(r) = dissipation {
@@ -594,23 +594,19 @@ fn legendre_structured(pool: &mut Pool, s: &System, inv: &[Vec<ExprId>], is_var:
     // ∂M⁻¹/∂q = −M⁻¹ (∂M/∂q) M⁻¹: only the few nonzero ∂M_ij/∂q_k are formed.
     let vel_subst: Subst = (0..n).map(|i| (s.qd[i], v[i])).collect();
     let mut eqs = Vec::with_capacity(n);
+    let (_, depends) = s.form.supports(pool, s.q);
+    let grad_l0 = quadratic::sparse_gradient(pool, s.form.l0, s.q);
     for k in 0..n {
         let mut terms = Vec::new();
-        for i in 0..n {
-            for j in i..n {
-                let mij = s.form.m[i][j];
-                if pool.free_of(mij, s.q[k]) {
-                    continue;
-                }
-                let d = pool.diff(mij, s.q[k]);
-                let d = if i == j { pool.mul2(half, d) } else { d };
-                let d = pool.simplify_in(d, is_var);
-                if !pool.is_zero(d) {
-                    terms.push(pool.mul(&[d, v[i], v[j]]));
-                }
+        for &(i, j) in &depends[k] {
+            let d = pool.diff(s.form.m[i][j], s.q[k]);
+            let d = if i == j { pool.mul2(half, d) } else { d };
+            let d = pool.simplify_in(d, is_var);
+            if !pool.is_zero(d) {
+                terms.push(pool.mul(&[d, v[i], v[j]]));
             }
         }
-        let dl0 = pool.diff(s.form.l0, s.q[k]);
+        let dl0 = grad_l0[k];
         let extra = nonconservative(pool, s, k, &vel_subst);
         let rest = pool.add2(dl0, extra);
         terms.push(pool.simplify_in(rest, is_var));

@@ -57,13 +57,14 @@ impl Quadratic {
         let n = v.q.len();
         let zero_vel: Subst = v.qd.iter().map(|&x| (x, pool.zero())).collect();
         let mut form = Quadratic::zero(pool, n);
-        let first: Vec<ExprId> = v.qd.iter().map(|&x| pool.diff(l, x)).collect();
+        let first = sparse_gradient(pool, l, v.qd);
         for i in 0..n {
             if pool.is_zero(first[i]) {
                 continue;
             }
+            let second = sparse_gradient(pool, first[i], v.qd);
             for j in i..n {
-                let d = pool.diff(first[i], v.qd[j]);
+                let d = second[j];
                 if pool.is_zero(d) {
                     continue;
                 }
@@ -165,17 +166,15 @@ impl Quadratic {
         pool.add(&terms)
     }
 
-    /// The velocity-dependent and conservative part of the forcing, row by
-    /// row: f_i with M q'' = f for this L alone (no dissipation or forces).
-    /// Coefficients are simplified one by one; rows are sums of distinct
-    /// velocity monomials and need no simplification as a whole.
-    pub fn forcing(&self, pool: &mut Pool, v: &Vars) -> Vec<ExprId> {
-        let n = v.q.len();
-        // Which coordinates each entry of M depends on, and the inverse index:
-        // for each coordinate, the entries (j ≤ k) that depend on it.
+    /// Which coordinates each entry of M depends on (`support[j][k]`), and the
+    /// inverse index: for each coordinate, the entries (j ≤ k) that depend on it.
+    /// One walk per nonzero entry, so a diagonal M of a thousand coordinates
+    /// costs a thousand walks, not a billion tests.
+    pub fn supports(&self, pool: &Pool, q: &[ExprId]) -> (Vec<Vec<Vec<usize>>>, Vec<Vec<(usize, usize)>>) {
+        let n = q.len();
         let mut support: Vec<Vec<Vec<usize>>> = vec![vec![Vec::new(); n]; n];
         let mut depends: Vec<Vec<(usize, usize)>> = vec![Vec::new(); n];
-        let index = coordinate_index(v.q);
+        let index = coordinate_index(q);
         for j in 0..n {
             for k in j..n {
                 let e = self.m[j][k];
@@ -190,7 +189,58 @@ impl Quadratic {
                 support[j][k] = s;
             }
         }
-        let explicit_m = (0..n).any(|j| (0..n).any(|k| !pool.free_of(self.m[j][k], v.t)));
+        (support, depends)
+    }
+
+    /// ∂L/∂q_i for every coordinate, assembled from the parts that depend on
+    /// q_i: ½ Σ ∂M_jk/∂q_i q_j' q_k' + Σ ∂b_j/∂q_i q_j' + ∂L₀/∂q_i.
+    pub fn coordinate_gradient(&self, pool: &mut Pool, q: &[ExprId], qd: &[ExprId]) -> Vec<ExprId> {
+        let n = q.len();
+        let (_, depends) = self.supports(pool, q);
+        let grad_l0 = sparse_gradient(pool, self.l0, q);
+        let index = coordinate_index(q);
+        let mut b_terms: Vec<Vec<ExprId>> = vec![Vec::new(); n];
+        for (j, &b) in self.b.iter().enumerate() {
+            if pool.as_number(b).is_some() {
+                continue;
+            }
+            for c in support_of(pool, b, &index) {
+                let d = pool.diff(b, q[c]);
+                b_terms[c].push(pool.mul2(d, qd[j]));
+            }
+        }
+        let half = pool.rational(1, 2);
+        (0..n)
+            .map(|i| {
+                let mut terms = std::mem::take(&mut b_terms[i]);
+                for &(j, k) in &depends[i] {
+                    let d = pool.diff(self.m[j][k], q[i]);
+                    let term = if j == k {
+                        let sq = pool.powi(qd[j], 2);
+                        pool.mul(&[half, d, sq])
+                    } else {
+                        pool.mul(&[d, qd[j], qd[k]])
+                    };
+                    terms.push(term);
+                }
+                terms.push(grad_l0[i]);
+                pool.add(&terms)
+            })
+            .collect()
+    }
+
+    /// The velocity-dependent and conservative part of the forcing, row by
+    /// row: f_i with M q'' = f for this L alone (no dissipation or forces).
+    /// Coefficients are simplified one by one; rows are sums of distinct
+    /// velocity monomials and need no simplification as a whole.
+    pub fn forcing(&self, pool: &mut Pool, v: &Vars) -> Vec<ExprId> {
+        let n = v.q.len();
+        // Which coordinates each entry of M depends on, and the inverse index:
+        // for each coordinate, the entries (j ≤ k) that depend on it.
+        let (support, depends) = self.supports(pool, v.q);
+        let grad_l0 = sparse_gradient(pool, self.l0, v.q);
+        let explicit_m =
+            (0..n).any(|j| (j..n).any(|k| pool.as_number(self.m[j][k]).is_none() && !pool.free_of(self.m[j][k], v.t)));
         let has_b = self.b.iter().any(|&b| !pool.is_zero(b));
         let neg_half = pool.rational(-1, 2);
 
@@ -248,7 +298,7 @@ impl Quadratic {
             }
             // Velocity-free terms: −∂b_i/∂t + ∂L₀/∂q_i.
             let db = pool.diff(self.b[i], v.t);
-            let dl = pool.diff(self.l0, v.q[i]);
+            let dl = grad_l0[i];
             let rest = pool.sub(dl, db);
             let rest = pool.simplify_in(rest, v.is_var);
             terms.push(rest);
@@ -272,6 +322,25 @@ fn support_of(pool: &Pool, e: ExprId, index: &FxHashMap<ExprId, usize>) -> Vec<u
 
 /// Dot products of Jacobian columns, each with the masses that share it.
 type Groups = Vec<(ExprId, Vec<ExprId>)>;
+
+/// ∂e/∂x_i for every symbol x_i of `q` (coordinates or velocities). A long sum (the potential of a thousand
+/// springs) is split by the coordinates each term contains, so each term is
+/// differentiated only by its own coordinates: O(size), not O(n·size).
+pub fn sparse_gradient(pool: &mut Pool, e: ExprId, q: &[ExprId]) -> Vec<ExprId> {
+    let n = q.len();
+    let terms: Vec<ExprId> = match pool.node(e) {
+        sym::Node::Add(terms) => terms.to_vec(),
+        _ => vec![e],
+    };
+    let index = coordinate_index(q);
+    let mut parts: Vec<Vec<ExprId>> = vec![Vec::new(); n];
+    for term in terms.iter() {
+        for c in support_of(pool, *term, &index) {
+            parts[c].push(pool.diff(*term, q[c]));
+        }
+    }
+    parts.iter().map(|p| pool.add(p)).collect()
+}
 
 /// T of point masses by the notes' recipe: with x_k(q, t),
 /// T = ½ Σ_k m_k |Σ_i ∂x_k/∂q_i q_i' + ∂x_k/∂t|², as a quadratic form:
