@@ -170,10 +170,10 @@ impl Quadratic {
     /// inverse index: for each coordinate, the entries (j ≤ k) that depend on it.
     /// One walk per nonzero entry, so a diagonal M of a thousand coordinates
     /// costs a thousand walks, not a billion tests.
-    pub fn supports(&self, pool: &Pool, q: &[ExprId]) -> (Vec<Vec<Vec<usize>>>, Vec<Vec<(usize, usize)>>) {
+    pub fn supports(&self, pool: &Pool, q: &[ExprId]) -> (Vec<Vec<Vec<usize>>>, Dependents) {
         let n = q.len();
         let mut support: Vec<Vec<Vec<usize>>> = vec![vec![Vec::new(); n]; n];
-        let mut depends: Vec<Vec<(usize, usize)>> = vec![Vec::new(); n];
+        let mut depends: Dependents = vec![Vec::new(); n];
         let index = coordinate_index(q);
         for j in 0..n {
             for k in j..n {
@@ -319,6 +319,9 @@ fn support_of(pool: &Pool, e: ExprId, index: &FxHashMap<ExprId, usize>) -> Vec<u
     s.sort_unstable();
     s
 }
+
+/// For each coordinate, the entries (j ≤ k) of M that depend on it.
+pub type Dependents = Vec<Vec<(usize, usize)>>;
 
 /// Dot products of Jacobian columns, each with the masses that share it.
 type Groups = Vec<(ExprId, Vec<ExprId>)>;
