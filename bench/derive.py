@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import platform
 import shutil
@@ -359,6 +360,37 @@ def table(ours: list[dict], sympy: dict, symengine: dict) -> tuple[str, list[dic
     return "\n".join(rows), ratios
 
 
+def fit_exponent(points: list[tuple[int, float]]) -> float | None:
+    """Least-squares slope of log(value) against log(N)."""
+    pts = [(n, v) for n, v in points if v and v > 0]
+    if len(pts) < 2:
+        return None
+    xs = [math.log(n) for n, _ in pts]
+    ys = [math.log(v) for _, v in pts]
+    mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
+    sxx = sum((x - mx) ** 2 for x in xs)
+    return sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sxx if sxx > 0 else None
+
+
+def scaling_fits(ours: list[dict], sympy: dict, symengine: dict, n_min: int = 4) -> list[dict]:
+    """Fitted growth exponents on the N-link pendulum for N >= n_min (small N is start-up)."""
+    series = {
+        "lagrange in-process, all": [(r["n"], r.get("derive_s")) for r in ours if r["system"] == "pendulum"],
+        "lagrange in-process, L, M, f": [(r["n"], r.get("equations_s")) for r in ours if r["system"] == "pendulum"],
+        "lagrange output size (bytes)": [(r["n"], r.get("output_bytes")) for r in ours if r["system"] == "pendulum"],
+        "SymPy": [(n, t) for (system, n), t in sympy.items() if system == "pendulum"],
+        "SymEngine": [(n, t) for (system, n), t in symengine.items() if system == "pendulum"],
+    }
+    fits = []
+    for what, points in series.items():
+        pts = sorted((n, v) for n, v in points if n >= n_min and v)
+        exponent = fit_exponent(pts)
+        if exponent is not None:
+            fits.append({"bench": BENCH, "record": "scaling", "what": what, "exponent": exponent,
+                         "sizes": [n for n, _ in pts]})
+    return fits
+
+
 # ------------------------------------------------------------------ main
 
 
@@ -501,11 +533,16 @@ def main(argv=None) -> int:
     # 4. report
     text, ratios = table(ours, sympy_times, symengine_times)
     records += ratios
+    scaling = scaling_fits(ours, sympy_times, symengine_times)
+    records += scaling
     out_path.parent.mkdir(parents=True, exist_ok=True)
     with out_path.open("w") as handle:
         for record in records:
             handle.write(json.dumps(record, default=str) + "\n")
     print(text)
+    print()
+    for fit in scaling:
+        print(f"- {fit['what']}: time ~ N^{fit['exponent']:.2f} over N = {fit['sizes']}")
     print()
     print(
         "lagrange process: whole `derive --format json` process, CPU seconds (median); lagrange in-process: "
