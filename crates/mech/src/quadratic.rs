@@ -58,6 +58,7 @@ impl Quadratic {
         let zero_vel: Subst = v.qd.iter().map(|&x| (x, pool.zero())).collect();
         let mut form = Quadratic::zero(pool, n);
         let first = sparse_gradient(pool, l, v.qd);
+        let velocity_index = coordinate_index(v.qd);
         for i in 0..n {
             if pool.is_zero(first[i]) {
                 continue;
@@ -69,7 +70,7 @@ impl Quadratic {
                     continue;
                 }
                 let d = pool.simplify_in(d, v.is_var);
-                if v.qd.iter().any(|&x| !pool.free_of(d, x)) {
+                if !support_of(pool, d, &velocity_index).is_empty() {
                     return None;
                 }
                 form.m[i][j] = d;
