@@ -12,12 +12,18 @@
 //!
 //! Every expression a run needs is compiled into one [`Tape`] per use, with the
 //! parameters as inputs. Entry point: [`Dynamics::new`], then [`Dynamics::system`].
+//!
+//! Structure is kept: the kernels output only the entries of M that are not
+//! identically zero, and a diagonal M (a chain of masses) is solved by division,
+//! so a right-hand side costs O(N) there instead of the O(N²) of writing a dense
+//! M and the O(N³) of factoring it. The Hamilton kernel is compiled on first use
+//! (a Lagrange-form run never pays for it).
 
 use crate::derive::Derivation;
 use crate::error::ModelError;
 use crate::probe;
 use num::{LinearSolver, OdeSystem, RhsError, SeparableSystem};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 use sym::{Compiled, ExprId, Tape};
 
 /// The state variables a system integrates.
@@ -75,16 +81,65 @@ impl Kernel {
     }
 }
 
+/// A kernel compiled when it is first evaluated; clones share the native code
+/// (compiled once for all of them), each keeps its own tape for the fallback.
+#[derive(Debug, Clone)]
+pub(crate) struct LazyKernel {
+    tape: Tape,
+    native: Arc<OnceLock<Option<Arc<Compiled>>>>,
+}
+
+impl LazyKernel {
+    fn new(tape: Tape) -> LazyKernel {
+        LazyKernel { tape, native: Arc::new(OnceLock::new()) }
+    }
+
+    fn eval(&mut self, inputs: &[f64], outputs: &mut [f64]) {
+        match self.native.get_or_init(|| Compiled::new(&self.tape).ok().map(Arc::new)) {
+            Some(native) => native.eval(inputs, outputs),
+            None => self.tape.eval(inputs, outputs),
+        }
+    }
+}
+
+/// Where the entries of M that are not identically zero sit.
+#[derive(Debug, Clone)]
+struct MassPattern {
+    n: usize,
+    /// `(row, column)` of each stored entry, row-major order.
+    entries: Arc<Vec<(usize, usize)>>,
+    /// Every stored entry is on the diagonal.
+    diagonal: bool,
+}
+
+impl MassPattern {
+    fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// Writes the stored entries `values` into the dense row-major `dense`
+    /// (whose other entries stay zero).
+    fn scatter(&self, values: &[f64], dense: &mut [f64]) {
+        for (&(i, j), &v) in self.entries.iter().zip(values) {
+            dense[i * self.n + j] = v;
+        }
+    }
+}
+
 /// The compiled dynamics of a derivation. See the module documentation.
 #[derive(Debug, Clone)]
 pub struct Dynamics {
     n: usize,
     /// Input vector template: `[q, q', t, parameters]`.
     inputs: Vec<f64>,
-    /// Outputs `M` (row-major, n²) and `f` (n) from `[q, q', t, params]`.
+    /// The stored entries of M.
+    pattern: MassPattern,
+    /// Outputs M's stored entries (`pattern`) and `f` (n) from `[q, q', t, params]`.
     mass_forcing: Kernel,
-    /// Outputs `M` (n²), `b` (n) and `∂L/∂q − ∂R/∂q' + Q` (n) from `[q, q', t, params]`.
-    hamilton: Option<Kernel>,
+    /// Outputs M's stored entries, `b` (n) and `∂L/∂q − ∂R/∂q' + Q` (n) from `[q, q', t, params]`.
+    hamilton: Option<LazyKernel>,
+    /// Scratch for [`Dynamics::eval_mass_forcing`].
+    scratch: Vec<f64>,
     /// Outputs the invariants from `[q, q', t, params]`.
     invariants_tape: Kernel,
     invariants: Vec<Invariant>,
@@ -112,14 +167,26 @@ impl Dynamics {
             inputs[2 * n + 1 + k] = p.value;
         }
 
-        let mut outs: Vec<ExprId> = d.mass_matrix.iter().flatten().copied().collect();
+        let mut entries = Vec::new();
+        let mut stored: Vec<ExprId> = Vec::new();
+        for (i, row) in d.mass_matrix.iter().enumerate() {
+            for (j, &m) in row.iter().enumerate() {
+                if !pool.is_zero(m) {
+                    entries.push((i, j));
+                    stored.push(m);
+                }
+            }
+        }
+        let diagonal = entries.iter().all(|&(i, j)| i == j);
+        let pattern = MassPattern { n, entries: Arc::new(entries), diagonal };
+        let mut outs: Vec<ExprId> = stored.clone();
         outs.extend(&d.forcing);
         let mass_forcing = Kernel::new(Tape::compile(pool, &outs, &input_syms).expect("derivation symbols are inputs"));
 
-        let quadratic = d.mass_matrix.iter().flatten().all(|&m| d.qd.iter().all(|&v| pool.free_of(m, v)));
+        let quadratic = stored.iter().all(|&m| d.qd.iter().all(|&v| pool.free_of(m, v)));
         let hamilton = quadratic.then(|| {
             let zero_vel: probe::Subst = d.qd.iter().map(|&v| (v, pool.zero())).collect();
-            let mut outs: Vec<ExprId> = d.mass_matrix.iter().flatten().copied().collect();
+            let mut outs: Vec<ExprId> = stored.clone();
             for &p in &d.momenta {
                 outs.push(pool.substitute(p, &zero_vel));
             }
@@ -131,12 +198,10 @@ impl Dynamics {
                 }
                 outs.push(pool.add(&terms));
             }
-            Kernel::new(Tape::compile(pool, &outs, &input_syms).expect("derivation symbols are inputs"))
+            LazyKernel::new(Tape::compile(pool, &outs, &input_syms).expect("derivation symbols are inputs"))
         });
-        let constant_mass = d
-            .mass_matrix
+        let constant_mass = stored
             .iter()
-            .flatten()
             .all(|&m| d.q.iter().chain(&d.qd).all(|&v| pool.free_of(m, v)) && pool.free_of(m, d.t));
         let velocity_free_forcing = d.forcing.iter().all(|&f| d.qd.iter().all(|&v| pool.free_of(f, v)));
         let no_linear_momentum = d.momenta.iter().all(|&p| {
@@ -153,6 +218,8 @@ impl Dynamics {
         Dynamics {
             n,
             inputs,
+            scratch: vec![0.0; pattern.len() + n],
+            pattern,
             mass_forcing,
             hamilton,
             invariants_tape,
@@ -191,12 +258,13 @@ impl Dynamics {
     /// A first-order system in the given form.
     pub fn system(&self, form: Form) -> System {
         let n = self.n;
+        let e = self.pattern.len();
         System {
             dynamics: self.clone(),
             form,
             inputs: self.inputs.clone(),
-            out: vec![0.0; n * n + 2 * n],
-            mass: vec![0.0; n * n],
+            out: vec![0.0; e + 2 * n],
+            mass: vec![0.0; if self.pattern.diagonal { n } else { n * n }],
             lu: LinearSolver::new(n),
             work: vec![0.0; n],
             factored_once: false,
@@ -206,7 +274,11 @@ impl Dynamics {
     /// Evaluates M (row-major, n²) and f (n) at `inputs` = `[q, q', t, parameters]`
     /// (the constrained runs of `constrained.rs` reuse this kernel).
     pub(crate) fn eval_mass_forcing(&mut self, inputs: &[f64], out: &mut [f64]) {
-        self.mass_forcing.eval(inputs, out);
+        let (n, e) = (self.n, self.pattern.len());
+        self.mass_forcing.eval(inputs, &mut self.scratch);
+        out[..n * n].fill(0.0);
+        self.pattern.scatter(&self.scratch[..e], &mut out[..n * n]);
+        out[n * n..n * n + n].copy_from_slice(&self.scratch[e..e + n]);
     }
 
     /// The input template `[q, q', t, parameters]` with the parameters' values.
@@ -279,14 +351,13 @@ impl System {
                 // p = M q' + b.
                 self.set_inputs(t, q, qd);
                 let tape = self.dynamics.hamilton.as_mut().expect("Hamilton form needs L quadratic in q'");
-                tape.eval(&self.inputs, &mut self.out[..n * n + 2 * n]);
-                for i in 0..n {
-                    let mut p = self.out[n * n + i];
-                    for j in 0..n {
-                        p += self.out[i * n + j] * qd[j];
-                    }
-                    y.push(p);
+                tape.eval(&self.inputs, &mut self.out);
+                let e = self.dynamics.pattern.len();
+                let mut p = self.out[e..e + n].to_vec();
+                for (&(i, j), m) in self.dynamics.pattern.entries.iter().zip(&self.out[..e]) {
+                    p[i] += m * qd[j];
                 }
+                y.extend(p);
             }
         }
         Ok(y)
@@ -330,8 +401,28 @@ impl System {
             self.inputs[n..2 * n].copy_from_slice(&y[n..]);
         }
         self.inputs[2 * n] = t;
-        self.dynamics.mass_forcing.eval(&self.inputs, &mut self.out[..n * n + n]);
-        self.out[..n * n].to_vec()
+        let e = self.dynamics.pattern.len();
+        self.dynamics.mass_forcing.eval(&self.inputs, &mut self.out[..e + n]);
+        let mut m = vec![0.0; n * n];
+        self.dynamics.pattern.scatter(&self.out[..e], &mut m);
+        m
+    }
+
+    /// Factors M from its stored entries at the front of `out`: divided by when
+    /// diagonal, scattered into the dense scratch and factored otherwise.
+    fn factor_mass(&mut self) -> Result<(), RhsError> {
+        let pattern = &self.dynamics.pattern;
+        let values = &self.out[..pattern.len()];
+        if pattern.diagonal {
+            self.mass.fill(0.0);
+            for (&(i, _), &v) in pattern.entries.iter().zip(values) {
+                self.mass[i] = v;
+            }
+            self.lu.factor_diagonal(&self.mass).map_err(RhsError::from)
+        } else {
+            pattern.scatter(values, &mut self.mass);
+            self.lu.factor(&self.mass).map_err(RhsError::from)
+        }
     }
 
     fn set_inputs(&mut self, t: f64, q: &[f64], qd: &[f64]) {
@@ -352,9 +443,10 @@ impl System {
         self.inputs[2 * n] = t;
         let tape = self.dynamics.hamilton.as_mut().expect("Hamilton form needs L quadratic in q'");
         tape.eval(&self.inputs, &mut self.out);
-        self.lu.factor(&self.out[..n * n]).map_err(RhsError::from)?;
+        self.factor_mass()?;
+        let e = self.dynamics.pattern.len();
         for i in 0..n {
-            qd[i] = p[i] - self.out[n * n + i];
+            qd[i] = p[i] - self.out[e + i];
         }
         self.lu.solve_in_place(qd).map_err(RhsError::from)?;
         Ok(())
@@ -372,11 +464,11 @@ impl OdeSystem for System {
             Form::Lagrange => {
                 self.inputs[..2 * n].copy_from_slice(y);
                 self.inputs[2 * n] = t;
-                let out = &mut self.out[..n * n + n];
-                self.dynamics.mass_forcing.eval(&self.inputs, out);
-                self.lu.factor(&out[..n * n]).map_err(RhsError::from)?;
+                let e = self.dynamics.pattern.len();
+                self.dynamics.mass_forcing.eval(&self.inputs, &mut self.out[..e + n]);
+                self.factor_mass()?;
                 dy[..n].copy_from_slice(&y[n..]);
-                dy[n..].copy_from_slice(&out[n * n..]);
+                dy[n..].copy_from_slice(&self.out[e..e + n]);
                 self.lu.solve_in_place(&mut dy[n..]).map_err(RhsError::from)?;
             }
             Form::Hamilton | Form::Separable => {
@@ -391,7 +483,8 @@ impl OdeSystem for System {
                 let tape = self.dynamics.hamilton.as_mut().expect("Hamilton form needs L quadratic in q'");
                 tape.eval(&self.inputs, &mut self.out);
                 dy[..n].copy_from_slice(&qd);
-                dy[n..].copy_from_slice(&self.out[n * n + n..]);
+                let e = self.dynamics.pattern.len();
+                dy[n..].copy_from_slice(&self.out[e + n..e + 2 * n]);
                 self.work = qd;
             }
         }
@@ -414,9 +507,9 @@ impl SeparableSystem for System {
             for v in &mut self.inputs[..=2 * n] {
                 *v = 0.0;
             }
-            self.dynamics.mass_forcing.eval(&self.inputs, &mut self.out[..n * n + n]);
-            self.mass.copy_from_slice(&self.out[..n * n]);
-            self.lu.factor(&self.mass).map_err(RhsError::from)?;
+            let e = self.dynamics.pattern.len();
+            self.dynamics.mass_forcing.eval(&self.inputs, &mut self.out[..e + n]);
+            self.factor_mass()?;
             self.factored_once = true;
         }
         dq.copy_from_slice(p);
@@ -431,8 +524,9 @@ impl SeparableSystem for System {
             *v = 0.0;
         }
         self.inputs[2 * n] = t;
-        self.dynamics.mass_forcing.eval(&self.inputs, &mut self.out[..n * n + n]);
-        dp.copy_from_slice(&self.out[n * n..n * n + n]);
+        let e = self.dynamics.pattern.len();
+        self.dynamics.mass_forcing.eval(&self.inputs, &mut self.out[..e + n]);
+        dp.copy_from_slice(&self.out[e..e + n]);
         if let Some(index) = dp.iter().position(|v| !v.is_finite()) {
             return Err(RhsError::NonFinite { index: n + index });
         }
