@@ -200,9 +200,8 @@ impl Dynamics {
             }
             LazyKernel::new(Tape::compile(pool, &outs, &input_syms).expect("derivation symbols are inputs"))
         });
-        let constant_mass = stored
-            .iter()
-            .all(|&m| d.q.iter().chain(&d.qd).all(|&v| pool.free_of(m, v)) && pool.free_of(m, d.t));
+        let constant_mass =
+            stored.iter().all(|&m| d.q.iter().chain(&d.qd).all(|&v| pool.free_of(m, v)) && pool.free_of(m, d.t));
         let velocity_free_forcing = d.forcing.iter().all(|&f| d.qd.iter().all(|&v| pool.free_of(f, v)));
         let no_linear_momentum = d.momenta.iter().all(|&p| {
             let zero_vel: probe::Subst = d.qd.iter().map(|&v| (v, pool.zero())).collect();
