@@ -23,6 +23,7 @@ use crate::derive::Derivation;
 use crate::error::ModelError;
 use crate::probe;
 use num::{LinearSolver, OdeSystem, RhsError, SeparableSystem};
+use rustc_hash::FxHashSet;
 use std::sync::{Arc, OnceLock};
 use sym::{Compiled, ExprId, Tape};
 
@@ -183,7 +184,11 @@ impl Dynamics {
         outs.extend(&d.forcing);
         let mass_forcing = Kernel::new(Tape::compile(pool, &outs, &input_syms).expect("derivation symbols are inputs"));
 
-        let quadratic = stored.iter().all(|&m| d.qd.iter().all(|&v| pool.free_of(m, v)));
+        // Which symbols M and f contain, from one traversal each (a chain of a
+        // thousand masses has a thousand entries and two thousand symbols).
+        let in_mass: FxHashSet<ExprId> = pool.reachable(&stored).into_iter().collect();
+        let in_forcing: FxHashSet<ExprId> = pool.reachable(&d.forcing).into_iter().collect();
+        let quadratic = d.qd.iter().all(|v| !in_mass.contains(v));
         let hamilton = quadratic.then(|| {
             let zero_vel: probe::Subst = d.qd.iter().map(|&v| (v, pool.zero())).collect();
             let mut outs: Vec<ExprId> = stored.clone();
@@ -200,11 +205,10 @@ impl Dynamics {
             }
             LazyKernel::new(Tape::compile(pool, &outs, &input_syms).expect("derivation symbols are inputs"))
         });
-        let constant_mass =
-            stored.iter().all(|&m| d.q.iter().chain(&d.qd).all(|&v| pool.free_of(m, v)) && pool.free_of(m, d.t));
-        let velocity_free_forcing = d.forcing.iter().all(|&f| d.qd.iter().all(|&v| pool.free_of(f, v)));
+        let constant_mass = d.q.iter().chain(&d.qd).chain([&d.t]).all(|v| !in_mass.contains(v));
+        let velocity_free_forcing = d.qd.iter().all(|v| !in_forcing.contains(v));
+        let zero_vel: probe::Subst = d.qd.iter().map(|&v| (v, pool.zero())).collect();
         let no_linear_momentum = d.momenta.iter().all(|&p| {
-            let zero_vel: probe::Subst = d.qd.iter().map(|&v| (v, pool.zero())).collect();
             let b = pool.substitute(p, &zero_vel);
             probe::is_zero(pool, b)
         });
