@@ -51,7 +51,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import derive as derive_bench  # noqa: E402  (ensure_binary, anchor_python, run_anchor)
 
 REPO = Path(__file__).resolve().parent.parent
-DEFAULT_ANCHORS = REPO.parent / "shared" / "bench"
+DEFAULT_ANCHORS = next((p for p in (REPO.parent / "shared" / "bench", REPO.parent.parent / "shared" / "bench") if p.exists()),
+                       REPO.parent / "shared" / "bench")
 BENCH = "lagrange_simulate"
 
 # (name in the anchor, model file, end time)

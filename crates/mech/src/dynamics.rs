@@ -582,6 +582,37 @@ position = ["l*sin(th)", "-l*cos(th)"]
         assert!((dq[0] - om).abs() < 1e-12 && (dp[0] - out[1]).abs() < 1e-10);
     }
 
+    /// A chain's M is diagonal: the kernel outputs its N diagonal entries (not
+    /// N²), the solve divides, and every form gives the spring forces.
+    #[test]
+    fn a_diagonal_mass_matrix_is_stored_and_solved_as_such() {
+        let chain = "coordinates = [\"x1\", \"x2\", \"x3\"]\n\
+            lagrangian = \"m1*x1'^2/2 + m2*x2'^2/2 + m3*x3'^2/2 - k*(x1^2 + (x2 - x1)^2 + (x3 - x2)^2 + x3^2)/2\"\n\
+            [parameters]\nm1 = 1.0\nm2 = 2.0\nm3 = 4.0\nk = 3.0\n";
+        let dy = dynamics(chain);
+        assert!(dy.pattern.diagonal && dy.pattern.len() == 3, "{:?}", dy.pattern);
+        assert!(dy.is_separable());
+        let (x, v) = ([0.3, -0.2, 0.5], [0.1, 0.2, -0.3]);
+        let k = 3.0;
+        let acc = [-k * (2.0 * x[0] - x[1]), -k * (2.0 * x[1] - x[0] - x[2]) / 2.0, -k * (2.0 * x[2] - x[1]) / 4.0];
+        let mut y = x.to_vec();
+        y.extend(v);
+        let mut out = [0.0; 6];
+        dy.system(Form::Lagrange).rhs(0.0, &y, &mut out).unwrap();
+        for i in 0..3 {
+            assert!((out[i] - v[i]).abs() < 1e-15 && (out[3 + i] - acc[i]).abs() < 1e-14, "{out:?}");
+        }
+        let mut ham = dy.system(Form::Hamilton);
+        let yh = ham.initial_state(0.0, &x, &v).unwrap();
+        assert_eq!(&yh[3..], &[0.1, 0.4, -1.2]);
+        ham.rhs(0.0, &yh, &mut out).unwrap();
+        let masses = [1.0, 2.0, 4.0];
+        for i in 0..3 {
+            assert!((out[i] - v[i]).abs() < 1e-15 && (out[3 + i] - masses[i] * acc[i]).abs() < 1e-13, "{out:?}");
+        }
+        assert_eq!(ham.mass_matrix_at(0.0, &yh), vec![1.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 4.0]);
+    }
+
     #[test]
     fn a_singular_mass_matrix_is_an_error_not_a_number() {
         let dy = dynamics("coordinates = [\"x\"]\nkinetic = \"x^2*x'^2/2\"\n");

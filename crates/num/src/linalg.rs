@@ -585,6 +585,54 @@ mod tests {
         }
     }
 
+    /// A diagonal matrix is divided by, through `factor` (n > 4) or
+    /// `factor_diagonal`, with the same errors as LU; small matrices take the
+    /// unrolled LU, which gives the general loop's results bit for bit.
+    #[test]
+    fn diagonal_and_small_paths() {
+        let n = 1000;
+        let d: Vec<f64> = (0..n).map(|i| 1.0 + i as f64).collect();
+        let mut dense = vec![0.0; n * n];
+        for i in 0..n {
+            dense[i * n + i] = d[i];
+        }
+        let f = rand_vec(n, 7);
+        let (mut a, mut b) = (LinearSolver::new(n), LinearSolver::new(n));
+        a.factor(&dense).unwrap();
+        b.factor_diagonal(&d).unwrap();
+        assert_eq!(a.bandwidth(), Some((0, 0)));
+        let (mut xa, mut xb) = (vec![0.0; n], vec![0.0; n]);
+        a.solve(&f, &mut xa).unwrap();
+        b.solve(&f, &mut xb).unwrap();
+        assert_eq!(xa, xb);
+        assert!(xa.iter().zip(&f).zip(&d).all(|((x, f), d)| (x * d - f).abs() < 1e-15 * f.abs().max(1.0)));
+        assert!((b.pivot_ratio() - 1.0 / n as f64).abs() < 1e-15);
+        let mut zero = d.clone();
+        zero[5] = 0.0;
+        assert!(matches!(b.factor_diagonal(&zero), Err(LinalgError::Singular { col: 5 })));
+        assert!(matches!(b.solve(&f, &mut xb), Err(LinalgError::NotFactored)));
+        assert!(matches!(b.factor_diagonal(&[1.0, 1e-15, 1.0][..]), Err(LinalgError::DimensionMismatch { .. })));
+        let mut tiny = d.clone();
+        tiny[0] = 1e-14;
+        assert!(matches!(b.factor_diagonal(&tiny), Err(LinalgError::IllConditioned { .. })));
+        tiny[0] = f64::NAN;
+        assert!(matches!(b.factor_diagonal(&tiny), Err(LinalgError::NonFinite { row: 0, col: 0 })));
+        // n = 1..4: unrolled LU against the general loop.
+        for n in 1..=4 {
+            let m = rand_vec(n * n, 11 + n as u64);
+            let rhs = rand_vec(n, 3);
+            let mut fixed = DenseLu::new(n);
+            fixed.matrix_mut().copy_from_slice(&m);
+            let mut general = fixed.clone();
+            assert_eq!(fixed.factor().unwrap().to_bits(), general.factor_general().unwrap().to_bits());
+            let (mut x1, mut x2) = (rhs.clone(), rhs.clone());
+            fixed.solve_in_place(&mut x1);
+            general.solve_general(&mut x2);
+            assert_eq!(x1, x2, "n = {n}");
+            assert_eq!(fixed.lu, general.lu);
+        }
+    }
+
     #[test]
     fn singular_and_ill_conditioned_are_errors() {
         let mut s = LinearSolver::new(2);
