@@ -155,6 +155,30 @@ def median_of(values):
     return statistics.median(values) if values else None
 
 
+def heyoka_python(anchors: Path, allow_install: bool) -> str | None:
+    """A Python that imports heyoka: this one, the anchors' venv, or that venv after
+    installing heyoka's pinned version (requirements-strong.txt) into it."""
+    modules = ("heyoka", "numpy")
+    if derive_bench.can_import(sys.executable, modules):
+        return sys.executable
+    venv = Path(os.environ.get("TMPDIR") or "/tmp") / "lagrange-bench-venv"
+    python = venv / "bin" / "python"
+    if python.exists() and derive_bench.can_import(str(python), modules):
+        return str(python)
+    if not allow_install:
+        log("no Python imports heyoka (and --no-install was given)")
+        return None
+    try:
+        if not python.exists():
+            subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
+        packages = derive_bench.pinned(anchors, ["heyoka", "numpy", "cloudpickle"])
+        log(f"installing {' '.join(packages)} into {venv}")
+        subprocess.run([str(python), "-m", "pip", "install", "--quiet", *packages], check=True, timeout=900)
+    except (OSError, subprocess.SubprocessError) as err:
+        log(f"cannot set up {venv}: {err}")
+    return str(python) if python.exists() and derive_bench.can_import(str(python), modules) else None
+
+
 def measure_sweep(binary: Path, grid: int, until: float, rtol: float, timeout: float) -> list[dict]:
     """`lagrange sweep` of the double pendulum's chaos map on one thread, with and without the twin."""
     records = []
@@ -406,7 +430,7 @@ def main(argv=None) -> int:
 
     heyoka_records: list[dict] = []
     if not args.no_heyoka:
-        python = derive_bench.anchor_python(args.anchors, ("heyoka", "numpy"), allow_install=not args.no_install)
+        python = heyoka_python(args.anchors, allow_install=not args.no_install)
         if python is None:
             records.append({"bench": BENCH, "record": "anchor_error", "anchor": "heyoka_simulate", "error": "no Python with heyoka"})
         else:

@@ -137,8 +137,10 @@ pub struct Dynamics {
     pattern: MassPattern,
     /// Outputs M's stored entries (`pattern`) and `f` (n) from `[q, q', t, params]`.
     mass_forcing: Kernel,
-    /// Outputs M's stored entries, `b` (n) and `∂L/∂q − ∂R/∂q' + Q` (n) from `[q, q', t, params]`.
-    hamilton: Option<LazyKernel>,
+    /// Hamilton's form, two kernels: M's stored entries and `b` (n) from `[q, t, params]`
+    /// (free of q'), and `∂L/∂q − ∂R/∂q' + Q` (n) from `[q, q', t, params]`. Split so that
+    /// each right-hand side computes each group once.
+    hamilton: Option<(LazyKernel, LazyKernel)>,
     /// Scratch for [`Dynamics::eval_mass_forcing`].
     scratch: Vec<f64>,
     /// Outputs the invariants from `[q, q', t, params]`.
@@ -195,15 +197,19 @@ impl Dynamics {
             for &p in &d.momenta {
                 outs.push(pool.substitute(p, &zero_vel));
             }
+            let mut rates = Vec::with_capacity(n);
             for i in 0..n {
                 let mut terms = vec![pool.diff(d.lagrangian, d.q[i]), d.forces[i]];
                 if let Some(r) = d.dissipation {
                     let dr = pool.diff(r, d.qd[i]);
                     terms.push(pool.neg(dr));
                 }
-                outs.push(pool.add(&terms));
+                rates.push(pool.add(&terms));
             }
-            LazyKernel::new(Tape::compile(pool, &outs, &input_syms).expect("derivation symbols are inputs"))
+            let compile = |pool: &sym::Pool, outs: &[ExprId]| {
+                LazyKernel::new(Tape::compile(pool, outs, &input_syms).expect("derivation symbols are inputs"))
+            };
+            (compile(pool, &outs), compile(pool, &rates))
         });
         let constant_mass = d.q.iter().chain(&d.qd).chain([&d.t]).all(|v| !in_mass.contains(v));
         let velocity_free_forcing = d.qd.iter().all(|v| !in_forcing.contains(v));
@@ -353,9 +359,9 @@ impl System {
             Form::Hamilton | Form::Separable => {
                 // p = M q' + b.
                 self.set_inputs(t, q, qd);
-                let tape = self.dynamics.hamilton.as_mut().expect("Hamilton form needs L quadratic in q'");
-                tape.eval(&self.inputs, &mut self.out);
+                let (tape, _) = self.dynamics.hamilton.as_mut().expect("Hamilton form needs L quadratic in q'");
                 let e = self.dynamics.pattern.len();
+                tape.eval(&self.inputs, &mut self.out[..e + n]);
                 let mut p = self.out[e..e + n].to_vec();
                 for (&(i, j), m) in self.dynamics.pattern.entries.iter().zip(&self.out[..e]) {
                     p[i] += m * qd[j];
@@ -435,7 +441,7 @@ impl System {
         self.inputs[2 * n] = t;
     }
 
-    /// q' = M⁻¹(p − b), leaving M, b and the momentum rates in `out`.
+    /// q' = M⁻¹(p − b), leaving M and b at the front of `out`.
     fn hamilton_velocities(&mut self, t: f64, y: &[f64], qd: &mut [f64]) -> Result<(), RhsError> {
         let n = self.dynamics.n;
         let (q, p) = y.split_at(n);
@@ -444,10 +450,10 @@ impl System {
             *v = 0.0;
         }
         self.inputs[2 * n] = t;
-        let tape = self.dynamics.hamilton.as_mut().expect("Hamilton form needs L quadratic in q'");
-        tape.eval(&self.inputs, &mut self.out);
-        self.factor_mass()?;
+        let (tape, _) = self.dynamics.hamilton.as_mut().expect("Hamilton form needs L quadratic in q'");
         let e = self.dynamics.pattern.len();
+        tape.eval(&self.inputs, &mut self.out[..e + n]);
+        self.factor_mass()?;
         for i in 0..n {
             qd[i] = p[i] - self.out[e + i];
         }
@@ -483,10 +489,10 @@ impl OdeSystem for System {
                 }
                 // p' = ∂L/∂q − ∂R/∂q' + Q at q' = M⁻¹(p − b).
                 self.inputs[n..2 * n].copy_from_slice(&qd);
-                let tape = self.dynamics.hamilton.as_mut().expect("Hamilton form needs L quadratic in q'");
-                tape.eval(&self.inputs, &mut self.out);
-                dy[..n].copy_from_slice(&qd);
+                let (_, tape) = self.dynamics.hamilton.as_mut().expect("Hamilton form needs L quadratic in q'");
                 let e = self.dynamics.pattern.len();
+                tape.eval(&self.inputs, &mut self.out[e + n..e + 2 * n]);
+                dy[..n].copy_from_slice(&qd);
                 dy[n..].copy_from_slice(&self.out[e + n..e + 2 * n]);
                 self.work = qd;
             }

@@ -124,12 +124,16 @@ impl DenseLu {
             let pivot = a[k * n + k];
             u_min = u_min.min(best);
             u_max = u_max.max(best);
-            for i in k + 1..n {
-                let l = a[i * n + k] / pivot;
-                a[i * n + k] = l;
+            // Row k and the rows below as slices: the updates compile to
+            // straight loops (the same operations as indexing, in the same order).
+            let (upper, lower) = a.split_at_mut((k + 1) * n);
+            let row_k = &upper[k * n + k + 1..];
+            for row_i in lower.chunks_exact_mut(n) {
+                let l = row_i[k] / pivot;
+                row_i[k] = l;
                 if l != 0.0 {
-                    for j in k + 1..n {
-                        a[i * n + j] -= l * a[k * n + j];
+                    for (x, &u) in row_i[k + 1..].iter_mut().zip(row_k) {
+                        *x -= l * u;
                     }
                 }
             }
@@ -179,18 +183,23 @@ impl DenseLu {
         for k in 0..n {
             b.swap(k, self.piv[k]);
         }
-        for k in 0..n {
-            let bk = b[k];
-            for i in k + 1..n {
-                b[i] -= a[i * n + k] * bk;
+        // Forward: b_i −= Σ_{k<i} l_ik b_k, subtracted in ascending k as the
+        // column-oriented loop does, over row slices (no bounds checks).
+        for i in 1..n {
+            let (done, rest) = b.split_at_mut(i);
+            let mut s = rest[0];
+            for (&l, &bk) in a[i * n..i * n + i].iter().zip(done.iter()) {
+                s -= l * bk;
             }
+            rest[0] = s;
         }
         for k in (0..n).rev() {
-            let mut s = b[k];
-            for j in k + 1..n {
-                s -= a[k * n + j] * b[j];
+            let (head, tail) = b.split_at_mut(k + 1);
+            let mut s = head[k];
+            for (&u, &bj) in a[k * n + k + 1..(k + 1) * n].iter().zip(tail.iter()) {
+                s -= u * bj;
             }
-            b[k] = s / a[k * n + k];
+            head[k] = s / a[k * n + k];
         }
     }
 }
