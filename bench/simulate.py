@@ -16,8 +16,16 @@ What it does, in order:
    `lambdify` and `hand` right-hand sides and the same tolerances (rtol = atol), in a venv
    under ${TMPDIR:-/tmp} with the anchors' pinned requirements if this Python cannot import
    sympy, numpy and scipy (the venv logic is bench/derive.py's);
-3. prints two Markdown tables -- every run, and the ratios ours vs SciPy (wall time, RHS
-   evaluations, energy drift) -- and writes every record as JSON lines to --out.
+3. runs the strong anchor ../shared/bench/heyoka_simulate.py (heyoka, Taylor method with
+   LLVM) on the double pendulum at the same tolerances, and its 200x200 double-pendulum
+   ensemble to t = 20 on one worker against `lagrange sweep` on one thread (with and
+   without the Lyapunov twin; heyoka integrates no twin), unless --no-heyoka;
+4. times one right-hand side of the double pendulum with the criterion bench
+   crates/sym/benches/rhs.rs (JIT, tape interpreter, hand-written Rust) against SciPy's
+   lambdified and hand-written Python ones (the anchor's `rhs` records), unless --no-rhs;
+5. prints Markdown tables -- setup (model file to first step), one RHS, every run, the
+   ratios ours vs SciPy and heyoka (wall time, RHS evaluations, energy drift), and the
+   ensemble -- and writes every record as JSON lines to --out.
 
 Matched settings: rtol = atol = R on both sides (SciPy's anchor uses rtol = atol); both
 sides report the energy drift at the accepted steps (`--every-step` for us, SciPy's
@@ -43,7 +51,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import derive as derive_bench  # noqa: E402  (ensure_binary, anchor_python, run_anchor)
 
 REPO = Path(__file__).resolve().parent.parent
-DEFAULT_ANCHORS = REPO.parent / "shared" / "bench"
+DEFAULT_ANCHORS = next((p for p in (REPO.parent / "shared" / "bench", REPO.parent.parent / "shared" / "bench") if p.exists()),
+                       REPO.parent / "shared" / "bench")
 BENCH = "lagrange_simulate"
 
 # (name in the anchor, model file, end time)
@@ -80,6 +89,11 @@ def run_ours(binary: Path, model: str, until: float, rtol: float, method: str | 
     except json.JSONDecodeError as err:
         return {"error": f"summary is not JSON: {err}"}
     summary["process_wall_s"] = wall
+    # The same run with the CSV output of 1001 samples (what a user runs), whole process.
+    csv_args = [a for a in args if a != "--every-step"] + ["--out", os.devnull]
+    start = time.perf_counter()
+    csv_run = subprocess.run(csv_args, cwd=REPO, capture_output=True, text=True, timeout=timeout)
+    summary["csv_process_wall_s"] = time.perf_counter() - start if csv_run.returncode == 0 else None
     summary["stderr"] = proc.stderr.strip()
     return summary
 
@@ -112,6 +126,10 @@ def measure_ours(binary: Path, rtols, methods, repeats: int, timeout: float) -> 
                     "dt": last.get("dt"),
                     "wall_s": statistics.median(r["wall_seconds"] for r in ok) if ok else None,
                     "process_wall_s": statistics.median(r["process_wall_s"] for r in ok) if ok else None,
+                    "process_wall_min_s": min(r["process_wall_s"] for r in ok) if ok else None,
+                    "csv_process_wall_s": median_of(r.get("csv_process_wall_s") for r in ok),
+                    "setup_s": median_of(r.get("setup_seconds") for r in ok),
+                    "derive_s": median_of(r.get("derive_seconds") for r in ok),
                     "wall_samples": [r["wall_seconds"] for r in ok],
                     "steps": last.get("steps"),
                     "rhs_evaluations": last.get("rhs_evaluations"),
@@ -125,6 +143,84 @@ def measure_ours(binary: Path, rtols, methods, repeats: int, timeout: float) -> 
                 log(f"lagrange {system} rtol={rtol:g} {method} -> {record['method']}: wall={fmt_s(record['wall_s'])} "
                     f"steps={record['steps']} rhs={record['rhs_evaluations']} drift={fmt_e(record['energy_drift_steps'])}")
                 records.append(record)
+    return records
+
+
+def fmt_us(value) -> str:
+    return "n/a" if value is None else f"{value:,.0f}"
+
+
+def median_of(values):
+    values = [v for v in values if v is not None]
+    return statistics.median(values) if values else None
+
+
+def heyoka_python(anchors: Path, allow_install: bool) -> str | None:
+    """A Python that imports heyoka: this one, the anchors' venv, or that venv after
+    installing heyoka's pinned version (requirements-strong.txt) into it."""
+    modules = ("heyoka", "numpy")
+    if derive_bench.can_import(sys.executable, modules):
+        return sys.executable
+    venv = Path(os.environ.get("TMPDIR") or "/tmp") / "lagrange-bench-venv"
+    python = venv / "bin" / "python"
+    if python.exists() and derive_bench.can_import(str(python), modules):
+        return str(python)
+    if not allow_install:
+        log("no Python imports heyoka (and --no-install was given)")
+        return None
+    try:
+        if not python.exists():
+            subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
+        packages = derive_bench.pinned(anchors, ["heyoka", "numpy", "cloudpickle"])
+        log(f"installing {' '.join(packages)} into {venv}")
+        subprocess.run([str(python), "-m", "pip", "install", "--quiet", *packages], check=True, timeout=900)
+    except (OSError, subprocess.SubprocessError) as err:
+        log(f"cannot set up {venv}: {err}")
+    return str(python) if python.exists() and derive_bench.can_import(str(python), modules) else None
+
+
+def measure_sweep(binary: Path, grid: int, until: float, rtol: float, timeout: float) -> list[dict]:
+    """`lagrange sweep` of the double pendulum's chaos map on one thread, with and without the twin."""
+    records = []
+    for lyapunov in (False, True):
+        args = [str(binary), "sweep", "examples/double_pendulum.toml", "--until", repr(until),
+                "--grid", f"a=0:3.1:{grid},b=0:3.1:{grid}", "--rtol", repr(rtol), "--atol", repr(rtol),
+                "--threads", "1", "--out", os.devnull]
+        if not lyapunov:
+            args.append("--no-lyapunov")
+        start = time.perf_counter()
+        try:
+            proc = subprocess.run(args, cwd=REPO, capture_output=True, text=True, timeout=timeout)
+            wall = time.perf_counter() - start
+            error = None if proc.returncode == 0 else f"exit {proc.returncode}: {proc.stderr.strip()[-300:]}"
+        except subprocess.TimeoutExpired:
+            wall, error = None, f"timed out after {timeout:.0f} s"
+        record = {"bench": BENCH, "record": "ensemble", "tool": "lagrange", "grid": grid, "n": grid * grid,
+                  "t_end": until, "rtol": rtol, "lyapunov": lyapunov, "threads": 1, "wall_s": wall,
+                  "us_per_trajectory": None if wall is None else wall / (grid * grid) * 1e6, "error": error}
+        log(f"lagrange sweep {grid}x{grid} lyapunov={lyapunov}: {fmt_s(wall)}" + (f" ({error})" if error else ""))
+        records.append(record)
+    return records
+
+
+def measure_rhs(repo: Path, build: bool) -> list[dict]:
+    """One double-pendulum RHS: the criterion bench crates/sym/benches/rhs.rs (ns per call)."""
+    if not build:
+        return []
+    log("cargo bench -p lagrange-sym --bench rhs (criterion, --quick)")
+    proc = subprocess.run(["cargo", "bench", "-p", "lagrange-sym", "--bench", "rhs", "--", "--quick", "--noplot"],
+                          cwd=repo, capture_output=True, text=True)
+    if proc.returncode != 0:
+        log(f"the rhs bench failed: {proc.stderr.strip()[-300:]}")
+        return []
+    records = []
+    for name in ("jit", "tape_eval", "hand"):
+        path = repo / "target" / "criterion" / "double_pendulum_rhs" / name / "new" / "estimates.json"
+        try:
+            ns = json.loads(path.read_text())["median"]["point_estimate"]
+        except (OSError, KeyError, json.JSONDecodeError):
+            continue
+        records.append({"bench": BENCH, "record": "rhs", "tool": "lagrange", "variant": name, "ns_per_call": ns})
     return records
 
 
@@ -210,6 +306,72 @@ def tables(ours: list[dict], scipy: dict, variants) -> tuple[str, list[dict]]:
     return "\n".join(runs) + "\n\n" + "\n".join(ratios) + "\n", ratio_records
 
 
+def extra_tables(ours: list[dict], scipy_records: list[dict], heyoka_records: list[dict], rhs_records: list[dict],
+                 sweep_records: list[dict]) -> str:
+    """Setup, one RHS, whole runs against heyoka, and the ensemble."""
+    out = []
+    dp = [r for r in ours if r["system"] == "double_pendulum" and r["wall_s"] is not None]
+    scipy_setup = next((r for r in scipy_records if r.get("record") == "setup" and r.get("system") == "double_pendulum"), None)
+    hey_runs = {float(r["rtol"]): r for r in heyoka_records if r.get("record") == "run" and r.get("problem") == "double_pendulum"}
+    if dp:
+        # Adaptive runs start integrating right after compiling; fixed-step ones
+        # first run their pilots (listed apart).
+        adaptive = [r for r in dp if not r["dt"]] or dp
+        setup = median_of(r["setup_s"] for r in adaptive)
+        hey = next(iter(hey_runs.values()), None)
+        out += ["| double pendulum: model file to first step | seconds | anchor / ours |", "| --- | ---: | ---: |",
+                f"| lagrange: read, parse, derive, compile (`setup_seconds`, {adaptive[0]['method']}) | {fmt_s(setup)} | |",
+                f"| lagrange: of which read, parse, derive (`derive_seconds`) "
+                f"| {fmt_s(median_of(r['derive_s'] for r in adaptive))} | |",
+                *[f"| lagrange {r['method']}: the same plus the pilot runs that choose its step | {fmt_s(r['setup_s'])} | |"
+                  for r in dp if r["dt"]],
+                f"| SciPy anchor: derive + lambdify | {fmt_s(scipy_setup and scipy_setup.get('derive_and_lambdify_s'))} "
+                f"| {fmt_ratio(scipy_setup and scipy_setup.get('derive_and_lambdify_s'), setup)} |",
+                f"| heyoka: compile (cold) | {fmt_s(hey and hey.get('compile_s'))} | {fmt_ratio(hey and hey.get('compile_s'), setup)} |",
+                ""]
+    rhs = {r["variant"]: r["ns_per_call"] for r in rhs_records}
+    scipy_rhs = {r["variant"]: r["us_per_call"] * 1e3 for r in scipy_records
+                 if r.get("record") == "rhs" and r.get("system") == "double_pendulum" and r.get("us_per_call")}
+    if rhs:
+        jit = rhs.get("jit")
+        out += ["| double pendulum: one RHS | ns per call | / lagrange JIT |", "| --- | ---: | ---: |"]
+        for label, ns in [("lagrange JIT (cranelift)", jit), ("lagrange tape interpreter", rhs.get("tape_eval")),
+                          ("hand-written Rust (criterion bench)", rhs.get("hand")),
+                          ("SciPy anchor: lambdify", scipy_rhs.get("lambdify")),
+                          ("SciPy anchor: hand-written Python", scipy_rhs.get("hand"))]:
+            out.append(f"| {label} | {'n/a' if ns is None else f'{ns:,.1f}'} | {fmt_ratio(ns, jit, 2)} |")
+        out.append("")
+    if hey_runs:
+        out += ["| double pendulum t = 0..100 | ours | process wall (1001-row CSV) | integration wall | energy drift "
+                "| heyoka propagate | heyoka compile + propagate | heyoka drift | heyoka propagate / our process "
+                "| drift ours / heyoka |",
+                "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+        for r in dp:
+            h = hey_runs.get(float(r["rtol"]))
+            if h is None:
+                continue
+            total = (h.get("compile_s") or 0) + (h.get("wall_s") or 0)
+            out.append(f"| rtol {r['rtol']:g} | {r['method']} | {fmt_s(r['csv_process_wall_s'])} | {fmt_s(r['wall_s'])} "
+                       f"| {fmt_e(r['energy_drift_steps'])} | {fmt_s(h.get('wall_s'))} | {fmt_s(total)} "
+                       f"| {fmt_e(h.get('energy_rel_drift'))} | {fmt_ratio(h.get('wall_s'), r['csv_process_wall_s'], 2)} "
+                       f"| {fmt_ratio(r['energy_drift_steps'], h.get('energy_rel_drift'), 2)} |")
+        out.append("")
+    hey_ens = next((r for r in heyoka_records if r.get("record") == "ensemble" and r.get("workers") == 1), None)
+    if sweep_records:
+        out += ["| chaos map, double pendulum, t = 0..20, one core | runs | wall | µs per run | heyoka / ours |",
+                "| --- | ---: | ---: | ---: | ---: |"]
+        for r in sweep_records:
+            label = "lagrange sweep" + (" with Lyapunov twin" if r["lyapunov"] else " --no-lyapunov")
+            out.append(f"| {label} (rtol {r['rtol']:g}) | {r['n']:,} | {fmt_s(r['wall_s'])} "
+                       f"| {fmt_us(r['us_per_trajectory'])} "
+                       f"| {fmt_ratio(hey_ens and hey_ens['wall_s'] * r['n'] / hey_ens['n'], r['wall_s'], 2)} |")
+        if hey_ens:
+            out.append(f"| heyoka ensemble, batch {hey_ens.get('batch_size')}, 1 worker (tol {hey_ens['tol_label']}) "
+                       f"| {hey_ens['n']:,} | {fmt_s(hey_ens['wall_s'])} | {hey_ens['us_per_trajectory']:,.0f} | |")
+        out.append("")
+    return "\n".join(out)
+
+
 # ------------------------------------------------------------------ main
 
 
@@ -224,7 +386,12 @@ def main(argv=None) -> int:
                         help="SciPy's dense t_eval audit grid (a second run per case); 0 skips it (default)")
     parser.add_argument("--timeout", type=float, default=300.0, help="seconds per run of ours (default 300)")
     parser.add_argument("--anchor-timeout", type=float, default=3600.0, help="seconds for the SciPy script (default 3600)")
-    parser.add_argument("--no-scipy", action="store_true", help="skip the anchor")
+    parser.add_argument("--no-scipy", action="store_true", help="skip the SciPy anchor")
+    parser.add_argument("--no-heyoka", action="store_true", help="skip the heyoka anchor")
+    parser.add_argument("--no-rhs", action="store_true", help="skip the criterion RHS bench")
+    parser.add_argument("--ensemble-grid", type=int, default=200,
+                        help="points per angle of the chaos map (both sides; 0 skips it; default 200)")
+    parser.add_argument("--ensemble-until", type=float, default=20.0, help="end time of the chaos map (default 20)")
     parser.add_argument("--no-install", action="store_true", help="never create or fill the anchors' venv")
     parser.add_argument("--binary", type=Path, default=REPO / "target" / "release" / "lagrange")
     parser.add_argument("--no-build", action="store_true", help="never run cargo")
@@ -267,7 +434,33 @@ def main(argv=None) -> int:
                 log(f"scipy_simulate.py: {error}")
     records += scipy_records
 
+    heyoka_records: list[dict] = []
+    if not args.no_heyoka:
+        python = heyoka_python(args.anchors, allow_install=not args.no_install)
+        if python is None:
+            records.append({"bench": BENCH, "record": "anchor_error", "anchor": "heyoka_simulate", "error": "no Python with heyoka"})
+        else:
+            problems = ["double_pendulum"] + (["ensemble"] if args.ensemble_grid > 0 else [])
+            anchor_args = ["--problems", *problems, "--tols", *[repr(r) for r in rtols],
+                           "--ensemble-tols", "1e-10", "--ensemble-modes", "threads", "--workers", "1",
+                           "--ensemble-repeats", "1", "--ensemble-grid", str(args.ensemble_grid),
+                           "--ensemble-t-end", repr(args.ensemble_until), "--repeats", str(args.anchor_repeats)]
+            heyoka_records, error = derive_bench.run_anchor(python, args.anchors / "heyoka_simulate.py", anchor_args,
+                                                            args.anchor_timeout)
+            for r in heyoka_records:
+                r["source"] = "heyoka_simulate.py"
+            if error:
+                records.append({"bench": BENCH, "record": "anchor_error", "anchor": "heyoka_simulate", "error": error})
+                log(f"heyoka_simulate.py: {error}")
+    records += heyoka_records
+    sweep_records = (measure_sweep(args.binary, args.ensemble_grid, args.ensemble_until, 1e-10, args.timeout * 10)
+                     if args.ensemble_grid > 0 else [])
+    records += sweep_records
+    rhs_records = [] if args.no_rhs else measure_rhs(REPO, build=not args.no_build)
+    records += rhs_records
+
     text, ratio_records = tables(ours, scipy_index(scipy_records), variants)
+    text = extra_tables(ours, scipy_records, heyoka_records, rhs_records, sweep_records) + "\n" + text
     records += ratio_records
     args.out.parent.mkdir(parents=True, exist_ok=True)
     with args.out.open("w") as f:

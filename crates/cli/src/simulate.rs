@@ -15,6 +15,7 @@ use std::fs::File;
 use std::io::{BufWriter, IsTerminal, Write};
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 /// Options of `simulate`, as parsed by clap.
 pub struct Options {
@@ -47,10 +48,16 @@ pub fn list_methods() -> String {
 }
 
 pub fn run(opts: &Options) -> Result<(), Failure> {
+    // Setup is timed from here (reading the model file) to the first row, which
+    // the integration hands over before its first step: parse, derive, compile
+    // and, for fixed-step methods, the pilot runs that choose the step.
+    let started = Instant::now();
     let source = crate::read_source(&opts.model)?;
     let path = &opts.model;
     let model = crate::parse_model(path, &source, &opts.set)?;
     let mut derivation = Derivation::new(model).map_err(|e| Failure::model(path, &source, e))?;
+    let derived = started.elapsed().as_secs_f64();
+    let mut first_row: Option<f64> = None;
 
     let method = match &opts.method {
         None => None,
@@ -117,6 +124,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     let constraint_cols = mech::constraint_columns(&derivation);
 
     let result = mech::simulate(&mut derivation, &config, |row| {
+        first_row.get_or_insert_with(|| started.elapsed().as_secs_f64());
         if let Some(w) = csv.as_mut() {
             let r = (|| -> std::io::Result<()> {
                 if !header_written {
@@ -183,8 +191,11 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
         let data = plot_data.into_plot(&derivation.model.name, &report, &names, &inv_names);
         plot::write_svg(plot_path, &data).map_err(Failure::run)?;
     }
-    let mut text =
-        if opts.summary_json { summary_json(&report, &names) } else { summary_text(&report, &names, &derivation) };
+    let mut text = if opts.summary_json {
+        summary_json(&report, &names, Timing { derive_seconds: derived, setup_seconds: first_row })
+    } else {
+        summary_text(&report, &names, &derivation)
+    };
     if !opts.summary_json && !opts.crossing.is_empty() {
         text.push_str(&format!(
             "{crossings_seen} crossing{} recorded{}\n",
@@ -244,7 +255,15 @@ fn progress_bar(until: f64) -> Option<indicatif::ProgressBar> {
     Some(pb)
 }
 
-fn summary_json(r: &RunReport, names: &[String]) -> String {
+/// Where the time before the integration went, for the JSON summary.
+struct Timing {
+    /// Reading, parsing and deriving the model.
+    derive_seconds: f64,
+    /// From reading the model file to the first row (None when no row came).
+    setup_seconds: Option<f64>,
+}
+
+fn summary_json(r: &RunReport, names: &[String], timing: Timing) -> String {
     let mut fin = serde_json::Map::new();
     for (i, name) in names.iter().enumerate() {
         fin.insert(name.clone(), json!(r.final_q[i]));
@@ -281,6 +300,8 @@ fn summary_json(r: &RunReport, names: &[String]) -> String {
         "invariants": inv,
         "warnings": r.warnings,
         "wall_seconds": r.wall_seconds,
+        "derive_seconds": timing.derive_seconds,
+        "setup_seconds": timing.setup_seconds,
     });
     let mut v = v;
     if !r.constraints.is_empty() {

@@ -369,6 +369,12 @@ fn kepler_conservation_audit() {
     for key in ["method", "steps", "rhs_evaluations", "t_final", "final", "wall_seconds"] {
         assert!(!summary[key].is_null(), "the summary has no `{key}`");
     }
+    // Setup: reading + parsing + deriving, then up to the first row (compiling
+    // and gauss6's pilot runs), which the integration's own time includes too.
+    let derive = num(&summary["derive_seconds"], "derive_seconds");
+    let setup = num(&summary["setup_seconds"], "setup_seconds");
+    let wall = num(&summary["wall_seconds"], "wall_seconds");
+    assert!(derive > 0.0 && setup >= derive && setup < derive + wall, "{derive} {setup} {wall}");
     // The audit agrees with the CSV columns.
     let h = csv.column("H");
     let drift = h.iter().map(|v| (v - h[0]).abs()).fold(0.0, f64::max);

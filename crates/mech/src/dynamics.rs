@@ -12,12 +12,19 @@
 //!
 //! Every expression a run needs is compiled into one [`Tape`] per use, with the
 //! parameters as inputs. Entry point: [`Dynamics::new`], then [`Dynamics::system`].
+//!
+//! Structure is kept: the kernels output only the entries of M that are not
+//! identically zero, and a diagonal M (a chain of masses) is solved by division,
+//! so a right-hand side costs O(N) there instead of the O(N²) of writing a dense
+//! M and the O(N³) of factoring it. The Hamilton kernel is compiled on first use
+//! (a Lagrange-form run never pays for it).
 
 use crate::derive::Derivation;
 use crate::error::ModelError;
 use crate::probe;
 use num::{LinearSolver, OdeSystem, RhsError, SeparableSystem};
-use std::sync::Arc;
+use rustc_hash::FxHashSet;
+use std::sync::{Arc, OnceLock};
 use sym::{Compiled, ExprId, Tape};
 
 /// The state variables a system integrates.
@@ -75,16 +82,67 @@ impl Kernel {
     }
 }
 
+/// A kernel compiled when it is first evaluated; clones share the native code
+/// (compiled once for all of them), each keeps its own tape for the fallback.
+#[derive(Debug, Clone)]
+pub(crate) struct LazyKernel {
+    tape: Tape,
+    native: Arc<OnceLock<Option<Arc<Compiled>>>>,
+}
+
+impl LazyKernel {
+    fn new(tape: Tape) -> LazyKernel {
+        LazyKernel { tape, native: Arc::new(OnceLock::new()) }
+    }
+
+    fn eval(&mut self, inputs: &[f64], outputs: &mut [f64]) {
+        match self.native.get_or_init(|| Compiled::new(&self.tape).ok().map(Arc::new)) {
+            Some(native) => native.eval(inputs, outputs),
+            None => self.tape.eval(inputs, outputs),
+        }
+    }
+}
+
+/// Where the entries of M that are not identically zero sit.
+#[derive(Debug, Clone)]
+struct MassPattern {
+    n: usize,
+    /// `(row, column)` of each stored entry, row-major order.
+    entries: Arc<Vec<(usize, usize)>>,
+    /// Every stored entry is on the diagonal.
+    diagonal: bool,
+}
+
+impl MassPattern {
+    fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// Writes the stored entries `values` into the dense row-major `dense`
+    /// (whose other entries stay zero).
+    fn scatter(&self, values: &[f64], dense: &mut [f64]) {
+        for (&(i, j), &v) in self.entries.iter().zip(values) {
+            dense[i * self.n + j] = v;
+        }
+    }
+}
+
 /// The compiled dynamics of a derivation. See the module documentation.
 #[derive(Debug, Clone)]
 pub struct Dynamics {
     n: usize,
     /// Input vector template: `[q, q', t, parameters]`.
     inputs: Vec<f64>,
-    /// Outputs `M` (row-major, n²) and `f` (n) from `[q, q', t, params]`.
+    /// The stored entries of M.
+    pattern: MassPattern,
+    /// Outputs M's stored entries (`pattern`) and `f` (n) from `[q, q', t, params]`.
     mass_forcing: Kernel,
-    /// Outputs `M` (n²), `b` (n) and `∂L/∂q − ∂R/∂q' + Q` (n) from `[q, q', t, params]`.
-    hamilton: Option<Kernel>,
+    /// Hamilton's form, two kernels: M's stored entries and `b` (n) from `[q, t, params]`
+    /// (free of q'), and `∂L/∂q − ∂R/∂q' + Q` (n) from `[q, q', t, params]`. Split so that
+    /// each right-hand side computes each group once.
+    hamilton: Option<(LazyKernel, LazyKernel)>,
+    /// Scratch for [`Dynamics::eval_mass_forcing`].
+    scratch: Vec<f64>,
     /// Outputs the invariants from `[q, q', t, params]`.
     invariants_tape: Kernel,
     invariants: Vec<Invariant>,
@@ -112,35 +170,51 @@ impl Dynamics {
             inputs[2 * n + 1 + k] = p.value;
         }
 
-        let mut outs: Vec<ExprId> = d.mass_matrix.iter().flatten().copied().collect();
+        let mut entries = Vec::new();
+        let mut stored: Vec<ExprId> = Vec::new();
+        for (i, row) in d.mass_matrix.iter().enumerate() {
+            for (j, &m) in row.iter().enumerate() {
+                if !pool.is_zero(m) {
+                    entries.push((i, j));
+                    stored.push(m);
+                }
+            }
+        }
+        let diagonal = entries.iter().all(|&(i, j)| i == j);
+        let pattern = MassPattern { n, entries: Arc::new(entries), diagonal };
+        let mut outs: Vec<ExprId> = stored.clone();
         outs.extend(&d.forcing);
         let mass_forcing = Kernel::new(Tape::compile(pool, &outs, &input_syms).expect("derivation symbols are inputs"));
 
-        let quadratic = d.mass_matrix.iter().flatten().all(|&m| d.qd.iter().all(|&v| pool.free_of(m, v)));
+        // Which symbols M and f contain, from one traversal each (a chain of a
+        // thousand masses has a thousand entries and two thousand symbols).
+        let in_mass: FxHashSet<ExprId> = pool.reachable(&stored).into_iter().collect();
+        let in_forcing: FxHashSet<ExprId> = pool.reachable(&d.forcing).into_iter().collect();
+        let quadratic = d.qd.iter().all(|v| !in_mass.contains(v));
         let hamilton = quadratic.then(|| {
             let zero_vel: probe::Subst = d.qd.iter().map(|&v| (v, pool.zero())).collect();
-            let mut outs: Vec<ExprId> = d.mass_matrix.iter().flatten().copied().collect();
+            let mut outs: Vec<ExprId> = stored.clone();
             for &p in &d.momenta {
                 outs.push(pool.substitute(p, &zero_vel));
             }
+            let mut rates = Vec::with_capacity(n);
             for i in 0..n {
                 let mut terms = vec![pool.diff(d.lagrangian, d.q[i]), d.forces[i]];
                 if let Some(r) = d.dissipation {
                     let dr = pool.diff(r, d.qd[i]);
                     terms.push(pool.neg(dr));
                 }
-                outs.push(pool.add(&terms));
+                rates.push(pool.add(&terms));
             }
-            Kernel::new(Tape::compile(pool, &outs, &input_syms).expect("derivation symbols are inputs"))
+            let compile = |pool: &sym::Pool, outs: &[ExprId]| {
+                LazyKernel::new(Tape::compile(pool, outs, &input_syms).expect("derivation symbols are inputs"))
+            };
+            (compile(pool, &outs), compile(pool, &rates))
         });
-        let constant_mass = d
-            .mass_matrix
-            .iter()
-            .flatten()
-            .all(|&m| d.q.iter().chain(&d.qd).all(|&v| pool.free_of(m, v)) && pool.free_of(m, d.t));
-        let velocity_free_forcing = d.forcing.iter().all(|&f| d.qd.iter().all(|&v| pool.free_of(f, v)));
+        let constant_mass = d.q.iter().chain(&d.qd).chain([&d.t]).all(|v| !in_mass.contains(v));
+        let velocity_free_forcing = d.qd.iter().all(|v| !in_forcing.contains(v));
+        let zero_vel: probe::Subst = d.qd.iter().map(|&v| (v, pool.zero())).collect();
         let no_linear_momentum = d.momenta.iter().all(|&p| {
-            let zero_vel: probe::Subst = d.qd.iter().map(|&v| (v, pool.zero())).collect();
             let b = pool.substitute(p, &zero_vel);
             probe::is_zero(pool, b)
         });
@@ -153,6 +227,8 @@ impl Dynamics {
         Dynamics {
             n,
             inputs,
+            scratch: vec![0.0; pattern.len() + n],
+            pattern,
             mass_forcing,
             hamilton,
             invariants_tape,
@@ -191,12 +267,13 @@ impl Dynamics {
     /// A first-order system in the given form.
     pub fn system(&self, form: Form) -> System {
         let n = self.n;
+        let e = self.pattern.len();
         System {
             dynamics: self.clone(),
             form,
             inputs: self.inputs.clone(),
-            out: vec![0.0; n * n + 2 * n],
-            mass: vec![0.0; n * n],
+            out: vec![0.0; e + 2 * n],
+            mass: vec![0.0; if self.pattern.diagonal { n } else { n * n }],
             lu: LinearSolver::new(n),
             work: vec![0.0; n],
             factored_once: false,
@@ -206,7 +283,11 @@ impl Dynamics {
     /// Evaluates M (row-major, n²) and f (n) at `inputs` = `[q, q', t, parameters]`
     /// (the constrained runs of `constrained.rs` reuse this kernel).
     pub(crate) fn eval_mass_forcing(&mut self, inputs: &[f64], out: &mut [f64]) {
-        self.mass_forcing.eval(inputs, out);
+        let (n, e) = (self.n, self.pattern.len());
+        self.mass_forcing.eval(inputs, &mut self.scratch);
+        out[..n * n].fill(0.0);
+        self.pattern.scatter(&self.scratch[..e], &mut out[..n * n]);
+        out[n * n..n * n + n].copy_from_slice(&self.scratch[e..e + n]);
     }
 
     /// The input template `[q, q', t, parameters]` with the parameters' values.
@@ -278,15 +359,14 @@ impl System {
             Form::Hamilton | Form::Separable => {
                 // p = M q' + b.
                 self.set_inputs(t, q, qd);
-                let tape = self.dynamics.hamilton.as_mut().expect("Hamilton form needs L quadratic in q'");
-                tape.eval(&self.inputs, &mut self.out[..n * n + 2 * n]);
-                for i in 0..n {
-                    let mut p = self.out[n * n + i];
-                    for j in 0..n {
-                        p += self.out[i * n + j] * qd[j];
-                    }
-                    y.push(p);
+                let (tape, _) = self.dynamics.hamilton.as_mut().expect("Hamilton form needs L quadratic in q'");
+                let e = self.dynamics.pattern.len();
+                tape.eval(&self.inputs, &mut self.out[..e + n]);
+                let mut p = self.out[e..e + n].to_vec();
+                for (&(i, j), m) in self.dynamics.pattern.entries.iter().zip(&self.out[..e]) {
+                    p[i] += m * qd[j];
                 }
+                y.extend(p);
             }
         }
         Ok(y)
@@ -330,8 +410,28 @@ impl System {
             self.inputs[n..2 * n].copy_from_slice(&y[n..]);
         }
         self.inputs[2 * n] = t;
-        self.dynamics.mass_forcing.eval(&self.inputs, &mut self.out[..n * n + n]);
-        self.out[..n * n].to_vec()
+        let e = self.dynamics.pattern.len();
+        self.dynamics.mass_forcing.eval(&self.inputs, &mut self.out[..e + n]);
+        let mut m = vec![0.0; n * n];
+        self.dynamics.pattern.scatter(&self.out[..e], &mut m);
+        m
+    }
+
+    /// Factors M from its stored entries at the front of `out`: divided by when
+    /// diagonal, scattered into the dense scratch and factored otherwise.
+    fn factor_mass(&mut self) -> Result<(), RhsError> {
+        let pattern = &self.dynamics.pattern;
+        let values = &self.out[..pattern.len()];
+        if pattern.diagonal {
+            self.mass.fill(0.0);
+            for (&(i, _), &v) in pattern.entries.iter().zip(values) {
+                self.mass[i] = v;
+            }
+            self.lu.factor_diagonal(&self.mass).map_err(RhsError::from)
+        } else {
+            pattern.scatter(values, &mut self.mass);
+            self.lu.factor(&self.mass).map_err(RhsError::from)
+        }
     }
 
     fn set_inputs(&mut self, t: f64, q: &[f64], qd: &[f64]) {
@@ -341,7 +441,7 @@ impl System {
         self.inputs[2 * n] = t;
     }
 
-    /// q' = M⁻¹(p − b), leaving M, b and the momentum rates in `out`.
+    /// q' = M⁻¹(p − b), leaving M and b at the front of `out`.
     fn hamilton_velocities(&mut self, t: f64, y: &[f64], qd: &mut [f64]) -> Result<(), RhsError> {
         let n = self.dynamics.n;
         let (q, p) = y.split_at(n);
@@ -350,11 +450,12 @@ impl System {
             *v = 0.0;
         }
         self.inputs[2 * n] = t;
-        let tape = self.dynamics.hamilton.as_mut().expect("Hamilton form needs L quadratic in q'");
-        tape.eval(&self.inputs, &mut self.out);
-        self.lu.factor(&self.out[..n * n]).map_err(RhsError::from)?;
+        let (tape, _) = self.dynamics.hamilton.as_mut().expect("Hamilton form needs L quadratic in q'");
+        let e = self.dynamics.pattern.len();
+        tape.eval(&self.inputs, &mut self.out[..e + n]);
+        self.factor_mass()?;
         for i in 0..n {
-            qd[i] = p[i] - self.out[n * n + i];
+            qd[i] = p[i] - self.out[e + i];
         }
         self.lu.solve_in_place(qd).map_err(RhsError::from)?;
         Ok(())
@@ -372,11 +473,11 @@ impl OdeSystem for System {
             Form::Lagrange => {
                 self.inputs[..2 * n].copy_from_slice(y);
                 self.inputs[2 * n] = t;
-                let out = &mut self.out[..n * n + n];
-                self.dynamics.mass_forcing.eval(&self.inputs, out);
-                self.lu.factor(&out[..n * n]).map_err(RhsError::from)?;
+                let e = self.dynamics.pattern.len();
+                self.dynamics.mass_forcing.eval(&self.inputs, &mut self.out[..e + n]);
+                self.factor_mass()?;
                 dy[..n].copy_from_slice(&y[n..]);
-                dy[n..].copy_from_slice(&out[n * n..]);
+                dy[n..].copy_from_slice(&self.out[e..e + n]);
                 self.lu.solve_in_place(&mut dy[n..]).map_err(RhsError::from)?;
             }
             Form::Hamilton | Form::Separable => {
@@ -388,10 +489,11 @@ impl OdeSystem for System {
                 }
                 // p' = ∂L/∂q − ∂R/∂q' + Q at q' = M⁻¹(p − b).
                 self.inputs[n..2 * n].copy_from_slice(&qd);
-                let tape = self.dynamics.hamilton.as_mut().expect("Hamilton form needs L quadratic in q'");
-                tape.eval(&self.inputs, &mut self.out);
+                let (_, tape) = self.dynamics.hamilton.as_mut().expect("Hamilton form needs L quadratic in q'");
+                let e = self.dynamics.pattern.len();
+                tape.eval(&self.inputs, &mut self.out[e + n..e + 2 * n]);
                 dy[..n].copy_from_slice(&qd);
-                dy[n..].copy_from_slice(&self.out[n * n + n..]);
+                dy[n..].copy_from_slice(&self.out[e + n..e + 2 * n]);
                 self.work = qd;
             }
         }
@@ -414,9 +516,9 @@ impl SeparableSystem for System {
             for v in &mut self.inputs[..=2 * n] {
                 *v = 0.0;
             }
-            self.dynamics.mass_forcing.eval(&self.inputs, &mut self.out[..n * n + n]);
-            self.mass.copy_from_slice(&self.out[..n * n]);
-            self.lu.factor(&self.mass).map_err(RhsError::from)?;
+            let e = self.dynamics.pattern.len();
+            self.dynamics.mass_forcing.eval(&self.inputs, &mut self.out[..e + n]);
+            self.factor_mass()?;
             self.factored_once = true;
         }
         dq.copy_from_slice(p);
@@ -431,8 +533,9 @@ impl SeparableSystem for System {
             *v = 0.0;
         }
         self.inputs[2 * n] = t;
-        self.dynamics.mass_forcing.eval(&self.inputs, &mut self.out[..n * n + n]);
-        dp.copy_from_slice(&self.out[n * n..n * n + n]);
+        let e = self.dynamics.pattern.len();
+        self.dynamics.mass_forcing.eval(&self.inputs, &mut self.out[..e + n]);
+        dp.copy_from_slice(&self.out[e..e + n]);
         if let Some(index) = dp.iter().position(|v| !v.is_finite()) {
             return Err(RhsError::NonFinite { index: n + index });
         }
@@ -483,6 +586,37 @@ position = ["l*sin(th)", "-l*cos(th)"]
         sep.velocity(&y[1..], &mut dq).unwrap();
         sep.force(0.0, &y[..1], &mut dp).unwrap();
         assert!((dq[0] - om).abs() < 1e-12 && (dp[0] - out[1]).abs() < 1e-10);
+    }
+
+    /// A chain's M is diagonal: the kernel outputs its N diagonal entries (not
+    /// N²), the solve divides, and every form gives the spring forces.
+    #[test]
+    fn a_diagonal_mass_matrix_is_stored_and_solved_as_such() {
+        let chain = "coordinates = [\"x1\", \"x2\", \"x3\"]\n\
+            lagrangian = \"m1*x1'^2/2 + m2*x2'^2/2 + m3*x3'^2/2 - k*(x1^2 + (x2 - x1)^2 + (x3 - x2)^2 + x3^2)/2\"\n\
+            [parameters]\nm1 = 1.0\nm2 = 2.0\nm3 = 4.0\nk = 3.0\n";
+        let dy = dynamics(chain);
+        assert!(dy.pattern.diagonal && dy.pattern.len() == 3, "{:?}", dy.pattern);
+        assert!(dy.is_separable());
+        let (x, v) = ([0.3, -0.2, 0.5], [0.1, 0.2, -0.3]);
+        let k = 3.0;
+        let acc = [-k * (2.0 * x[0] - x[1]), -k * (2.0 * x[1] - x[0] - x[2]) / 2.0, -k * (2.0 * x[2] - x[1]) / 4.0];
+        let mut y = x.to_vec();
+        y.extend(v);
+        let mut out = [0.0; 6];
+        dy.system(Form::Lagrange).rhs(0.0, &y, &mut out).unwrap();
+        for i in 0..3 {
+            assert!((out[i] - v[i]).abs() < 1e-15 && (out[3 + i] - acc[i]).abs() < 1e-14, "{out:?}");
+        }
+        let mut ham = dy.system(Form::Hamilton);
+        let yh = ham.initial_state(0.0, &x, &v).unwrap();
+        assert_eq!(&yh[3..], &[0.1, 0.4, -1.2]);
+        ham.rhs(0.0, &yh, &mut out).unwrap();
+        let masses = [1.0, 2.0, 4.0];
+        for i in 0..3 {
+            assert!((out[i] - v[i]).abs() < 1e-15 && (out[3 + i] - masses[i] * acc[i]).abs() < 1e-13, "{out:?}");
+        }
+        assert_eq!(ham.mass_matrix_at(0.0, &yh), vec![1.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 4.0]);
     }
 
     #[test]

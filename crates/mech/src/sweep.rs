@@ -51,15 +51,17 @@
 //! drift symplectic methods avoid stays at the tolerance level, which the
 //! `energy_drift` column reports for every run.
 
+use crate::body::GimbalGuard;
 use crate::derive::Derivation;
 use crate::dynamics::{Dynamics, Form, System};
 use crate::error::ModelError;
 use crate::model::Model;
 use crate::run::choose_method;
-use num::{integrate_to, Config, Method, SolveError, Solver};
+use num::{integrate, integrate_to, Config, Direction, Event, Method, Output, SolveError, Solver, StopReason};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
+use std::ops::ControlFlow;
 
 /// Initial separation of the Lyapunov twin, in state units.
 pub const LYAPUNOV_D0: f64 = 1e-8;
@@ -574,7 +576,6 @@ pub fn sweep(
     let dynamics = Dynamics::new(d);
     let (method, form) =
         choose_method(d, &dynamics, Some(config.method.unwrap_or(Method::Dop853))).map_err(SweepError::Model)?;
-    let d: &Derivation = d;
     // Initial values from the model; a value neither in [initial] nor on an axis
     // is an error before anything runs.
     let base = initial_values(&d.model).map_err(SweepError::Model)?;
@@ -586,7 +587,11 @@ pub fn sweep(
     let system = dynamics.system(form);
     let runs: Vec<usize> = config.shard.runs(grid.len()).collect();
     let n = dynamics.n_coords();
-    let plan = Plan { method, form, config };
+    // Rigid bodies: a run through the Euler angles' gimbal singularity fails
+    // there (as `simulate` does) instead of integrating garbage.
+    let guards = crate::body::gimbal_guards(d, config.rtol);
+    let d: &Derivation = d;
+    let plan = Plan { method, form, config, guards: &guards };
 
     // Each worker owns its systems (and, for parameter grids, a derivation to
     // recompile); rows come back in the order of `runs`.
@@ -746,6 +751,8 @@ struct Plan<'a> {
     method: Method,
     form: Form,
     config: &'a SweepConfig,
+    /// One per rigid body, checked after every step of the main trajectory.
+    guards: &'a [GimbalGuard],
 }
 
 /// A solver in the form the method needs, borrowing its system.
@@ -778,6 +785,10 @@ impl Plan<'_> {
             lyapunov: f64::NAN,
             failure: None,
         };
+        if let Some(g) = self.guards.iter().find(|g| g.violated(q0)) {
+            out.failure = Some(g.message(0.0));
+            return out;
+        }
         let y0 = match sys.initial_state(0.0, q0, qd0) {
             Ok(y) => y,
             Err(e) => {
@@ -806,6 +817,21 @@ impl Plan<'_> {
                 solver_config.dt = Some(main.step_size());
             }
             let mut twin_y = cfg.lyapunov.then(|| perturbed(&y0));
+            // The twin's solver: kept from segment to segment and restarted from
+            // the renormalized state by the methods that can (DOP853, DOPRI5);
+            // built afresh every segment by the others.
+            let mut twin = Twin::Fresh(twin_sys);
+            if let (Some(ty), Method::Dop853 | Method::Dopri5) = (twin_y.as_ref(), self.method) {
+                if let Twin::Fresh(sys) = twin {
+                    twin = match build(self.method, self.form, sys, 0.0, ty, &solver_config) {
+                        Ok(s) => Twin::Kept(s),
+                        Err(e) => {
+                            out.failure = Some(format!("the perturbed twin failed: {e}"));
+                            return out;
+                        }
+                    };
+                }
+            }
             let mut twin_h = None;
             let mut segment = 0u32;
             while t < cfg.until {
@@ -815,25 +841,67 @@ impl Plan<'_> {
                 if t_next > cfg.until - 1e-6 * LYAPUNOV_INTERVAL {
                     t_next = cfg.until;
                 }
-                if let Err(e) = integrate_to(main.as_mut(), t_next, &mut y) {
+                let mut gimbal: Option<(f64, &GimbalGuard)> = None;
+                // Two terminal events per body: |sin β| falling to the threshold,
+                // and sin β changing sign (β passing 0 or π within one step,
+                // between two step ends that are both clear of the threshold).
+                let mut events: Vec<Event<'_>> = Vec::with_capacity(2 * self.guards.len());
+                for g in self.guards {
+                    let (beta, s2) = (g.beta, g.threshold * g.threshold);
+                    events.push(
+                        Event::new(move |_t, y| y[beta].sin().powi(2) - s2)
+                            .with_direction(Direction::Falling)
+                            .with_terminal(true),
+                    );
+                    events.push(Event::new(move |_t, y| y[beta].sin()).with_terminal(true));
+                }
+                let result = integrate(main.as_mut(), t_next, Output::EveryStep, &mut events, |obs| {
+                    match self.guards.iter().find(|g| g.violated(&obs.y[..n])) {
+                        Some(g) => {
+                            gimbal = Some((obs.t, g));
+                            ControlFlow::Break(())
+                        }
+                        None => ControlFlow::Continue(()),
+                    }
+                });
+                if let Ok(num::Summary { t: t_event, stop: StopReason::Event { index }, .. }) = result {
+                    gimbal = Some((t_event, &self.guards[index / 2]));
+                }
+                if let Some((t_fail, g)) = gimbal {
+                    out.t_final = t_fail;
+                    out.failure = Some(g.message(t_fail));
+                    return out;
+                }
+                if let Err(e) = result {
                     out.t_final = main.t();
                     out.failure = Some(e.to_string());
                     return out;
                 }
+                y.copy_from_slice(main.state());
                 if let (Some(ty), None) = (twin_y.as_mut(), &twin_failure) {
-                    let twin_config = Config { h_init: twin_h, ..solver_config };
-                    let step = build(self.method, self.form, twin_sys, t, ty, &twin_config).and_then(|mut s| {
-                        integrate_to(s.as_mut(), t_next, ty)?;
-                        Ok(s.step_size())
-                    });
+                    let step = match &mut twin {
+                        Twin::Kept(s) => integrate_to(s.as_mut(), t_next, ty),
+                        Twin::Fresh(sys) => {
+                            let twin_config = Config { h_init: twin_h, ..solver_config };
+                            build(self.method, self.form, sys, t, ty, &twin_config).and_then(|mut s| {
+                                integrate_to(s.as_mut(), t_next, ty)?;
+                                twin_h = Some(s.step_size());
+                                Ok(())
+                            })
+                        }
+                    };
                     match step {
-                        Ok(h) => {
-                            twin_h = Some(h);
+                        Ok(()) => {
                             let dist = distance(&y, ty);
                             if dist > 0.0 && dist.is_finite() {
                                 log_sum += (dist / LYAPUNOV_D0).ln();
                                 for (tk, yk) in ty.iter_mut().zip(&y) {
                                     *tk = yk + (*tk - yk) * (LYAPUNOV_D0 / dist);
+                                }
+                                if let Twin::Kept(s) = &mut twin {
+                                    if let Err(e) = s.set_state(ty) {
+                                        twin_failure = Some(format!("the perturbed twin failed: {e}"));
+                                    }
                                 }
                             } else {
                                 twin_failure =
@@ -863,6 +931,13 @@ impl Plan<'_> {
         out.failure = twin_failure;
         out
     }
+}
+
+/// The Lyapunov twin's integrator: one solver restarted every segment, or the
+/// system to build a fresh one on.
+enum Twin<'a> {
+    Kept(Box<dyn Solver + 'a>),
+    Fresh(&'a mut System),
 }
 
 /// `y0` moved by [`LYAPUNOV_D0`] along the unit vector with equal components.
@@ -1137,5 +1212,23 @@ mod tests {
         let grid = Grid::parse("x=0:1:2", &d.model).unwrap();
         let e = sweep(&mut d, &grid, &config(1.0), &|| {}).unwrap_err();
         assert_eq!(e.to_string(), "no initial value for x': neither [initial] nor the grid gives one");
+    }
+
+    /// A top swinging through β = 0 (no spin, thrown towards the vertical)
+    /// fails at the gimbal singularity instead of integrating through it; one
+    /// spinning fast stays away from it and finishes. A grid point at β = 0
+    /// fails at once.
+    #[test]
+    fn a_run_through_the_gimbal_singularity_fails_with_its_reason() {
+        let mut d = derivation(include_str!("../../../examples/tops/heavy_top.toml"));
+        let grid = Grid::parse("ga'=0:12:2,be'=-6:-6:1", &d.model).unwrap();
+        let t = sweep(&mut d, &grid, &config(3.0), &|| {}).unwrap();
+        let t_final = column(&t, "t_final");
+        assert!(t.rows[0].failure.contains("gimbal singularity"), "{:?}", t.rows[0]);
+        assert!(t_final[0] > 0.0 && t_final[0] < 3.0, "{t_final:?}");
+        assert!(t.rows[1].failure.is_empty() && t_final[1] == 3.0, "{:?}", t.rows[1]);
+        let grid = Grid::parse("be=0:0:1", &d.model).unwrap();
+        let t = sweep(&mut d, &grid, &config(1.0), &|| {}).unwrap();
+        assert!(t.rows[0].failure.contains("gimbal singularity"), "{:?}", t.rows[0]);
     }
 }

@@ -244,6 +244,10 @@ pub struct Dop853<S> {
     /// Dense output: `y_old` and the seven interpolant coefficients.
     cont: [Vec<f64>; 8],
     stats: Statistics,
+    /// Whether the dense output waits for [`Solver::prepare_dense`].
+    lazy_dense: bool,
+    /// The step size of the last step, while its dense output is pending.
+    dense_pending: Option<f64>,
 }
 
 impl<S: OdeSystem> Dop853<S> {
@@ -262,7 +266,22 @@ impl<S: OdeSystem> Dop853<S> {
         let h =
             first_step(&mut system, &control, 8, config.h_init, t0, y0, &mut k[0], &mut y1, &mut y_stage, &mut stats)?;
         let cont = std::array::from_fn(|i| if i == 0 { y0.to_vec() } else { vec![0.0; n] });
-        Ok(Dop853 { system, control, t: t0, t_old: t0, h, stop: None, y: y0.to_vec(), k, y1, y_stage, cont, stats })
+        Ok(Dop853 {
+            system,
+            control,
+            t: t0,
+            t_old: t0,
+            h,
+            stop: None,
+            y: y0.to_vec(),
+            k,
+            y1,
+            y_stage,
+            cont,
+            stats,
+            lazy_dense: false,
+            dense_pending: None,
+        })
     }
 
     /// The system, e.g. to read parameters or counters it keeps.
@@ -380,6 +399,8 @@ impl<S: OdeSystem> Solver for Dop853<S> {
         if self.stats.steps >= self.control.max_steps {
             return Err(SolveError::MaxStepsExceeded { t: self.t, max_steps: self.control.max_steps });
         }
+        // This step overwrites the stages a pending dense output would need.
+        self.dense_pending = None;
         loop {
             let mut h = self.h;
             let mut reaches_stop = false;
@@ -406,7 +427,11 @@ impl<S: OdeSystem> Solver for Dop853<S> {
                 }
                 continue;
             }
-            self.build_dense(h)?;
+            if self.lazy_dense {
+                self.dense_pending = Some(h);
+            } else {
+                self.build_dense(h)?;
+            }
             self.t_old = self.t;
             self.t = if reaches_stop { self.stop.take().unwrap_or(self.t + h) } else { self.t + h };
             std::mem::swap(&mut self.y, &mut self.y1);
@@ -418,8 +443,30 @@ impl<S: OdeSystem> Solver for Dop853<S> {
         }
     }
 
+    fn set_lazy_dense(&mut self, lazy: bool) {
+        self.lazy_dense = lazy;
+    }
+
+    fn prepare_dense(&mut self) -> Result<(), SolveError> {
+        let Some(h) = self.dense_pending.take() else { return Ok(()) };
+        // The stages of the last step are still there, with the step's two ends
+        // swapped (y ↔ y1, k[0] ↔ k[12]) and t moved on: put them back as
+        // `build_dense` expects them (before the swap), build, and swap again.
+        std::mem::swap(&mut self.y, &mut self.y1);
+        self.k.swap(0, 12);
+        let t_end = self.t;
+        self.t = self.t_old;
+        let built = self.build_dense(h);
+        self.t = t_end;
+        std::mem::swap(&mut self.y, &mut self.y1);
+        self.k.swap(0, 12);
+        built
+    }
+
     fn set_state(&mut self, y: &[f64]) -> Result<(), SolveError> {
         check_len(self.y.len(), y.len())?;
+        // The last step's dense output is kept: build it before the state changes.
+        self.prepare_dense()?;
         self.y.copy_from_slice(y);
         // The first stage of the next step is F(t, y) at the new state.
         self.stats.rhs_evaluations += 1;
@@ -430,6 +477,9 @@ impl<S: OdeSystem> Solver for Dop853<S> {
     fn interpolate(&self, t: f64, out: &mut [f64]) -> Result<(), SolveError> {
         check_len(self.y.len(), out.len())?;
         check_interpolation(t, self.t_old, self.t)?;
+        if self.dense_pending.is_some() {
+            return Err(SolveError::DenseOutputNotPrepared { method: "dop853" });
+        }
         let h = self.t - self.t_old;
         if h == 0.0 {
             out.copy_from_slice(&self.y);

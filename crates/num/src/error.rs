@@ -188,6 +188,14 @@ pub enum SolveError {
         /// The method name.
         method: &'static str,
     },
+    /// [`crate::Solver::interpolate`] was called on a step whose dense output is
+    /// pending ([`crate::Solver::set_lazy_dense`]) before
+    /// [`crate::Solver::prepare_dense`].
+    #[error("method {method}: the dense output of the last step was not prepared (call prepare_dense first)")]
+    DenseOutputNotPrepared {
+        /// The method name.
+        method: &'static str,
+    },
     /// The method name is unknown.
     #[error("unknown method {name:?}; known methods: {known}")]
     UnknownMethod {

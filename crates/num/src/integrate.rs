@@ -158,7 +158,27 @@ pub fn integrate_projected<V: Solver + ?Sized>(
     drive(solver, t_end, output, events, Some(project), observer)
 }
 
+/// Runs [`drive_lazily`] with the solver's dense output computed only for the
+/// steps that are interpolated in (a sample or an event inside them), and for
+/// the last one, so that the caller finds the solver as after eager steps.
 fn drive<V: Solver + ?Sized>(
+    solver: &mut V,
+    t_end: f64,
+    output: Output,
+    events: &mut [Event<'_>],
+    project: Option<Projection<'_>>,
+    observer: impl FnMut(&Observation<'_>) -> ControlFlow<()>,
+) -> Result<Summary, SolveError> {
+    solver.set_lazy_dense(true);
+    let result = drive_lazily(solver, t_end, output, events, project, observer);
+    let prepared = solver.prepare_dense();
+    solver.set_lazy_dense(false);
+    let summary = result?;
+    prepared?;
+    Ok(summary)
+}
+
+fn drive_lazily<V: Solver + ?Sized>(
     solver: &mut V,
     t_end: f64,
     output: Output,
@@ -240,6 +260,7 @@ fn drive<V: Solver + ?Sized>(
                 Direction::Both => rising || falling,
             };
             if counts {
+                solver.prepare_dense()?;
                 let tol = 4.0 * f64::EPSILON * t_a.abs().max(t_b.abs());
                 let root = brent(
                     |t| {
@@ -288,6 +309,7 @@ fn drive<V: Solver + ?Sized>(
             if t == t_b {
                 y.copy_from_slice(solver.state());
             } else {
+                solver.prepare_dense()?;
                 solver.interpolate(t, &mut y)?;
             }
             if stopped(observer(&Observation { t, y: &y, kind: obs_kind })) {
@@ -331,7 +353,7 @@ pub fn integrate_to<V: Solver + ?Sized>(solver: &mut V, t_end: f64, y_end: &mut 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Config, Method, OdeSystem, RhsError};
+    use crate::{Config, Method, OdeSystem, RhsError, StepOutcome};
 
     /// x'' = −x as y = [x, v].
     struct Oscillator;
@@ -344,6 +366,63 @@ mod tests {
             dy[1] = -y[0];
             Ok(())
         }
+    }
+
+    /// The driver builds DOP853's interpolant only on the steps it samples in:
+    /// the samples are bit for bit those of eager dense output, with fewer
+    /// evaluations, and after the run the last step interpolates as usual.
+    #[test]
+    fn lazy_dense_output_gives_the_eager_samples_with_fewer_evaluations() {
+        let config = Config { rtol: 1e-10, atol: 1e-12, ..Config::default() };
+        let t_end = 20.0;
+        let n = 11;
+        let mut lazy = Method::Dop853.build(Oscillator, 0.0, &[1.0, 0.0], &config).unwrap();
+        let mut samples = Vec::new();
+        integrate(&mut lazy, t_end, Output::Samples(n), &mut [], |o| {
+            samples.push((o.t, o.y.to_vec()));
+            ControlFlow::Continue(())
+        })
+        .unwrap();
+        let mut eager = Method::Dop853.build(Oscillator, 0.0, &[1.0, 0.0], &config).unwrap();
+        eager.set_stop_time(t_end).unwrap();
+        let mut y = vec![0.0; 2];
+        let mut k = 1;
+        loop {
+            let outcome = eager.step().unwrap();
+            while k < n && samples[k].0 <= eager.t() {
+                if samples[k].0 == eager.t() {
+                    y.copy_from_slice(eager.state());
+                } else {
+                    eager.interpolate(samples[k].0, &mut y).unwrap();
+                }
+                assert_eq!(y, samples[k].1, "sample {k} at t = {}", samples[k].0);
+                k += 1;
+            }
+            if outcome == StepOutcome::ReachedStop {
+                break;
+            }
+        }
+        assert_eq!(k, n);
+        assert_eq!(lazy.statistics().steps, eager.statistics().steps);
+        assert!(
+            lazy.statistics().rhs_evaluations + 2 * eager.statistics().steps < eager.statistics().rhs_evaluations,
+            "{:?} vs {:?}",
+            lazy.statistics(),
+            eager.statistics()
+        );
+        // The last step's interpolant is there after the run.
+        let mut mid = [0.0; 2];
+        lazy.interpolate(0.5 * (lazy.step_start() + lazy.t()), &mut mid).unwrap();
+        eager.interpolate(0.5 * (eager.step_start() + eager.t()), &mut y).unwrap();
+        assert_eq!(mid.to_vec(), y);
+        // Asked for while pending, the interpolant is an error, not stale numbers.
+        lazy.set_lazy_dense(true);
+        lazy.set_stop_time(t_end + 1.0).unwrap();
+        lazy.step().unwrap();
+        let t = 0.5 * (lazy.step_start() + lazy.t());
+        assert!(matches!(lazy.interpolate(t, &mut mid), Err(SolveError::DenseOutputNotPrepared { .. })));
+        lazy.prepare_dense().unwrap();
+        lazy.interpolate(t, &mut mid).unwrap();
     }
 
     /// Over 100 periods the projection keeps x² + v² = 1 at round-off, where the

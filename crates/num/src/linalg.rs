@@ -38,6 +38,63 @@ impl DenseLu {
     /// Factors the matrix in [`matrix_mut`](Self::matrix_mut) in place; returns the
     /// pivot ratio `min|u_kk| / max|u_kk|`.
     pub(crate) fn factor(&mut self) -> Result<f64, LinalgError> {
+        // The same algorithm with the size known at compile time: the loops
+        // unroll and the bounds checks go (the right-hand side of a double
+        // pendulum factors a 2 × 2 M at every call). Same operations, same
+        // order, so the results are bit for bit those of the general loop.
+        match self.n {
+            1 => self.factor_fixed::<1>(),
+            2 => self.factor_fixed::<2>(),
+            3 => self.factor_fixed::<3>(),
+            4 => self.factor_fixed::<4>(),
+            _ => self.factor_general(),
+        }
+    }
+
+    fn factor_fixed<const N: usize>(&mut self) -> Result<f64, LinalgError> {
+        let a = &mut self.lu[..N * N];
+        if let Some(pos) = a.iter().position(|x| !x.is_finite()) {
+            return Err(LinalgError::NonFinite { row: pos / N, col: pos % N });
+        }
+        let mut u_min = f64::INFINITY;
+        let mut u_max = 0.0_f64;
+        for k in 0..N {
+            let mut p = k;
+            let mut best = a[k * N + k].abs();
+            for i in k + 1..N {
+                let v = a[i * N + k].abs();
+                if v > best {
+                    best = v;
+                    p = i;
+                }
+            }
+            self.piv[k] = p;
+            if best == 0.0 {
+                return Err(LinalgError::Singular { col: k });
+            }
+            if p != k {
+                for j in 0..N {
+                    a.swap(k * N + j, p * N + j);
+                }
+            }
+            let pivot = a[k * N + k];
+            u_min = u_min.min(best);
+            u_max = u_max.max(best);
+            for i in k + 1..N {
+                let l = a[i * N + k] / pivot;
+                a[i * N + k] = l;
+                if l != 0.0 {
+                    for j in k + 1..N {
+                        a[i * N + j] -= l * a[k * N + j];
+                    }
+                }
+            }
+        }
+        self.factored = true;
+        Ok(u_min / u_max)
+    }
+
+    fn factor_general(&mut self) -> Result<f64, LinalgError> {
         let n = self.n;
         let a = &mut self.lu;
         if let Some(pos) = a.iter().position(|x| !x.is_finite()) {
@@ -67,12 +124,16 @@ impl DenseLu {
             let pivot = a[k * n + k];
             u_min = u_min.min(best);
             u_max = u_max.max(best);
-            for i in k + 1..n {
-                let l = a[i * n + k] / pivot;
-                a[i * n + k] = l;
+            // Row k and the rows below as slices: the updates compile to
+            // straight loops (the same operations as indexing, in the same order).
+            let (upper, lower) = a.split_at_mut((k + 1) * n);
+            let row_k = &upper[k * n + k + 1..];
+            for row_i in lower.chunks_exact_mut(n) {
+                let l = row_i[k] / pivot;
+                row_i[k] = l;
                 if l != 0.0 {
-                    for j in k + 1..n {
-                        a[i * n + j] -= l * a[k * n + j];
+                    for (x, &u) in row_i[k + 1..].iter_mut().zip(row_k) {
+                        *x -= l * u;
                     }
                 }
             }
@@ -84,24 +145,61 @@ impl DenseLu {
     /// Solves in place with the last factorization.
     pub(crate) fn solve_in_place(&self, b: &mut [f64]) {
         debug_assert!(self.factored && b.len() == self.n);
+        match self.n {
+            1 => self.solve_fixed::<1>(b),
+            2 => self.solve_fixed::<2>(b),
+            3 => self.solve_fixed::<3>(b),
+            4 => self.solve_fixed::<4>(b),
+            _ => self.solve_general(b),
+        }
+    }
+
+    fn solve_fixed<const N: usize>(&self, b: &mut [f64]) {
+        let a = &self.lu[..N * N];
+        let piv = &self.piv[..N];
+        let b: &mut [f64; N] = b.try_into().expect("N values");
+        for k in 0..N {
+            b.swap(k, piv[k]);
+        }
+        for k in 0..N {
+            let bk = b[k];
+            for i in k + 1..N {
+                b[i] -= a[i * N + k] * bk;
+            }
+        }
+        for k in (0..N).rev() {
+            let mut s = b[k];
+            for j in k + 1..N {
+                s -= a[k * N + j] * b[j];
+            }
+            b[k] = s / a[k * N + k];
+        }
+    }
+
+    fn solve_general(&self, b: &mut [f64]) {
         let n = self.n;
         let a = &self.lu;
         // Rows were swapped whole (multipliers included), so permute first.
         for k in 0..n {
             b.swap(k, self.piv[k]);
         }
-        for k in 0..n {
-            let bk = b[k];
-            for i in k + 1..n {
-                b[i] -= a[i * n + k] * bk;
+        // Forward: b_i −= Σ_{k<i} l_ik b_k, subtracted in ascending k as the
+        // column-oriented loop does, over row slices (no bounds checks).
+        for i in 1..n {
+            let (done, rest) = b.split_at_mut(i);
+            let mut s = rest[0];
+            for (&l, &bk) in a[i * n..i * n + i].iter().zip(done.iter()) {
+                s -= l * bk;
             }
+            rest[0] = s;
         }
         for k in (0..n).rev() {
-            let mut s = b[k];
-            for j in k + 1..n {
-                s -= a[k * n + j] * b[j];
+            let (head, tail) = b.split_at_mut(k + 1);
+            let mut s = head[k];
+            for (&u, &bj) in a[k * n + k + 1..(k + 1) * n].iter().zip(tail.iter()) {
+                s -= u * bj;
             }
-            b[k] = s / a[k * n + k];
+            head[k] = s / a[k * n + k];
         }
     }
 }
@@ -208,12 +306,14 @@ enum Path {
     None,
     Dense,
     Banded,
+    Diagonal,
 }
 
 /// Factors an `n × n` matrix and solves `M x = f`, reusing its storage.
 ///
 /// [`factor`](LinearSolver::factor) scans the matrix for its lower and upper
-/// bandwidth `(kl, ku)`; when the band is narrow (`4·(2kl + ku + 1) < n`) it uses
+/// bandwidth `(kl, ku)`; a diagonal matrix is divided by (`O(n)`), and when the
+/// band is narrow (`4·(2kl + ku + 1) < n`) it uses
 /// banded LU, `O(n·kl·(kl + ku))`, otherwise dense LU, `O(n³)`. Singular matrices and
 /// matrices whose pivot ratio falls below the threshold ([`DEFAULT_PIVOT_RATIO`]) are
 /// reported as errors instead of producing garbage.
@@ -232,6 +332,8 @@ pub struct LinearSolver {
     path: Path,
     dense: DenseLu,
     band: BandLu,
+    /// The diagonal of the last diagonal factorization.
+    diag: Vec<f64>,
     pivot_ratio: f64,
 }
 
@@ -244,6 +346,7 @@ impl LinearSolver {
             path: Path::None,
             dense: DenseLu::default(),
             band: BandLu::default(),
+            diag: Vec::new(),
             pivot_ratio: f64::NAN,
         }
     }
@@ -267,7 +370,11 @@ impl LinearSolver {
 
     /// `Some((kl, ku))` when the last factorization took the banded path.
     pub fn bandwidth(&self) -> Option<(usize, usize)> {
-        (self.path == Path::Banded).then_some((self.band.kl, self.band.ku))
+        match self.path {
+            Path::Banded => Some((self.band.kl, self.band.ku)),
+            Path::Diagonal => Some((0, 0)),
+            _ => None,
+        }
     }
 
     /// Factors the row-major `n × n` matrix `a` (`a[i * n + j]` is row `i`, column `j`).
@@ -276,6 +383,10 @@ impl LinearSolver {
         self.path = Path::None;
         if a.len() != n * n {
             return Err(LinalgError::DimensionMismatch { expected: n * n, found: a.len() });
+        }
+        if n <= 4 {
+            // Too small for a band to pay: dense LU (which checks finiteness).
+            return self.factor_dense(a);
         }
         let mut kl = 0;
         let mut ku = 0;
@@ -294,25 +405,66 @@ impl LinearSolver {
                 }
             }
         }
-        let ratio = if 4 * (2 * kl + ku + 1) < n {
+        if kl == 0 && ku == 0 {
+            let diagonal: Vec<f64> = (0..n).map(|i| a[i * n + i]).collect();
+            return self.factor_diagonal(&diagonal);
+        }
+        if 4 * (2 * kl + ku + 1) < n {
             let r = self.band.factor(n, kl, ku, a)?;
             self.path = Path::Banded;
-            r
+            self.accept(r)
         } else {
-            if self.dense.n != n {
-                self.dense = DenseLu::new(n);
-            }
-            self.dense.matrix_mut().copy_from_slice(a);
-            let r = self.dense.factor()?;
-            self.path = Path::Dense;
-            r
-        };
+            self.factor_dense(a)
+        }
+    }
+
+    fn factor_dense(&mut self, a: &[f64]) -> Result<(), LinalgError> {
+        let n = self.n;
+        if self.dense.n != n {
+            self.dense = DenseLu::new(n);
+        }
+        self.dense.matrix_mut().copy_from_slice(a);
+        let r = self.dense.factor()?;
+        self.path = Path::Dense;
+        self.accept(r)
+    }
+
+    /// Records the pivot ratio of a factorization and refuses it below the threshold.
+    fn accept(&mut self, ratio: f64) -> Result<(), LinalgError> {
         self.pivot_ratio = ratio;
         if ratio < self.threshold {
             self.path = Path::None;
             return Err(LinalgError::IllConditioned { pivot_ratio: ratio, threshold: self.threshold });
         }
         Ok(())
+    }
+
+    /// Factors the diagonal matrix with diagonal `d` (`O(n)`, for callers that
+    /// know their matrix is diagonal, such as a chain's mass matrix): the same
+    /// checks as [`factor`](Self::factor) — non-finite entries, zero pivots and
+    /// the pivot ratio `min|d_i| / max|d_i|` against the threshold.
+    pub fn factor_diagonal(&mut self, d: &[f64]) -> Result<(), LinalgError> {
+        let n = self.n;
+        self.path = Path::None;
+        if d.len() != n {
+            return Err(LinalgError::DimensionMismatch { expected: n, found: d.len() });
+        }
+        let mut u_min = f64::INFINITY;
+        let mut u_max = 0.0_f64;
+        for (i, &v) in d.iter().enumerate() {
+            if !v.is_finite() {
+                return Err(LinalgError::NonFinite { row: i, col: i });
+            }
+            if v == 0.0 {
+                return Err(LinalgError::Singular { col: i });
+            }
+            u_min = u_min.min(v.abs());
+            u_max = u_max.max(v.abs());
+        }
+        self.diag.clear();
+        self.diag.extend_from_slice(d);
+        self.path = Path::Diagonal;
+        self.accept(if n == 0 { 1.0 } else { u_min / u_max })
     }
 
     /// Solves `M x = f` with the last factorization.
@@ -336,6 +488,11 @@ impl LinearSolver {
             Path::None => return Err(LinalgError::NotFactored),
             Path::Dense => self.dense.solve_in_place(x),
             Path::Banded => self.band.solve_in_place(x),
+            Path::Diagonal => {
+                for (xi, di) in x.iter_mut().zip(&self.diag) {
+                    *xi /= di;
+                }
+            }
         }
         Ok(())
     }
@@ -434,6 +591,54 @@ mod tests {
         for (i, xi) in x.iter().enumerate() {
             let exact = ((i + 1) * (n - i)) as f64 / 2.0;
             assert!((xi - exact).abs() < 1e-8 * exact, "{i}: {xi} vs {exact}");
+        }
+    }
+
+    /// A diagonal matrix is divided by, through `factor` (n > 4) or
+    /// `factor_diagonal`, with the same errors as LU; small matrices take the
+    /// unrolled LU, which gives the general loop's results bit for bit.
+    #[test]
+    fn diagonal_and_small_paths() {
+        let n = 1000;
+        let d: Vec<f64> = (0..n).map(|i| 1.0 + i as f64).collect();
+        let mut dense = vec![0.0; n * n];
+        for i in 0..n {
+            dense[i * n + i] = d[i];
+        }
+        let f = rand_vec(n, 7);
+        let (mut a, mut b) = (LinearSolver::new(n), LinearSolver::new(n));
+        a.factor(&dense).unwrap();
+        b.factor_diagonal(&d).unwrap();
+        assert_eq!(a.bandwidth(), Some((0, 0)));
+        let (mut xa, mut xb) = (vec![0.0; n], vec![0.0; n]);
+        a.solve(&f, &mut xa).unwrap();
+        b.solve(&f, &mut xb).unwrap();
+        assert_eq!(xa, xb);
+        assert!(xa.iter().zip(&f).zip(&d).all(|((x, f), d)| (x * d - f).abs() < 1e-15 * f.abs().max(1.0)));
+        assert!((b.pivot_ratio() - 1.0 / n as f64).abs() < 1e-15);
+        let mut zero = d.clone();
+        zero[5] = 0.0;
+        assert!(matches!(b.factor_diagonal(&zero), Err(LinalgError::Singular { col: 5 })));
+        assert!(matches!(b.solve(&f, &mut xb), Err(LinalgError::NotFactored)));
+        assert!(matches!(b.factor_diagonal(&[1.0, 1e-15, 1.0][..]), Err(LinalgError::DimensionMismatch { .. })));
+        let mut tiny = d.clone();
+        tiny[0] = 1e-14;
+        assert!(matches!(b.factor_diagonal(&tiny), Err(LinalgError::IllConditioned { .. })));
+        tiny[0] = f64::NAN;
+        assert!(matches!(b.factor_diagonal(&tiny), Err(LinalgError::NonFinite { row: 0, col: 0 })));
+        // n = 1..4: unrolled LU against the general loop.
+        for n in 1..=4 {
+            let m = rand_vec(n * n, 11 + n as u64);
+            let rhs = rand_vec(n, 3);
+            let mut fixed = DenseLu::new(n);
+            fixed.matrix_mut().copy_from_slice(&m);
+            let mut general = fixed.clone();
+            assert_eq!(fixed.factor().unwrap().to_bits(), general.factor_general().unwrap().to_bits());
+            let (mut x1, mut x2) = (rhs.clone(), rhs.clone());
+            fixed.solve_in_place(&mut x1);
+            general.solve_general(&mut x2);
+            assert_eq!(x1, x2, "n = {n}");
+            assert_eq!(fixed.lu, general.lu);
         }
     }
 

@@ -157,6 +157,22 @@ pub trait Solver {
         let _ = y;
         Err(SolveError::RestartUnsupported { method: self.method().name() })
     }
+    /// Asks the solver to compute the dense output of a step only when
+    /// [`prepare_dense`](Solver::prepare_dense) is called for it, instead of after
+    /// every step. For DOP853 this saves the three extra evaluations of its
+    /// interpolant on the steps nobody interpolates in (most of them, when a run
+    /// samples 1001 rows over thousands of steps or only needs its end state).
+    /// With it on, [`interpolate`](Solver::interpolate) fails with
+    /// [`SolveError::DenseOutputNotPrepared`] until `prepare_dense` ran for the
+    /// last step. Methods whose dense output is free ignore it.
+    fn set_lazy_dense(&mut self, lazy: bool) {
+        let _ = lazy;
+    }
+    /// Computes the dense output of the last step if it is pending (see
+    /// [`set_lazy_dense`](Solver::set_lazy_dense)); otherwise does nothing.
+    fn prepare_dense(&mut self) -> Result<(), SolveError> {
+        Ok(())
+    }
 }
 
 impl<S: Solver + ?Sized> Solver for Box<S> {
@@ -189,6 +205,12 @@ impl<S: Solver + ?Sized> Solver for Box<S> {
     }
     fn set_state(&mut self, y: &[f64]) -> Result<(), SolveError> {
         (**self).set_state(y)
+    }
+    fn set_lazy_dense(&mut self, lazy: bool) {
+        (**self).set_lazy_dense(lazy)
+    }
+    fn prepare_dense(&mut self) -> Result<(), SolveError> {
+        (**self).prepare_dense()
     }
 }
 
