@@ -129,6 +129,29 @@ mod tests {
     }
 
     #[test]
+    fn quotients_read_as_written() {
+        // Catenary: y'' = (1 + y'^2)/y.
+        check(
+            "y*sqrt(1 + y'^2)",
+            "(y'^2 - y*y'' + 1)/(y'^2 + 1)^(3/2)",
+            "(y'^2 + 1)/y",
+            Some("-y/sqrt(y'^2 + 1)"),
+        );
+        // Brachistochrone: y'' = -(1 + y'^2)/(2y).
+        check(
+            "sqrt((1 + y'^2)/(2*g*y))",
+            "-(y'^2 + 2*y*y'' + 1)*sqrt((y'^2 + 1)/(2*g*y))/(2*y*(y'^2 + 1)^2)",
+            "-(y'^2 + 1)/(2*y)",
+            Some("-sqrt((y'^2 + 1)/(2*g*y))/(y'^2 + 1)"),
+        );
+        let mut pool = Pool::default();
+        let f = pool.parse("y*sqrt(1 + y'^2)").unwrap();
+        let e = Euler::new(&mut pool, f, "x", "y").unwrap();
+        assert_eq!(pool.display(e.legendre).to_string(), "y/(y'^2 + 1)^(3/2)");
+        assert_eq!(pool.display(e.jacobi_q).to_string(), "-y''/(y'^2 + 1)^(3/2)");
+    }
+
+    #[test]
     fn linear_in_slope_is_degenerate() {
         let mut pool = Pool::default();
         let f = pool.parse("y*y' + x").unwrap();
