@@ -247,7 +247,9 @@ fn split(a: &Poly) -> (Number, Mono, Poly) {
     for m in a.keys() {
         common = Some(match common {
             None => m.clone(),
-            Some(prev) => Mono(prev.0.into_iter().filter_map(|(x, e)| Some((x, e.min(m.exponent(x)))).filter(|p| p.1 > 0)).collect()),
+            Some(prev) => Mono(
+                prev.0.into_iter().filter_map(|(x, e)| Some((x, e.min(m.exponent(x)))).filter(|p| p.1 > 0)).collect(),
+            ),
         });
     }
     let common = common.unwrap_or_default();

@@ -131,12 +131,7 @@ mod tests {
     #[test]
     fn quotients_read_as_written() {
         // Catenary: y'' = (1 + y'^2)/y.
-        check(
-            "y*sqrt(1 + y'^2)",
-            "(y'^2 - y*y'' + 1)/(y'^2 + 1)^(3/2)",
-            "(y'^2 + 1)/y",
-            Some("-y/sqrt(y'^2 + 1)"),
-        );
+        check("y*sqrt(1 + y'^2)", "(y'^2 - y*y'' + 1)/(y'^2 + 1)^(3/2)", "(y'^2 + 1)/y", Some("-y/sqrt(y'^2 + 1)"));
         // Brachistochrone: y'' = -(1 + y'^2)/(2y).
         check(
             "sqrt((1 + y'^2)/(2*g*y))",
