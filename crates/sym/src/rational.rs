@@ -9,13 +9,16 @@
 //! primitive polynomials (content 1, leading coefficient positive) with
 //! exponents, so `-y'^2 - 1` and `y'^2 + 1` are recognized as one factor.
 //!
-//! Cancellation is by trial division: the numerator is divided exactly (sparse
-//! multivariate division, lexicographic order) by each factor of the
-//! denominator as often as it goes, and by the common powers of atoms; the
-//! numeric content goes into the numerator's coefficients. This is not a full
-//! polynomial GCD: two denominator factors that share a factor stay apart, and
-//! a numerator is only cancelled against a whole denominator factor
-//! (`(x^2 - 1)/(x - 1) → x + 1` cancels; `(x^2 - 1)/(x^2 + 2*x + 1)` does not).
+//! Cancellation: the numerator is divided exactly (sparse multivariate
+//! division, lexicographic order) by each factor of the denominator as often
+//! as it goes (`(x^2 - 1)/(x - 1) → x + 1`), and by the common powers of
+//! atoms; the numeric content goes into the numerator's coefficients. When
+//! the numerator and a denominator factor are polynomials in one and the same
+//! atom, their GCD (Euclid over the rationals) is cancelled too
+//! (`(x^2 - 1)/(x^2 + 2*x + 1) → (x - 1)/(x + 1)`). This is not a full
+//! multivariate GCD: a factor shared only partly by polynomials in several
+//! atoms stays (`(x^2 - y^2)/(x^2 + 2*x*y + y^2)` is not reduced), and two
+//! denominator factors are not compared with each other.
 //!
 //! Entry points: [`Pool::together`] and [`Pool::simplify_rational`] (the shorter
 //! of `e` and its quotient form).
@@ -312,8 +315,9 @@ fn reduce(mut num: Poly, den: Vec<(Poly, u32)>) -> Frac {
     if num.is_empty() {
         return Frac::poly(num);
     }
-    let mut out = Vec::with_capacity(den.len());
-    for (b, mut k) in den {
+    let mut out: Vec<(Poly, u32)> = Vec::with_capacity(den.len());
+    let mut work = den;
+    while let Some((b, mut k)) = work.pop() {
         if b.len() == 1 {
             // A single atom (bases are monic and primitive).
             let (m, _) = b.first_key_value().expect("one term");
@@ -336,12 +340,87 @@ fn reduce(mut num: Poly, den: Vec<(Poly, u32)>) -> Frac {
                     None => break,
                 }
             }
+            // A common factor short of all of b: split b = g·(b/g) and go on.
+            if k > 0 {
+                if let Some((g, rest, q)) = common_factor(&num, &b) {
+                    num = q;
+                    let (c, m, rest) = split(&rest);
+                    // b is primitive, so c is ±1 by Gauss's lemma; scale all the same.
+                    let ck = (0..k).fold(Number::ONE, |acc, _| acc.times(c));
+                    num = scale(&num, recip(ck));
+                    work.extend(m.0.iter().map(|&(x, e)| (atom_poly(x), e * k)));
+                    if rest.len() > 1 || rest.keys().any(|key| !key.0.is_empty()) {
+                        work.push((rest, k));
+                    }
+                    if k > 1 {
+                        work.push((g, k - 1));
+                    }
+                    continue;
+                }
+            }
         }
         if k > 0 {
-            out.push((b, k));
+            match out.iter_mut().find(|p| p.0 == b) {
+                Some(p) => p.1 += k,
+                None => out.push((b, k)),
+            }
         }
     }
     Frac { num, den: out }
+}
+
+/// The atom a polynomial is univariate in (`None` for a constant or several atoms).
+fn main_atom(p: &Poly) -> Option<ExprId> {
+    let mut atom = None;
+    for m in p.keys() {
+        match m.0[..] {
+            [] => {}
+            [(a, _)] if atom.is_none() || atom == Some(a) => atom = Some(a),
+            _ => return None,
+        }
+    }
+    atom
+}
+
+/// The remainder of `p` divided by `d` (univariate in the same atom, exact).
+fn univariate_rem(p: &Poly, d: &Poly) -> Option<Poly> {
+    let (lm, &lc) = d.last_key_value()?;
+    let inv = recip(lc);
+    let mut rem = p.clone();
+    for _ in 0..MAX_DIVISION_STEPS {
+        let Some((m, &c)) = rem.last_key_value() else { return Some(rem) };
+        let Some(qm) = m.over(lm) else { return Some(rem) };
+        let qc = c.times(inv);
+        for (n, &e) in d {
+            add_term(&mut rem, n.times(&qm), qc.times(e).negated());
+        }
+        if has_float(&rem) {
+            return None;
+        }
+    }
+    None
+}
+
+/// A nontrivial common factor `g` of `num` and the primitive `b` when both
+/// are polynomials in one and the same atom (Euclid over the rationals), with
+/// `b/g` and `num/g`. `g` is primitive with a positive leading coefficient.
+fn common_factor(num: &Poly, b: &Poly) -> Option<(Poly, Poly, Poly)> {
+    let x = main_atom(b)?;
+    if main_atom(num) != Some(x) {
+        return None;
+    }
+    let (mut r0, mut r1) = (b.clone(), num.clone());
+    while !r1.is_empty() {
+        let r = univariate_rem(&r0, &r1)?;
+        (r0, r1) = (r1, r);
+    }
+    let (_, _, g) = split(&r0);
+    if g.len() < 2 || g == *b {
+        return None;
+    }
+    let rest = exact_div(b, &g)?;
+    let q = exact_div(num, &g)?;
+    Some((g, rest, q))
 }
 
 fn frac_add(a: &Frac, b: &Frac) -> Option<Frac> {
@@ -563,6 +642,14 @@ mod tests {
         check("1/(1 + 1/x)", "x/(x + 1)");
         check("(1/x - 1/y)/(1/x + 1/y)", "-(x - y)/(x + y)");
         check("x/2 + x/3", "5*x/6");
+    }
+
+    #[test]
+    fn univariate_common_factors() {
+        check("(x^2 - 1)/(x^2 + 2*x + 1)", "(x - 1)/(x + 1)");
+        check("1/(x - 1) - 2/(x^2 - 1)", "1/(x + 1)");
+        check("(x^3 - x)/(x^2 - 2*x + 1)^2", "x*(x + 1)/(x - 1)^3");
+        check("(x^2 - 1)/(x^2 + 1)", "(x^2 - 1)/(x^2 + 1)");
     }
 
     #[test]
