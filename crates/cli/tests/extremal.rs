@@ -112,6 +112,8 @@ fn check_brachistochrone(file: &Path, x1: f64, y1: f64, g: f64) {
     assert!(v["straight_line_value"].as_f64().unwrap() > time);
     assert_eq!(path(&v).len(), 201);
     close(v["departure"][0].as_f64().unwrap(), PI / 2.0, 1e-12);
+    // The Euler equation solved for y'' reads as the notes write it.
+    assert_eq!(v["acceleration"], "-(y'^2 + 1)/(2*y)");
     // Every point lies on the cycloid: θ from x (monotone), then y.
     for [x, y] in path(&v) {
         let theta = bisect(|t| a * (t - t.sin()) - x, 0.0, theta1 + 1e-6);
@@ -171,6 +173,7 @@ fn catenary_two_extremals_and_the_lower_one() {
     let area = |a: f64| a * (h + 0.5 * a * (2.0 * h / a).sinh());
     let ext = v["extremals"].as_array().unwrap();
     assert_eq!(ext.len(), 2, "{ext:?}");
+    assert_eq!(v["acceleration"], "(y'^2 + 1)/y");
     close(ext[0]["value"].as_f64().unwrap(), area(shallow), 1e-9);
     close(ext[1]["value"].as_f64().unwrap(), area(deep), 1e-9);
     close(v["value"].as_f64().unwrap(), area(shallow), 1e-9);

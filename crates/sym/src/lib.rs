@@ -22,6 +22,7 @@ mod jit;
 mod number;
 mod parse;
 mod print;
+mod rational;
 mod simplify;
 
 pub use eval::{EvalError, Tape};

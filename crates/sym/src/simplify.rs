@@ -5,8 +5,10 @@
 //! Entry points: [`Pool::simplify`] (generic) and [`Pool::simplify_in`] (collect
 //! the coefficients of the given variables, as the notes write equations of
 //! motion: `(mA + mB)*lA^2*a'' + …`). Both keep the shorter of the input and the
-//! rewritten form, so simplification never makes an expression longer, and every
-//! rewrite is an identity (the property tests check values at random points).
+//! rewritten form (and, where a sum stands in a denominator, the single
+//! quotient of [`Pool::together`]), so simplification never makes an
+//! expression longer, and every rewrite is an identity (the property tests
+//! check values at random points).
 
 use crate::expr::{ExprId, Func, Node, Pool, Symbol};
 use crate::number::{Number, Rational};
@@ -18,6 +20,8 @@ const MAX_EXPANDED_TERMS: usize = 4096;
 const EXPAND: u8 = 0;
 const TRIG: u8 = 1;
 const FACTOR: u8 = 2;
+/// Whether a node has a negative power of a sum inside (stored as 1 or 0).
+const QUOTIENT: u8 = 3;
 
 /// Largest power of a sum that is expanded.
 const MAX_EXPANDED_POWER: i128 = 12;
@@ -389,12 +393,50 @@ impl Pool {
     }
 
     /// Expands, combines trigonometric terms and factors common terms, and
-    /// returns the shorter of that and `e`.
+    /// returns the shorter of that and `e` (and of [`Pool::together`]`(e)` when
+    /// `e` divides by a sum).
     pub fn simplify(&mut self, e: ExprId) -> ExprId {
         let x = self.expand(e);
         let x = self.combine_trig(x);
         let x = self.factor_terms(x);
-        self.shorter(e, x)
+        let best = self.shorter(e, x);
+        self.shorter_together(best, e)
+    }
+
+    /// The shorter of `best` and `together(e)`, tried only when `e` has a
+    /// negative power of a sum (elsewhere it has nothing to combine).
+    fn shorter_together(&mut self, best: ExprId, e: ExprId) -> ExprId {
+        if !self.has_quotient_of_sums(e) {
+            return best;
+        }
+        let t = self.together(e);
+        self.shorter(best, t)
+    }
+
+    /// True when a negative power of a sum occurs in `e` (memoized per node).
+    fn has_quotient_of_sums(&mut self, e: ExprId) -> bool {
+        let mut stack = vec![(e, false)];
+        while let Some((id, ready)) = stack.pop() {
+            if self.rewrite_cache.contains_key(&(QUOTIENT, id)) {
+                continue;
+            }
+            let children = self.children(self.node(id));
+            if !ready {
+                stack.push((id, true));
+                stack.extend(children.iter().map(|&c| (c, false)));
+                continue;
+            }
+            let here = match self.node(id) {
+                &Node::Pow(b, x) => {
+                    matches!(self.node(b), Node::Add(_)) && self.as_number(x).is_some_and(|n| n.is_negative())
+                }
+                _ => false,
+            };
+            let any = here || children.iter().any(|c| self.rewrite_cache[&(QUOTIENT, *c)] == self.one());
+            let flag = if any { self.one() } else { self.zero() };
+            self.rewrite_cache.insert((QUOTIENT, id), flag);
+        }
+        self.rewrite_cache[&(QUOTIENT, e)] == self.one()
     }
 
     /// Like [`Pool::simplify`], but collects the coefficients of the variables
@@ -409,7 +451,7 @@ impl Pool {
         for candidate in [collected, self.factor_outer(collected), self.factor_outer(e)] {
             best = self.shorter(best, candidate);
         }
-        best
+        self.shorter_together(best, e)
     }
 
     /// The shorter of two equal expressions, preferring the first on a tie.
@@ -509,6 +551,20 @@ mod tests {
         let two_y = p.mul2(two, y);
         let inner = p.add2(x, two_y);
         assert_eq!(got, p.mul2(x, inner));
+    }
+
+    #[test]
+    fn quotients_of_sums_are_put_together() {
+        let mut p = Pool::default();
+        let e = p.parse("-1/(y*(y'^2/(y'^2 + 1) - 1))").unwrap();
+        let got = p.simplify(e);
+        assert_eq!(p.display(got).to_string(), "(y'^2 + 1)/y");
+        let yname = p.name("y");
+        let got = p.simplify_in(e, &|s| s.name == yname);
+        assert_eq!(p.display(got).to_string(), "(y'^2 + 1)/y");
+        // Without a sum in a denominator there is nothing to put together.
+        let e = p.parse("1/a + 1/b").unwrap();
+        assert_eq!(p.simplify(e), e);
     }
 
     #[test]

@@ -3,7 +3,7 @@
 //! Expressions are random trees of constructor calls ([`Gen`], built through the
 //! `Pool` constructors, so they are in canonical form). The properties:
 //! printing then parsing is the identity on ids; `diff` matches a central finite
-//! difference of `eval`; `simplify` keeps the value; a [`Tape`] of several roots
+//! difference of `eval`; `simplify` and `together` keep the value; a [`Tape`] of several roots
 //! agrees with `eval` of each; and the parser returns `Ok` or `Err`, never panics,
 //! on any text. The runner is seeded, so every run tries the same cases.
 
@@ -111,6 +111,31 @@ proptest! {
                     "simplify({}) = {}, but at {:?} they are {} and {}", pool.display(e), pool.display(s), p, a, b);
             }
         }
+    }
+
+    #[test]
+    fn together_keeps_the_value(g in expr(), points in prop::collection::vec(point(), 3)) {
+        let mut pool = Pool::default();
+        let e = build(&mut pool, &g);
+        let t = pool.together(e);
+        let r = pool.simplify_rational(e);
+        prop_assert!(pool.tree_size(r) <= pool.tree_size(e));
+        for p in &points {
+            let (a, b) = (eval(&pool, e, p), eval(&pool, t, p));
+            if a.is_finite() && b.is_finite() && a.abs() < 1e8 && finite_inside(&pool, e, p) {
+                prop_assert!(close(a, b, 1e-9, a.abs()),
+                    "together({}) = {}, but at {:?} they are {} and {}", pool.display(e), pool.display(t), p, a, b);
+            }
+        }
+    }
+
+    #[test]
+    fn together_never_panics_at_the_edges(g in tree(extreme_leaf())) {
+        let mut pool = Pool::default();
+        let e = build(&mut pool, &g);
+        let t = pool.together(e);
+        // The result is an expression of the pool that prints.
+        prop_assert!(!pool.display(t).to_string().is_empty());
     }
 
     #[test]

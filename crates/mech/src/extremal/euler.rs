@@ -64,8 +64,10 @@ impl Euler {
         let y_sym = pool.as_symbol(vars.y).map(|s| s.name);
         let is_var = |s: sym::Symbol| Some(s.name) == y_sym;
         let equation = pool.simplify_in(raw, &is_var);
+        let equation = pool.simplify_rational(equation);
         let f_pp = pool.diff(f_p, vars.p);
         let f_pp = pool.simplify(f_pp);
+        let f_pp = pool.simplify_rational(f_pp);
         if pool.is_zero(f_pp) {
             return Err(EulerError::Degenerate { y: y_name.to_string() });
         }
@@ -77,10 +79,12 @@ impl Euler {
         let e0 = pool.sub(e0, p_f_py);
         let acc = pool.div(e0, f_pp);
         let acceleration = pool.simplify(acc);
+        let acceleration = pool.simplify_rational(acceleration);
         let first_integral = if pool.free_of(f, vars.x) {
             let pf = pool.mul2(vars.p, f_p);
             let h = pool.sub(pf, f);
-            Some(pool.simplify(h))
+            let h = pool.simplify(h);
+            Some(pool.simplify_rational(h))
         } else {
             None
         };
@@ -89,6 +93,7 @@ impl Euler {
         let d_f_yp = total_derivative(pool, f_yp, vars);
         let q = pool.sub(f_yy, d_f_yp);
         let jacobi_q = pool.simplify_in(q, &is_var);
+        let jacobi_q = pool.simplify_rational(jacobi_q);
         Ok(Euler { vars, equation, acceleration, first_integral, legendre: f_pp, jacobi_q })
     }
 }
@@ -121,6 +126,24 @@ mod tests {
     fn euler_equations() {
         check("y'^2/2 - y^2/2", "-y - y''", "-y", Some("y^2/2 + y'^2/2"));
         check("y'^2 + x*y", "x - 2*y''", "x/2", None);
+    }
+
+    #[test]
+    fn quotients_read_as_written() {
+        // Catenary: y'' = (1 + y'^2)/y.
+        check("y*sqrt(1 + y'^2)", "(y'^2 - y*y'' + 1)/(y'^2 + 1)^(3/2)", "(y'^2 + 1)/y", Some("-y/sqrt(y'^2 + 1)"));
+        // Brachistochrone: y'' = -(1 + y'^2)/(2y).
+        check(
+            "sqrt((1 + y'^2)/(2*g*y))",
+            "-(y'^2 + 2*y*y'' + 1)*sqrt((y'^2 + 1)/(2*g*y))/(2*y*(y'^2 + 1)^2)",
+            "-(y'^2 + 1)/(2*y)",
+            Some("-sqrt((y'^2 + 1)/(2*g*y))/(y'^2 + 1)"),
+        );
+        let mut pool = Pool::default();
+        let f = pool.parse("y*sqrt(1 + y'^2)").unwrap();
+        let e = Euler::new(&mut pool, f, "x", "y").unwrap();
+        assert_eq!(pool.display(e.legendre).to_string(), "y/(y'^2 + 1)^(3/2)");
+        assert_eq!(pool.display(e.jacobi_q).to_string(), "-y''/(y'^2 + 1)^(3/2)");
     }
 
     #[test]
