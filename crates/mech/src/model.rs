@@ -299,7 +299,8 @@ pub(crate) fn number_expr(pool: &mut Pool, x: f64) -> ExprId {
 
 /// Where the text of a TOML string value starts, if its characters map one to
 /// one onto the file (no escapes); otherwise errors point at the whole value.
-fn content_offset(source: &str, span: &Range<usize>, value: &str) -> Option<usize> {
+/// Shared by every file the library reads (models, body files, problems).
+pub(crate) fn content_offset(source: &str, span: &Range<usize>, value: &str) -> Option<usize> {
     let raw = source.get(span.clone())?;
     for quote in ["\"\"\"", "'''", "\"", "'"] {
         if raw.len() >= 2 * quote.len() && raw.starts_with(quote) && raw.ends_with(quote) {
@@ -322,7 +323,8 @@ fn content_offset(source: &str, span: &Range<usize>, value: &str) -> Option<usiz
     None
 }
 
-pub(crate) fn check_identifier(name: &Spanned<String>, what: &str) -> Result<(), ModelError> {
+/// A name is letters, digits and '_', starting with a letter or '_'.
+pub(crate) fn check_name_shape(name: &Spanned<String>, what: &str) -> Result<(), ModelError> {
     let n = name.get_ref();
     let mut chars = n.chars();
     let ok = matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
@@ -333,6 +335,30 @@ pub(crate) fn check_identifier(name: &Spanned<String>, what: &str) -> Result<(),
             format!("{what} '{n}' is not a valid name: expected letters, digits and '_', starting with a letter"),
         ));
     }
+    Ok(())
+}
+
+/// Reads the TOML of a file the library knows (`what`: "model", "body", …),
+/// with the size limit, into its raw table; errors carry the TOML span.
+pub(crate) fn read_toml<T: serde::de::DeserializeOwned>(source: &str, what: &str) -> Result<T, ModelError> {
+    if source.len() > MAX_FILE_BYTES {
+        return Err(ModelError::whole(format!(
+            "the {what} file is {} bytes; the limit is {MAX_FILE_BYTES}",
+            source.len()
+        )));
+    }
+    toml::from_str(source).map_err(|e| {
+        let message = e.message().trim().to_string();
+        match e.span() {
+            Some(span) => ModelError::at(span, message),
+            None => ModelError::whole(message),
+        }
+    })
+}
+
+pub(crate) fn check_identifier(name: &Spanned<String>, what: &str) -> Result<(), ModelError> {
+    check_name_shape(name, what)?;
+    let n = name.get_ref();
     if RESERVED.contains(&n.as_str()) {
         return Err(ModelError::at(name.span(), format!("{what} '{n}' uses a reserved name"))
             .with_help("t is the time, pi the constant; function names cannot be symbols"));
@@ -350,19 +376,7 @@ impl Model {
     /// [`Model::parse`] for a model that may name other files (body files in
     /// `[[bodies]]`), which `files` reads.
     pub fn parse_with(source: &str, overrides: &[(String, f64)], files: &FileReader) -> Result<Model, ModelError> {
-        if source.len() > MAX_FILE_BYTES {
-            return Err(ModelError::whole(format!(
-                "the model file is {} bytes; the limit is {MAX_FILE_BYTES}",
-                source.len()
-            )));
-        }
-        let raw: RawModel = toml::from_str(source).map_err(|e| {
-            let message = e.message().trim().to_string();
-            match e.span() {
-                Some(span) => ModelError::at(span, message),
-                None => ModelError::whole(message),
-            }
-        })?;
+        let raw: RawModel = read_toml(source, "model")?;
         let mut r = Reader { source, files, pool: Pool::default(), coordinates: Vec::new(), parameters: Vec::new() };
 
         // Coordinates.

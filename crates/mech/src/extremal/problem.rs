@@ -76,16 +76,8 @@ fn missing(key: &str, example: &str) -> ModelError {
 }
 
 fn check_identifier(name: &Spanned<String>, what: &str) -> Result<(), ModelError> {
+    crate::model::check_name_shape(name, what)?;
     let n = name.get_ref();
-    let mut chars = n.chars();
-    let ok = matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
-        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_');
-    if !ok {
-        return Err(ModelError::at(
-            name.span(),
-            format!("{what} '{n}' is not a valid name: expected letters, digits and '_', starting with a letter"),
-        ));
-    }
     if RESERVED.contains(&n.as_str()) {
         return Err(ModelError::at(name.span(), format!("{what} '{n}' uses a reserved name"))
             .with_help("pi is the constant; function names cannot be symbols"));
@@ -93,36 +85,11 @@ fn check_identifier(name: &Spanned<String>, what: &str) -> Result<(), ModelError
     Ok(())
 }
 
-/// Where the text of a one-line TOML string value starts, if it maps one to one
-/// onto the file (no escapes); otherwise errors point at the whole value.
-fn content_offset(source: &str, span: &Range<usize>, value: &str) -> Option<usize> {
-    let raw = source.get(span.clone())?;
-    for quote in ["\"", "'"] {
-        if raw.len() >= 2 && raw.starts_with(quote) && raw.ends_with(quote) && &raw[1..raw.len() - 1] == value {
-            return Some(span.start + 1);
-        }
-    }
-    None
-}
-
 impl Problem {
     /// Reads a problem file's text. `overrides` are `--set name=value` pairs,
     /// applied to `[parameters]` (an unknown name is an error).
     pub fn parse(source: &str, overrides: &[(String, f64)]) -> Result<Problem, ModelError> {
-        if source.len() > crate::MAX_FILE_BYTES {
-            return Err(ModelError::whole(format!(
-                "the problem file is {} bytes; the limit is {}",
-                source.len(),
-                crate::MAX_FILE_BYTES
-            )));
-        }
-        let raw: RawProblem = toml::from_str(source).map_err(|e| {
-            let message = e.message().trim().to_string();
-            match e.span() {
-                Some(span) => ModelError::at(span, message),
-                None => ModelError::whole(message),
-            }
-        })?;
+        let raw: RawProblem = crate::model::read_toml(source, "problem")?;
         let independent = raw.independent.ok_or_else(|| missing("independent", "independent = \"x\""))?;
         let unknown = raw.unknown.ok_or_else(|| missing("unknown", "unknown = \"y\""))?;
         let integrand = raw.integrand.ok_or_else(|| missing("integrand", "integrand = \"sqrt(1 + y'^2)\""))?;
@@ -264,7 +231,7 @@ impl Names<'_> {
         };
         let opts = ParseOptions::default().with_known(&known);
         pool.parse_with(text, &opts).map_err(|err| {
-            let at = match content_offset(source, &span, text) {
+            let at = match crate::model::content_offset(source, &span, text) {
                 Some(o) => (o + err.span.start as usize)..(o + (err.span.end as usize).max(err.span.start as usize + 1)),
                 None => span.clone(),
             };

@@ -134,7 +134,7 @@ impl Reader<'_> {
             NumOrText::Text(s) => s,
         };
         let span = v.span();
-        let offset = content_offset(self.source, &span, text);
+        let offset = crate::model::content_offset(self.source, &span, text);
         let names: Vec<String> = self.parameters.iter().map(|p| p.name.clone()).collect();
         let known = |name: &str, order: u8| {
             order == 0 && (names.iter().any(|p| p == name) || (with_xyz && DENSITY_VARIABLES.contains(&name)))
@@ -348,30 +348,9 @@ fn decimal(text: &str) -> Option<sym::Rational> {
     sym::Rational::new(if neg { -num } else { num }, den)
 }
 
-/// Where the text of a TOML string value starts, if its characters map one to
-/// one onto the file (no escapes); otherwise errors point at the whole value.
-fn content_offset(source: &str, span: &Range<usize>, value: &str) -> Option<usize> {
-    let raw = source.get(span.clone())?;
-    for quote in ["\"", "'"] {
-        if raw.len() >= 2 && raw.starts_with(quote) && raw.ends_with(quote) && !raw.starts_with("\"\"\"") {
-            let inner = &raw[1..raw.len() - 1];
-            return (inner == value).then_some(span.start + 1);
-        }
-    }
-    None
-}
-
 fn check_identifier(name: &Spanned<String>) -> Result<(), ModelError> {
+    crate::model::check_name_shape(name, "parameter")?;
     let n = name.get_ref();
-    let mut chars = n.chars();
-    let ok = matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
-        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_');
-    if !ok {
-        return Err(ModelError::at(
-            name.span(),
-            format!("parameter '{n}' is not a valid name: expected letters, digits and '_', starting with a letter"),
-        ));
-    }
     if RESERVED.contains(&n.as_str()) {
         return Err(ModelError::at(name.span(), format!("parameter '{n}' uses a reserved name"))
             .with_help("t is the time, pi the constant; function names cannot be symbols"));
@@ -387,20 +366,7 @@ impl BodyFile {
     /// Reads a body file's text. `overrides` are `--set name=value` pairs,
     /// applied to `[parameters]` (an unknown name is an error).
     pub fn parse(source: &str, overrides: &[(String, f64)]) -> Result<BodyFile, ModelError> {
-        if source.len() > crate::MAX_FILE_BYTES {
-            return Err(ModelError::whole(format!(
-                "the body file is {} bytes; the limit is {}",
-                source.len(),
-                crate::MAX_FILE_BYTES
-            )));
-        }
-        let raw: RawBody = toml::from_str(source).map_err(|e| {
-            let message = e.message().trim().to_string();
-            match e.span() {
-                Some(span) => ModelError::at(span, message),
-                None => ModelError::whole(message),
-            }
-        })?;
+        let raw: RawBody = crate::model::read_toml(source, "body")?;
         let mut params: Vec<(&Spanned<String>, &Spanned<f64>)> = raw.parameters.iter().collect();
         params.sort_by_key(|(k, _)| k.span().start);
         let mut parameters: Vec<Parameter> = Vec::new();
