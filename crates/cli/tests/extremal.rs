@@ -7,25 +7,9 @@
 use serde_json::Value;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-fn repo_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().expect("the repository root exists")
-}
-
-/// Exit code, stdout and stderr of `lagrange ARGS` run in the repository root.
-fn lagrange(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_lagrange"))
-        .args(args)
-        .current_dir(repo_root())
-        .output()
-        .unwrap_or_else(|e| panic!("cannot start lagrange {args:?}: {e}"));
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
+use common::{close, lagrange, repo_root};
 
 #[track_caller]
 fn json(args: &[&str]) -> Value {
@@ -35,11 +19,6 @@ fn json(args: &[&str]) -> Value {
     let (code, stdout, stderr) = lagrange(&all);
     assert_eq!(code, 0, "lagrange {all:?}\n{stdout}\n{stderr}");
     serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("not JSON ({e}):\n{stdout}"))
-}
-
-#[track_caller]
-fn close(got: f64, want: f64, rel: f64) {
-    assert!((got - want).abs() <= rel * want.abs().max(1e-12), "got {got}, want {want}");
 }
 
 fn path(v: &Value) -> Vec<[f64; 2]> {

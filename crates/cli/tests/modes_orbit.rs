@@ -6,26 +6,10 @@
 
 use serde_json::Value;
 use std::f64::consts::PI;
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::PathBuf;
 
-fn repo_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().expect("the repository root exists")
-}
-
-/// Exit code, stdout and stderr of `lagrange ARGS` run in the repository root.
-fn lagrange(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_lagrange"))
-        .args(args)
-        .current_dir(repo_root())
-        .output()
-        .unwrap_or_else(|e| panic!("cannot start lagrange {args:?}: {e}"));
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
+use common::{close, lagrange};
 
 #[track_caller]
 fn json(args: &[&str]) -> Value {
@@ -36,11 +20,6 @@ fn json(args: &[&str]) -> Value {
 
 fn floats(v: &Value) -> Vec<f64> {
     v.as_array().expect("an array").iter().map(|x| x.as_f64().expect("a number")).collect()
-}
-
-#[track_caller]
-fn close(got: f64, want: f64, rel: f64) {
-    assert!((got - want).abs() <= rel * want.abs().max(1e-12), "got {got}, want {want}");
 }
 
 fn temp(name: &str) -> PathBuf {
