@@ -26,7 +26,7 @@ use crate::constraint::ConstraintKind;
 use crate::derive::Derivation;
 use crate::dynamics::{Dynamics, Form, Kernel};
 use crate::error::ModelError;
-use crate::run::{Audit, Row, RunConfig, RunError, RunReport};
+use crate::run::{drift_warnings, Audit, InvariantAudit, Row, RunConfig, RunError, RunReport};
 use num::{integrate_projected, Config, Event, LinearSolver, Method, ObservationKind, OdeSystem, RhsError, Solver};
 use num::{SolveError, StopReason};
 use std::ops::ControlFlow;
@@ -418,12 +418,7 @@ pub(crate) fn simulate(
     }
     let (q0, qd0) = d.model.initial_state().map_err(RunError::Input)?;
     let dynamics = Dynamics::new(d);
-    let conserved: Vec<bool> = dynamics
-        .invariants()
-        .iter()
-        .map(|inv| if inv.name == "H" { d.hamiltonian_conserved } else { inv.name != "E" })
-        .collect();
-    let inv_names: Vec<String> = dynamics.invariants().iter().map(|i| i.name.clone()).collect();
+    let mut invariant_audit = InvariantAudit::new(d, &dynamics);
     let mut inv_dynamics = dynamics.clone();
     let mut system = ConstrainedSystem::new(d, dynamics);
     let list = d.constraints.list.clone();
@@ -494,13 +489,9 @@ pub(crate) fn simulate(
     }
 
     // The audit, row by row.
-    let n_inv = inv_names.len();
     let n_cols = constraint_columns(d).len();
-    let mut inv = vec![0.0; n_inv];
+    let mut inv = vec![0.0; invariant_audit.len()];
     let mut cols = vec![0.0; n_cols];
-    let mut initial: Option<Vec<f64>> = None;
-    let mut max_abs = vec![0.0f64; n_inv];
-    let mut max_rel = vec![0.0f64; n_inv];
     let mut audits: Vec<ConstraintAudit> = list
         .iter()
         .map(|c| ConstraintAudit {
@@ -519,7 +510,6 @@ pub(crate) fn simulate(
     // grow together, and their difference cannot be better than H's own digits.
     let (mut hw_initial, mut hw_last, mut hw_abs, mut h_size) = (None::<f64>, 0.0, 0.0f64, 0.0f64);
     let mut last_y = y0.clone();
-    let mut last_inv = vec![0.0; n_inv];
     let mut last_t = 0.0;
     let mut row_error: Option<String> = None;
     let mut projector = system.clone();
@@ -536,16 +526,8 @@ pub(crate) fn simulate(
         let (q, rest) = row_y.split_at(n);
         let qd = &rest[..n];
         inv_dynamics.eval_invariants(obs.t, q, qd, &mut inv);
-        let init = initial.get_or_insert_with(|| inv.clone());
         let interpolated_event = matches!(obs.kind, ObservationKind::Event { .. });
-        for k in (0..n_inv).filter(|_| !interpolated_event) {
-            let a = (inv[k] - init[k]).abs();
-            if a.is_finite() {
-                max_abs[k] = max_abs[k].max(a);
-                let scale = init[k].abs();
-                max_rel[k] = max_rel[k].max(if scale > 0.0 { a / scale } else { a });
-            }
-        }
+        invariant_audit.observe(&inv, interpolated_event);
         let mut c = 0;
         for (k, audit) in audits.iter_mut().enumerate() {
             audit.final_lambda = cols[c];
@@ -568,7 +550,6 @@ pub(crate) fn simulate(
         }
         last_t = obs.t;
         last_y.copy_from_slice(&row_y);
-        last_inv.copy_from_slice(&inv);
         on_row(&Row {
             t: obs.t,
             q,
@@ -584,18 +565,7 @@ pub(crate) fn simulate(
     });
 
     let stats = solver.statistics();
-    let initial = initial.unwrap_or_else(|| last_inv.clone());
-    let inv_audits: Vec<Audit> = (0..n_inv)
-        .map(|k| Audit {
-            name: inv_names[k].clone(),
-            conserved: conserved[k],
-            initial: initial[k],
-            final_value: last_inv[k],
-            max_abs_drift: max_abs[k],
-            max_rel_drift: max_rel[k],
-        })
-        .collect();
-    let mut inv_audits = inv_audits;
+    let mut inv_audits = invariant_audit.audits();
     if let Some(h0) = hw_initial {
         inv_audits.push(Audit {
             name: "H-W".into(),
@@ -606,16 +576,8 @@ pub(crate) fn simulate(
             max_rel_drift: if h_size > 0.0 { hw_abs / h_size } else { hw_abs },
         });
     }
-    let mut warnings = Vec::new();
     let explained = (1e3 * config.rtol).max(1e-12);
-    for a in &inv_audits {
-        if a.conserved && a.max_rel_drift > explained {
-            warnings.push(format!(
-                "{} is conserved, but drifted by {:.3e} (relative), more than the tolerance explains ({:.1e})",
-                a.name, a.max_rel_drift, explained
-            ));
-        }
-    }
+    let mut warnings = drift_warnings(&inv_audits, explained);
     for a in &audits {
         if a.max_abs_residual > 1e-9 || a.max_abs_velocity_residual > 1e-9 {
             warnings.push(format!(

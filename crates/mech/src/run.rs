@@ -104,6 +104,91 @@ pub struct Audit {
     pub max_rel_drift: f64,
 }
 
+/// The audit of the invariants, row by row: the first row is the reference,
+/// the drift is the largest departure from it, the final value the last row's.
+/// Plain and constrained runs share it.
+pub(crate) struct InvariantAudit {
+    names: Vec<String>,
+    conserved: Vec<bool>,
+    initial: Option<Vec<f64>>,
+    last: Vec<f64>,
+    max_abs: Vec<f64>,
+    max_rel: Vec<f64>,
+}
+
+impl InvariantAudit {
+    /// The audit of the invariants `dynamics` evaluates; H is conserved as the
+    /// derivation says, E never on its own, the conserved momenta always.
+    pub(crate) fn new(d: &Derivation, dynamics: &Dynamics) -> InvariantAudit {
+        let invariants = dynamics.invariants();
+        let n = invariants.len();
+        InvariantAudit {
+            names: invariants.iter().map(|i| i.name.clone()).collect(),
+            conserved: invariants
+                .iter()
+                .map(|inv| if inv.name == "H" { d.hamiltonian_conserved } else { inv.name != "E" })
+                .collect(),
+            initial: None,
+            last: vec![0.0; n],
+            max_abs: vec![0.0; n],
+            max_rel: vec![0.0; n],
+        }
+    }
+
+    /// How many invariants there are.
+    pub(crate) fn len(&self) -> usize {
+        self.names.len()
+    }
+
+    /// Records one row's values. Event rows are interpolated between two steps
+    /// (cubic Hermite for the compositions): their error is the interpolant's,
+    /// not the integrator's, so they do not enter the drift.
+    pub(crate) fn observe(&mut self, inv: &[f64], interpolated_event: bool) {
+        let init = self.initial.get_or_insert_with(|| inv.to_vec());
+        if !interpolated_event {
+            for k in 0..inv.len() {
+                let a = (inv[k] - init[k]).abs();
+                if a.is_finite() {
+                    self.max_abs[k] = self.max_abs[k].max(a);
+                    let scale = init[k].abs();
+                    self.max_rel[k] = self.max_rel[k].max(if scale > 0.0 { a / scale } else { a });
+                }
+            }
+        }
+        self.last.copy_from_slice(inv);
+    }
+
+    /// One audit per invariant.
+    pub(crate) fn audits(&self) -> Vec<Audit> {
+        let initial = self.initial.as_ref().unwrap_or(&self.last);
+        (0..self.len())
+            .map(|k| Audit {
+                name: self.names[k].clone(),
+                conserved: self.conserved[k],
+                initial: initial[k],
+                final_value: self.last[k],
+                max_abs_drift: self.max_abs[k],
+                max_rel_drift: self.max_rel[k],
+            })
+            .collect()
+    }
+}
+
+/// A warning for each conserved invariant that drifted by more than
+/// `explained` (relative), the drift the method's tolerance accounts for.
+pub(crate) fn drift_warnings(audits: &[Audit], explained: f64) -> Vec<String> {
+    audits
+        .iter()
+        .filter(|a| a.conserved && a.max_rel_drift > explained)
+        .map(|a| {
+            format!(
+                "{} is conserved, but drifted by {:.3e} (relative), more than the tolerance explains ({:.1e})",
+                a.name, a.max_rel_drift, explained
+            )
+        })
+        .collect()
+}
+
 /// What a run did.
 #[derive(Debug, Clone)]
 pub struct RunReport {
@@ -224,12 +309,7 @@ pub fn simulate(
     let (method, form) = choose_method(d, &dynamics, config.method).map_err(RunError::Input)?;
     let n = dynamics.n_coords();
     let names: Vec<String> = dynamics.coordinate_names().to_vec();
-    let conserved: Vec<bool> = dynamics
-        .invariants()
-        .iter()
-        .map(|inv| if inv.name == "H" { d.hamiltonian_conserved } else { inv.name != "E" })
-        .collect();
-    let inv_names: Vec<String> = dynamics.invariants().iter().map(|i| i.name.clone()).collect();
+    let mut invariant_audit = InvariantAudit::new(d, &dynamics);
 
     let mut system = dynamics.system(form);
     let y0 = system.initial_state(0.0, &q0, &qd0).map_err(RunError::Input)?;
@@ -329,15 +409,10 @@ pub fn simulate(
     }
 
     // The audit, row by row.
-    let n_inv = inv_names.len();
     let mut qd = vec![0.0; n];
-    let mut inv = vec![0.0; n_inv];
-    let mut initial: Option<Vec<f64>> = None;
-    let mut max_abs = vec![0.0f64; n_inv];
-    let mut max_rel = vec![0.0f64; n_inv];
+    let mut inv = vec![0.0; invariant_audit.len()];
     let mut last_q = q0.clone();
     let mut last_qd = qd0.clone();
-    let mut last_inv = vec![0.0; n_inv];
     let mut last_t = 0.0;
     let mut row_error: Option<String> = None;
     let result = integrate(&mut solver, config.until, config.output, &mut events, |obs| {
@@ -345,23 +420,10 @@ pub fn simulate(
             row_error = Some(format!("at t = {}: {e}", obs.t));
             return ControlFlow::Break(());
         }
-        let init = initial.get_or_insert_with(|| inv.clone());
-        // Event rows are interpolated between two steps (cubic Hermite for the
-        // compositions): their error is the interpolant's, not the integrator's,
-        // so they do not enter the audit.
-        let interpolated_event = matches!(obs.kind, ObservationKind::Event { .. });
-        for k in (0..n_inv).filter(|_| !interpolated_event) {
-            let a = (inv[k] - init[k]).abs();
-            if a.is_finite() {
-                max_abs[k] = max_abs[k].max(a);
-                let scale = init[k].abs();
-                max_rel[k] = max_rel[k].max(if scale > 0.0 { a / scale } else { a });
-            }
-        }
+        invariant_audit.observe(&inv, matches!(obs.kind, ObservationKind::Event { .. }));
         last_t = obs.t;
         last_q.copy_from_slice(&obs.y[..n]);
         last_qd.copy_from_slice(&qd);
-        last_inv.copy_from_slice(&inv);
         let flow = on_row(&Row {
             t: obs.t,
             q: &obs.y[..n],
@@ -383,29 +445,11 @@ pub fn simulate(
     });
 
     let stats = solver.statistics();
-    let initial = initial.unwrap_or_else(|| last_inv.clone());
-    let audits: Vec<Audit> = (0..n_inv)
-        .map(|k| Audit {
-            name: inv_names[k].clone(),
-            conserved: conserved[k],
-            initial: initial[k],
-            final_value: last_inv[k],
-            max_abs_drift: max_abs[k],
-            max_rel_drift: max_rel[k],
-        })
-        .collect();
-    let mut warnings = Vec::new();
+    let audits = invariant_audit.audits();
     // What the method's tolerance explains: a few hundred local errors of size
     // rtol (fixed-step methods had their step chosen from rtol as well).
     let explained = if config.dt.is_some() { 1e-2 } else { (1e3 * config.rtol).max(1e-12) };
-    for a in &audits {
-        if a.conserved && a.max_rel_drift > explained {
-            warnings.push(format!(
-                "{} is conserved, but drifted by {:.3e} (relative), more than the tolerance explains ({:.1e})",
-                a.name, a.max_rel_drift, explained
-            ));
-        }
-    }
+    let warnings = drift_warnings(&audits, explained);
     let mut report = RunReport {
         method,
         form,
