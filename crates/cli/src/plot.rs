@@ -479,13 +479,11 @@ fn format_tick(value: f64, step: f64) -> String {
 }
 
 /// `value` as `m×10ⁿ` with at most two decimals in the mantissa, `1×10ⁿ` kept whole for a steady look.
-fn scientific(value: f64) -> String {
-    let formatted = format!("{value:.2e}");
-    let (mantissa, exponent) = formatted.split_once('e').unwrap_or((&formatted, "0"));
-    let exponent: String = exponent
-        .chars()
-        .map(|ch| match ch {
-            '-' => '⁻',
+/// `−11` as `⁻¹¹`: the exponent of a tick label.
+pub(crate) fn superscript(text: &str) -> String {
+    text.chars()
+        .map(|c| match c {
+            '−' | '-' => '⁻',
             '0' => '⁰',
             '1' => '¹',
             '2' => '²',
@@ -498,8 +496,13 @@ fn scientific(value: f64) -> String {
             '9' => '⁹',
             other => other,
         })
-        .collect();
-    format!("{}×10{exponent}", trim_zeros(mantissa))
+        .collect()
+}
+
+fn scientific(value: f64) -> String {
+    let formatted = format!("{value:.2e}");
+    let (mantissa, exponent) = formatted.split_once('e').unwrap_or((&formatted, "0"));
+    format!("{}×10{}", trim_zeros(mantissa), superscript(exponent))
 }
 
 fn trim_zeros(text: &str) -> String {

@@ -9,7 +9,7 @@
 //! of H is shown as log₁₀. Failed or missing runs are grey. Cells of equal colour
 //! in a row are drawn as one rectangle, which keeps a 200×200 map's file small.
 
-use crate::plot::{nice_step, pos, px, text_style, FONT};
+use crate::plot::{nice_step, pos, px, superscript, text_style, FONT};
 use mech::{Axis, SweepTable};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -269,26 +269,6 @@ fn draw_colorbar(area: &Area, scale: &Scale, label: &str) -> Result<(), Box<dyn 
         .pos(Pos::new(HPos::Center, VPos::Center));
     area.draw_text(label, &caption, (pos(146), (top + bottom) / 2))?;
     Ok(())
-}
-
-/// `−11` as `⁻¹¹`.
-fn superscript(text: &str) -> String {
-    text.chars()
-        .map(|c| match c {
-            '−' | '-' => '⁻',
-            '0' => '⁰',
-            '1' => '¹',
-            '2' => '²',
-            '3' => '³',
-            '4' => '⁴',
-            '5' => '⁵',
-            '6' => '⁶',
-            '7' => '⁷',
-            '8' => '⁸',
-            '9' => '⁹',
-            other => other,
-        })
-        .collect()
 }
 
 /// A tick label with a true minus sign and no trailing zeros.
