@@ -223,6 +223,15 @@ pub(crate) fn parse_model(path: &Path, source: &str, set: &[(String, f64)]) -> R
     mech::Model::parse_with(source, set, &files).map_err(|e| Failure::model(path, source, e))
 }
 
+/// Reads, parses and derives a model file; its text comes back too, for the
+/// diagnostics of what the command does next.
+pub(crate) fn derive_file(path: &Path, set: &[(String, f64)]) -> Result<(String, mech::Derivation), Failure> {
+    let source = read_source(path)?;
+    let model = parse_model(path, &source, set)?;
+    let derivation = mech::Derivation::new(model).map_err(|e| Failure::model(path, &source, e))?;
+    Ok((source, derivation))
+}
+
 fn derive(path: &Path, format: Format, set: &[(String, f64)]) -> Result<(), Failure> {
     let source = read_source(path)?;
     let start = std::time::Instant::now();

@@ -50,9 +50,7 @@ const MAX_PRINTED_SHAPE: usize = 8;
 /// Runs the command.
 pub fn run(args: &Args) -> Result<(), Failure> {
     let path = &args.model;
-    let source = crate::read_source(path)?;
-    let model = crate::parse_model(path, &source, &args.set)?;
-    let mut d = Derivation::new(model).map_err(|e| Failure::model(path, &source, e))?;
+    let (source, mut d) = crate::derive_file(path, &args.set)?;
     d.reject_constraints("`lagrange modes`").map_err(|e| Failure::model(path, &source, e))?;
     let config = ModesConfig { at: args.at.clone() };
     let modes = mech::normal_modes(&mut d, &config).map_err(|e| failure(path, &source, e))?;

@@ -34,9 +34,7 @@ pub struct Args {
 /// Runs the command.
 pub fn run(args: &Args) -> Result<(), Failure> {
     let path = &args.model;
-    let source = crate::read_source(path)?;
-    let model = crate::parse_model(path, &source, &args.set)?;
-    let mut d = Derivation::new(model).map_err(|e| Failure::model(path, &source, e))?;
+    let (source, mut d) = crate::derive_file(path, &args.set)?;
     d.reject_constraints("`lagrange orbit`").map_err(|e| Failure::model(path, &source, e))?;
     let mut orbit = Orbit::new(&mut d).map_err(|e| failure(path, &source, e))?;
     if let Some(svg) = &args.plot {

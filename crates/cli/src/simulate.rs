@@ -52,10 +52,8 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     // the integration hands over before its first step: parse, derive, compile
     // and, for fixed-step methods, the pilot runs that choose the step.
     let started = Instant::now();
-    let source = crate::read_source(&opts.model)?;
     let path = &opts.model;
-    let model = crate::parse_model(path, &source, &opts.set)?;
-    let mut derivation = Derivation::new(model).map_err(|e| Failure::model(path, &source, e))?;
+    let (source, mut derivation) = crate::derive_file(path, &opts.set)?;
     let derived = started.elapsed().as_secs_f64();
     let mut first_row: Option<f64> = None;
 

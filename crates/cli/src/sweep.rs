@@ -10,7 +10,7 @@
 mod heatmap;
 
 use crate::diagnostics::Failure;
-use mech::{Derivation, Grid, Shard, SweepConfig, SweepError, SweepTable};
+use mech::{Grid, Shard, SweepConfig, SweepError, SweepTable};
 use num::Method;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -96,9 +96,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         Some(name) => Some(name.parse::<Method>().map_err(|e| Failure::usage(e.to_string()))?),
         None => None,
     };
-    let source = crate::read_source(path)?;
-    let model = crate::parse_model(path, &source, &args.set)?;
-    let mut derivation = Derivation::new(model).map_err(|e| Failure::model(path, &source, e))?;
+    let (source, mut derivation) = crate::derive_file(path, &args.set)?;
     derivation.reject_constraints("`lagrange sweep`").map_err(|e| Failure::model(path, &source, e))?;
     let grid = Grid::parse(args.grid.as_deref().unwrap_or_default(), &derivation.model).map_err(usage)?;
     if args.heatmap.is_some() {

@@ -35,9 +35,7 @@ pub struct Args {
 /// Runs the command.
 pub fn run(args: &Args) -> Result<(), Failure> {
     let path = &args.model;
-    let source = crate::read_source(path)?;
-    let model = crate::parse_model(path, &source, &args.set)?;
-    let mut d = Derivation::new(model).map_err(|e| Failure::model(path, &source, e))?;
+    let (source, mut d) = crate::derive_file(path, &args.set)?;
     let top = Top::new(&d).map_err(|e| failure(path, &source, e))?;
     if let Some(svg) = &args.plot {
         let text = figure(&mut d, &top).map_err(|e| Failure::input(svg, format!("cannot draw the plot: {e}")))?;
