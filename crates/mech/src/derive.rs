@@ -10,7 +10,7 @@
 use crate::error::ModelError;
 use crate::model::{Model, RANK_COORDINATE};
 use crate::probe::{self, Subst};
-use crate::quadratic::{self, Quadratic, Vars as QVars};
+use crate::quadratic::{self, Quadratic, Sparsity, Vars as QVars};
 use sym::{ExprId, NameId, Pool, Symbol};
 
 /// A quantity the derivation shows to be conserved.
@@ -225,6 +225,7 @@ impl Derivation {
             }
         };
         let (dissipation, forces) = simplify_forces(pool);
+        let sparsity = form.as_ref().map(|f| f.sparsity(pool, &q));
 
         // Momenta and Euler–Lagrange equations.
         let mut mass_matrix = vec![vec![pool.zero(); n]; n];
@@ -232,11 +233,11 @@ impl Derivation {
         let mut equations = Vec::with_capacity(n);
         let mut dl_dq: Vec<ExprId> = Vec::with_capacity(n);
         let momenta: Vec<ExprId>;
-        if let Some(form) = &form {
+        if let (Some(form), Some(sp)) = (&form, &sparsity) {
             momenta = form.momenta(pool, &qd).into_iter().map(|p| polish(pool, p, &is_var)).collect();
             mass_matrix.clone_from(&form.m);
-            let rows = form.forcing(pool, &vars_q);
-            dl_dq = form.coordinate_gradient(pool, &q, &qd);
+            let rows = form.forcing(pool, &vars_q, sp);
+            dl_dq = form.coordinate_gradient(pool, &q, &qd, sp);
             for (i, row) in rows.into_iter().enumerate() {
                 // Dissipation and generalized forces: −∂R/∂q_i' + Q_i.
                 let mut extra = vec![forces[i]];
@@ -422,15 +423,15 @@ impl Derivation {
         }
 
         // The Hamiltonian, by the Legendre transform for L quadratic in q'.
-        let (hamiltonian, velocities, hamilton) = match &form {
+        let (hamiltonian, velocities, hamilton) = match form.as_ref().zip(sparsity.as_ref()) {
             None => {
                 verdicts.hamiltonian.push(
                     "L is not quadratic in the velocities, so p = ∂L/∂q' cannot be solved for q' in closed form; H is not given.".into(),
                 );
                 (None, None, None)
             }
-            Some(form) => {
-                let sys = System { q: &q, qd: &qd, p: &p, form, dissipation, forces: &forces };
+            Some((form, sparsity)) => {
+                let sys = System { q: &q, qd: &qd, p: &p, form, sparsity, dissipation, forces: &forces };
                 match legendre(pool, &sys, &is_var) {
                     Some((h, v, eqs)) => (Some(h), Some(v), Some(eqs)),
                     None => {
@@ -503,6 +504,7 @@ struct System<'a> {
     qd: &'a [ExprId],
     p: &'a [ExprId],
     form: &'a Quadratic,
+    sparsity: &'a Sparsity,
     dissipation: Option<ExprId>,
     forces: &'a [ExprId],
 }
@@ -594,8 +596,7 @@ fn legendre_structured(pool: &mut Pool, s: &System, inv: &[Vec<ExprId>], is_var:
     // ∂M⁻¹/∂q = −M⁻¹ (∂M/∂q) M⁻¹: only the few nonzero ∂M_ij/∂q_k are formed.
     let vel_subst: Subst = (0..n).map(|i| (s.qd[i], v[i])).collect();
     let mut eqs = Vec::with_capacity(n);
-    let (_, depends) = s.form.supports(pool, s.q);
-    let grad_l0 = quadratic::sparse_gradient(pool, s.form.l0, s.q);
+    let (depends, grad_l0) = (&s.sparsity.depends, &s.sparsity.grad_l0);
     for k in 0..n {
         let mut terms = Vec::new();
         for &(i, j) in &depends[k] {

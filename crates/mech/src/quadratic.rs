@@ -167,14 +167,14 @@ impl Quadratic {
         pool.add(&terms)
     }
 
-    /// Which coordinates each entry of M depends on (`support[j][k]`), and the
-    /// inverse index: for each coordinate, the entries (j ≤ k) that depend on it.
-    /// One walk per nonzero entry, so a diagonal M of a thousand coordinates
-    /// costs a thousand walks, not a billion tests.
-    pub fn supports(&self, pool: &Pool, q: &[ExprId]) -> (Vec<Vec<Vec<usize>>>, Dependents) {
+    /// Which coordinates each part depends on, found once for the forcing,
+    /// ∂L/∂q and Hamilton's equations. One walk per nonzero entry of M, so a
+    /// diagonal M of a thousand coordinates costs a thousand walks, not a
+    /// billion tests.
+    pub fn sparsity(&self, pool: &mut Pool, q: &[ExprId]) -> Sparsity {
         let n = q.len();
         let mut support: Vec<Vec<Vec<usize>>> = vec![vec![Vec::new(); n]; n];
-        let mut depends: Dependents = vec![Vec::new(); n];
+        let mut depends: Vec<Vec<(usize, usize)>> = vec![Vec::new(); n];
         let index = coordinate_index(q);
         for j in 0..n {
             for k in j..n {
@@ -190,15 +190,15 @@ impl Quadratic {
                 support[j][k] = s;
             }
         }
-        (support, depends)
+        let grad_l0 = sparse_gradient(pool, self.l0, q);
+        Sparsity { support, depends, grad_l0 }
     }
 
     /// ∂L/∂q_i for every coordinate, assembled from the parts that depend on
     /// q_i: ½ Σ ∂M_jk/∂q_i q_j' q_k' + Σ ∂b_j/∂q_i q_j' + ∂L₀/∂q_i.
-    pub fn coordinate_gradient(&self, pool: &mut Pool, q: &[ExprId], qd: &[ExprId]) -> Vec<ExprId> {
+    pub fn coordinate_gradient(&self, pool: &mut Pool, q: &[ExprId], qd: &[ExprId], sp: &Sparsity) -> Vec<ExprId> {
         let n = q.len();
-        let (_, depends) = self.supports(pool, q);
-        let grad_l0 = sparse_gradient(pool, self.l0, q);
+        let (depends, grad_l0) = (&sp.depends, &sp.grad_l0);
         let index = coordinate_index(q);
         let mut b_terms: Vec<Vec<ExprId>> = vec![Vec::new(); n];
         for (j, &b) in self.b.iter().enumerate() {
@@ -234,12 +234,9 @@ impl Quadratic {
     /// row: f_i with M q'' = f for this L alone (no dissipation or forces).
     /// Coefficients are simplified one by one; rows are sums of distinct
     /// velocity monomials and need no simplification as a whole.
-    pub fn forcing(&self, pool: &mut Pool, v: &Vars) -> Vec<ExprId> {
+    pub fn forcing(&self, pool: &mut Pool, v: &Vars, sp: &Sparsity) -> Vec<ExprId> {
         let n = v.q.len();
-        // Which coordinates each entry of M depends on, and the inverse index:
-        // for each coordinate, the entries (j ≤ k) that depend on it.
-        let (support, depends) = self.supports(pool, v.q);
-        let grad_l0 = sparse_gradient(pool, self.l0, v.q);
+        let (support, depends, grad_l0) = (&sp.support, &sp.depends, &sp.grad_l0);
         let explicit_m =
             (0..n).any(|j| (j..n).any(|k| pool.as_number(self.m[j][k]).is_none() && !pool.free_of(self.m[j][k], v.t)));
         let has_b = self.b.iter().any(|&b| !pool.is_zero(b));
@@ -321,8 +318,15 @@ fn support_of(pool: &Pool, e: ExprId, index: &FxHashMap<ExprId, usize>) -> Vec<u
     s
 }
 
-/// For each coordinate, the entries (j ≤ k) of M that depend on it.
-pub type Dependents = Vec<Vec<(usize, usize)>>;
+/// Where each part of a [`Quadratic`] depends on the coordinates.
+pub struct Sparsity {
+    /// `support[j][k]`: the coordinates M_jk depends on, ascending.
+    pub support: Vec<Vec<Vec<usize>>>,
+    /// For each coordinate, the entries (j ≤ k) of M that depend on it.
+    pub depends: Vec<Vec<(usize, usize)>>,
+    /// ∂L₀/∂q_i for every coordinate.
+    pub grad_l0: Vec<ExprId>,
+}
 
 /// Dot products of Jacobian columns, each with the masses that share it.
 type Groups = Vec<(ExprId, Vec<ExprId>)>;
@@ -502,7 +506,8 @@ mod tests {
         let form = Quadratic::split(&mut s.pool, l, &v).expect("quadratic");
         let expected = brute_force_forcing(&mut s, l);
         let v = Vars { q: &s.q, qd: &s.qd, t: s.t, is_var: &is_var };
-        let rows = form.forcing(&mut s.pool, &v);
+        let sp = form.sparsity(&mut s.pool, &s.q);
+        let rows = form.forcing(&mut s.pool, &v, &sp);
         for (got, want) in rows.into_iter().zip(expected) {
             let d = s.pool.sub(got, want);
             assert!(probe::is_zero(&s.pool, d), "{}", s.pool.display(d));
