@@ -22,6 +22,7 @@
 use crate::derive::Derivation;
 use crate::error::ModelError;
 use crate::probe;
+use crate::series::LagrangeSeries;
 use num::{LinearSolver, OdeSystem, RhsError, SeparableSystem};
 use rustc_hash::FxHashSet;
 use std::sync::{Arc, OnceLock};
@@ -137,6 +138,8 @@ pub struct Dynamics {
     pattern: MassPattern,
     /// Outputs M's stored entries (`pattern`) and `f` (n) from `[q, q', t, params]`.
     mass_forcing: Kernel,
+    /// The tape of `mass_forcing`, for Taylor expansions ([`crate::series`]).
+    mass_forcing_tape: Arc<Tape>,
     /// Hamilton's form, two kernels: M's stored entries and `b` (n) from `[q, t, params]`
     /// (free of q'), and `∂L/∂q − ∂R/∂q' + Q` (n) from `[q, q', t, params]`. Split so that
     /// each right-hand side computes each group once.
@@ -184,7 +187,9 @@ impl Dynamics {
         let pattern = MassPattern { n, entries: Arc::new(entries), diagonal };
         let mut outs: Vec<ExprId> = stored.clone();
         outs.extend(&d.forcing);
-        let mass_forcing = Kernel::new(Tape::compile(pool, &outs, &input_syms).expect("derivation symbols are inputs"));
+        let mass_forcing_tape =
+            Arc::new(Tape::compile(pool, &outs, &input_syms).expect("derivation symbols are inputs"));
+        let mass_forcing = Kernel::new((*mass_forcing_tape).clone());
 
         // Which symbols M and f contain, from one traversal each (a chain of a
         // thousand masses has a thousand entries and two thousand symbols).
@@ -230,6 +235,7 @@ impl Dynamics {
             scratch: vec![0.0; pattern.len() + n],
             pattern,
             mass_forcing,
+            mass_forcing_tape,
             hamilton,
             invariants_tape,
             invariants,
@@ -277,7 +283,17 @@ impl Dynamics {
             lu: LinearSolver::new(n),
             work: vec![0.0; n],
             factored_once: false,
+            series: None,
         }
+    }
+
+    /// The Taylor expansion of the Lagrange form to `order`, on `L` lanes.
+    pub(crate) fn lagrange_series<const L: usize>(&self, order: usize) -> LagrangeSeries<L> {
+        let p = &self.pattern;
+        let mut series = LagrangeSeries::new(&self.mass_forcing_tape, self.n, p.entries.clone(), p.diagonal, order);
+        let params: Vec<[f64; L]> = self.inputs[2 * self.n + 1..].iter().map(|&v| [v; L]).collect();
+        series.set_parameters(&params);
+        series
     }
 
     /// Evaluates M (row-major, n²) and f (n) at `inputs` = `[q, q', t, parameters]`
@@ -332,7 +348,12 @@ pub struct System {
     lu: LinearSolver,
     work: Vec<f64>,
     factored_once: bool,
+    /// The Taylor expansion and its scratch, made on first use (Lagrange form).
+    series: Option<Box<ScalarSeries>>,
 }
+
+/// The expansion of one trajectory, with its state and output in lanes of one.
+type ScalarSeries = (LagrangeSeries<1>, Vec<[f64; 1]>, Vec<[f64; 1]>);
 
 impl System {
     /// The form of the state.
@@ -347,6 +368,10 @@ impl System {
         self.inputs[start..start + values.len()].copy_from_slice(values);
         self.dynamics.inputs[start..start + values.len()].copy_from_slice(values);
         self.factored_once = false;
+        if let Some(series) = &mut self.series {
+            let lanes: Vec<[f64; 1]> = values.iter().map(|&v| [v]).collect();
+            series.0.set_parameters(&lanes);
+        }
     }
 
     /// The initial state in this form from (q, q') at time t.
@@ -501,6 +526,27 @@ impl OdeSystem for System {
             return Err(RhsError::NonFinite { index });
         }
         Ok(())
+    }
+
+    /// The Taylor expansion in Lagrange form ([`crate::series`]); the other forms have none.
+    fn taylor_series(&mut self, t: f64, y: &[f64], order: usize, out: &mut [f64]) -> Option<Result<(), RhsError>> {
+        if self.form != Form::Lagrange {
+            return None;
+        }
+        let dim = 2 * self.dynamics.n;
+        if self.series.as_ref().is_none_or(|s| s.0.order() != order) {
+            let series = self.dynamics.lagrange_series::<1>(order);
+            self.series = Some(Box::new((series, vec![[0.0]; dim], vec![[0.0]; dim * (order + 1)])));
+        }
+        let (series, y_lanes, out_lanes) = &mut **self.series.as_mut().expect("made above");
+        for (l, &v) in y_lanes.iter_mut().zip(y) {
+            *l = [v];
+        }
+        let result = series.expand([t], y_lanes, out_lanes);
+        for (o, l) in out.iter_mut().zip(out_lanes.iter()) {
+            *o = l[0];
+        }
+        Some(result)
     }
 }
 

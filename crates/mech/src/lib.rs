@@ -23,6 +23,7 @@ mod constrained;
 mod constraint;
 mod derive;
 mod dynamics;
+mod ensemble;
 mod error;
 pub mod euler;
 mod extremal;
@@ -34,6 +35,7 @@ pub mod probe;
 mod quadratic;
 mod report;
 mod run;
+mod series;
 mod sweep;
 mod top;
 

@@ -54,14 +54,17 @@
 use crate::body::GimbalGuard;
 use crate::derive::Derivation;
 use crate::dynamics::{Dynamics, Form, System};
+use crate::ensemble::{propagate, Batch, LANES};
 use crate::error::ModelError;
 use crate::model::Model;
 use crate::run::choose_method;
+use crate::series::LagrangeSeries;
 use num::{integrate, integrate_to, Config, Direction, Event, Method, Output, SolveError, Solver, StopReason};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::ops::ControlFlow;
+use sym::Lanes;
 
 /// Initial separation of the Lyapunov twin, in state units.
 pub const LYAPUNOV_D0: f64 = 1e-8;
@@ -593,9 +596,54 @@ pub fn sweep(
     let d: &Derivation = d;
     let plan = Plan { method, form, config, guards: &guards };
 
+    // The Taylor method on smooth Lagrange-form models runs batches of
+    // trajectories in lock step (`ensemble.rs`); its code is compiled once here.
+    let batched = (method == Method::Taylor && form == Form::Lagrange && guards.is_empty())
+        .then(|| dynamics.lagrange_series::<LANES>(num::taylor_order(config.rtol)));
+
     // Each worker owns its systems (and, for parameter grids, a derivation to
     // recompile); rows come back in the order of `runs`.
     let work = || -> Vec<TableRow> {
+        if let Some(series) = &batched {
+            let per_batch = if config.lyapunov { LANES / 2 } else { LANES };
+            return runs
+                .par_chunks(per_batch)
+                .map_init(
+                    || (series.clone(), system.clone(), Vec::new(), has_parameters.then(|| d.clone())),
+                    |(series, sys, scratch, derivation), chunk| {
+                        let starts: Vec<Start> = chunk
+                            .iter()
+                            .map(|&run| {
+                                let inputs = grid.point(run);
+                                let start = match derivation {
+                                    Some(derivation) => {
+                                        for (value, target) in inputs.iter().zip(&grid.targets) {
+                                            if let Target::Parameter(k) = *target {
+                                                derivation.model.parameters[k].value = *value;
+                                            }
+                                        }
+                                        let values: Vec<f64> =
+                                            derivation.model.parameters.iter().map(|p| p.value).collect();
+                                        initial_values(&derivation.model)
+                                            .and_then(|base| complete(&base, grid, &inputs, &derivation.model))
+                                            .map(|(q, qd)| (q, qd, values))
+                                    }
+                                    None => complete(&base, grid, &inputs, &d.model)
+                                        .map(|(q, qd)| (q, qd, d.model.parameters.iter().map(|p| p.value).collect())),
+                                };
+                                (run, inputs, start.map_err(|e| e.message))
+                            })
+                            .collect();
+                        let rows = plan.run_batch(series, sys, scratch, n, starts);
+                        for _ in chunk {
+                            progress();
+                        }
+                        rows
+                    },
+                )
+                .flatten()
+                .collect();
+        }
         runs.par_iter()
             .map_init(
                 || (system.clone(), system.clone(), has_parameters.then(|| d.clone())),
@@ -930,6 +978,132 @@ impl Plan<'_> {
         }
         out.failure = twin_failure;
         out
+    }
+}
+
+/// A run of a batch: its index, its grid inputs, and its initial (q, q') with
+/// its parameter values, or why it cannot start.
+type Start = (usize, Vec<f64>, Result<(Vec<f64>, Vec<f64>, Vec<f64>), String>);
+
+impl Plan<'_> {
+    /// The runs of one batch with the Taylor method in lock step
+    /// ([`crate::ensemble`]): the main trajectories on the first lanes, their
+    /// Lyapunov twins on the next, in the same segments as [`Plan::run`].
+    fn run_batch(
+        &self,
+        series: &mut LagrangeSeries<LANES>,
+        sys: &mut System,
+        scratch: &mut Vec<Lanes<LANES>>,
+        n: usize,
+        starts: Vec<Start>,
+    ) -> Vec<TableRow> {
+        let cfg = self.config;
+        let live: Vec<usize> = (0..starts.len()).filter(|&i| starts[i].2.is_ok()).collect();
+        let m = live.len();
+        let mut outcomes: Vec<Option<RunOutcome>> = (0..starts.len()).map(|_| None).collect();
+        if m > 0 {
+            let start = |r: usize| starts[live[r]].2.as_ref().expect("live runs started");
+            let y0: Vec<Vec<f64>> = (0..m).map(|r| [start(r).0.as_slice(), &start(r).1].concat()).collect();
+            let mut lanes = y0.clone();
+            if cfg.lyapunov {
+                lanes.extend(y0.iter().map(|y| perturbed(y)));
+            }
+            let used = lanes.len();
+            let mut batch = Batch::new(&lanes);
+            for l in used..LANES {
+                batch.failure[l] = Some("unused lane".into());
+            }
+            // Lane l runs the parameters of run l mod m.
+            let n_params = start(0).2.len();
+            let params: Vec<Lanes<LANES>> =
+                (0..n_params).map(|k| std::array::from_fn(|l| start((l % used) % m).2[k])).collect();
+            series.set_parameters(&params);
+            let solver_config = Config { rtol: cfg.rtol, atol: cfg.atol, h_max: Some(cfg.until), ..Config::default() };
+            let mut log_sum = vec![0.0; m];
+            let mut twin_failure: Vec<Option<String>> = vec![None; m];
+            let mut t = 0.0;
+            let mut segment = 0u32;
+            while t < cfg.until {
+                segment += 1;
+                let mut t_next = f64::from(segment) * LYAPUNOV_INTERVAL;
+                if t_next > cfg.until - 1e-6 * LYAPUNOV_INTERVAL {
+                    t_next = cfg.until;
+                }
+                propagate(series, &mut batch, t_next, &solver_config, scratch);
+                if cfg.lyapunov {
+                    for r in 0..m {
+                        let twin = m + r;
+                        if batch.failure[r].is_some() || twin_failure[r].is_some() {
+                            continue;
+                        }
+                        if let Some(e) = &batch.failure[twin] {
+                            twin_failure[r] = Some(format!("the perturbed twin failed: {e}"));
+                            continue;
+                        }
+                        let (main, mut other) = (batch.state(r), batch.state(twin));
+                        let dist = distance(&main, &other);
+                        if dist > 0.0 && dist.is_finite() {
+                            log_sum[r] += (dist / LYAPUNOV_D0).ln();
+                            for (tk, yk) in other.iter_mut().zip(&main) {
+                                *tk = yk + (*tk - yk) * (LYAPUNOV_D0 / dist);
+                            }
+                            batch.set_state(twin, &other);
+                        } else {
+                            twin_failure[r] =
+                                Some(format!("the perturbed twin's distance became {dist} at t = {t_next}"));
+                            batch.failure[twin] = twin_failure[r].clone();
+                        }
+                    }
+                }
+                t = t_next;
+            }
+            for r in 0..m {
+                let (_, _, values) = start(r);
+                sys.set_parameters(values);
+                let mut out = RunOutcome {
+                    t_final: batch.t[r],
+                    q: vec![f64::NAN; n],
+                    qd: vec![f64::NAN; n],
+                    energy_drift: f64::NAN,
+                    lyapunov: f64::NAN,
+                    failure: batch.failure[r].clone(),
+                };
+                if out.failure.is_none() {
+                    let y = batch.state(r);
+                    let mut qd = vec![0.0; n];
+                    let mut inv = vec![0.0; sys.n_invariants()];
+                    let h0 = sys.invariants_at(0.0, &y0[r], &mut qd, &mut inv).ok().map(|()| inv[0]);
+                    match sys.invariants_at(t, &y, &mut qd, &mut inv) {
+                        Err(e) => out.failure = Some(format!("at t = {t}: {e}")),
+                        Ok(()) => {
+                            out.q.copy_from_slice(&y[..n]);
+                            out.qd.copy_from_slice(&qd);
+                            if let Some(h0) = h0 {
+                                let drift = (inv[0] - h0).abs();
+                                out.energy_drift = if h0 != 0.0 { drift / h0.abs() } else { drift };
+                            }
+                            if cfg.lyapunov && twin_failure[r].is_none() {
+                                out.lyapunov = log_sum[r] / t;
+                            }
+                            out.failure = twin_failure[r].take();
+                        }
+                    }
+                }
+                outcomes[live[r]] = Some(out);
+            }
+        }
+        starts
+            .into_iter()
+            .zip(outcomes)
+            .map(|((run, inputs, start), outcome)| {
+                let outcome = match (start, outcome) {
+                    (Err(message), _) => Err(message),
+                    (Ok(_), Some(o)) => Ok(o),
+                    (Ok(_), None) => unreachable!("every started run has an outcome"),
+                };
+                row(run, inputs, n, outcome)
+            })
+            .collect()
     }
 }
 

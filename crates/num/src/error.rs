@@ -196,6 +196,13 @@ pub enum SolveError {
         /// The method name.
         method: &'static str,
     },
+    /// The Taylor method was requested for a system that cannot give Taylor
+    /// coefficients ([`crate::OdeSystem::taylor_series`]).
+    #[error("method {method} needs the Taylor coefficients of the right-hand side, which this system cannot give")]
+    RequiresTaylorSeries {
+        /// The method name.
+        method: &'static str,
+    },
     /// The method name is unknown.
     #[error("unknown method {name:?}; known methods: {known}")]
     UnknownMethod {

@@ -30,7 +30,8 @@
 //! - Stepping: the [`Solver`] trait (`step`, `t`, `state`, `interpolate`,
 //!   `statistics`), implemented by [`Dopri5`], [`Dop853`] (adaptive explicit),
 //!   [`Composition`] (Verlet and its symplectic compositions), [`Gauss`]
-//!   (Gauss–Legendre, implicit symplectic) and [`Radau5`] (stiff).
+//!   (Gauss–Legendre, implicit symplectic), [`Radau5`] (stiff) and [`Taylor`]
+//!   (Taylor series, for systems that give their coefficients).
 //! - [`Method`] names them for the command line and builds any of them;
 //!   [`select_step`] picks a fixed step from a tolerance.
 //! - [`integrate`] drives a solver with output sampling and [`Event`]s.
@@ -54,6 +55,7 @@ mod root;
 mod solver;
 mod stepsize;
 mod system;
+mod taylor;
 
 pub use composition::{Composition, Scheme};
 pub use dop853::Dop853;
@@ -71,3 +73,4 @@ pub use root::brent;
 pub use solver::{Config, Controller, Solver, Statistics, StepOutcome};
 pub use stepsize::{run_fixed, select_step};
 pub use system::{finite_difference_jacobian, OdeSystem, Separable, SeparableSystem};
+pub use taylor::{taylor_order, taylor_step, Taylor};

@@ -15,6 +15,7 @@ use crate::radau5::Radau5;
 use crate::solver::{check_initial, Config, Solver};
 use crate::stepsize::{guess_step, run_fixed, select_step};
 use crate::system::{OdeSystem, Separable, SeparableSystem};
+use crate::taylor::Taylor;
 
 /// An integration method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -39,11 +40,14 @@ pub enum Method {
     Gauss6,
     /// Radau IIA, 3 stages, order 5, adaptive, for stiff problems ([`Radau5`]).
     Radau5,
+    /// Adaptive Taylor series, order from the tolerance ([`Taylor`]); needs a system
+    /// with [`OdeSystem::taylor_series`].
+    Taylor,
 }
 
 impl Method {
     /// Every method, in the order `--list-methods` shows them.
-    pub const ALL: [Method; 10] = [
+    pub const ALL: [Method; 11] = [
         Method::Dopri5,
         Method::Dop853,
         Method::Verlet,
@@ -54,6 +58,7 @@ impl Method {
         Method::Gauss4,
         Method::Gauss6,
         Method::Radau5,
+        Method::Taylor,
     ];
 
     /// The name used on the command line.
@@ -69,6 +74,7 @@ impl Method {
             Method::Gauss4 => "gauss4",
             Method::Gauss6 => "gauss6",
             Method::Radau5 => "radau5",
+            Method::Taylor => "taylor",
         }
     }
 
@@ -85,12 +91,15 @@ impl Method {
             Method::Gauss4 => "Gauss-Legendre 2 stages, symplectic, order 4, fixed step",
             Method::Gauss6 => "Gauss-Legendre 3 stages, symplectic, order 6, fixed step",
             Method::Radau5 => "Radau IIA 3 stages, order 5, adaptive, implicit (stiff problems)",
+            Method::Taylor => "Taylor series, order from rtol (13 at 1e-10), adaptive (tight tolerances, ensembles)",
         }
     }
 
-    /// The classical order of accuracy.
+    /// The classical order of accuracy (the Taylor method's at its default rtol of
+    /// 1e-9; [`crate::taylor_order`] gives it for any tolerance).
     pub fn order(self) -> u32 {
         match self {
+            Method::Taylor => 12,
             Method::Dopri5 | Method::Radau5 => 5,
             Method::Dop853 | Method::KahanLi8 => 8,
             Method::Verlet | Method::Gauss2 => 2,
@@ -102,7 +111,7 @@ impl Method {
     /// Whether the method adapts its step to `rtol`/`atol` (otherwise it takes a fixed
     /// step `dt`, chosen by [`select_step`] when not given).
     pub fn is_adaptive(self) -> bool {
-        matches!(self, Method::Dopri5 | Method::Dop853 | Method::Radau5)
+        matches!(self, Method::Dopri5 | Method::Dop853 | Method::Radau5 | Method::Taylor)
     }
 
     /// Whether the method is symplectic (for Hamiltonian systems: no energy drift).
@@ -151,6 +160,7 @@ impl Method {
             Method::Dopri5 => Box::new(Dopri5::new(system, t0, y0, &config)?),
             Method::Dop853 => Box::new(Dop853::new(system, t0, y0, &config)?),
             Method::Radau5 => Box::new(Radau5::new(system, t0, y0, &config)?),
+            Method::Taylor => Box::new(Taylor::new(system, t0, y0, &config)?),
             _ => Box::new(Gauss::new(system, self, t0, y0, &config)?),
         })
     }

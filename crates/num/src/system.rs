@@ -27,6 +27,15 @@ pub trait OdeSystem {
         self.rhs(t, y, &mut f0)?;
         finite_difference_jacobian(|y, dy| self.rhs(t, y, dy), y, &f0, jac, &mut y_work, &mut f_work)
     }
+
+    /// Writes the normalized Taylor coefficients `y⁽ᵏ⁾(t)/k!`, `k = 0..=order`, of
+    /// the solution through `(t, y)` into `series` (order `k` at
+    /// `series[k * dim..(k + 1) * dim]`), for the Taylor integrator
+    /// ([`crate::Taylor`]). `None` (the default) means the system cannot.
+    fn taylor_series(&mut self, t: f64, y: &[f64], order: usize, series: &mut [f64]) -> Option<Result<(), RhsError>> {
+        let _ = (t, y, order, series);
+        None
+    }
 }
 
 /// A separable Hamiltonian `H = T(p) + V(q, t)`: `q' = dT/dp(p)`, `p' = -dV/dq(q, t)`.
@@ -53,6 +62,9 @@ impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
     fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<(), RhsError> {
         (**self).jacobian(t, y, jac)
     }
+    fn taylor_series(&mut self, t: f64, y: &[f64], order: usize, series: &mut [f64]) -> Option<Result<(), RhsError>> {
+        (**self).taylor_series(t, y, order, series)
+    }
 }
 
 impl<S: OdeSystem + ?Sized> OdeSystem for Box<S> {
@@ -64,6 +76,9 @@ impl<S: OdeSystem + ?Sized> OdeSystem for Box<S> {
     }
     fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<(), RhsError> {
         (**self).jacobian(t, y, jac)
+    }
+    fn taylor_series(&mut self, t: f64, y: &[f64], order: usize, series: &mut [f64]) -> Option<Result<(), RhsError>> {
+        (**self).taylor_series(t, y, order, series)
     }
 }
 

@@ -336,7 +336,9 @@ fn fixed_step_from_tolerance() {
 /// Stop times are hit exactly and stepping may continue afterwards.
 #[test]
 fn stop_time_is_exact() {
-    for method in Method::ALL {
+    // The Taylor method needs a system with Taylor coefficients, which this
+    // separable oscillator does not give; `taylor.rs` tests its stop times.
+    for method in Method::ALL.into_iter().filter(|&m| m != Method::Taylor) {
         let config = Config { dt: Some(0.3), ..Config::default() };
         let mut s = method.build_separable(Oscillator, 0.0, &[1.0, 0.0], &config).unwrap();
         let mut y = [0.0; 2];

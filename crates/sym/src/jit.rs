@@ -101,7 +101,7 @@ impl std::fmt::Debug for Compiled {
 pub const OPTIMIZE_MAX_OPS: usize = 4096;
 
 /// The host ISA, with `opt_level=speed` or `none`, built once per process.
-fn host_isa(optimize: bool) -> Result<OwnedTargetIsa, JitError> {
+pub(crate) fn host_isa(optimize: bool) -> Result<OwnedTargetIsa, JitError> {
     static FAST: OnceLock<Result<OwnedTargetIsa, JitError>> = OnceLock::new();
     static PLAIN: OnceLock<Result<OwnedTargetIsa, JitError>> = OnceLock::new();
     let cell = if optimize { &FAST } else { &PLAIN };
@@ -134,7 +134,7 @@ macro_rules! unary_wrappers {
         })*
 
         /// The symbol and address of the wrapper of `f`.
-        fn unary(f: Func) -> (&'static str, *const u8) {
+        pub(crate) fn unary(f: Func) -> (&'static str, *const u8) {
             match f {
                 $(Func::$f => (stringify!($name), $name as *const u8),)*
             }
@@ -157,16 +157,16 @@ unary_wrappers! {
     Abs => lagrange_abs,
 }
 
-extern "C" fn lagrange_powf(x: f64, y: f64) -> f64 {
+pub(crate) extern "C" fn lagrange_powf(x: f64, y: f64) -> f64 {
     x.powf(y)
 }
 
-extern "C" fn lagrange_atan2(y: f64, x: f64) -> f64 {
+pub(crate) extern "C" fn lagrange_atan2(y: f64, x: f64) -> f64 {
     y.atan2(x)
 }
 
-const POWF: &str = "lagrange_powf";
-const ATAN2: &str = "lagrange_atan2";
+pub(crate) const POWF: &str = "lagrange_powf";
+pub(crate) const ATAN2: &str = "lagrange_atan2";
 
 /// Translates the tape into the body of one function.
 struct Translator<'a, 'b> {
@@ -380,13 +380,13 @@ fn emission_order(tape: &Tape) -> Vec<usize> {
 }
 
 /// The byte offset of element `k` of an `f64` buffer.
-fn offset(k: usize) -> Result<i32, JitError> {
+pub(crate) fn offset(k: usize) -> Result<i32, JitError> {
     k.checked_mul(8)
         .and_then(|o| i32::try_from(o).ok())
         .ok_or_else(|| JitError::Codegen { message: format!("buffer index {k} exceeds the 2 GiB addressing limit") })
 }
 
-fn codegen(e: impl std::fmt::Display) -> JitError {
+pub(crate) fn codegen(e: impl std::fmt::Display) -> JitError {
     JitError::Codegen { message: e.to_string() }
 }
 

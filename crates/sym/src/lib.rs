@@ -24,6 +24,8 @@ mod parse;
 mod print;
 mod rational;
 mod simplify;
+mod taylor;
+mod taylor_jit;
 
 pub use eval::{EvalError, Tape};
 pub use expr::{ExprId, Func, NameId, Node, Pool, Symbol};
@@ -31,3 +33,4 @@ pub use jit::{Compiled, JitError};
 pub use number::{Number, Rational};
 pub use parse::{Limits, ParseError, ParseErrorKind, ParseOptions, Span};
 pub use print::{Display, Latex};
+pub use taylor::{Lanes, TaylorTape};

@@ -1,0 +1,130 @@
+//! Many trajectories in lock step: the Taylor method on [`LANES`] lanes at
+//! once, for sweeps.
+//!
+//! Each lane is an independent trajectory with its own time and step (the
+//! step rule of [`num::Taylor`], per lane); one expansion of the
+//! [`LagrangeSeries`] serves all lanes, and its native code handles two lanes
+//! per instruction. A lane that reaches its end time idles (step 0) until the
+//! others are done, and a lane whose expansion stops being finite is frozen
+//! with its failure while the others go on.
+
+use crate::series::LagrangeSeries;
+use num::{taylor_step, Config};
+use sym::Lanes;
+
+/// Trajectories per batch.
+pub(crate) const LANES: usize = 8;
+
+/// The state of a batch of trajectories: `y[i]` is component `i` on every lane.
+#[derive(Debug, Clone)]
+pub(crate) struct Batch {
+    pub(crate) t: Lanes<LANES>,
+    pub(crate) y: Vec<Lanes<LANES>>,
+    /// Why a lane stopped early (None: still going).
+    pub(crate) failure: [Option<String>; LANES],
+    pub(crate) steps: [usize; LANES],
+}
+
+impl Batch {
+    /// A batch at t = 0 from each lane's state (`states[lane]`; missing lanes
+    /// repeat the first state, and are never read back).
+    pub(crate) fn new(states: &[Vec<f64>]) -> Batch {
+        let dim = states[0].len();
+        let y = (0..dim).map(|i| std::array::from_fn(|l| states.get(l).unwrap_or(&states[0])[i])).collect();
+        Batch { t: [0.0; LANES], y, failure: Default::default(), steps: [0; LANES] }
+    }
+
+    /// The state of one lane.
+    pub(crate) fn state(&self, lane: usize) -> Vec<f64> {
+        self.y.iter().map(|c| c[lane]).collect()
+    }
+
+    /// Sets the state of one lane.
+    pub(crate) fn set_state(&mut self, lane: usize, state: &[f64]) {
+        for (c, &v) in self.y.iter_mut().zip(state) {
+            c[lane] = v;
+        }
+    }
+}
+
+/// Advances every live lane of `batch` to `t_end` with the Taylor method
+/// (`series` on [`LANES`] lanes, its order chosen from `config.rtol`).
+pub(crate) fn propagate(
+    series: &mut LagrangeSeries<LANES>,
+    batch: &mut Batch,
+    t_end: f64,
+    config: &Config,
+    scratch: &mut Vec<Lanes<LANES>>,
+) {
+    let p = series.order();
+    let dim = batch.y.len();
+    scratch.resize(dim * (p + 1), [0.0; LANES]);
+    loop {
+        let live: [bool; LANES] = std::array::from_fn(|l| batch.failure[l].is_none() && batch.t[l] < t_end);
+        if !live.contains(&true) {
+            return;
+        }
+        if let Err(e) = series.expand(batch.t, &batch.y, scratch) {
+            for l in (0..LANES).filter(|&l| live[l]) {
+                batch.failure[l] = Some(format!("right-hand side failed at t = {}: {e}", batch.t[l]));
+            }
+            return;
+        }
+        // The step of each lane from the norms of its state and last two orders.
+        let norm = |k: usize, l: usize| scratch[k * dim..(k + 1) * dim].iter().fold(0.0f64, |m, c| m.max(c[l].abs()));
+        let mut h = [0.0; LANES];
+        for l in 0..LANES {
+            if !live[l] {
+                continue;
+            }
+            if let Some(bad) = (0..=p).find(|&k| scratch[k * dim..(k + 1) * dim].iter().any(|c| !c[l].is_finite())) {
+                batch.failure[l] = Some(format!(
+                    "right-hand side failed at t = {}: order {bad} of the Taylor series is not finite",
+                    batch.t[l]
+                ));
+                continue;
+            }
+            if batch.steps[l] >= config.max_steps {
+                batch.failure[l] =
+                    Some(format!("maximal number of steps ({}) reached at t = {}", config.max_steps, batch.t[l]));
+                continue;
+            }
+            let mut step = taylor_step(p, norm(0, l), norm(p - 1, l), norm(p, l), config.rtol, config.atol);
+            if let Some(h_max) = config.h_max {
+                step = step.min(h_max);
+            }
+            let rest = t_end - batch.t[l];
+            if !step.is_finite() || batch.t[l] + step * (1.0 + 1e-10) >= t_end {
+                step = rest;
+            }
+            if step <= f64::EPSILON * batch.t[l].abs().max(1.0) && step < rest {
+                batch.failure[l] = Some(format!("step size {step:e} too small at t = {}", batch.t[l]));
+                continue;
+            }
+            h[l] = step;
+        }
+        // Horner's rule on every lane (h = 0 leaves a lane where it is).
+        for i in 0..dim {
+            let mut acc = scratch[p * dim + i];
+            for k in (0..p).rev() {
+                let c = &scratch[k * dim + i];
+                for l in 0..LANES {
+                    acc[l] = acc[l] * h[l] + c[l];
+                }
+            }
+            batch.y[i] = acc;
+        }
+        for l in 0..LANES {
+            if h[l] > 0.0 {
+                batch.steps[l] += 1;
+                batch.t[l] =
+                    if batch.t[l] + h[l] >= t_end || h[l] == t_end - batch.t[l] { t_end } else { batch.t[l] + h[l] };
+            }
+        }
+        for l in 0..LANES {
+            if h[l] > 0.0 && batch.y.iter().any(|c| !c[l].is_finite()) {
+                batch.failure[l] = Some(format!("the state became non-finite at t = {}", batch.t[l]));
+            }
+        }
+    }
+}

@@ -1,0 +1,253 @@
+//! Taylor series of the motion in Lagrange form, for the Taylor integrator:
+//! the normalized coefficients of `y = [q, q']` to any order, on `L` lanes
+//! (trajectories) at once.
+//!
+//! The tape of M's stored entries and f runs in Taylor mode
+//! ([`sym::TaylorTape`], native code where the host has a code generator);
+//! the accelerations `a = q''` follow order by order from `M a = f` without
+//! differentiating M⁻¹: the Cauchy product gives
+//! `M[0] a[k] = f[k] − Σ_{j=1..k} M[j] a[k−j]`, so M is inverted once per
+//! expansion (at order 0) and each order costs one product with M[0]⁻¹, plus
+//! the convolutions of the entries of M that vary (none for a chain of
+//! masses). Then `q[k+1] = q'[k]/(k+1)` and `q'[k+1] = a[k]/(k+1)`.
+//!
+//! M[0]⁻¹ is applied as reciprocals when M is diagonal, as an explicit
+//! inverse up to [`EXPLICIT_INVERSE_MAX`] coordinates (a few multiply-adds
+//! per order, and the 2×2 of a double pendulum is solved thirteen times per
+//! step), and by LU solves beyond.
+
+use num::{LinearSolver, RhsError};
+use std::sync::Arc;
+use sym::{Lanes, Tape, TaylorTape};
+
+/// Up to this many coordinates M[0]⁻¹ is formed explicitly.
+const EXPLICIT_INVERSE_MAX: usize = 6;
+
+/// How M[0]⁻¹ is applied.
+#[derive(Debug, Clone)]
+enum Inverse<const L: usize> {
+    /// 1 / M_ii, per coordinate.
+    Diagonal(Vec<Lanes<L>>),
+    /// M⁻¹ row-major, n × n.
+    Explicit(Vec<Lanes<L>>),
+    /// One factorization per lane.
+    Lu(Vec<LinearSolver>),
+}
+
+/// The Taylor expansion of a Lagrange-form system. See the module documentation.
+#[derive(Debug, Clone)]
+pub(crate) struct LagrangeSeries<const L: usize> {
+    n: usize,
+    tape: TaylorTape<L>,
+    /// `(row, column)` of M's stored entries; the tape outputs them first, then f.
+    entries: Arc<Vec<(usize, usize)>>,
+    /// The stored entries of M that vary along a trajectory.
+    varying: Vec<usize>,
+    /// Where each input (`[q, q', t]`) and output (M's entries, f) sits in the
+    /// tape's coefficient buffer.
+    input_at: Vec<usize>,
+    output_at: Vec<usize>,
+    inverse: Inverse<L>,
+    /// The factorization behind an explicit inverse.
+    lu: LinearSolver,
+    /// Scratch: M on one lane, the right-hand side of one order.
+    mass: Vec<f64>,
+    column: Vec<f64>,
+    rhs: Vec<Lanes<L>>,
+    /// `a[k]`, order-major: `accel[k * n + i]`.
+    accel: Vec<Lanes<L>>,
+}
+
+impl<const L: usize> LagrangeSeries<L> {
+    /// The expansion to `order` of the system whose tape maps `[q, q', t,
+    /// parameters]` to M's stored `entries` followed by f.
+    pub(crate) fn new(
+        tape: &Tape,
+        n: usize,
+        entries: Arc<Vec<(usize, usize)>>,
+        diagonal: bool,
+        order: usize,
+    ) -> LagrangeSeries<L> {
+        // Inputs [q, q', t] vary along a trajectory; the parameters do not.
+        let variable: Vec<bool> = (0..tape.n_inputs()).map(|k| k <= 2 * n).collect();
+        let mut tape = TaylorTape::new(tape, order, &variable);
+        // Native code where the host has a code generator: the whole expansion in
+        // one function when M can be inverted in closed form, the tape's orders
+        // otherwise; the interpreter where there is no code generator.
+        if !matches!(tape.compile_second_order(n, &entries), Ok(true)) {
+            let _ = tape.compile_native();
+        }
+        let varying = (0..entries.len()).filter(|&e| !tape.output_is_constant(e)).collect();
+        let input_at = (0..=2 * n).map(|i| tape.input_index(i)).collect();
+        let output_at = (0..entries.len() + n).map(|i| tape.output_index(i)).collect();
+        let inverse = if diagonal {
+            Inverse::Diagonal(vec![[0.0; L]; n])
+        } else if n <= EXPLICIT_INVERSE_MAX {
+            Inverse::Explicit(vec![[0.0; L]; n * n])
+        } else {
+            Inverse::Lu((0..L).map(|_| LinearSolver::new(n)).collect())
+        };
+        LagrangeSeries {
+            n,
+            tape,
+            entries,
+            varying,
+            input_at,
+            output_at,
+            inverse,
+            lu: LinearSolver::new(n),
+            mass: vec![0.0; n * n],
+            column: vec![0.0; n],
+            rhs: vec![[0.0; L]; n],
+            accel: vec![[0.0; L]; n * order.max(1)],
+        }
+    }
+
+    /// The order of the expansion.
+    pub(crate) fn order(&self) -> usize {
+        self.tape.order()
+    }
+
+    /// Sets the parameters, `values[k]` for every lane.
+    pub(crate) fn set_parameters(&mut self, values: &[Lanes<L>]) {
+        for (k, v) in values.iter().enumerate() {
+            self.tape.set_constant_input(2 * self.n + 1 + k, *v);
+        }
+        self.tape.refresh_constants();
+    }
+
+    /// Writes the coefficients of orders `0..=order` of `y = [q, q']` at time `t`
+    /// into `series` (order-major, `series[k * 2n + i]`), from `y` (`y[i]` on every lane).
+    pub(crate) fn expand(&mut self, t: Lanes<L>, y: &[Lanes<L>], series: &mut [Lanes<L>]) -> Result<(), RhsError> {
+        let (n, p) = (self.n, self.order());
+        let dim = 2 * n;
+        let e = self.entries.len();
+        if self.tape.is_second_order() {
+            let c = self.tape.coefficients_mut();
+            for i in 0..dim {
+                c[self.input_at[i]] = y[i];
+            }
+            c[self.input_at[dim]] = t;
+            c[self.input_at[dim] + 1] = [1.0; L];
+            self.tape.expand_second_order();
+            let c = self.tape.coefficients();
+            for k in 0..=p {
+                for i in 0..dim {
+                    series[k * dim + i] = c[self.input_at[i] + k];
+                }
+            }
+            return Ok(());
+        }
+        series[..dim].copy_from_slice(y);
+        for k in 0..p {
+            let c = self.tape.coefficients_mut();
+            for i in 0..dim {
+                c[self.input_at[i] + k] = series[k * dim + i];
+            }
+            c[self.input_at[dim] + k] = match k {
+                0 => t,
+                1 => [1.0; L],
+                _ => [0.0; L],
+            };
+            self.tape.compute(k);
+            if k == 0 {
+                self.invert()?;
+            }
+            let c = self.tape.coefficients();
+            // f[k] − Σ_{j=1..k} M[j] a[k−j]
+            for i in 0..n {
+                self.rhs[i] = c[self.output_at[e + i] + k];
+            }
+            for &m in &self.varying {
+                let (row, col) = self.entries[m];
+                let at = self.output_at[m];
+                let mut r = self.rhs[row];
+                for j in 1..=k {
+                    let (mj, a) = (&c[at + j], &self.accel[(k - j) * n + col]);
+                    for l in 0..L {
+                        r[l] -= mj[l] * a[l];
+                    }
+                }
+                self.rhs[row] = r;
+            }
+            let accel = &mut self.accel[k * n..(k + 1) * n];
+            match &mut self.inverse {
+                Inverse::Diagonal(d) => {
+                    for i in 0..n {
+                        accel[i] = std::array::from_fn(|l| self.rhs[i][l] * d[i][l]);
+                    }
+                }
+                Inverse::Explicit(inv) => {
+                    for i in 0..n {
+                        let mut acc = [0.0; L];
+                        for j in 0..n {
+                            let (m, r) = (&inv[i * n + j], &self.rhs[j]);
+                            for l in 0..L {
+                                acc[l] += m[l] * r[l];
+                            }
+                        }
+                        accel[i] = acc;
+                    }
+                }
+                Inverse::Lu(lu) => {
+                    for (l, lu) in lu.iter().enumerate() {
+                        for i in 0..n {
+                            self.column[i] = self.rhs[i][l];
+                        }
+                        lu.solve_in_place(&mut self.column).map_err(RhsError::from)?;
+                        for i in 0..n {
+                            accel[i][l] = self.column[i];
+                        }
+                    }
+                }
+            }
+            let next = 1.0 / (k + 1) as f64;
+            for i in 0..n {
+                let (v, a) = (series[k * dim + n + i], self.accel[k * n + i]);
+                series[(k + 1) * dim + i] = std::array::from_fn(|l| v[l] * next);
+                series[(k + 1) * dim + n + i] = std::array::from_fn(|l| a[l] * next);
+            }
+        }
+        Ok(())
+    }
+
+    /// Inverts (or factors) M[0] on every lane.
+    fn invert(&mut self) -> Result<(), RhsError> {
+        let n = self.n;
+        let c = self.tape.coefficients();
+        if let Inverse::Diagonal(d) = &mut self.inverse {
+            for (m, &(i, _)) in self.entries.iter().enumerate() {
+                let v = c[self.output_at[m]];
+                if let Some(l) = v.iter().position(|&x| x == 0.0 || !x.is_finite()) {
+                    return Err(RhsError::Singular {
+                        detail: format!("M[{i}][{i}] = {} on a diagonal mass matrix", v[l]),
+                    });
+                }
+                d[i] = std::array::from_fn(|l| 1.0 / v[l]);
+            }
+            return Ok(());
+        }
+        for lane in 0..L {
+            self.mass.fill(0.0);
+            for (m, &(i, j)) in self.entries.iter().enumerate() {
+                self.mass[i * n + j] = c[self.output_at[m]][lane];
+            }
+            match &mut self.inverse {
+                Inverse::Diagonal(_) => unreachable!("handled above"),
+                Inverse::Lu(lu) => lu[lane].factor(&self.mass)?,
+                Inverse::Explicit(inv) => {
+                    self.lu.factor(&self.mass)?;
+                    for col in 0..n {
+                        self.column.fill(0.0);
+                        self.column[col] = 1.0;
+                        self.lu.solve_in_place(&mut self.column)?;
+                        for row in 0..n {
+                            inv[row * n + col][lane] = self.column[row];
+                        }
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,994 @@
+//! Taylor-mode evaluation of a tape: the Taylor coefficients of every output,
+//! order by order, from the Taylor coefficients of the inputs.
+//!
+//! This is the engine of the Taylor integrator (Jorba & Zou 2005; heyoka):
+//! along a solution `y(t)` of an ODE each tape slot is a function of `t`, and
+//! its normalized coefficients `x[k] = x⁽ᵏ⁾(t₀)/k!` follow from the operands'
+//! by the classical recurrences (products are Cauchy convolutions, quotients
+//! and functions are solved from `w' = g(u) u'`). Order `k` of every slot needs
+//! only orders `0..=k` of its operands, so an ODE integrator sets the state's
+//! order `k`, calls [`TaylorTape::compute`] for order `k`, and reads the right-
+//! hand side's order `k`, which is the state's order `k + 1` times `k + 1`.
+//!
+//! Slots that depend only on constants and constant inputs (the parameters)
+//! are evaluated once by [`TaylorTape::refresh_constants`] and enter the
+//! recurrences as scalars: `c·u` costs `O(1)` per order instead of the `O(k)`
+//! of a convolution. Integer powers become chains of products (no division by
+//! a base that may vanish), and `u^v` becomes `exp(v·ln u)`.
+//!
+//! Every coefficient is an array of `L` lanes: `L` independent trajectories of
+//! one ensemble run in lock step, and the loops over lanes vectorize.
+
+use crate::eval::{Op, Tape};
+use crate::expr::Func;
+use crate::jit::JitError;
+use crate::taylor_jit::{NativeTaylor, SecondOrderLayout, NATIVE_MAX_WORK};
+use std::sync::Arc;
+
+/// One coefficient of one slot on every lane.
+pub type Lanes<const L: usize> = [f64; L];
+
+/// A variable instruction of the Taylor tape; operands are slots, `c` names a
+/// constant slot (read at order 0 only).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum T {
+    Add(u32, u32),
+    Sub(u32, u32),
+    Mul(u32, u32),
+    Div(u32, u32),
+    Neg(u32),
+    Square(u32),
+    /// `v + c`
+    AddC(u32, u32),
+    /// `v - c`
+    SubVC(u32, u32),
+    /// `c - v`
+    SubCV(u32, u32),
+    /// `v * c`
+    MulC(u32, u32),
+    /// `v / c`
+    DivVC(u32, u32),
+    /// `c / v`
+    DivCV(u32, u32),
+    Sqrt(u32),
+    /// `v ^ c` for a non-integer constant exponent.
+    PowC(u32, u32),
+    Exp(u32),
+    Log(u32),
+    /// sin and cos of `u`: this slot is sin, `cos` the other.
+    Sin {
+        u: u32,
+        cos: u32,
+    },
+    /// The cosine half of a [`T::Sin`], computed with it.
+    CosOf,
+    /// sinh and cosh of `u`, like [`T::Sin`].
+    Sinh {
+        u: u32,
+        cosh: u32,
+    },
+    /// `tan u`, `aux = 1 + tan²u`; `sign = -1` gives `tanh u`, `aux = 1 - tanh²u`.
+    Tan {
+        u: u32,
+        aux: u32,
+        sign: f64,
+    },
+    /// Written by its `Tan`.
+    Aux,
+    /// `asin u` (`sign = 1`) or `acos u` (`sign = -1`); `root = √(1 - u²)`,
+    /// `inner = 1 - u²`.
+    Asin {
+        u: u32,
+        inner: u32,
+        root: u32,
+        sign: f64,
+    },
+    /// `atan u`, `aux = 1 + u²`.
+    Atan {
+        u: u32,
+        aux: u32,
+    },
+    /// `atan2(y, x)`, `aux = x² + y²`.
+    Atan2 {
+        y: u32,
+        x: u32,
+        aux: u32,
+    },
+    Abs(u32),
+}
+
+/// A tape evaluated in Taylor mode on `L` lanes. See the module documentation.
+#[derive(Clone, Debug)]
+pub struct TaylorTape<const L: usize> {
+    order: usize,
+    /// `coef[slot * (order + 1) + k]`: the k-th normalized coefficient.
+    coef: Vec<Lanes<L>>,
+    /// Constant instructions, evaluated by `refresh_constants`: (slot, op over slots).
+    constants: Vec<(u32, Op)>,
+    /// Variable instructions in order: (slot, instruction).
+    program: Vec<(u32, T)>,
+    /// The slot of each input.
+    input_slots: Vec<u32>,
+    /// Whether each input varies along a trajectory.
+    variable_inputs: Vec<bool>,
+    /// The slot of each output.
+    outputs: Vec<u32>,
+    /// Whether each slot is constant.
+    constant: Vec<bool>,
+    /// The orders as native code, shared by clones ([`TaylorTape::compile_native`]).
+    native: Option<Arc<NativeTaylor>>,
+    /// The whole expansion of a second-order system as native code
+    /// ([`TaylorTape::compile_second_order`]).
+    second_order: Option<(SecondOrderLayout, Arc<NativeTaylor>)>,
+}
+
+struct Builder {
+    constants: Vec<(u32, Op)>,
+    program: Vec<(u32, T)>,
+    constant: Vec<bool>,
+    /// The (sin, cos) or (sinh, cosh) slots of an argument, made once for both.
+    pairs: rustc_hash::FxHashMap<(u32, bool), (u32, u32)>,
+}
+
+impl Builder {
+    fn slot(&mut self, constant: bool) -> u32 {
+        self.constant.push(constant);
+        (self.constant.len() - 1) as u32
+    }
+
+    fn constant_op(&mut self, op: Op) -> u32 {
+        let s = self.slot(true);
+        self.constants.push((s, op));
+        s
+    }
+
+    fn var(&mut self, t: T) -> u32 {
+        let s = self.slot(false);
+        self.program.push((s, t));
+        s
+    }
+
+    fn is_const(&self, s: u32) -> bool {
+        self.constant[s as usize]
+    }
+
+    fn mul(&mut self, a: u32, b: u32) -> u32 {
+        match (self.is_const(a), self.is_const(b)) {
+            (true, true) => self.constant_op(Op::Mul(a, b)),
+            (false, true) => self.var(T::MulC(a, b)),
+            (true, false) => self.var(T::MulC(b, a)),
+            (false, false) if a == b => self.var(T::Square(a)),
+            (false, false) => self.var(T::Mul(a, b)),
+        }
+    }
+
+    fn recip(&mut self, a: u32) -> u32 {
+        if self.is_const(a) {
+            return self.constant_op(Op::Recip(a));
+        }
+        let one = self.constant_op(Op::Const(1f64.to_bits()));
+        self.var(T::DivCV(one, a))
+    }
+
+    /// `base^n` by binary exponentiation.
+    fn powi(&mut self, base: u32, n: i32) -> u32 {
+        if self.is_const(base) {
+            return self.constant_op(Op::Powi(base, n));
+        }
+        if n == 0 {
+            return self.constant_op(Op::Const(1f64.to_bits()));
+        }
+        let mut m = n.unsigned_abs();
+        let mut power = base;
+        let mut acc: Option<u32> = None;
+        loop {
+            if m & 1 == 1 {
+                acc = Some(match acc {
+                    Some(a) => self.mul(a, power),
+                    None => power,
+                });
+            }
+            m >>= 1;
+            if m == 0 {
+                break;
+            }
+            power = self.mul(power, power);
+        }
+        let acc = acc.expect("n != 0 has a set bit");
+        if n < 0 {
+            self.recip(acc)
+        } else {
+            acc
+        }
+    }
+
+    fn func(&mut self, f: Func, u: u32) -> u32 {
+        match f {
+            Func::Sin | Func::Cos | Func::Sinh | Func::Cosh => {
+                let circular = matches!(f, Func::Sin | Func::Cos);
+                let (sin, cos) = match self.pairs.get(&(u, circular)) {
+                    Some(&pair) => pair,
+                    None => {
+                        let sin = self.slot(false);
+                        let cos = self.slot(false);
+                        let op = if circular { T::Sin { u, cos } } else { T::Sinh { u, cosh: cos } };
+                        self.program.push((sin, op));
+                        self.program.push((cos, T::CosOf));
+                        self.pairs.insert((u, circular), (sin, cos));
+                        (sin, cos)
+                    }
+                };
+                if matches!(f, Func::Sin | Func::Sinh) {
+                    sin
+                } else {
+                    cos
+                }
+            }
+            Func::Tan | Func::Tanh => {
+                let w = self.slot(false);
+                let aux = self.slot(false);
+                let sign = if f == Func::Tan { 1.0 } else { -1.0 };
+                self.program.push((w, T::Tan { u, aux, sign }));
+                self.program.push((aux, T::Aux));
+                w
+            }
+            Func::Asin | Func::Acos => {
+                let inner = self.slot(false);
+                let root = self.slot(false);
+                let w = self.slot(false);
+                self.program.push((inner, T::Aux));
+                self.program.push((root, T::Aux));
+                let sign = if f == Func::Asin { 1.0 } else { -1.0 };
+                self.program.push((w, T::Asin { u, inner, root, sign }));
+                w
+            }
+            Func::Atan => {
+                let aux = self.slot(false);
+                self.program.push((aux, T::Aux));
+                self.var(T::Atan { u, aux })
+            }
+            Func::Exp => self.var(T::Exp(u)),
+            Func::Log => self.var(T::Log(u)),
+            Func::Abs => self.var(T::Abs(u)),
+        }
+    }
+}
+
+impl<const L: usize> TaylorTape<L> {
+    /// Prepares `tape` for Taylor coefficients up to `order`. `variable[k]` tells
+    /// whether input `k` varies along a trajectory (state, time) or is constant
+    /// (a parameter); every input starts at 0 on every lane.
+    pub fn new(tape: &Tape, order: usize, variable: &[bool]) -> TaylorTape<L> {
+        assert_eq!(variable.len(), tape.n_inputs(), "one flag per input");
+        let mut b =
+            Builder { constants: Vec::new(), program: Vec::new(), constant: Vec::new(), pairs: Default::default() };
+        let mut input_slots = vec![0; tape.n_inputs()];
+        // The Taylor slot of each tape slot.
+        let mut map: Vec<u32> = Vec::with_capacity(tape.len());
+        for op in tape.ops() {
+            let m = |s: u32| map[s as usize];
+            let all_const = |b: &Builder, slots: &[u32]| slots.iter().all(|&s| b.is_const(m(s)));
+            let slot = match *op {
+                Op::Input(k) => {
+                    let s = b.slot(!variable[k as usize]);
+                    input_slots[k as usize] = s;
+                    s
+                }
+                Op::Const(bits) => b.constant_op(Op::Const(bits)),
+                // Every operand constant: evaluated once, as the tape would.
+                Op::Add(x, y) | Op::Sub(x, y) | Op::Mul(x, y) | Op::Div(x, y) | Op::Powf(x, y) | Op::Atan2(x, y)
+                    if all_const(&b, &[x, y]) =>
+                {
+                    b.constant_op(remap(*op, &map))
+                }
+                Op::Neg(x) | Op::Recip(x) | Op::Square(x) | Op::Powi(x, _) | Op::Sqrt(x) | Op::Func(_, x)
+                    if all_const(&b, &[x]) =>
+                {
+                    b.constant_op(remap(*op, &map))
+                }
+                Op::Add(x, y) => match (b.is_const(m(x)), b.is_const(m(y))) {
+                    (true, _) => b.var(T::AddC(m(y), m(x))),
+                    (_, true) => b.var(T::AddC(m(x), m(y))),
+                    _ => b.var(T::Add(m(x), m(y))),
+                },
+                Op::Sub(x, y) => match (b.is_const(m(x)), b.is_const(m(y))) {
+                    (true, _) => b.var(T::SubCV(m(x), m(y))),
+                    (_, true) => b.var(T::SubVC(m(x), m(y))),
+                    _ => b.var(T::Sub(m(x), m(y))),
+                },
+                Op::Mul(x, y) => b.mul(m(x), m(y)),
+                Op::Div(x, y) => match (b.is_const(m(x)), b.is_const(m(y))) {
+                    (true, _) => b.var(T::DivCV(m(x), m(y))),
+                    (_, true) => b.var(T::DivVC(m(x), m(y))),
+                    _ => b.var(T::Div(m(x), m(y))),
+                },
+                Op::Neg(x) => b.var(T::Neg(m(x))),
+                Op::Recip(x) => b.recip(m(x)),
+                Op::Square(x) => b.var(T::Square(m(x))),
+                Op::Powi(x, n) => b.powi(m(x), n),
+                Op::Powf(x, y) if b.is_const(m(y)) => b.var(T::PowC(m(x), m(y))),
+                Op::Powf(x, y) => {
+                    // x^y = exp(y ln x)
+                    let ln =
+                        if b.is_const(m(x)) { b.constant_op(Op::Func(Func::Log, m(x))) } else { b.var(T::Log(m(x))) };
+                    let prod = b.mul(m(y), ln);
+                    b.var(T::Exp(prod))
+                }
+                Op::Sqrt(x) => b.var(T::Sqrt(m(x))),
+                Op::Func(f, x) => b.func(f, m(x)),
+                Op::Atan2(y, x) => {
+                    let aux = b.slot(false);
+                    b.program.push((aux, T::Aux));
+                    b.var(T::Atan2 { y: m(y), x: m(x), aux })
+                }
+            };
+            map.push(slot);
+        }
+        let n_slots = b.constant.len();
+        TaylorTape {
+            order,
+            coef: vec![[0.0; L]; n_slots * (order + 1)],
+            constants: b.constants,
+            program: b.program,
+            input_slots,
+            variable_inputs: variable.to_vec(),
+            outputs: tape.output_slots().iter().map(|&s| map[s as usize]).collect(),
+            constant: b.constant,
+            native: None,
+            second_order: None,
+        }
+    }
+
+    /// Compiles the whole Taylor expansion of the second-order system
+    /// `M(q, q', t) q'' = f(q, q', t)` into one native function, run by
+    /// [`expand_second_order`](Self::expand_second_order). The tape's inputs
+    /// must start with `q` (n), `q'` (n) and `t`; its outputs are M's stored
+    /// entries at `entries` (row, column), then `f` (n).
+    ///
+    /// M[0] is inverted in closed form once per expansion, so this serves a
+    /// diagonal M of any size and a dense one of at most 3 coordinates; it
+    /// returns `Ok(false)` (nothing compiled) otherwise, or when the code
+    /// would be too large.
+    pub fn compile_second_order(&mut self, n: usize, entries: &[(usize, usize)]) -> Result<bool, JitError> {
+        let diagonal = entries.iter().all(|&(i, j)| i == j);
+        let work = self.native_work() + entries.len() * (self.order + 1) * (self.order + 2) / 2 * L;
+        if (!diagonal && n > 3) || work > NATIVE_MAX_WORK || self.outputs.len() != entries.len() + n {
+            return Ok(false);
+        }
+        assert!(self.input_slots.len() > 2 * n, "inputs q, q', t come first");
+        let stride = self.order + 1;
+        let first = self.coef.len() / stride;
+        let extra = n + if diagonal { n } else { n * n };
+        let slots: Vec<u32> = (first..first + extra).map(|s| s as u32).collect();
+        let (accel, inverse) = slots.split_at(n);
+        let layout = SecondOrderLayout {
+            n,
+            entries: entries.to_vec(),
+            q: self.input_slots[..n].to_vec(),
+            v: self.input_slots[n..2 * n].to_vec(),
+            mass: self.outputs[..entries.len()].to_vec(),
+            force: self.outputs[entries.len()..].to_vec(),
+            varying: (0..entries.len()).map(|e| !self.output_is_constant(e)).collect(),
+            accel: accel.to_vec(),
+            inverse: inverse.to_vec(),
+            diagonal,
+        };
+        let len = (first + extra) * stride * L;
+        let native = NativeTaylor::second_order(self, &layout, len)?;
+        self.coef.resize((first + extra) * stride, [0.0; L]);
+        self.second_order = Some((layout, Arc::new(native)));
+        Ok(true)
+    }
+
+    /// Whether [`compile_second_order`](Self::compile_second_order) succeeded.
+    pub fn is_second_order(&self) -> bool {
+        self.second_order.is_some()
+    }
+
+    /// The whole expansion of the second-order system: from order 0 of `q`, `q'`
+    /// and orders 0 and 1 of `t` in the inputs' coefficients, writes orders
+    /// `1..=order` of `q` and `q'` there.
+    ///
+    /// # Panics
+    ///
+    /// When [`compile_second_order`](Self::compile_second_order) did not succeed.
+    pub fn expand_second_order(&mut self) {
+        let (_, native) = self.second_order.as_ref().expect("compile_second_order succeeded");
+        native.run(0, self.coef.as_flattened_mut());
+    }
+
+    /// Compiles every order to native code ([`crate::Compiled`]'s JIT), used by
+    /// [`compute`](Self::compute) from then on. Returns `Ok(false)` and stays
+    /// interpreted when the unrolled code would be too large to pay for its
+    /// compilation, and an error when the host has no code generator.
+    pub fn compile_native(&mut self) -> Result<bool, JitError> {
+        if self.native_work() > NATIVE_MAX_WORK {
+            return Ok(false);
+        }
+        self.native = Some(Arc::new(NativeTaylor::new(self)?));
+        Ok(true)
+    }
+
+    /// The multiply-adds of one expansion on all lanes: `O(p)` for a linear
+    /// instruction, `O(p²)` for a convolution. Native code is this long.
+    fn native_work(&self) -> usize {
+        let (linear, quadratic) = (self.order + 1, (self.order + 1) * (self.order + 2) / 2);
+        let per_lane: usize = self
+            .program
+            .iter()
+            .map(|(_, op)| match op {
+                T::Add(..)
+                | T::Sub(..)
+                | T::Neg(_)
+                | T::AddC(..)
+                | T::SubVC(..)
+                | T::SubCV(..)
+                | T::MulC(..)
+                | T::DivVC(..)
+                | T::Abs(_)
+                | T::CosOf
+                | T::Aux => linear,
+                T::Sin { .. } | T::Sinh { .. } | T::Tan { .. } | T::Asin { .. } | T::Atan2 { .. } => 2 * quadratic,
+                _ => quadratic,
+            })
+            .sum();
+        per_lane * L
+    }
+
+    /// Whether [`compute`](Self::compute) runs native code.
+    pub fn is_native(&self) -> bool {
+        self.native.is_some()
+    }
+
+    /// The variable instructions, for the code generator.
+    pub(crate) fn program(&self) -> &[(u32, T)] {
+        &self.program
+    }
+
+    /// The number of `f64` in the coefficient buffer.
+    pub(crate) fn buffer_len(&self) -> usize {
+        self.coef.len() * L
+    }
+
+    /// The highest order computed.
+    pub fn order(&self) -> usize {
+        self.order
+    }
+
+    /// The number of variable instructions (a measure of the cost of one order).
+    pub fn len(&self) -> usize {
+        self.program.len()
+    }
+
+    /// True when no instruction varies (every output is constant).
+    pub fn is_empty(&self) -> bool {
+        self.program.is_empty()
+    }
+
+    /// Whether output `i` is constant along a trajectory.
+    pub fn output_is_constant(&self, i: usize) -> bool {
+        self.constant[self.outputs[i] as usize]
+    }
+
+    fn at(&self, slot: u32, k: usize) -> usize {
+        slot as usize * (self.order + 1) + k
+    }
+
+    /// Sets constant input `k` on every lane; call [`refresh_constants`](Self::refresh_constants) after.
+    pub fn set_constant_input(&mut self, k: usize, value: Lanes<L>) {
+        debug_assert!(!self.variable_inputs[k]);
+        let i = self.at(self.input_slots[k], 0);
+        self.coef[i] = value;
+    }
+
+    /// Evaluates the constant slots from the constant inputs.
+    pub fn refresh_constants(&mut self) {
+        for idx in 0..self.constants.len() {
+            let (slot, op) = self.constants[idx];
+            let v = |s: u32, lane: usize| self.coef[self.at(s, 0)][lane];
+            let mut out = [0.0; L];
+            for (lane, o) in out.iter_mut().enumerate() {
+                *o = match op {
+                    Op::Input(_) => unreachable!("inputs are not instructions here"),
+                    Op::Const(bits) => f64::from_bits(bits),
+                    Op::Add(a, b) => v(a, lane) + v(b, lane),
+                    Op::Sub(a, b) => v(a, lane) - v(b, lane),
+                    Op::Mul(a, b) => v(a, lane) * v(b, lane),
+                    Op::Div(a, b) => v(a, lane) / v(b, lane),
+                    Op::Neg(a) => -v(a, lane),
+                    Op::Recip(a) => 1.0 / v(a, lane),
+                    Op::Square(a) => v(a, lane) * v(a, lane),
+                    Op::Powi(a, n) => v(a, lane).powi(n),
+                    Op::Powf(a, b) => v(a, lane).powf(v(b, lane)),
+                    Op::Sqrt(a) => v(a, lane).sqrt(),
+                    Op::Func(f, a) => f.apply(v(a, lane)),
+                    Op::Atan2(a, b) => v(a, lane).atan2(v(b, lane)),
+                };
+            }
+            let i = self.at(slot, 0);
+            self.coef[i] = out;
+        }
+    }
+
+    /// The coefficient buffer: order `k` of the slot at `index` is at `index + k`
+    /// (see [`input_index`](Self::input_index), [`output_index`](Self::output_index)).
+    pub fn coefficients(&self) -> &[Lanes<L>] {
+        &self.coef
+    }
+
+    /// The coefficient buffer, to set the variable inputs' coefficients.
+    pub fn coefficients_mut(&mut self) -> &mut [Lanes<L>] {
+        &mut self.coef
+    }
+
+    /// Where order 0 of input `i` sits in [`coefficients`](Self::coefficients).
+    pub fn input_index(&self, i: usize) -> usize {
+        self.at(self.input_slots[i], 0)
+    }
+
+    /// Where order 0 of output `i` sits in [`coefficients`](Self::coefficients);
+    /// a constant output's higher orders there are zero.
+    pub fn output_index(&self, i: usize) -> usize {
+        self.at(self.outputs[i], 0)
+    }
+
+    /// The coefficient of order `k` of variable input `i`, to be set before
+    /// [`compute`](Self::compute) of order `k`.
+    pub fn input_mut(&mut self, i: usize, k: usize) -> &mut Lanes<L> {
+        debug_assert!(self.variable_inputs[i]);
+        let at = self.at(self.input_slots[i], k);
+        &mut self.coef[at]
+    }
+
+    /// The coefficient of order `k` of output `i` (zero above order 0 for a
+    /// constant output), valid once order `k` is computed.
+    pub fn output(&self, i: usize, k: usize) -> Lanes<L> {
+        let slot = self.outputs[i];
+        if self.constant[slot as usize] && k > 0 {
+            return [0.0; L];
+        }
+        self.coef[self.at(slot, k)]
+    }
+
+    /// Computes order `k` of every variable slot. Orders `0..k` must have been
+    /// computed, and the variable inputs' orders `0..=k` set.
+    pub fn compute(&mut self, k: usize) {
+        assert!(k <= self.order, "order {k} above the tape's {}", self.order);
+        if let Some(native) = &self.native {
+            native.run(k, self.coef.as_flattened_mut());
+            return;
+        }
+        let stride = self.order + 1;
+        for idx in 0..self.program.len() {
+            let (out, op) = self.program[idx];
+            let w = out as usize * stride;
+            let c = &mut self.coef;
+            let s = |slot: u32| slot as usize * stride;
+            let value: Lanes<L> = if k == 0 {
+                match op {
+                    T::CosOf | T::Aux => continue,
+                    _ => order_zero(c, op, stride),
+                }
+            } else {
+                match op {
+                    T::Add(a, b) => lanes(|l| c[s(a) + k][l] + c[s(b) + k][l]),
+                    T::Sub(a, b) => lanes(|l| c[s(a) + k][l] - c[s(b) + k][l]),
+                    T::Neg(a) => lanes(|l| -c[s(a) + k][l]),
+                    T::AddC(a, _) | T::SubVC(a, _) => c[s(a) + k],
+                    T::SubCV(_, a) => lanes(|l| -c[s(a) + k][l]),
+                    T::MulC(a, b) => lanes(|l| c[s(a) + k][l] * c[s(b)][l]),
+                    T::DivVC(a, b) => lanes(|l| c[s(a) + k][l] / c[s(b)][l]),
+                    T::Mul(a, b) => {
+                        let (a, b) = (s(a), s(b));
+                        let mut acc = [0.0; L];
+                        for j in 0..=k {
+                            fma(&mut acc, &c[a + j], &c[b + k - j]);
+                        }
+                        acc
+                    }
+                    T::Square(a) => {
+                        let a = s(a);
+                        let mut acc = [0.0; L];
+                        for j in 0..k.div_ceil(2) {
+                            fma(&mut acc, &c[a + j], &c[a + k - j]);
+                        }
+                        let mut out = lanes(|l| 2.0 * acc[l]);
+                        if k.is_multiple_of(2) {
+                            fma(&mut out, &c[a + k / 2], &c[a + k / 2]);
+                        }
+                        out
+                    }
+                    T::Div(a, b) => {
+                        // w = a/b: w[k] = (a[k] - Σ_{j=1..k} b[j] w[k-j]) / b[0]
+                        let (a, b) = (s(a), s(b));
+                        let mut acc = c[a + k];
+                        for j in 1..=k {
+                            fms(&mut acc, &c[b + j], &c[w + k - j]);
+                        }
+                        lanes(|l| acc[l] / c[b][l])
+                    }
+                    T::DivCV(_, b) => {
+                        let b = s(b);
+                        let mut acc = [0.0; L];
+                        for j in 1..=k {
+                            fms(&mut acc, &c[b + j], &c[w + k - j]);
+                        }
+                        lanes(|l| acc[l] / c[b][l])
+                    }
+                    T::Sqrt(a) => {
+                        // w² = a: w[k] = (a[k] - Σ_{j=1..k-1} w[j] w[k-j]) / (2 w[0])
+                        let a = s(a);
+                        let mut acc = c[a + k];
+                        for j in 1..k {
+                            fms(&mut acc, &c[w + j], &c[w + k - j]);
+                        }
+                        lanes(|l| acc[l] / (2.0 * c[w][l]))
+                    }
+                    T::PowC(a, e) => {
+                        // a w' = α a' w: w[k] = Σ_{j=0..k-1} (α(k-j) - j) a[k-j] w[j] / (k a[0])
+                        let (a, e) = (s(a), s(e));
+                        let kf = k as f64;
+                        let mut acc = [0.0; L];
+                        for j in 0..k {
+                            let (kj, jf) = ((k - j) as f64, j as f64);
+                            for l in 0..L {
+                                acc[l] += (c[e][l] * kj - jf) * c[a + k - j][l] * c[w + j][l];
+                            }
+                        }
+                        lanes(|l| acc[l] / (kf * c[a][l]))
+                    }
+                    T::Exp(a) => {
+                        // w' = a' w: w[k] = Σ_{j=1..k} j a[j] w[k-j] / k
+                        let a = s(a);
+                        weighted(c, a, w, k, 1, k)
+                    }
+                    T::Log(a) => {
+                        // a w' = a': w[k] = (a[k] - Σ_{j=1..k-1} j w[j] a[k-j] / k) / a[0]
+                        let a = s(a);
+                        let sum = weighted(c, w, a, k, 1, k - 1);
+                        lanes(|l| (c[a + k][l] - sum[l]) / c[a][l])
+                    }
+                    T::Sin { u, cos } => {
+                        let (u, cs) = (s(u), s(cos));
+                        let sin = weighted(c, u, cs, k, 1, k);
+                        let cos = weighted(c, u, w, k, 1, k);
+                        c[cs + k] = lanes(|l| -cos[l]);
+                        sin
+                    }
+                    T::Sinh { u, cosh } => {
+                        let (u, ch) = (s(u), s(cosh));
+                        let sinh = weighted(c, u, ch, k, 1, k);
+                        c[ch + k] = weighted(c, u, w, k, 1, k);
+                        sinh
+                    }
+                    T::Tan { u, aux, sign } => {
+                        // w' = u' (1 ± w²)
+                        let (u, x) = (s(u), s(aux));
+                        let v = weighted(c, u, x, k, 1, k);
+                        c[w + k] = v;
+                        let mut sq = [0.0; L];
+                        for j in 0..=k {
+                            fma(&mut sq, &c[w + j], &c[w + k - j]);
+                        }
+                        c[x + k] = lanes(|l| sign * sq[l]);
+                        v
+                    }
+                    T::Asin { u, inner, root, sign } => {
+                        // inner = 1 - u², root = √inner, root·w' = ±u'
+                        let (u, i, r) = (s(u), s(inner), s(root));
+                        let mut sq = [0.0; L];
+                        for j in 0..=k {
+                            fma(&mut sq, &c[u + j], &c[u + k - j]);
+                        }
+                        c[i + k] = lanes(|l| -sq[l]);
+                        let mut acc = c[i + k];
+                        for j in 1..k {
+                            fms(&mut acc, &c[r + j], &c[r + k - j]);
+                        }
+                        c[r + k] = lanes(|l| acc[l] / (2.0 * c[r][l]));
+                        derivative_quotient(c, u, r, w, k, sign)
+                    }
+                    T::Atan { u, aux } => {
+                        // aux = 1 + u², aux·w' = u'
+                        let (u, x) = (s(u), s(aux));
+                        let mut sq = [0.0; L];
+                        for j in 0..=k {
+                            fma(&mut sq, &c[u + j], &c[u + k - j]);
+                        }
+                        c[x + k] = sq;
+                        derivative_quotient(c, u, x, w, k, 1.0)
+                    }
+                    T::Atan2 { y, x, aux } => {
+                        // aux = x² + y², aux·w' = x y' - y x'
+                        let (y, x, d) = (s(y), s(x), s(aux));
+                        let mut sq = [0.0; L];
+                        for j in 0..=k {
+                            fma(&mut sq, &c[x + j], &c[x + k - j]);
+                            fma(&mut sq, &c[y + j], &c[y + k - j]);
+                        }
+                        c[d + k] = sq;
+                        // z[k-1] = Σ_{j=0..k-1} (k-j) (x[j] y[k-j] - y[j] x[k-j])
+                        let mut acc = [0.0; L];
+                        for j in 0..k {
+                            let kj = (k - j) as f64;
+                            for l in 0..L {
+                                acc[l] += kj * (c[x + j][l] * c[y + k - j][l] - c[y + j][l] * c[x + k - j][l]);
+                            }
+                        }
+                        for j in 1..k {
+                            let kj = (k - j) as f64;
+                            for l in 0..L {
+                                acc[l] -= kj * c[d + j][l] * c[w + k - j][l];
+                            }
+                        }
+                        lanes(|l| acc[l] / (k as f64 * c[d][l]))
+                    }
+                    T::Abs(a) => {
+                        let a = s(a);
+                        lanes(|l| if c[a][l] < 0.0 { -c[a + k][l] } else { c[a + k][l] })
+                    }
+                    T::CosOf | T::Aux => continue,
+                }
+            };
+            c[w + k] = value;
+        }
+    }
+}
+
+/// Order 0 of a variable instruction: its ordinary value (and that of its
+/// companion slots).
+fn order_zero<const L: usize>(c: &mut [Lanes<L>], op: T, stride: usize) -> Lanes<L> {
+    let s = |slot: u32| slot as usize * stride;
+    match op {
+        T::Add(a, b) | T::AddC(a, b) => lanes(|l| c[s(a)][l] + c[s(b)][l]),
+        T::Sub(a, b) | T::SubVC(a, b) | T::SubCV(a, b) => lanes(|l| c[s(a)][l] - c[s(b)][l]),
+        T::Mul(a, b) | T::MulC(a, b) => lanes(|l| c[s(a)][l] * c[s(b)][l]),
+        T::Div(a, b) | T::DivVC(a, b) | T::DivCV(a, b) => lanes(|l| c[s(a)][l] / c[s(b)][l]),
+        T::Neg(a) => lanes(|l| -c[s(a)][l]),
+        T::Square(a) => lanes(|l| c[s(a)][l] * c[s(a)][l]),
+        T::Sqrt(a) => lanes(|l| c[s(a)][l].sqrt()),
+        T::PowC(a, e) => lanes(|l| c[s(a)][l].powf(c[s(e)][l])),
+        T::Exp(a) => lanes(|l| c[s(a)][l].exp()),
+        T::Log(a) => lanes(|l| c[s(a)][l].ln()),
+        T::Abs(a) => lanes(|l| c[s(a)][l].abs()),
+        T::Sin { u, cos } => {
+            let (mut sin, mut cos_v) = ([0.0; L], [0.0; L]);
+            for l in 0..L {
+                (sin[l], cos_v[l]) = c[s(u)][l].sin_cos();
+            }
+            c[s(cos)] = cos_v;
+            sin
+        }
+        T::Sinh { u, cosh } => {
+            c[s(cosh)] = lanes(|l| c[s(u)][l].cosh());
+            lanes(|l| c[s(u)][l].sinh())
+        }
+        T::Tan { u, aux, sign } => {
+            let v = lanes(|l| if sign > 0.0 { c[s(u)][l].tan() } else { c[s(u)][l].tanh() });
+            c[s(aux)] = lanes(|l| 1.0 + sign * v[l] * v[l]);
+            v
+        }
+        T::Asin { u, inner, root, sign } => {
+            let inner_v = lanes(|l| 1.0 - c[s(u)][l] * c[s(u)][l]);
+            c[s(inner)] = inner_v;
+            c[s(root)] = lanes(|l| inner_v[l].sqrt());
+            lanes(|l| if sign > 0.0 { c[s(u)][l].asin() } else { c[s(u)][l].acos() })
+        }
+        T::Atan { u, aux } => {
+            c[s(aux)] = lanes(|l| 1.0 + c[s(u)][l] * c[s(u)][l]);
+            lanes(|l| c[s(u)][l].atan())
+        }
+        T::Atan2 { y, x, aux } => {
+            c[s(aux)] = lanes(|l| c[s(x)][l] * c[s(x)][l] + c[s(y)][l] * c[s(y)][l]);
+            lanes(|l| c[s(y)][l].atan2(c[s(x)][l]))
+        }
+        T::CosOf | T::Aux => unreachable!("written by their instruction"),
+    }
+}
+
+/// `Σ_{j=lo..=hi} j a[j] b[k-j] / k` (the recurrence of `w' = a' b`).
+#[inline(always)]
+fn weighted<const L: usize>(c: &[Lanes<L>], a: usize, b: usize, k: usize, lo: usize, hi: usize) -> Lanes<L> {
+    let mut acc = [0.0; L];
+    for j in lo..=hi {
+        let jf = j as f64;
+        for l in 0..L {
+            acc[l] += jf * c[a + j][l] * c[b + k - j][l];
+        }
+    }
+    let kf = k as f64;
+    lanes(|l| acc[l] / kf)
+}
+
+/// `w[k]` from `d·w' = sign·u'`:
+/// `w[k] = (sign·k·u[k] - Σ_{j=1..k-1} (k-j) d[j] w[k-j]) / (k d[0])`.
+#[inline(always)]
+fn derivative_quotient<const L: usize>(c: &[Lanes<L>], u: usize, d: usize, w: usize, k: usize, sign: f64) -> Lanes<L> {
+    let kf = k as f64;
+    let mut acc: Lanes<L> = lanes(|l| sign * kf * c[u + k][l]);
+    for j in 1..k {
+        let kj = (k - j) as f64;
+        for l in 0..L {
+            acc[l] -= kj * c[d + j][l] * c[w + k - j][l];
+        }
+    }
+    lanes(|l| acc[l] / (kf * c[d][l]))
+}
+
+#[inline(always)]
+fn lanes<const L: usize>(f: impl Fn(usize) -> f64) -> Lanes<L> {
+    std::array::from_fn(f)
+}
+
+#[inline(always)]
+fn fma<const L: usize>(acc: &mut Lanes<L>, a: &Lanes<L>, b: &Lanes<L>) {
+    for l in 0..L {
+        acc[l] += a[l] * b[l];
+    }
+}
+
+#[inline(always)]
+fn fms<const L: usize>(acc: &mut Lanes<L>, a: &Lanes<L>, b: &Lanes<L>) {
+    for l in 0..L {
+        acc[l] -= a[l] * b[l];
+    }
+}
+
+/// An instruction of the tape with its operand slots renamed.
+fn remap(op: Op, map: &[u32]) -> Op {
+    let m = |s: u32| map[s as usize];
+    match op {
+        Op::Input(k) => Op::Input(k),
+        Op::Const(b) => Op::Const(b),
+        Op::Add(a, b) => Op::Add(m(a), m(b)),
+        Op::Sub(a, b) => Op::Sub(m(a), m(b)),
+        Op::Mul(a, b) => Op::Mul(m(a), m(b)),
+        Op::Div(a, b) => Op::Div(m(a), m(b)),
+        Op::Neg(a) => Op::Neg(m(a)),
+        Op::Recip(a) => Op::Recip(m(a)),
+        Op::Square(a) => Op::Square(m(a)),
+        Op::Powi(a, n) => Op::Powi(m(a), n),
+        Op::Powf(a, b) => Op::Powf(m(a), m(b)),
+        Op::Sqrt(a) => Op::Sqrt(m(a)),
+        Op::Func(f, a) => Op::Func(f, m(a)),
+        Op::Atan2(a, b) => Op::Atan2(m(a), m(b)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::expr::Pool;
+
+    /// Checks the Taylor coefficients of `text` along x(t) = x0 + t, y(t) = y0 - t
+    /// (and the constant parameter a) against repeated symbolic derivatives.
+    fn check<const L: usize>(text: &str, x0: [f64; L], y0: f64, a: f64) {
+        let interpreted = check_with::<L>(text, x0, y0, a, false);
+        let native = check_with::<L>(text, x0, y0, a, true);
+        // Native code and interpreter agree to rounding.
+        for (k, (i, n)) in interpreted.iter().zip(&native).enumerate() {
+            for l in 0..L {
+                let close = (i[l] - n[l]).abs() <= 1e-12 * i[l].abs().max(1e-300) || i[l] == n[l];
+                assert!(close, "{text}: order {k} lane {l}: interpreted {} native {}", i[l], n[l]);
+            }
+        }
+    }
+
+    /// The output's coefficients, checked against the derivatives.
+    fn check_with<const L: usize>(text: &str, x0: [f64; L], y0: f64, a: f64, native: bool) -> Vec<Lanes<L>> {
+        let order = 6;
+        let mut p = Pool::default();
+        let e = p.parse(text).unwrap();
+        let (x, y, pa) = (p.symbol("x"), p.symbol("y"), p.symbol("a"));
+        let mut tape_t = Tape::compile(&p, &[e], &[x, y, pa]).unwrap();
+        let mut taylor = TaylorTape::<L>::new(&tape_t, order, &[true, true, false]);
+        if native {
+            assert!(taylor.compile_native().unwrap());
+            assert!(taylor.is_native());
+        }
+        taylor.set_constant_input(2, [a; L]);
+        taylor.refresh_constants();
+        // d/dt = d/dx - d/dy along the line.
+        let mut derivs = vec![e];
+        for k in 1..=order {
+            let dx = p.diff(derivs[k - 1], x);
+            let dy = p.diff(derivs[k - 1], y);
+            derivs.push(p.sub(dx, dy));
+        }
+        let mut tape_d = Tape::compile(&p, &derivs, &[x, y, pa]).unwrap();
+        for k in 0..=order {
+            *taylor.input_mut(0, k) = [if k == 0 {
+                0.0
+            } else if k == 1 {
+                1.0
+            } else {
+                0.0
+            }; L];
+            if k == 0 {
+                *taylor.input_mut(0, 0) = x0;
+            }
+            *taylor.input_mut(1, k) = [if k == 0 {
+                y0
+            } else if k == 1 {
+                -1.0
+            } else {
+                0.0
+            }; L];
+            taylor.compute(k);
+        }
+        let mut factorial = 1.0;
+        for k in 0..=order {
+            if k > 0 {
+                factorial *= k as f64;
+            }
+            for lane in 0..L {
+                let mut exact = vec![0.0; order + 1];
+                tape_d.eval(&[x0[lane], y0, a], &mut exact);
+                let want = exact[k] / factorial;
+                let got = taylor.output(0, k)[lane];
+                let tol = 1e-9 * (1.0 + want.abs());
+                assert!((got - want).abs() <= tol, "{text}: order {k} lane {lane}: {got} vs {want}");
+            }
+        }
+        let mut value = [0.0];
+        tape_t.eval(&[x0[0], y0, a], &mut value);
+        assert!((taylor.output(0, 0)[0] - value[0]).abs() <= 1e-12 * (1.0 + value[0].abs()));
+        (0..=order).map(|k| taylor.output(0, k)).collect()
+    }
+
+    #[test]
+    fn coefficients_match_repeated_derivatives() {
+        for text in [
+            "x*y + a*x - y/a + 3",
+            "x/y",
+            "a/x + x^3 - y^-2 + 2*x^2*y",
+            "sin(x)*cos(y) + cos(x - y)",
+            "tan(x) + tanh(y) + sinh(x)*cosh(y)",
+            "asin(x/3) + acos(y/4) + atan(x*y)",
+            "exp(x)*log(y) + sqrt(y)",
+            "x^1.5 + y^(1/3) + x^y + a^x",
+            "atan2(y, x) + abs(x - y)",
+            "a*exp(-x^2)/(1 + y^2)",
+        ] {
+            check::<1>(text, [0.7], 2.3, 1.7);
+            check::<4>(text, [0.3, 0.9, 1.1, 1.4], 2.3, 1.7);
+        }
+    }
+
+    #[test]
+    fn constants_are_computed_once_and_scale_instead_of_convolving() {
+        let mut p = Pool::default();
+        let e = p.parse("a*b*x + a^2").unwrap();
+        let (x, a, b) = (p.symbol("x"), p.symbol("a"), p.symbol("b"));
+        let tape = Tape::compile(&p, &[e], &[x, a, b]).unwrap();
+        let t = TaylorTape::<1>::new(&tape, 4, &[true, false, false]);
+        assert!(t.program.iter().all(|(_, op)| !matches!(op, T::Mul(..) | T::Square(..))));
+        let e = p.parse("a*b").unwrap();
+        let tape = Tape::compile(&p, &[e], &[x, a, b]).unwrap();
+        let mut t = TaylorTape::<1>::new(&tape, 4, &[true, false, false]);
+        assert!(t.is_empty() && t.output_is_constant(0));
+        t.set_constant_input(1, [2.0]);
+        t.set_constant_input(2, [3.0]);
+        t.refresh_constants();
+        assert_eq!((t.output(0, 0), t.output(0, 3)), ([6.0], [0.0]));
+    }
+
+    #[test]
+    fn the_exponential_of_t_has_coefficients_one_over_k_factorial() {
+        let mut p = Pool::default();
+        let e = p.parse("exp(t)").unwrap();
+        let t = p.symbol("t");
+        let tape = Tape::compile(&p, &[e], &[t]).unwrap();
+        let mut taylor = TaylorTape::<1>::new(&tape, 20, &[true]);
+        let mut factorial = 1.0;
+        for k in 0..=20 {
+            *taylor.input_mut(0, k) = [if k == 1 { 1.0 } else { 0.0 }];
+            taylor.compute(k);
+            if k > 0 {
+                factorial *= k as f64;
+            }
+            let got = taylor.output(0, k)[0];
+            assert!((got * factorial - 1.0).abs() < 1e-13, "order {k}: {got}");
+        }
+    }
+}

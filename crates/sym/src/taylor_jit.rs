@@ -1,0 +1,788 @@
+//! Native code for a [`TaylorTape`]: one straight-line machine function per
+//! Taylor order, compiled with cranelift.
+//!
+//! The function of order `k` computes order `k` of every variable slot on
+//! every lane, exactly the recurrences of `taylor.rs` with every loop
+//! unrolled (the order, the convolution bounds and the lanes are known when
+//! compiling), reading and writing the tape's coefficient buffer in place,
+//! two lanes per instruction where the lanes pair up. Cranelift's optimizer
+//! is off: the code is straight-line arithmetic on loaded values, which it
+//! cannot improve, and it would triple the compile time. For a second-order
+//! system `M q'' = f` ([`NativeTaylor::second_order`]) the whole expansion,
+//! coupling included, is one function. The interpreter in `taylor.rs` stays the reference and the fallback;
+//! both agree to rounding (the same operations, summed in the same order).
+
+// Calling JIT-compiled code can only be done through a raw function pointer;
+// see `jit.rs` for the same pattern. Two unsafe blocks: the pointer casts in
+// `NativeTaylor::new` and the call in `NativeTaylor::run`.
+#![allow(unsafe_code)]
+
+use crate::expr::Func;
+use crate::jit::{codegen, host_isa, lagrange_atan2, lagrange_powf, offset, unary, JitError, ATAN2, POWF};
+use crate::taylor::{TaylorTape, T};
+use cranelift_codegen::ir::{
+    condcodes::FloatCC, types, AbiParam, FuncRef, InstBuilder, MemFlagsData, UserFuncName, Value,
+};
+use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
+use cranelift_jit::{JITBuilder, JITModule};
+use cranelift_module::{default_libcall_names, Linkage, Module};
+use rustc_hash::FxHashMap;
+use std::sync::{Mutex, PoisonError};
+
+type OrderFn = unsafe extern "C" fn(coef: *mut f64);
+
+/// Orders `0..=p` of a Taylor tape as native functions. Shared by the clones
+/// of a tape (one compilation serves an ensemble's workers).
+pub(crate) struct NativeTaylor {
+    /// Owns the code the functions point into; taken only in `Drop`.
+    module: Mutex<Option<JITModule>>,
+    funcs: Vec<OrderFn>,
+    /// The length of the coefficient buffer the functions address.
+    len: usize,
+}
+
+impl std::fmt::Debug for NativeTaylor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("NativeTaylor").field("orders", &self.funcs.len()).finish_non_exhaustive()
+    }
+}
+
+/// Tapes whose unrolled code would exceed this many multiply-adds (over all
+/// orders and lanes) stay interpreted: compiling takes about a microsecond per
+/// multiply-add, which a run must win back.
+pub(crate) const NATIVE_MAX_WORK: usize = 60_000;
+
+/// Emits the code of one function. Values are `f64` (width 1) or `f64x2`
+/// (width 2, two lanes per instruction); `lane` arguments name the first lane
+/// of a group of `width`.
+struct Emitter<'a, 'b, const L: usize> {
+    module: &'a mut JITModule,
+    b: FunctionBuilder<'b>,
+    imports: FxHashMap<&'static str, FuncRef>,
+    base: Value,
+    stride: usize,
+    width: usize,
+}
+
+/// Two lanes per instruction when the lanes pair up (SSE2 on x86-64, NEON on
+/// aarch64: cranelift's vectors are 128 bits wide).
+fn vector_width(lanes: usize) -> usize {
+    if lanes.is_multiple_of(2) {
+        2
+    } else {
+        1
+    }
+}
+
+impl<const L: usize> Emitter<'_, '_, L> {
+    fn ty(&self) -> types::Type {
+        if self.width == 2 {
+            types::F64X2
+        } else {
+            types::F64
+        }
+    }
+
+    /// The groups of lanes at the current width: their first lanes.
+    fn groups(&self) -> impl Iterator<Item = usize> {
+        (0..L).step_by(self.width)
+    }
+
+    fn index(&self, slot: u32, j: usize, lane: usize) -> usize {
+        (slot as usize * self.stride + j) * L + lane
+    }
+
+    /// Coefficient `j` of `slot` at `lane`, loaded where it is used: keeping the
+    /// values of this order in registers instead makes the allocator spill
+    /// (measured slower), and short live ranges keep compilation fast.
+    fn ld(&mut self, slot: u32, j: usize, lane: usize) -> Result<Value, JitError> {
+        let at = offset(self.index(slot, j, lane))?;
+        let ty = self.ty();
+        Ok(self.b.ins().load(ty, MemFlagsData::trusted(), self.base, at))
+    }
+
+    fn st(&mut self, slot: u32, j: usize, lane: usize, v: Value) -> Result<(), JitError> {
+        let at = offset(self.index(slot, j, lane))?;
+        self.b.ins().store(MemFlagsData::trusted(), v, self.base, at);
+        Ok(())
+    }
+
+    fn c(&mut self, x: f64) -> Value {
+        let v = self.b.ins().f64const(x);
+        if self.width == 2 {
+            self.b.ins().splat(types::F64X2, v)
+        } else {
+            v
+        }
+    }
+
+    fn call(&mut self, name: &'static str, args: &[Value]) -> Result<Value, JitError> {
+        let f = match self.imports.get(name) {
+            Some(&f) => f,
+            None => {
+                let mut sig = self.module.make_signature();
+                sig.params.extend(args.iter().map(|_| AbiParam::new(types::F64)));
+                sig.returns.push(AbiParam::new(types::F64));
+                let id = self.module.declare_function(name, Linkage::Import, &sig).map_err(codegen)?;
+                let f = self.module.declare_func_in_func(id, self.b.func);
+                self.imports.insert(name, f);
+                f
+            }
+        };
+        let call = self.b.ins().call(f, args);
+        Ok(self.b.inst_results(call)[0])
+    }
+
+    fn func(&mut self, f: Func, x: Value) -> Result<Value, JitError> {
+        self.call(unary(f).0, &[x])
+    }
+
+    /// `Σ_{j ∈ js} weight(j) · a[j] · b[k−j]`, started from zero and the
+    /// products formed as the interpreter forms them.
+    fn sum(
+        &mut self,
+        a: u32,
+        b: u32,
+        k: usize,
+        js: impl Iterator<Item = usize>,
+        weight: impl Fn(usize) -> Option<f64>,
+        lane: usize,
+    ) -> Result<Value, JitError> {
+        let mut acc = self.c(0.0);
+        for j in js {
+            let (x, y) = (self.ld(a, j, lane)?, self.ld(b, k - j, lane)?);
+            let term = match weight(j) {
+                Some(w) => {
+                    let w = self.c(w);
+                    let wx = self.b.ins().fmul(w, x);
+                    self.b.ins().fmul(wx, y)
+                }
+                None => self.b.ins().fmul(x, y),
+            };
+            acc = self.b.ins().fadd(acc, term);
+        }
+        Ok(acc)
+    }
+
+    /// `acc − Σ_{j ∈ js} a[j] · b[k−j]`.
+    fn sub_sum(
+        &mut self,
+        acc: Value,
+        a: u32,
+        b: u32,
+        k: usize,
+        js: std::ops::Range<usize>,
+        lane: usize,
+    ) -> Result<Value, JitError> {
+        let mut acc = acc;
+        for j in js {
+            let (x, y) = (self.ld(a, j, lane)?, self.ld(b, k - j, lane)?);
+            let term = self.b.ins().fmul(x, y);
+            acc = self.b.ins().fsub(acc, term);
+        }
+        Ok(acc)
+    }
+
+    /// `Σ_{j=1..=k} j a[j] b[k−j] / k` (the recurrence of `w' = a' b`).
+    fn weighted(&mut self, a: u32, b: u32, k: usize, hi: usize, lane: usize) -> Result<Value, JitError> {
+        let acc = self.sum(a, b, k, 1..=hi, |j| Some(j as f64), lane)?;
+        let kf = self.c(k as f64);
+        Ok(self.b.ins().fdiv(acc, kf))
+    }
+
+    /// `(sign·k·u[k] − Σ_{j=1..k−1} (k−j) d[j] w[k−j]) / (k d[0])`.
+    fn derivative_quotient(
+        &mut self,
+        u: u32,
+        d: u32,
+        w: u32,
+        k: usize,
+        sign: f64,
+        lane: usize,
+    ) -> Result<Value, JitError> {
+        let kf = k as f64;
+        let uk = self.ld(u, k, lane)?;
+        let skf = self.c(sign * kf);
+        let mut acc = self.b.ins().fmul(skf, uk);
+        for j in 1..k {
+            let kj = self.c((k - j) as f64);
+            let (x, y) = (self.ld(d, j, lane)?, self.ld(w, k - j, lane)?);
+            let t = self.b.ins().fmul(kj, x);
+            let t = self.b.ins().fmul(t, y);
+            acc = self.b.ins().fsub(acc, t);
+        }
+        let kc = self.c(kf);
+        let d0 = self.ld(d, 0, lane)?;
+        let den = self.b.ins().fmul(kc, d0);
+        Ok(self.b.ins().fdiv(acc, den))
+    }
+
+    /// Σ_{j=0..=k} a[j] a[k−j] (zero-started, as the interpreter's `fma` loop).
+    fn self_product(&mut self, a: u32, k: usize, lane: usize) -> Result<Value, JitError> {
+        self.sum(a, a, k, 0..=k, |_| None, lane)
+    }
+
+    /// Order 0 of one instruction on one lane.
+    fn order_zero(&mut self, w: u32, op: T, lane: usize) -> Result<(), JitError> {
+        let v = match op {
+            T::CosOf | T::Aux => return Ok(()),
+            T::Add(a, b) | T::AddC(a, b) => {
+                let (x, y) = (self.ld(a, 0, lane)?, self.ld(b, 0, lane)?);
+                self.b.ins().fadd(x, y)
+            }
+            T::Sub(a, b) | T::SubVC(a, b) | T::SubCV(a, b) => {
+                let (x, y) = (self.ld(a, 0, lane)?, self.ld(b, 0, lane)?);
+                self.b.ins().fsub(x, y)
+            }
+            T::Mul(a, b) | T::MulC(a, b) => {
+                let (x, y) = (self.ld(a, 0, lane)?, self.ld(b, 0, lane)?);
+                self.b.ins().fmul(x, y)
+            }
+            T::Div(a, b) | T::DivVC(a, b) | T::DivCV(a, b) => {
+                let (x, y) = (self.ld(a, 0, lane)?, self.ld(b, 0, lane)?);
+                self.b.ins().fdiv(x, y)
+            }
+            T::Neg(a) => {
+                let x = self.ld(a, 0, lane)?;
+                self.b.ins().fneg(x)
+            }
+            T::Square(a) => {
+                let x = self.ld(a, 0, lane)?;
+                self.b.ins().fmul(x, x)
+            }
+            T::Sqrt(a) => {
+                let x = self.ld(a, 0, lane)?;
+                self.b.ins().sqrt(x)
+            }
+            T::PowC(a, e) => {
+                let (x, y) = (self.ld(a, 0, lane)?, self.ld(e, 0, lane)?);
+                self.call(POWF, &[x, y])?
+            }
+            T::Exp(a) => {
+                let x = self.ld(a, 0, lane)?;
+                self.func(Func::Exp, x)?
+            }
+            T::Log(a) => {
+                let x = self.ld(a, 0, lane)?;
+                self.func(Func::Log, x)?
+            }
+            T::Abs(a) => {
+                let x = self.ld(a, 0, lane)?;
+                self.b.ins().fabs(x)
+            }
+            T::Sin { u, cos } | T::Sinh { u, cosh: cos } => {
+                let circular = matches!(op, T::Sin { .. });
+                let x = self.ld(u, 0, lane)?;
+                let (fs, fc) = if circular { (Func::Sin, Func::Cos) } else { (Func::Sinh, Func::Cosh) };
+                let c = self.func(fc, x)?;
+                self.st(cos, 0, lane, c)?;
+                self.func(fs, x)?
+            }
+            T::Tan { u, aux, sign } => {
+                let x = self.ld(u, 0, lane)?;
+                let v = self.func(if sign > 0.0 { Func::Tan } else { Func::Tanh }, x)?;
+                let (one, s) = (self.c(1.0), self.c(sign));
+                let sq = self.b.ins().fmul(v, v);
+                let t = self.b.ins().fmul(s, sq);
+                let a = self.b.ins().fadd(one, t);
+                self.st(aux, 0, lane, a)?;
+                v
+            }
+            T::Asin { u, inner, root, sign } => {
+                let x = self.ld(u, 0, lane)?;
+                let one = self.c(1.0);
+                let sq = self.b.ins().fmul(x, x);
+                let i = self.b.ins().fsub(one, sq);
+                self.st(inner, 0, lane, i)?;
+                let r = self.b.ins().sqrt(i);
+                self.st(root, 0, lane, r)?;
+                self.func(if sign > 0.0 { Func::Asin } else { Func::Acos }, x)?
+            }
+            T::Atan { u, aux } => {
+                let x = self.ld(u, 0, lane)?;
+                let one = self.c(1.0);
+                let sq = self.b.ins().fmul(x, x);
+                let a = self.b.ins().fadd(one, sq);
+                self.st(aux, 0, lane, a)?;
+                self.func(Func::Atan, x)?
+            }
+            T::Atan2 { y, x, aux } => {
+                let (yv, xv) = (self.ld(y, 0, lane)?, self.ld(x, 0, lane)?);
+                let xx = self.b.ins().fmul(xv, xv);
+                let yy = self.b.ins().fmul(yv, yv);
+                let a = self.b.ins().fadd(xx, yy);
+                self.st(aux, 0, lane, a)?;
+                self.call(ATAN2, &[yv, xv])?
+            }
+        };
+        self.st(w, 0, lane, v)
+    }
+
+    /// Order `k ≥ 1` of one instruction on one lane.
+    fn order_k(&mut self, w: u32, op: T, k: usize, lane: usize) -> Result<(), JitError> {
+        let v = match op {
+            T::CosOf | T::Aux => return Ok(()),
+            T::Add(a, b) => {
+                let (x, y) = (self.ld(a, k, lane)?, self.ld(b, k, lane)?);
+                self.b.ins().fadd(x, y)
+            }
+            T::Sub(a, b) => {
+                let (x, y) = (self.ld(a, k, lane)?, self.ld(b, k, lane)?);
+                self.b.ins().fsub(x, y)
+            }
+            T::Neg(a) | T::SubCV(_, a) => {
+                let x = self.ld(a, k, lane)?;
+                self.b.ins().fneg(x)
+            }
+            T::AddC(a, _) | T::SubVC(a, _) => self.ld(a, k, lane)?,
+            T::MulC(a, c) => {
+                let (x, y) = (self.ld(a, k, lane)?, self.ld(c, 0, lane)?);
+                self.b.ins().fmul(x, y)
+            }
+            T::DivVC(a, c) => {
+                let (x, y) = (self.ld(a, k, lane)?, self.ld(c, 0, lane)?);
+                self.b.ins().fdiv(x, y)
+            }
+            T::Mul(a, b) => self.sum(a, b, k, 0..=k, |_| None, lane)?,
+            T::Square(a) => {
+                let half = self.sum(a, a, k, 0..k.div_ceil(2), |_| None, lane)?;
+                let two = self.c(2.0);
+                let mut out = self.b.ins().fmul(two, half);
+                if k.is_multiple_of(2) {
+                    let m = self.ld(a, k / 2, lane)?;
+                    let sq = self.b.ins().fmul(m, m);
+                    out = self.b.ins().fadd(out, sq);
+                }
+                out
+            }
+            T::Div(a, b) => {
+                let ak = self.ld(a, k, lane)?;
+                let acc = self.sub_sum(ak, b, w, k, 1..k + 1, lane)?;
+                let b0 = self.ld(b, 0, lane)?;
+                self.b.ins().fdiv(acc, b0)
+            }
+            T::DivCV(_, b) => {
+                let zero = self.c(0.0);
+                let acc = self.sub_sum(zero, b, w, k, 1..k + 1, lane)?;
+                let b0 = self.ld(b, 0, lane)?;
+                self.b.ins().fdiv(acc, b0)
+            }
+            T::Sqrt(a) => {
+                let ak = self.ld(a, k, lane)?;
+                let acc = self.sub_sum(ak, w, w, k, 1..k, lane)?;
+                let (two, w0) = (self.c(2.0), self.ld(w, 0, lane)?);
+                let den = self.b.ins().fmul(two, w0);
+                self.b.ins().fdiv(acc, den)
+            }
+            T::PowC(a, e) => {
+                let alpha = self.ld(e, 0, lane)?;
+                let mut acc = self.c(0.0);
+                for j in 0..k {
+                    let (kj, jf) = (self.c((k - j) as f64), self.c(j as f64));
+                    let ak = self.b.ins().fmul(alpha, kj);
+                    let coeff = self.b.ins().fsub(ak, jf);
+                    let (x, y) = (self.ld(a, k - j, lane)?, self.ld(w, j, lane)?);
+                    let t = self.b.ins().fmul(coeff, x);
+                    let t = self.b.ins().fmul(t, y);
+                    acc = self.b.ins().fadd(acc, t);
+                }
+                let (kf, a0) = (self.c(k as f64), self.ld(a, 0, lane)?);
+                let den = self.b.ins().fmul(kf, a0);
+                self.b.ins().fdiv(acc, den)
+            }
+            T::Exp(a) => self.weighted(a, w, k, k, lane)?,
+            T::Log(a) => {
+                let s = self.weighted(w, a, k, k - 1, lane)?;
+                let ak = self.ld(a, k, lane)?;
+                let num = self.b.ins().fsub(ak, s);
+                let a0 = self.ld(a, 0, lane)?;
+                self.b.ins().fdiv(num, a0)
+            }
+            T::Sin { u, cos } => {
+                let sin = self.weighted(u, cos, k, k, lane)?;
+                let c = self.weighted(u, w, k, k, lane)?;
+                let c = self.b.ins().fneg(c);
+                self.st(cos, k, lane, c)?;
+                sin
+            }
+            T::Sinh { u, cosh } => {
+                let sinh = self.weighted(u, cosh, k, k, lane)?;
+                let c = self.weighted(u, w, k, k, lane)?;
+                self.st(cosh, k, lane, c)?;
+                sinh
+            }
+            T::Tan { u, aux, sign } => {
+                let v = self.weighted(u, aux, k, k, lane)?;
+                self.st(w, k, lane, v)?;
+                let sq = self.self_product(w, k, lane)?;
+                let s = self.c(sign);
+                let a = self.b.ins().fmul(s, sq);
+                self.st(aux, k, lane, a)?;
+                v
+            }
+            T::Asin { u, inner, root, sign } => {
+                let sq = self.self_product(u, k, lane)?;
+                let i = self.b.ins().fneg(sq);
+                self.st(inner, k, lane, i)?;
+                let acc = self.sub_sum(i, root, root, k, 1..k, lane)?;
+                let (two, r0) = (self.c(2.0), self.ld(root, 0, lane)?);
+                let den = self.b.ins().fmul(two, r0);
+                let r = self.b.ins().fdiv(acc, den);
+                self.st(root, k, lane, r)?;
+                self.derivative_quotient(u, root, w, k, sign, lane)?
+            }
+            T::Atan { u, aux } => {
+                let sq = self.self_product(u, k, lane)?;
+                self.st(aux, k, lane, sq)?;
+                self.derivative_quotient(u, aux, w, k, 1.0, lane)?
+            }
+            T::Atan2 { y, x, aux } => {
+                let mut sq = self.c(0.0);
+                for j in 0..=k {
+                    let (x1, x2) = (self.ld(x, j, lane)?, self.ld(x, k - j, lane)?);
+                    let t = self.b.ins().fmul(x1, x2);
+                    sq = self.b.ins().fadd(sq, t);
+                    let (y1, y2) = (self.ld(y, j, lane)?, self.ld(y, k - j, lane)?);
+                    let t = self.b.ins().fmul(y1, y2);
+                    sq = self.b.ins().fadd(sq, t);
+                }
+                self.st(aux, k, lane, sq)?;
+                let mut acc = self.c(0.0);
+                for j in 0..k {
+                    let kj = self.c((k - j) as f64);
+                    let (xj, ykj) = (self.ld(x, j, lane)?, self.ld(y, k - j, lane)?);
+                    let (yj, xkj) = (self.ld(y, j, lane)?, self.ld(x, k - j, lane)?);
+                    let p1 = self.b.ins().fmul(xj, ykj);
+                    let p2 = self.b.ins().fmul(yj, xkj);
+                    let diff = self.b.ins().fsub(p1, p2);
+                    let t = self.b.ins().fmul(kj, diff);
+                    acc = self.b.ins().fadd(acc, t);
+                }
+                for j in 1..k {
+                    let kj = self.c((k - j) as f64);
+                    let (dj, wkj) = (self.ld(aux, j, lane)?, self.ld(w, k - j, lane)?);
+                    let t = self.b.ins().fmul(kj, dj);
+                    let t = self.b.ins().fmul(t, wkj);
+                    acc = self.b.ins().fsub(acc, t);
+                }
+                let (kf, d0) = (self.c(k as f64), self.ld(aux, 0, lane)?);
+                let den = self.b.ins().fmul(kf, d0);
+                self.b.ins().fdiv(acc, den)
+            }
+            T::Abs(a) => {
+                let (a0, ak) = (self.ld(a, 0, lane)?, self.ld(a, k, lane)?);
+                let zero = self.c(0.0);
+                let negative = self.b.ins().fcmp(FloatCC::LessThan, a0, zero);
+                let minus = self.b.ins().fneg(ak);
+                if self.width == 2 {
+                    let mask = self.b.ins().bitcast(types::F64X2, MemFlagsData::new(), negative);
+                    self.b.ins().bitselect(mask, minus, ak)
+                } else {
+                    self.b.ins().select(negative, minus, ak)
+                }
+            }
+        };
+        self.st(w, k, lane, v)
+    }
+}
+
+impl<const L: usize> Emitter<'_, '_, L> {
+    /// Order `k` of every instruction on every lane: order 0 lane by lane (it
+    /// calls the elementary functions), higher orders two lanes at a time
+    /// where the lanes pair up.
+    fn orders(&mut self, program: &[(u32, T)], k: usize) -> Result<(), JitError> {
+        self.width = if k == 0 { 1 } else { vector_width(L) };
+        for &(w, op) in program {
+            for lane in self.groups().collect::<Vec<_>>() {
+                if k == 0 {
+                    self.order_zero(w, op, lane)?;
+                } else {
+                    self.order_k(w, op, k, lane)?;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The extra slots of a second-order system `M a = f` (see
+/// [`TaylorTape::compile_second_order`]): where its parts sit.
+#[derive(Clone, Debug)]
+pub(crate) struct SecondOrderLayout {
+    pub(crate) n: usize,
+    /// `(row, column)` of M's stored entries, the tape's first outputs.
+    pub(crate) entries: Vec<(usize, usize)>,
+    /// Slots of q, q' (inputs 0..2n) and t (input 2n).
+    pub(crate) q: Vec<u32>,
+    pub(crate) v: Vec<u32>,
+    /// Slots of M's stored entries and of f (outputs).
+    pub(crate) mass: Vec<u32>,
+    pub(crate) force: Vec<u32>,
+    /// Which stored entries vary along a trajectory.
+    pub(crate) varying: Vec<bool>,
+    /// Extra slots: the accelerations (n) and M[0]⁻¹ (n for a diagonal M, n² otherwise).
+    pub(crate) accel: Vec<u32>,
+    pub(crate) inverse: Vec<u32>,
+    pub(crate) diagonal: bool,
+}
+
+impl<const L: usize> Emitter<'_, '_, L> {
+    /// M[0]⁻¹ on every lane, by the adjugate (n ≤ 3) or reciprocals (diagonal).
+    fn invert(&mut self, s: &SecondOrderLayout) -> Result<(), JitError> {
+        self.width = 1;
+        let n = s.n;
+        for lane in 0..L {
+            if s.diagonal {
+                for (e, &(i, _)) in s.entries.iter().enumerate() {
+                    let (one, m) = (self.c(1.0), self.ld(s.mass[e], 0, lane)?);
+                    let r = self.b.ins().fdiv(one, m);
+                    self.st(s.inverse[i], 0, lane, r)?;
+                }
+                continue;
+            }
+            let mut m = vec![None; n * n];
+            for (e, &(i, j)) in s.entries.iter().enumerate() {
+                m[i * n + j] = Some(self.ld(s.mass[e], 0, lane)?);
+            }
+            let zero = self.c(0.0);
+            let m: Vec<Value> = m.into_iter().map(|x| x.unwrap_or(zero)).collect();
+            let at = |i: usize, j: usize| m[i * n + j];
+            // Cofactors C_ij; M⁻¹_ij = C_ji / det.
+            let mut cof = vec![zero; n * n];
+            if n == 1 {
+                cof[0] = self.c(1.0);
+            } else if n == 2 {
+                cof[0] = at(1, 1);
+                cof[1] = self.b.ins().fneg(at(1, 0));
+                cof[2] = self.b.ins().fneg(at(0, 1));
+                cof[3] = at(0, 0);
+            } else {
+                for i in 0..3 {
+                    for j in 0..3 {
+                        let (r0, r1) = ((i + 1) % 3, (i + 2) % 3);
+                        let (c0, c1) = ((j + 1) % 3, (j + 2) % 3);
+                        // The cyclic minor carries its sign.
+                        let p1 = self.b.ins().fmul(at(r0, c0), at(r1, c1));
+                        let p2 = self.b.ins().fmul(at(r0, c1), at(r1, c0));
+                        cof[i * 3 + j] = self.b.ins().fsub(p1, p2);
+                    }
+                }
+            }
+            let mut det = self.b.ins().fmul(at(0, 0), cof[0]);
+            for j in 1..n {
+                let t = self.b.ins().fmul(at(0, j), cof[j]);
+                det = self.b.ins().fadd(det, t);
+            }
+            let one = self.c(1.0);
+            let r = self.b.ins().fdiv(one, det);
+            for i in 0..n {
+                for j in 0..n {
+                    let x = self.b.ins().fmul(cof[j * n + i], r);
+                    self.st(s.inverse[i * n + j], 0, lane, x)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The accelerations of order `k` and the state's order `k + 1`:
+    /// `a[k] = M[0]⁻¹ (f[k] − Σ_{j=1..k} M[j] a[k−j])`, `q[k+1] = q'[k]/(k+1)`,
+    /// `q'[k+1] = a[k]/(k+1)`.
+    fn couple(&mut self, s: &SecondOrderLayout, k: usize) -> Result<(), JitError> {
+        self.width = vector_width(L);
+        let n = s.n;
+        for lane in self.groups().collect::<Vec<_>>() {
+            let mut rhs = Vec::with_capacity(n);
+            for i in 0..n {
+                rhs.push(self.ld(s.force[i], k, lane)?);
+            }
+            for (e, &(row, col)) in s.entries.iter().enumerate() {
+                if !s.varying[e] {
+                    continue;
+                }
+                for j in 1..=k {
+                    let (mj, a) = (self.ld(s.mass[e], j, lane)?, self.ld(s.accel[col], k - j, lane)?);
+                    let t = self.b.ins().fmul(mj, a);
+                    rhs[row] = self.b.ins().fsub(rhs[row], t);
+                }
+            }
+            let scale = self.c(1.0 / (k + 1) as f64);
+            for i in 0..n {
+                let a = if s.diagonal {
+                    let r = self.ld(s.inverse[i], 0, lane)?;
+                    self.b.ins().fmul(r, rhs[i])
+                } else {
+                    let mut acc = None;
+                    for j in 0..n {
+                        let r = self.ld(s.inverse[i * n + j], 0, lane)?;
+                        let t = self.b.ins().fmul(r, rhs[j]);
+                        acc = Some(match acc {
+                            Some(a) => self.b.ins().fadd(a, t),
+                            None => t,
+                        });
+                    }
+                    acc.expect("n ≥ 1")
+                };
+                self.st(s.accel[i], k, lane, a)?;
+                let next_v = self.b.ins().fmul(a, scale);
+                self.st(s.v[i], k + 1, lane, next_v)?;
+                let v = self.ld(s.v[i], k, lane)?;
+                let next_q = self.b.ins().fmul(v, scale);
+                self.st(s.q[i], k + 1, lane, next_q)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl NativeTaylor {
+    /// Compiles the whole expansion of a second-order system into one function
+    /// (run it with `run(0, …)`): orders `0..p` of the tape, each followed by
+    /// the coupling that yields the state's next order.
+    pub(crate) fn second_order<const L: usize>(
+        tape: &TaylorTape<L>,
+        layout: &SecondOrderLayout,
+        buffer_len: usize,
+    ) -> Result<NativeTaylor, JitError> {
+        let order = tape.order();
+        let mut jb = JITBuilder::with_isa(host_isa(false)?, default_libcall_names());
+        for f in Func::ALL {
+            let (name, ptr) = unary(f);
+            jb.symbol(name, ptr);
+        }
+        jb.symbol(POWF, lagrange_powf as *const u8);
+        jb.symbol(ATAN2, lagrange_atan2 as *const u8);
+        let mut module = JITModule::new(jb);
+        let ptr = module.target_config().pointer_type();
+        let mut sig = module.make_signature();
+        sig.params.push(AbiParam::new(ptr));
+        let id = module.declare_function("expand", Linkage::Local, &sig).map_err(codegen)?;
+        let mut ctx = module.make_context();
+        let mut fctx = FunctionBuilderContext::new();
+        ctx.func.signature = sig;
+        ctx.func.name = UserFuncName::user(0, id.as_u32());
+        {
+            let mut b = FunctionBuilder::new(&mut ctx.func, &mut fctx);
+            let entry = b.create_block();
+            b.append_block_params_for_function_params(entry);
+            b.switch_to_block(entry);
+            b.seal_block(entry);
+            let base = b.block_params(entry)[0];
+            let mut e = Emitter::<L> {
+                module: &mut module,
+                b,
+                imports: FxHashMap::default(),
+                base,
+                stride: order + 1,
+                width: 1,
+            };
+            for k in 0..order {
+                e.orders(tape.program(), k)?;
+                if k == 0 {
+                    e.invert(layout)?;
+                }
+                e.couple(layout, k)?;
+            }
+            e.b.ins().return_(&[]);
+            let config = e.module.target_config();
+            e.b.finalize(config);
+        }
+        module.define_function(id, &mut ctx).map_err(codegen)?;
+        module.clear_context(&mut ctx);
+        module.finalize_definitions().map_err(codegen)?;
+        let code = module.get_finalized_function(id);
+        // SAFETY: as in `NativeTaylor::new`: a function of signature `(ptr) -> ()`
+        // in the host's C calling convention, owned by `module`.
+        let func = unsafe { std::mem::transmute::<*const u8, OrderFn>(code) };
+        Ok(NativeTaylor { module: Mutex::new(Some(module)), funcs: vec![func], len: buffer_len })
+    }
+
+    /// Compiles every order of `tape`.
+    pub(crate) fn new<const L: usize>(tape: &TaylorTape<L>) -> Result<NativeTaylor, JitError> {
+        let order = tape.order();
+        let mut jb = JITBuilder::with_isa(host_isa(false)?, default_libcall_names());
+        for f in Func::ALL {
+            let (name, ptr) = unary(f);
+            jb.symbol(name, ptr);
+        }
+        jb.symbol(POWF, lagrange_powf as *const u8);
+        jb.symbol(ATAN2, lagrange_atan2 as *const u8);
+        let mut module = JITModule::new(jb);
+        let ptr = module.target_config().pointer_type();
+        let mut sig = module.make_signature();
+        sig.params.push(AbiParam::new(ptr));
+        let mut ids = Vec::with_capacity(order + 1);
+        let mut ctx = module.make_context();
+        let mut fctx = FunctionBuilderContext::new();
+        for k in 0..=order {
+            let id = module.declare_function(&format!("order{k}"), Linkage::Local, &sig).map_err(codegen)?;
+            ctx.func.signature = sig.clone();
+            ctx.func.name = UserFuncName::user(0, id.as_u32());
+            {
+                let mut b = FunctionBuilder::new(&mut ctx.func, &mut fctx);
+                let entry = b.create_block();
+                b.append_block_params_for_function_params(entry);
+                b.switch_to_block(entry);
+                b.seal_block(entry);
+                let base = b.block_params(entry)[0];
+                let mut e = Emitter::<L> {
+                    module: &mut module,
+                    b,
+                    imports: FxHashMap::default(),
+                    base,
+                    stride: order + 1,
+                    width: 1,
+                };
+                e.orders(tape.program(), k)?;
+                e.b.ins().return_(&[]);
+                let config = e.module.target_config();
+                e.b.finalize(config);
+            }
+            module.define_function(id, &mut ctx).map_err(codegen)?;
+            module.clear_context(&mut ctx);
+            ids.push(id);
+        }
+        module.finalize_definitions().map_err(codegen)?;
+        let funcs = ids
+            .into_iter()
+            .map(|id| {
+                let code = module.get_finalized_function(id);
+                // SAFETY: `code` is the entry of a function just defined with
+                // signature `(ptr) -> ()` in the host's default calling
+                // convention (`extern "C"` on every host cranelift-native
+                // supports); the module owning it lives as long as `self`.
+                unsafe { std::mem::transmute::<*const u8, OrderFn>(code) }
+            })
+            .collect();
+        Ok(NativeTaylor { module: Mutex::new(Some(module)), funcs, len: tape.buffer_len() })
+    }
+
+    /// Runs the function of order `k` on the coefficient buffer.
+    ///
+    /// # Panics
+    ///
+    /// When `coef` is not the length the code was compiled for, or `k` is above the order.
+    pub(crate) fn run(&self, k: usize, coef: &mut [f64]) {
+        assert_eq!(coef.len(), self.len, "NativeTaylor::run: wrong buffer length");
+        let f = self.funcs[k];
+        // SAFETY: the function reads and writes `coef[i]` only for indices
+        // `(slot * (order + 1) + j) * L + lane` of slots, orders and lanes of
+        // the tape it was compiled from, all below `self.len`, which was just
+        // checked; the slice is valid and exclusively borrowed. The code is
+        // alive while `self` is, calls only the safe wrappers of `jit.rs`,
+        // and never unwinds.
+        unsafe { f(coef.as_mut_ptr()) }
+    }
+}
+
+impl Drop for NativeTaylor {
+    fn drop(&mut self) {
+        let module = self.module.get_mut().unwrap_or_else(PoisonError::into_inner).take();
+        if let Some(module) = module {
+            // SAFETY: the functions are only called through `run`, which needs
+            // `&self`; `drop` has `&mut self`, so none is running, and none can
+            // be called afterwards.
+            unsafe { module.free_memory() }
+        }
+    }
+}
