@@ -31,7 +31,7 @@ pub struct Args {
     /// Override a parameter for every run: --set g=1.62 (repeatable).
     #[arg(long = "set", value_name = "NAME=VALUE", value_parser = crate::parse_set)]
     pub set: Vec<(String, f64)>,
-    /// Integrator (see `simulate --list-methods`); default dop853.
+    /// Integrator (see `simulate --list-methods`); default taylor (dop853 for models with rigid bodies).
     #[arg(long)]
     pub method: Option<String>,
     /// Relative tolerance (default 1e-10).

@@ -287,10 +287,16 @@ impl Dynamics {
         }
     }
 
-    /// The Taylor expansion of the Lagrange form to `order`, on `L` lanes.
+    /// The Taylor expansion of the Lagrange form to `order`, on `L` lanes, in native code.
     pub(crate) fn lagrange_series<const L: usize>(&self, order: usize) -> LagrangeSeries<L> {
+        self.lagrange_series_with(order, true)
+    }
+
+    /// The same, interpreted unless `native`.
+    pub(crate) fn lagrange_series_with<const L: usize>(&self, order: usize, native: bool) -> LagrangeSeries<L> {
         let p = &self.pattern;
-        let mut series = LagrangeSeries::new(&self.mass_forcing_tape, self.n, p.entries.clone(), p.diagonal, order);
+        let mut series =
+            LagrangeSeries::new(&self.mass_forcing_tape, self.n, p.entries.clone(), p.diagonal, order, native);
         let params: Vec<[f64; L]> = self.inputs[2 * self.n + 1..].iter().map(|&v| [v; L]).collect();
         series.set_parameters(&params);
         series

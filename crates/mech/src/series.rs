@@ -60,13 +60,15 @@ pub(crate) struct LagrangeSeries<const L: usize> {
 
 impl<const L: usize> LagrangeSeries<L> {
     /// The expansion to `order` of the system whose tape maps `[q, q', t,
-    /// parameters]` to M's stored `entries` followed by f.
+    /// parameters]` to M's stored `entries` followed by f; `native` asks for
+    /// native code (the interpreter serves where there is none).
     pub(crate) fn new(
         tape: &Tape,
         n: usize,
         entries: Arc<Vec<(usize, usize)>>,
         diagonal: bool,
         order: usize,
+        native: bool,
     ) -> LagrangeSeries<L> {
         // Inputs [q, q', t] vary along a trajectory; the parameters do not.
         let variable: Vec<bool> = (0..tape.n_inputs()).map(|k| k <= 2 * n).collect();
@@ -74,7 +76,7 @@ impl<const L: usize> LagrangeSeries<L> {
         // Native code where the host has a code generator: the whole expansion in
         // one function when M can be inverted in closed form, the tape's orders
         // otherwise; the interpreter where there is no code generator.
-        if !matches!(tape.compile_second_order(n, &entries), Ok(true)) {
+        if native && !matches!(tape.compile_second_order(n, &entries), Ok(true)) {
             let _ = tape.compile_native();
         }
         let varying = (0..entries.len()).filter(|&e| !tape.output_is_constant(e)).collect();
@@ -100,6 +102,17 @@ impl<const L: usize> LagrangeSeries<L> {
             column: vec![0.0; n],
             rhs: vec![[0.0; L]; n],
             accel: vec![[0.0; L]; n * order.max(1)],
+        }
+    }
+
+    /// How the expansion runs: `"whole"` (one native function), `"orders"`
+    /// (native code per order, coupling here) or `"interpreted"`.
+    #[cfg(test)]
+    fn code(&self) -> &'static str {
+        match (self.tape.is_second_order(), self.tape.is_native()) {
+            (true, _) => "whole",
+            (false, true) => "orders",
+            (false, false) => "interpreted",
         }
     }
 
@@ -249,5 +262,112 @@ impl<const L: usize> LagrangeSeries<L> {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dynamics::{Dynamics, Form};
+    use crate::{Derivation, Model};
+    use num::OdeSystem;
+
+    /// An N-link pendulum from particles (dense M of size N).
+    fn pendulum(n: usize) -> String {
+        let coords: Vec<String> = (1..=n).map(|k| format!("\"t{k}\"")).collect();
+        let mut text =
+            format!("name = \"p\"\ncoordinates = [{}]\ngravity = \"g\"\n[parameters]\ng = 9.81\n", coords.join(", "));
+        for k in 1..=n {
+            let x: Vec<String> = (1..=k).map(|i| format!("sin(t{i})")).collect();
+            let y: Vec<String> = (1..=k).map(|i| format!("-cos(t{i})")).collect();
+            text += &format!("[[particles]]\nmass = \"1\"\nposition = [\"{}\", \"{}\"]\n", x.join(" + "), y.join(" "));
+        }
+        text
+    }
+
+    const CHAIN: &str = r#"
+name = "chain"
+coordinates = ["x1", "x2", "x3"]
+lagrangian = "m*(x1'^2 + x2'^2 + x3'^2)/2 - k*(x1^2 + (x2 - x1)^2 + (x3 - x2)^2 + x3^2)/2 - c*t*x1"
+[parameters]
+m = 2.0
+k = 3.0
+c = 0.5
+"#;
+
+    /// y[1] = F(y) and y[2] = (dF/dt along the flow)/2, by central differences.
+    fn check(text: &str, native: bool, expect_code: &str) {
+        let mut d = Derivation::new(Model::parse(text, &[]).unwrap()).unwrap();
+        let dynamics = Dynamics::new(&mut d);
+        let n = dynamics.n_coords();
+        let dim = 2 * n;
+        let mut sys = dynamics.system(Form::Lagrange);
+        let mut series = dynamics.lagrange_series_with::<1>(9, native);
+        assert_eq!(series.code(), expect_code);
+        let t = 0.3;
+        let y: Vec<f64> = (0..dim).map(|i| 0.4 + 0.37 * i as f64 - 0.9 * (i % 2) as f64).collect();
+        let y_lanes: Vec<[f64; 1]> = y.iter().map(|&v| [v]).collect();
+        let mut out = vec![[0.0]; dim * 10];
+        series.expand([t], &y_lanes, &mut out).unwrap();
+        let mut f = vec![0.0; dim];
+        sys.rhs(t, &y, &mut f).unwrap();
+        for i in 0..dim {
+            assert_eq!(out[i][0], y[i]);
+            assert!(
+                (out[dim + i][0] - f[i]).abs() <= 1e-12 * (1.0 + f[i].abs()),
+                "order 1, {i}: {} vs {}",
+                out[dim + i][0],
+                f[i]
+            );
+        }
+        let h = 1e-5;
+        let (mut fp, mut fm) = (vec![0.0; dim], vec![0.0; dim]);
+        let yp: Vec<f64> = y.iter().zip(&f).map(|(a, b)| a + h * b).collect();
+        let ym: Vec<f64> = y.iter().zip(&f).map(|(a, b)| a - h * b).collect();
+        sys.rhs(t + h, &yp, &mut fp).unwrap();
+        sys.rhs(t - h, &ym, &mut fm).unwrap();
+        for i in 0..dim {
+            let want = (fp[i] - fm[i]) / (4.0 * h);
+            let got = out[2 * dim + i][0];
+            assert!((got - want).abs() <= 1e-6 * (1.0 + want.abs()), "order 2, {i}: {got} vs {want}");
+        }
+    }
+
+    #[test]
+    fn series_start_with_the_right_hand_side_and_its_derivative() {
+        check(&pendulum(2), true, "whole");
+        check(&pendulum(2), false, "interpreted");
+        check(&pendulum(4), true, "orders");
+        check(&pendulum(4), false, "interpreted");
+        check(CHAIN, true, "whole");
+        check(CHAIN, false, "interpreted");
+    }
+
+    #[test]
+    fn every_way_of_running_gives_the_same_series_and_lanes_are_independent() {
+        for text in [pendulum(3), pendulum(4), CHAIN.to_string()] {
+            let mut d = Derivation::new(Model::parse(&text, &[]).unwrap()).unwrap();
+            let dynamics = Dynamics::new(&mut d);
+            let dim = 2 * dynamics.n_coords();
+            let p = 12;
+            let states: Vec<Vec<f64>> =
+                (0..4).map(|l| (0..dim).map(|i| 0.1 * (i + l) as f64 - 0.3).collect()).collect();
+            let lanes: Vec<[f64; 4]> = (0..dim).map(|i| std::array::from_fn(|l| states[l][i])).collect();
+            let mut batch = dynamics.lagrange_series_with::<4>(p, true);
+            let mut out4 = vec![[0.0; 4]; dim * (p + 1)];
+            batch.expand([0.2; 4], &lanes, &mut out4).unwrap();
+            for (l, state) in states.iter().enumerate() {
+                let single: Vec<[f64; 1]> = state.iter().map(|&v| [v]).collect();
+                for native in [true, false] {
+                    let mut s = dynamics.lagrange_series_with::<1>(p, native);
+                    let mut out1 = vec![[0.0]; dim * (p + 1)];
+                    s.expand([0.2], &single, &mut out1).unwrap();
+                    for k in 0..out1.len() {
+                        let (a, b) = (out1[k][0], out4[k][l]);
+                        assert!((a - b).abs() <= 1e-12 * a.abs().max(1e-300), "coefficient {k}, lane {l}: {a} vs {b}");
+                    }
+                }
+            }
+        }
     }
 }
