@@ -267,7 +267,6 @@ impl<const L: usize> LagrangeSeries<L> {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
     use crate::dynamics::{Dynamics, Form};
     use crate::{Derivation, Model};
     use num::OdeSystem;
