@@ -7,7 +7,8 @@ What it does, in order:
    --summary json` (building the binary with `cargo build --release` if it is missing) for
    the double pendulum (examples/double_pendulum.toml, t = 0..100), the 50-mass chain
    (examples/chain50.toml, t = 0..100) and Kepler (examples/kepler.toml, t = 0..1000),
-   each with `--method dop853` and with the method the derivation picks (no --method):
+   each with `--method dop853`, `--method taylor` and with the method the derivation
+   picks (no --method):
    median over --repeats runs of the integration's `wall_seconds` (compilation and, for
    fixed-step methods, the pilot runs that choose the step included) and of the whole
    process, and the summary's steps, rhs_evaluations and H's max_rel_drift (H is the
@@ -18,8 +19,9 @@ What it does, in order:
    sympy, numpy and scipy (the venv logic is bench/derive.py's);
 3. runs the strong anchor ../shared/bench/heyoka_simulate.py (heyoka, Taylor method with
    LLVM) on the double pendulum at the same tolerances, and its 200x200 double-pendulum
-   ensemble to t = 20 on one worker against `lagrange sweep` on one thread (with and
-   without the Lyapunov twin; heyoka integrates no twin), unless --no-heyoka;
+   ensemble to t = 20 on one worker against `lagrange sweep` (Taylor on one thread with
+   and without the Lyapunov twin -- heyoka integrates no twin --, DOP853 on one thread,
+   and Taylor on every core), unless --no-heyoka;
 4. times one right-hand side of the double pendulum with the criterion bench
    crates/sym/benches/rhs.rs (JIT, tape interpreter, hand-written Rust) against SciPy's
    lambdified and hand-written Python ones (the anchor's `rhs` records), unless --no-rhs;
@@ -180,12 +182,18 @@ def heyoka_python(anchors: Path, allow_install: bool) -> str | None:
 
 
 def measure_sweep(binary: Path, grid: int, until: float, rtol: float, timeout: float) -> list[dict]:
-    """`lagrange sweep` of the double pendulum's chaos map on one thread, with and without the twin."""
+    """`lagrange sweep` of the double pendulum's chaos map: the Taylor method (the default)
+    with and without the twin on one thread, DOP853 without the twin on one thread, and the
+    Taylor method without the twin on every core."""
     records = []
-    for lyapunov in (False, True):
+    cores = os.cpu_count() or 1
+    cases = [("taylor", False, 1), ("taylor", True, 1), ("dop853", False, 1)]
+    if cores > 1:
+        cases.append(("taylor", False, cores))
+    for method, lyapunov, threads in cases:
         args = [str(binary), "sweep", "examples/double_pendulum.toml", "--until", repr(until),
                 "--grid", f"a=0:3.1:{grid},b=0:3.1:{grid}", "--rtol", repr(rtol), "--atol", repr(rtol),
-                "--threads", "1", "--out", os.devnull]
+                "--method", method, "--threads", str(threads), "--out", os.devnull]
         if not lyapunov:
             args.append("--no-lyapunov")
         start = time.perf_counter()
@@ -196,9 +204,11 @@ def measure_sweep(binary: Path, grid: int, until: float, rtol: float, timeout: f
         except subprocess.TimeoutExpired:
             wall, error = None, f"timed out after {timeout:.0f} s"
         record = {"bench": BENCH, "record": "ensemble", "tool": "lagrange", "grid": grid, "n": grid * grid,
-                  "t_end": until, "rtol": rtol, "lyapunov": lyapunov, "threads": 1, "wall_s": wall,
-                  "us_per_trajectory": None if wall is None else wall / (grid * grid) * 1e6, "error": error}
-        log(f"lagrange sweep {grid}x{grid} lyapunov={lyapunov}: {fmt_s(wall)}" + (f" ({error})" if error else ""))
+                  "t_end": until, "rtol": rtol, "method": method, "lyapunov": lyapunov, "threads": threads,
+                  "wall_s": wall, "us_per_trajectory": None if wall is None else wall / (grid * grid) * 1e6,
+                  "error": error}
+        log(f"lagrange sweep {grid}x{grid} {method} lyapunov={lyapunov} threads={threads}: {fmt_s(wall)}"
+            + (f" ({error})" if error else ""))
         records.append(record)
     return records
 
@@ -358,10 +368,12 @@ def extra_tables(ours: list[dict], scipy_records: list[dict], heyoka_records: li
         out.append("")
     hey_ens = next((r for r in heyoka_records if r.get("record") == "ensemble" and r.get("workers") == 1), None)
     if sweep_records:
-        out += ["| chaos map, double pendulum, t = 0..20, one core | runs | wall | µs per run | heyoka / ours |",
+        out += ["| chaos map, double pendulum, t = 0..20 | runs | wall | µs per run | heyoka (1 worker) / ours |",
                 "| --- | ---: | ---: | ---: | ---: |"]
         for r in sweep_records:
-            label = "lagrange sweep" + (" with Lyapunov twin" if r["lyapunov"] else " --no-lyapunov")
+            label = (f"lagrange sweep --method {r.get('method', 'dop853')}"
+                     + (" with Lyapunov twin" if r["lyapunov"] else " --no-lyapunov")
+                     + (f", {r['threads']} threads" if r.get("threads", 1) > 1 else ", 1 thread"))
             out.append(f"| {label} (rtol {r['rtol']:g}) | {r['n']:,} | {fmt_s(r['wall_s'])} "
                        f"| {fmt_us(r['us_per_trajectory'])} "
                        f"| {fmt_ratio(hey_ens and hey_ens['wall_s'] * r['n'] / hey_ens['n'], r['wall_s'], 2)} |")
@@ -378,8 +390,8 @@ def extra_tables(ours: list[dict], scipy_records: list[dict], heyoka_records: li
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--rtols", default="1e-10", help="comma-separated tolerances, rtol = atol (default 1e-10)")
-    parser.add_argument("--methods", default="dop853,default",
-                        help="our methods, comma-separated; `default` = the derivation's choice (default dop853,default)")
+    parser.add_argument("--methods", default="dop853,taylor,default",
+                        help="our methods, comma-separated; `default` = the derivation's choice (default dop853,taylor,default)")
     parser.add_argument("--repeats", type=int, default=5, help="runs of ours per case (median; default 5)")
     parser.add_argument("--anchor-repeats", type=int, default=3, help="timed repeats per SciPy run (default 3)")
     parser.add_argument("--grid-points", type=int, default=0,

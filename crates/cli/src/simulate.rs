@@ -338,8 +338,14 @@ fn summary_text(r: &RunReport, names: &[String], d: &Derivation) -> String {
         step,
         if r.form.name() == "lagrange" { "q'" } else { "p" }
     ));
+    // The Taylor method's work unit is one expansion of the series per step.
+    let evaluations = if r.method == num::Method::Taylor {
+        format!("Taylor expansions of order {}", num::taylor_order(r.rtol))
+    } else {
+        "right-hand-side evaluations".to_string()
+    };
     s.push_str(&format!(
-        "{} steps ({} rejected), {} right-hand-side evaluations{}, {:.3} s\n",
+        "{} steps ({} rejected), {} {evaluations}{}, {:.3} s\n",
         r.steps,
         r.rejected,
         r.rhs_evaluations,
