@@ -70,18 +70,32 @@ pub(crate) fn propagate(
             }
             return;
         }
-        // The step of each lane from the norms of its state and last two orders.
-        let norm = |k: usize, l: usize| scratch[k * dim..(k + 1) * dim].iter().fold(0.0f64, |m, c| m.max(c[l].abs()));
+        // Per lane: the norms of the state and of the last two orders, and
+        // whether any coefficient is not finite (one pass over the series).
+        let norm = |k: usize| {
+            let mut m = [0.0f64; LANES];
+            for c in &scratch[k * dim..(k + 1) * dim] {
+                for l in 0..LANES {
+                    m[l] = m[l].max(c[l].abs());
+                }
+            }
+            m
+        };
+        let mut finite = [true; LANES];
+        for c in scratch.iter() {
+            for l in 0..LANES {
+                finite[l] &= c[l].is_finite();
+            }
+        }
+        let (norm0, before_last, last) = (norm(0), norm(p - 1), norm(p));
         let mut h = [0.0; LANES];
         for l in 0..LANES {
             if !live[l] {
                 continue;
             }
-            if let Some(bad) = (0..=p).find(|&k| scratch[k * dim..(k + 1) * dim].iter().any(|c| !c[l].is_finite())) {
-                batch.failure[l] = Some(format!(
-                    "right-hand side failed at t = {}: order {bad} of the Taylor series is not finite",
-                    batch.t[l]
-                ));
+            if !finite[l] {
+                batch.failure[l] =
+                    Some(format!("right-hand side failed at t = {}: the Taylor series is not finite", batch.t[l]));
                 continue;
             }
             if batch.steps[l] >= config.max_steps {
@@ -89,7 +103,7 @@ pub(crate) fn propagate(
                     Some(format!("maximal number of steps ({}) reached at t = {}", config.max_steps, batch.t[l]));
                 continue;
             }
-            let mut step = taylor_step(p, norm(0, l), norm(p - 1, l), norm(p, l), config.rtol, config.atol);
+            let mut step = taylor_step(p, norm0[l], before_last[l], last[l], config.rtol, config.atol);
             if let Some(h_max) = config.h_max {
                 step = step.min(h_max);
             }

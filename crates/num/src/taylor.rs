@@ -35,9 +35,11 @@ pub fn taylor_order(rtol: f64) -> usize {
 pub fn taylor_step(order: usize, norm0: f64, before_last: f64, last: f64, rtol: f64, atol: f64) -> f64 {
     let scale = norm0.max(atol / rtol);
     let p = order as f64;
-    let rho = |norm: f64, j: f64| if norm > 0.0 { (scale / norm).powf(1.0 / j) } else { f64::INFINITY };
-    let rho = rho(before_last, p - 1.0).min(rho(last, p));
-    rho * (-2.0 - 0.7 / (p - 1.0)).exp()
+    // ln ρ_j = ln(s/‖y[j]‖)/j: two logarithms and one exponential instead of two
+    // powers (this runs once per step and lane).
+    let log_rho = |norm: f64, j: f64| if norm > 0.0 { (scale / norm).ln() / j } else { f64::INFINITY };
+    let log_rho = log_rho(before_last, p - 1.0).min(log_rho(last, p));
+    (log_rho - 2.0 - 0.7 / (p - 1.0)).exp()
 }
 
 /// The Taylor integrator. See the module documentation.

@@ -53,11 +53,19 @@ pub(crate) enum T {
     Sqrt(u32),
     /// `v ^ c` for a non-integer constant exponent.
     PowC(u32, u32),
-    Exp(u32),
+    /// `exp u`; `du` is `Deriv(u)`.
+    Exp {
+        u: u32,
+        du: u32,
+    },
     Log(u32),
+    /// `k·u[k]` at order k: the coefficients of `t·u'(t)`, shared by the
+    /// recurrences `w' = u'·g` of exp, sin, cos, sinh, cosh, tan and tanh.
+    Deriv(u32),
     /// sin and cos of `u`: this slot is sin, `cos` the other.
     Sin {
         u: u32,
+        du: u32,
         cos: u32,
     },
     /// The cosine half of a [`T::Sin`], computed with it.
@@ -65,11 +73,13 @@ pub(crate) enum T {
     /// sinh and cosh of `u`, like [`T::Sin`].
     Sinh {
         u: u32,
+        du: u32,
         cosh: u32,
     },
     /// `tan u`, `aux = 1 + tan²u`; `sign = -1` gives `tanh u`, `aux = 1 - tanh²u`.
     Tan {
         u: u32,
+        du: u32,
         aux: u32,
         sign: f64,
     },
@@ -128,6 +138,8 @@ struct Builder {
     constant: Vec<bool>,
     /// The (sin, cos) or (sinh, cosh) slots of an argument, made once for both.
     pairs: rustc_hash::FxHashMap<(u32, bool), (u32, u32)>,
+    /// The `Deriv` slot of an argument.
+    derivs: rustc_hash::FxHashMap<u32, u32>,
 }
 
 impl Builder {
@@ -202,6 +214,21 @@ impl Builder {
         }
     }
 
+    /// The slot of `Deriv(u)`, made once per argument.
+    fn deriv(&mut self, u: u32) -> u32 {
+        if let Some(&d) = self.derivs.get(&u) {
+            return d;
+        }
+        let d = self.var(T::Deriv(u));
+        self.derivs.insert(u, d);
+        d
+    }
+
+    fn exp(&mut self, u: u32) -> u32 {
+        let du = self.deriv(u);
+        self.var(T::Exp { u, du })
+    }
+
     fn func(&mut self, f: Func, u: u32) -> u32 {
         match f {
             Func::Sin | Func::Cos | Func::Sinh | Func::Cosh => {
@@ -209,9 +236,10 @@ impl Builder {
                 let (sin, cos) = match self.pairs.get(&(u, circular)) {
                     Some(&pair) => pair,
                     None => {
+                        let du = self.deriv(u);
                         let sin = self.slot(false);
                         let cos = self.slot(false);
-                        let op = if circular { T::Sin { u, cos } } else { T::Sinh { u, cosh: cos } };
+                        let op = if circular { T::Sin { u, du, cos } } else { T::Sinh { u, du, cosh: cos } };
                         self.program.push((sin, op));
                         self.program.push((cos, T::CosOf));
                         self.pairs.insert((u, circular), (sin, cos));
@@ -225,10 +253,11 @@ impl Builder {
                 }
             }
             Func::Tan | Func::Tanh => {
+                let du = self.deriv(u);
                 let w = self.slot(false);
                 let aux = self.slot(false);
                 let sign = if f == Func::Tan { 1.0 } else { -1.0 };
-                self.program.push((w, T::Tan { u, aux, sign }));
+                self.program.push((w, T::Tan { u, du, aux, sign }));
                 self.program.push((aux, T::Aux));
                 w
             }
@@ -247,7 +276,7 @@ impl Builder {
                 self.program.push((aux, T::Aux));
                 self.var(T::Atan { u, aux })
             }
-            Func::Exp => self.var(T::Exp(u)),
+            Func::Exp => self.exp(u),
             Func::Log => self.var(T::Log(u)),
             Func::Abs => self.var(T::Abs(u)),
         }
@@ -260,8 +289,13 @@ impl<const L: usize> TaylorTape<L> {
     /// (a parameter); every input starts at 0 on every lane.
     pub fn new(tape: &Tape, order: usize, variable: &[bool]) -> TaylorTape<L> {
         assert_eq!(variable.len(), tape.n_inputs(), "one flag per input");
-        let mut b =
-            Builder { constants: Vec::new(), program: Vec::new(), constant: Vec::new(), pairs: Default::default() };
+        let mut b = Builder {
+            constants: Vec::new(),
+            program: Vec::new(),
+            constant: Vec::new(),
+            pairs: Default::default(),
+            derivs: Default::default(),
+        };
         let mut input_slots = vec![0; tape.n_inputs()];
         // The Taylor slot of each tape slot.
         let mut map: Vec<u32> = Vec::with_capacity(tape.len());
@@ -312,7 +346,7 @@ impl<const L: usize> TaylorTape<L> {
                     let ln =
                         if b.is_const(m(x)) { b.constant_op(Op::Func(Func::Log, m(x))) } else { b.var(T::Log(m(x))) };
                     let prod = b.mul(m(y), ln);
-                    b.var(T::Exp(prod))
+                    b.exp(prod)
                 }
                 Op::Sqrt(x) => b.var(T::Sqrt(m(x))),
                 Op::Func(f, x) => b.func(f, m(x)),
@@ -637,10 +671,13 @@ impl<const L: usize> TaylorTape<L> {
                         }
                         lanes(|l| acc[l] / (kf * c[a][l]))
                     }
-                    T::Exp(a) => {
-                        // w' = a' w: w[k] = Σ_{j=1..k} j a[j] w[k-j] / k
-                        let a = s(a);
-                        weighted(c, a, w, k, 1, k)
+                    T::Deriv(a) => {
+                        let kf = k as f64;
+                        lanes(|l| kf * c[s(a) + k][l])
+                    }
+                    T::Exp { du, .. } => {
+                        // w' = u' w: w[k] = Σ_{j=1..k} j u[j] w[k-j] / k
+                        derived(c, s(du), w, k)
                     }
                     T::Log(a) => {
                         // a w' = a': w[k] = (a[k] - Σ_{j=1..k-1} j w[j] a[k-j] / k) / a[0]
@@ -648,23 +685,23 @@ impl<const L: usize> TaylorTape<L> {
                         let sum = weighted(c, w, a, k, 1, k - 1);
                         lanes(|l| (c[a + k][l] - sum[l]) / c[a][l])
                     }
-                    T::Sin { u, cos } => {
-                        let (u, cs) = (s(u), s(cos));
-                        let sin = weighted(c, u, cs, k, 1, k);
-                        let cos = weighted(c, u, w, k, 1, k);
+                    T::Sin { du, cos, .. } => {
+                        let (du, cs) = (s(du), s(cos));
+                        let sin = derived(c, du, cs, k);
+                        let cos = derived(c, du, w, k);
                         c[cs + k] = lanes(|l| -cos[l]);
                         sin
                     }
-                    T::Sinh { u, cosh } => {
-                        let (u, ch) = (s(u), s(cosh));
-                        let sinh = weighted(c, u, ch, k, 1, k);
-                        c[ch + k] = weighted(c, u, w, k, 1, k);
+                    T::Sinh { du, cosh, .. } => {
+                        let (du, ch) = (s(du), s(cosh));
+                        let sinh = derived(c, du, ch, k);
+                        c[ch + k] = derived(c, du, w, k);
                         sinh
                     }
-                    T::Tan { u, aux, sign } => {
+                    T::Tan { du, aux, sign, .. } => {
                         // w' = u' (1 ± w²)
-                        let (u, x) = (s(u), s(aux));
-                        let v = weighted(c, u, x, k, 1, k);
+                        let (du, x) = (s(du), s(aux));
+                        let v = derived(c, du, x, k);
                         c[w + k] = v;
                         let mut sq = [0.0; L];
                         for j in 0..=k {
@@ -748,10 +785,11 @@ fn order_zero<const L: usize>(c: &mut [Lanes<L>], op: T, stride: usize) -> Lanes
         T::Square(a) => lanes(|l| c[s(a)][l] * c[s(a)][l]),
         T::Sqrt(a) => lanes(|l| c[s(a)][l].sqrt()),
         T::PowC(a, e) => lanes(|l| c[s(a)][l].powf(c[s(e)][l])),
-        T::Exp(a) => lanes(|l| c[s(a)][l].exp()),
+        T::Exp { u, .. } => lanes(|l| c[s(u)][l].exp()),
+        T::Deriv(_) => [0.0; L],
         T::Log(a) => lanes(|l| c[s(a)][l].ln()),
         T::Abs(a) => lanes(|l| c[s(a)][l].abs()),
-        T::Sin { u, cos } => {
+        T::Sin { u, cos, .. } => {
             let (mut sin, mut cos_v) = ([0.0; L], [0.0; L]);
             for l in 0..L {
                 (sin[l], cos_v[l]) = c[s(u)][l].sin_cos();
@@ -759,11 +797,11 @@ fn order_zero<const L: usize>(c: &mut [Lanes<L>], op: T, stride: usize) -> Lanes
             c[s(cos)] = cos_v;
             sin
         }
-        T::Sinh { u, cosh } => {
+        T::Sinh { u, cosh, .. } => {
             c[s(cosh)] = lanes(|l| c[s(u)][l].cosh());
             lanes(|l| c[s(u)][l].sinh())
         }
-        T::Tan { u, aux, sign } => {
+        T::Tan { u, aux, sign, .. } => {
             let v = lanes(|l| if sign > 0.0 { c[s(u)][l].tan() } else { c[s(u)][l].tanh() });
             c[s(aux)] = lanes(|l| 1.0 + sign * v[l] * v[l]);
             v
@@ -784,6 +822,17 @@ fn order_zero<const L: usize>(c: &mut [Lanes<L>], op: T, stride: usize) -> Lanes
         }
         T::CosOf | T::Aux => unreachable!("written by their instruction"),
     }
+}
+
+/// `Σ_{j=1..=k} du[j] b[k-j] / k` with `du[j] = j u[j]` (the recurrence of `w' = u' b`).
+#[inline(always)]
+fn derived<const L: usize>(c: &[Lanes<L>], du: usize, b: usize, k: usize) -> Lanes<L> {
+    let mut acc = [0.0; L];
+    for j in 1..=k {
+        fma(&mut acc, &c[du + j], &c[b + k - j]);
+    }
+    let kf = k as f64;
+    lanes(|l| acc[l] / kf)
 }
 
 /// `Σ_{j=lo..=hi} j a[j] b[k-j] / k` (the recurrence of `w' = a' b`).

@@ -62,6 +62,19 @@ struct Emitter<'a, 'b, const L: usize> {
     base: Value,
     stride: usize,
     width: usize,
+    /// Whether the host fuses multiply-adds.
+    fma: bool,
+}
+
+/// Whether `fma` compiles to one instruction here (elsewhere cranelift would
+/// call a library routine).
+fn host_has_fma() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    return std::arch::is_x86_feature_detected!("fma");
+    #[cfg(target_arch = "aarch64")]
+    return true;
+    #[allow(unreachable_code)]
+    false
 }
 
 /// Two lanes per instruction when the lanes pair up (SSE2 on x86-64, NEON on
@@ -137,8 +150,18 @@ impl<const L: usize> Emitter<'_, '_, L> {
         self.call(unary(f).0, &[x])
     }
 
-    /// `Σ_{j ∈ js} weight(j) · a[j] · b[k−j]`, started from zero and the
-    /// products formed as the interpreter forms them.
+    /// `acc + x·y`, fused where the host has FMA (one rounding; the
+    /// interpreter rounds twice, within the tolerance the tests allow).
+    fn mul_add(&mut self, x: Value, y: Value, acc: Value) -> Value {
+        if self.fma {
+            self.b.ins().fma(x, y, acc)
+        } else {
+            let p = self.b.ins().fmul(x, y);
+            self.b.ins().fadd(acc, p)
+        }
+    }
+
+    /// `Σ_{j ∈ js} weight(j) · a[j] · b[k−j]`, started from zero.
     fn sum(
         &mut self,
         a: u32,
@@ -151,17 +174,23 @@ impl<const L: usize> Emitter<'_, '_, L> {
         let mut acc = self.c(0.0);
         for j in js {
             let (x, y) = (self.ld(a, j, lane)?, self.ld(b, k - j, lane)?);
-            let term = match weight(j) {
+            let x = match weight(j) {
                 Some(w) => {
                     let w = self.c(w);
-                    let wx = self.b.ins().fmul(w, x);
-                    self.b.ins().fmul(wx, y)
+                    self.b.ins().fmul(w, x)
                 }
-                None => self.b.ins().fmul(x, y),
+                None => x,
             };
-            acc = self.b.ins().fadd(acc, term);
+            acc = self.mul_add(x, y, acc);
         }
         Ok(acc)
+    }
+
+    /// `Σ_{j=1..=k} du[j] b[k−j] / k`, `du[j] = j u[j]` (the recurrence of `w' = u' b`).
+    fn derived(&mut self, du: u32, b: u32, k: usize, lane: usize) -> Result<Value, JitError> {
+        let acc = self.sum(du, b, k, 1..=k, |_| None, lane)?;
+        let kf = self.c(k as f64);
+        Ok(self.b.ins().fdiv(acc, kf))
     }
 
     /// `acc − Σ_{j ∈ js} a[j] · b[k−j]`.
@@ -258,10 +287,11 @@ impl<const L: usize> Emitter<'_, '_, L> {
                 let (x, y) = (self.ld(a, 0, lane)?, self.ld(e, 0, lane)?);
                 self.call(POWF, &[x, y])?
             }
-            T::Exp(a) => {
-                let x = self.ld(a, 0, lane)?;
+            T::Exp { u, .. } => {
+                let x = self.ld(u, 0, lane)?;
                 self.func(Func::Exp, x)?
             }
+            T::Deriv(_) => self.c(0.0),
             T::Log(a) => {
                 let x = self.ld(a, 0, lane)?;
                 self.func(Func::Log, x)?
@@ -270,7 +300,7 @@ impl<const L: usize> Emitter<'_, '_, L> {
                 let x = self.ld(a, 0, lane)?;
                 self.b.ins().fabs(x)
             }
-            T::Sin { u, cos } | T::Sinh { u, cosh: cos } => {
+            T::Sin { u, cos, .. } | T::Sinh { u, cosh: cos, .. } => {
                 let circular = matches!(op, T::Sin { .. });
                 let x = self.ld(u, 0, lane)?;
                 let (fs, fc) = if circular { (Func::Sin, Func::Cos) } else { (Func::Sinh, Func::Cosh) };
@@ -278,7 +308,7 @@ impl<const L: usize> Emitter<'_, '_, L> {
                 self.st(cos, 0, lane, c)?;
                 self.func(fs, x)?
             }
-            T::Tan { u, aux, sign } => {
+            T::Tan { u, aux, sign, .. } => {
                 let x = self.ld(u, 0, lane)?;
                 let v = self.func(if sign > 0.0 { Func::Tan } else { Func::Tanh }, x)?;
                 let (one, s) = (self.c(1.0), self.c(sign));
@@ -390,7 +420,11 @@ impl<const L: usize> Emitter<'_, '_, L> {
                 let den = self.b.ins().fmul(kf, a0);
                 self.b.ins().fdiv(acc, den)
             }
-            T::Exp(a) => self.weighted(a, w, k, k, lane)?,
+            T::Deriv(a) => {
+                let (kf, x) = (self.c(k as f64), self.ld(a, k, lane)?);
+                self.b.ins().fmul(kf, x)
+            }
+            T::Exp { du, .. } => self.derived(du, w, k, lane)?,
             T::Log(a) => {
                 let s = self.weighted(w, a, k, k - 1, lane)?;
                 let ak = self.ld(a, k, lane)?;
@@ -398,21 +432,21 @@ impl<const L: usize> Emitter<'_, '_, L> {
                 let a0 = self.ld(a, 0, lane)?;
                 self.b.ins().fdiv(num, a0)
             }
-            T::Sin { u, cos } => {
-                let sin = self.weighted(u, cos, k, k, lane)?;
-                let c = self.weighted(u, w, k, k, lane)?;
+            T::Sin { du, cos, .. } => {
+                let sin = self.derived(du, cos, k, lane)?;
+                let c = self.derived(du, w, k, lane)?;
                 let c = self.b.ins().fneg(c);
                 self.st(cos, k, lane, c)?;
                 sin
             }
-            T::Sinh { u, cosh } => {
-                let sinh = self.weighted(u, cosh, k, k, lane)?;
-                let c = self.weighted(u, w, k, k, lane)?;
+            T::Sinh { du, cosh, .. } => {
+                let sinh = self.derived(du, cosh, k, lane)?;
+                let c = self.derived(du, w, k, lane)?;
                 self.st(cosh, k, lane, c)?;
                 sinh
             }
-            T::Tan { u, aux, sign } => {
-                let v = self.weighted(u, aux, k, k, lane)?;
+            T::Tan { du, aux, sign, .. } => {
+                let v = self.derived(du, aux, k, lane)?;
                 self.st(w, k, lane, v)?;
                 let sq = self.self_product(w, k, lane)?;
                 let s = self.c(sign);
@@ -600,11 +634,15 @@ impl<const L: usize> Emitter<'_, '_, L> {
                 if !s.varying[e] {
                     continue;
                 }
+                if k == 0 {
+                    continue;
+                }
+                let mut acc = self.c(0.0);
                 for j in 1..=k {
                     let (mj, a) = (self.ld(s.mass[e], j, lane)?, self.ld(s.accel[col], k - j, lane)?);
-                    let t = self.b.ins().fmul(mj, a);
-                    rhs[row] = self.b.ins().fsub(rhs[row], t);
+                    acc = self.mul_add(mj, a, acc);
                 }
+                rhs[row] = self.b.ins().fsub(rhs[row], acc);
             }
             let scale = self.c(1.0 / (k + 1) as f64);
             for i in 0..n {
@@ -612,16 +650,13 @@ impl<const L: usize> Emitter<'_, '_, L> {
                     let r = self.ld(s.inverse[i], 0, lane)?;
                     self.b.ins().fmul(r, rhs[i])
                 } else {
-                    let mut acc = None;
-                    for j in 0..n {
+                    let r = self.ld(s.inverse[i * n], 0, lane)?;
+                    let mut acc = self.b.ins().fmul(r, rhs[0]);
+                    for j in 1..n {
                         let r = self.ld(s.inverse[i * n + j], 0, lane)?;
-                        let t = self.b.ins().fmul(r, rhs[j]);
-                        acc = Some(match acc {
-                            Some(a) => self.b.ins().fadd(a, t),
-                            None => t,
-                        });
+                        acc = self.mul_add(r, rhs[j], acc);
                     }
-                    acc.expect("n ≥ 1")
+                    acc
                 };
                 self.st(s.accel[i], k, lane, a)?;
                 let next_v = self.b.ins().fmul(a, scale);
@@ -675,6 +710,7 @@ impl NativeTaylor {
                 base,
                 stride: order + 1,
                 width: 1,
+                fma: host_has_fma(),
             };
             for k in 0..order {
                 e.orders(tape.program(), k)?;
@@ -732,6 +768,7 @@ impl NativeTaylor {
                     base,
                     stride: order + 1,
                     width: 1,
+                    fma: host_has_fma(),
                 };
                 e.orders(tape.program(), k)?;
                 e.b.ins().return_(&[]);
