@@ -428,7 +428,7 @@ impl<const L: usize> TaylorTape<L> {
     /// When [`compile_second_order`](Self::compile_second_order) did not succeed.
     pub fn expand_second_order(&mut self) {
         let (_, native) = self.second_order.as_ref().expect("compile_second_order succeeded");
-        native.run(0, self.coef.as_flattened_mut());
+        native.run_all(self.coef.as_flattened_mut());
     }
 
     /// Compiles every order to native code ([`crate::Compiled`]'s JIT), used by

@@ -34,8 +34,8 @@ type OrderFn = unsafe extern "C" fn(coef: *mut f64);
 /// Orders `0..=p` of a Taylor tape as native functions. Shared by the clones
 /// of a tape (one compilation serves an ensemble's workers).
 pub(crate) struct NativeTaylor {
-    /// Owns the code the functions point into; taken only in `Drop`.
-    module: Mutex<Option<JITModule>>,
+    /// Own the code the functions point into; taken only in `Drop`.
+    modules: Mutex<Vec<JITModule>>,
     funcs: Vec<OrderFn>,
     /// The length of the coefficient buffer the functions address.
     len: usize,
@@ -671,23 +671,61 @@ impl<const L: usize> Emitter<'_, '_, L> {
 }
 
 impl NativeTaylor {
-    /// Compiles the whole expansion of a second-order system into one function
-    /// (run it with `run(0, …)`): orders `0..p` of the tape, each followed by
-    /// the coupling that yields the state's next order.
+    /// Compiles the whole expansion of a second-order system (run it with
+    /// [`run_all`](Self::run_all)): orders `0..p` of the tape, each followed by
+    /// the coupling that yields the state's next order. The orders are split in
+    /// two functions of about equal length, compiled on two threads (compiling
+    /// costs more than a thousand steps of a small system).
     pub(crate) fn second_order<const L: usize>(
         tape: &TaylorTape<L>,
         layout: &SecondOrderLayout,
         buffer_len: usize,
     ) -> Result<NativeTaylor, JitError> {
         let order = tape.order();
-        let mut jb = JITBuilder::with_isa(host_isa(false)?, default_libcall_names());
-        for f in Func::ALL {
-            let (name, ptr) = unary(f);
-            jb.symbol(name, ptr);
+        // Order k costs about k + 1 convolution terms per instruction: split at half the sum.
+        let total: usize = (1..=order).sum();
+        let mut split = 0;
+        let mut acc = 0;
+        while split < order && 2 * acc < total {
+            split += 1;
+            acc += split;
         }
-        jb.symbol(POWF, lagrange_powf as *const u8);
-        jb.symbol(ATAN2, lagrange_atan2 as *const u8);
-        let mut module = JITModule::new(jb);
+        let parts = if order >= 4 { vec![0..split, split..order] } else { vec![0..order] };
+        let compiled: Vec<Result<(JITModule, OrderFn), JitError>> = std::thread::scope(|scope| {
+            let handles: Vec<_> = parts
+                .iter()
+                .skip(1)
+                .map(|ks| {
+                    let ks = ks.clone();
+                    scope.spawn(move || Self::second_order_part(tape, layout, ks))
+                })
+                .collect();
+            let mut all = vec![Self::second_order_part(tape, layout, parts[0].clone())];
+            for h in handles {
+                all.push(
+                    h.join().unwrap_or_else(|_| Err(JitError::Codegen { message: "compiler thread panicked".into() })),
+                );
+            }
+            all
+        });
+        let mut modules = Vec::with_capacity(compiled.len());
+        let mut funcs = Vec::with_capacity(compiled.len());
+        for part in compiled {
+            let (module, func) = part?;
+            modules.push(module);
+            funcs.push(func);
+        }
+        Ok(NativeTaylor { modules: Mutex::new(modules), funcs, len: buffer_len })
+    }
+
+    /// One function computing orders `ks` of a second-order expansion, in its own module.
+    fn second_order_part<const L: usize>(
+        tape: &TaylorTape<L>,
+        layout: &SecondOrderLayout,
+        ks: std::ops::Range<usize>,
+    ) -> Result<(JITModule, OrderFn), JitError> {
+        let order = tape.order();
+        let mut module = new_module()?;
         let ptr = module.target_config().pointer_type();
         let mut sig = module.make_signature();
         sig.params.push(AbiParam::new(ptr));
@@ -712,7 +750,7 @@ impl NativeTaylor {
                 width: 1,
                 fma: host_has_fma(),
             };
-            for k in 0..order {
+            for k in ks {
                 e.orders(tape.program(), k)?;
                 if k == 0 {
                     e.invert(layout)?;
@@ -728,22 +766,16 @@ impl NativeTaylor {
         module.finalize_definitions().map_err(codegen)?;
         let code = module.get_finalized_function(id);
         // SAFETY: as in `NativeTaylor::new`: a function of signature `(ptr) -> ()`
-        // in the host's C calling convention, owned by `module`.
+        // in the host's C calling convention, owned by `module`, which the
+        // caller keeps as long as the pointer.
         let func = unsafe { std::mem::transmute::<*const u8, OrderFn>(code) };
-        Ok(NativeTaylor { module: Mutex::new(Some(module)), funcs: vec![func], len: buffer_len })
+        Ok((module, func))
     }
 
     /// Compiles every order of `tape`.
     pub(crate) fn new<const L: usize>(tape: &TaylorTape<L>) -> Result<NativeTaylor, JitError> {
         let order = tape.order();
-        let mut jb = JITBuilder::with_isa(host_isa(false)?, default_libcall_names());
-        for f in Func::ALL {
-            let (name, ptr) = unary(f);
-            jb.symbol(name, ptr);
-        }
-        jb.symbol(POWF, lagrange_powf as *const u8);
-        jb.symbol(ATAN2, lagrange_atan2 as *const u8);
-        let mut module = JITModule::new(jb);
+        let mut module = new_module()?;
         let ptr = module.target_config().pointer_type();
         let mut sig = module.make_signature();
         sig.params.push(AbiParam::new(ptr));
@@ -791,7 +823,7 @@ impl NativeTaylor {
                 unsafe { std::mem::transmute::<*const u8, OrderFn>(code) }
             })
             .collect();
-        Ok(NativeTaylor { module: Mutex::new(Some(module)), funcs, len: tape.buffer_len() })
+        Ok(NativeTaylor { modules: Mutex::new(vec![module]), funcs, len: tape.buffer_len() })
     }
 
     /// Runs the function of order `k` on the coefficient buffer.
@@ -812,13 +844,38 @@ impl NativeTaylor {
     }
 }
 
+impl NativeTaylor {
+    /// Runs every function in turn (the parts of a second-order expansion).
+    ///
+    /// # Panics
+    ///
+    /// When `coef` is not the length the code was compiled for.
+    pub(crate) fn run_all(&self, coef: &mut [f64]) {
+        for k in 0..self.funcs.len() {
+            self.run(k, coef);
+        }
+    }
+}
+
+/// A JIT module with the elementary functions' wrappers as symbols.
+fn new_module() -> Result<JITModule, JitError> {
+    let mut jb = JITBuilder::with_isa(host_isa(false)?, default_libcall_names());
+    for f in Func::ALL {
+        let (name, ptr) = unary(f);
+        jb.symbol(name, ptr);
+    }
+    jb.symbol(POWF, lagrange_powf as *const u8);
+    jb.symbol(ATAN2, lagrange_atan2 as *const u8);
+    Ok(JITModule::new(jb))
+}
+
 impl Drop for NativeTaylor {
     fn drop(&mut self) {
-        let module = self.module.get_mut().unwrap_or_else(PoisonError::into_inner).take();
-        if let Some(module) = module {
-            // SAFETY: the functions are only called through `run`, which needs
-            // `&self`; `drop` has `&mut self`, so none is running, and none can
-            // be called afterwards.
+        let modules = std::mem::take(self.modules.get_mut().unwrap_or_else(PoisonError::into_inner));
+        for module in modules {
+            // SAFETY: the functions are only called through `run` and
+            // `run_all`, which need `&self`; `drop` has `&mut self`, so none is
+            // running, and none can be called afterwards.
             unsafe { module.free_memory() }
         }
     }
