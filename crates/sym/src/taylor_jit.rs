@@ -690,7 +690,8 @@ impl NativeTaylor {
             split += 1;
             acc += split;
         }
-        let parts = if order >= 4 { vec![0..split, split..order] } else { vec![0..order] };
+        let parts: Vec<std::ops::Range<usize>> =
+            if order >= 4 { vec![0..split, split..order] } else { std::iter::once(0..order).collect() };
         let compiled: Vec<Result<(JITModule, OrderFn), JitError>> = std::thread::scope(|scope| {
             let handles: Vec<_> = parts
                 .iter()
