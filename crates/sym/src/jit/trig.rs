@@ -8,16 +8,22 @@
 //!    also leaves `n mod 4` in the low bits), and `x − n·π/2` is formed as the
 //!    unevaluated sum `y0 + y1` from `π/2 = P1 + P2 + P3 + P3T`. `P1`, `P2` and
 //!    `P3` have at most 33 significant bits, so for `|n| ≤ 2¹⁹` the products
-//!    `n·Pk` are exact, `x − n·P1` is exact (Sterbenz), and the two other
-//!    subtractions keep their rounding errors (TwoSum). Where fdlibm decides
-//!    from the cancellation how many parts to use, this always uses all of
-//!    them with exact error terms, which is at least as accurate and has no
-//!    branch. Valid for `|x| <` [`INLINE_MAX`] = 2¹⁹·π/2, fdlibm's "medium"
+//!    `n·Pk` are exact, `x − n·P1` is exact (Sterbenz), and the rounding
+//!    errors of the other sums are kept (TwoSum). Where fdlibm decides from
+//!    the cancellation how many parts to use, this always uses all of them,
+//!    which is at least as accurate and has no branch; `y0` is ready early
+//!    and `y1` is only needed at the end of the kernels, so the long path is
+//!    short. Valid for `|x| <` [`INLINE_MAX`] = 2¹⁹·π/2, fdlibm's "medium"
 //!    range; the caller sends larger and non-finite `x` to the library.
 //! 2. Kernels: fdlibm's `__kernel_sin(y0, y1, 1)` and `__kernel_cos(y0, y1)`,
 //!    the minimax polynomials on [−π/4, π/4] with their coefficients and
-//!    evaluation order; the branch of `__kernel_cos` on `|y0|` (which only
-//!    chooses the split `qx` of `1 − z/2`) is a `select`.
+//!    their outer formulas (the `S1` term and the tail `y1` apart, the split
+//!    `qx` of `1 − z/2`). The inner polynomials in `z = y0²` are evaluated by
+//!    Estrin's scheme instead of Horner's: half the dependent steps, which
+//!    makes a sine about 4 ns faster here, at no measurable cost in accuracy
+//!    (their rounding enters the result some 2⁻⁶ smaller than the result's
+//!    own). The branch of `__kernel_cos` on `|y0|` (which only chooses `qx`)
+//!    is a `select`.
 //! 3. The quadrant `n mod 4` picks `(sin, cos)` among `(s, c)`, `(c, −s)`,
 //!    `(−s, −c)`, `(−c, s)` with `select`s.
 //!
@@ -25,7 +31,8 @@
 //! `sin(u)` does not depend on whether the tape also holds `cos(u)`. Every
 //! operation is sign-symmetric, so `sin(−x) = −sin(x)` and `cos(−x) = cos(x)`
 //! bit for bit, and `sin(±0) = ±0`. Measured against glibc's `sin` and `cos`
-//! (the tests below and in `jit.rs`), the results differ by at most one ulp.
+//! (the tests below), the results differ by at most one ulp, in about 3% of
+//! cases.
 
 use cranelift_codegen::ir::{condcodes::FloatCC, types, InstBuilder, MemFlagsData, Value};
 use cranelift_frontend::FunctionBuilder;
@@ -94,8 +101,15 @@ pub(crate) fn sin_cos(b: &mut FunctionBuilder<'_>, x: Value) -> (Value, Value) {
     (sin, cos)
 }
 
-/// `x − n·π/2 = y0 + y1` (|y1| ≤ ulp(y0)/2) and `n` as an `i64` whose two
-/// low bits are `n mod 4`.
+/// `x − n·π/2 = y0 + y1` and `n` as an `i64` whose two low bits are
+/// `n mod 4`.
+///
+/// `y0` is `x − n·P1 − (n·P2 + n·P3)` with one rounding at the end, so it is
+/// ready after five operations, and `y1` the rest (that rounding's error, the
+/// low part of `n·P2 + n·P3`, and `n·P3T`), which the kernels use only at
+/// the end. `|y1|` is at most `ulp(y0)/2 + 2⁻⁶⁷`: tiny next to `y0` except
+/// where `x` is within 2⁻¹⁵ of a multiple of π/2, and there the kernels are
+/// linear in it (`sin(y0 + y1) ≈ y0 + y1`, `cos ≈ 1`).
 fn reduce(b: &mut FunctionBuilder<'_>, x: Value) -> (Value, Value, Value) {
     let k = |b: &mut FunctionBuilder<'_>, c: f64| b.ins().f64const(c);
     let (inv_pio2, to_int) = (k(b, INV_PIO2), k(b, TO_INT));
@@ -108,21 +122,20 @@ fn reduce(b: &mut FunctionBuilder<'_>, x: Value) -> (Value, Value, Value) {
     let p1 = k(b, P1);
     let w1 = b.ins().fmul(n, p1);
     let r1 = b.ins().fsub(x, w1);
-    let p2 = k(b, P2);
-    let w2 = b.ins().fmul(n, p2);
-    let (r2, e2) = two_diff(b, r1, w2);
-    let p3 = k(b, P3);
-    let w3 = b.ins().fmul(n, p3);
-    let (r3, e3) = two_diff(b, r2, w3);
-    // What is still to be subtracted from r3: n·P3T − (e2 + e3). Subtracting
-    // it (rather than adding its negation) keeps sin(−0) = −0.
+    // n·P2 + n·P3 = hi + lo exactly (both products are exact; Fast2Sum, as
+    // |n·P2| ≥ |n·P3|), computed while r1 is.
+    let (p2, p3) = (k(b, P2), k(b, P3));
+    let (w2, w3) = (b.ins().fmul(n, p2), b.ins().fmul(n, p3));
+    let hi = b.ins().fadd(w2, w3);
+    let w2_part = b.ins().fsub(hi, w2);
+    let lo = b.ins().fsub(w3, w2_part);
+    let (y0, e) = two_diff(b, r1, hi);
+    // Subtracting what remains (rather than adding its negation) keeps
+    // sin(−0) = −0.
     let p3t = k(b, P3T);
     let w4 = b.ins().fmul(n, p3t);
-    let e = b.ins().fadd(e2, e3);
-    let rest = b.ins().fsub(w4, e);
-    let y0 = b.ins().fsub(r3, rest);
-    let d = b.ins().fsub(r3, y0);
-    let y1 = b.ins().fsub(d, rest);
+    let rest = b.ins().fadd(lo, w4);
+    let y1 = b.ins().fsub(e, rest);
     (y0, y1, quadrant)
 }
 
@@ -138,25 +151,48 @@ fn two_diff(b: &mut FunctionBuilder<'_>, a: Value, c: Value) -> (Value, Value) {
     (s, e)
 }
 
-/// `c0 + z·(c1 + z·(… + z·cn))`.
-fn horner(b: &mut FunctionBuilder<'_>, z: Value, coefficients: &[f64]) -> Value {
-    let (&last, rest) = coefficients.split_last().expect("a polynomial has a coefficient");
-    let mut acc = b.ins().f64const(last);
-    for &c in rest.iter().rev() {
-        let m = b.ins().fmul(z, acc);
-        let c = b.ins().f64const(c);
-        acc = b.ins().fadd(c, m);
+/// `c0 + c1·z + … + cn·zⁿ` by Estrin's scheme: pairs `c2k + c2k+1·z` first,
+/// then combined with `z²`, `z⁴`, … (half of Horner's dependent steps).
+fn polynomial(b: &mut FunctionBuilder<'_>, z: Value, coefficients: &[f64]) -> Value {
+    let mut terms: Vec<Value> = coefficients
+        .chunks(2)
+        .map(|pair| {
+            let c0 = b.ins().f64const(pair[0]);
+            match pair.get(1) {
+                Some(&c1) => {
+                    let c1 = b.ins().f64const(c1);
+                    let m = b.ins().fmul(z, c1);
+                    b.ins().fadd(m, c0)
+                }
+                None => c0,
+            }
+        })
+        .collect();
+    let mut power = z;
+    while terms.len() > 1 {
+        power = b.ins().fmul(power, power);
+        terms = terms
+            .chunks(2)
+            .map(|pair| match *pair {
+                [lo, hi] => {
+                    let m = b.ins().fmul(hi, power);
+                    b.ins().fadd(m, lo)
+                }
+                [lo] => lo,
+                _ => unreachable!("chunks of two"),
+            })
+            .collect();
     }
-    acc
+    terms[0]
 }
 
 /// fdlibm `__kernel_sin(x, y, 1)`: `x − ((z·(y/2 − v·r) − y) − v·S1)`.
 fn kernel_sin(b: &mut FunctionBuilder<'_>, x: Value, y: Value) -> Value {
     let z = b.ins().fmul(x, x);
     let v = b.ins().fmul(z, x);
-    let r = horner(b, z, &S[1..]);
+    let r = polynomial(b, z, &S[1..]);
     let half = b.ins().f64const(0.5);
-    let half_y = b.ins().fmul(half, y);
+    let half_y = b.ins().fmul(y, half);
     let vr = b.ins().fmul(v, r);
     let u = b.ins().fsub(half_y, vr);
     let zu = b.ins().fmul(z, u);
@@ -172,7 +208,7 @@ fn kernel_sin(b: &mut FunctionBuilder<'_>, x: Value, y: Value) -> Value {
 /// 0.28125 for `|x| > 0.78125`, and `|x|/4` with its low word cleared between.
 fn kernel_cos(b: &mut FunctionBuilder<'_>, x: Value, y: Value) -> Value {
     let z = b.ins().fmul(x, x);
-    let poly = horner(b, z, &C);
+    let poly = polynomial(b, z, &C);
     let r = b.ins().fmul(z, poly);
     let ax = b.ins().fabs(x);
     let qx = {
@@ -188,7 +224,7 @@ fn kernel_cos(b: &mut FunctionBuilder<'_>, x: Value, y: Value) -> Value {
         b.ins().select(is_small, zero, qx)
     };
     let half = b.ins().f64const(0.5);
-    let half_z = b.ins().fmul(half, z);
+    let half_z = b.ins().fmul(z, half);
     let hz = b.ins().fsub(half_z, qx);
     let one = b.ins().f64const(1.0);
     let a = b.ins().fsub(one, qx);
@@ -357,6 +393,38 @@ pub(super) mod tests {
         assert_eq!((s.to_bits(), c.to_bits()), (0f64.to_bits(), 1f64.to_bits()));
         let (s, c) = natives.eval(-0.0);
         assert_eq!((s.to_bits(), c.to_bits()), ((-0f64).to_bits(), 1f64.to_bits()));
+    }
+
+    /// A sine is the same bits in a tape alone, next to an argument out of
+    /// range (then the function falls back to per-site checks), and in a tape
+    /// long enough to be compiled with per-site checks only.
+    #[test]
+    fn results_do_not_depend_on_the_rest_of_the_tape() {
+        let mut pool = Pool::default();
+        let (x, y) = (pool.symbol("x"), pool.symbol("y"));
+        let roots = [pool.parse("sin(x)").unwrap(), pool.parse("cos(y)").unwrap()];
+        let pair = Compiled::new(&Tape::compile(&pool, &roots, &[x, y]).unwrap()).unwrap();
+        let terms: Vec<String> = (1..=1200).map(|k| format!("{k}*cos(y + {k})/(y + {k})")).collect();
+        let long = pool.parse(&terms.join(" + ")).unwrap();
+        let roots = [roots[0], long];
+        let tape = Tape::compile(&pool, &roots, &[x, y]).unwrap();
+        assert!(tape.len() > crate::jit::OPTIMIZE_MAX_OPS);
+        let long = Compiled::new(&tape).unwrap();
+        let natives = Natives::new();
+        for x in uniform(4).take(2000).map(|u| (2.0 * u - 1.0) * 1e3) {
+            let alone = natives.eval(x).0;
+            for y in [0.5, 1e7, f64::INFINITY, f64::NAN] {
+                let mut out = [0.0; 2];
+                pair.eval(&[x, y], &mut out);
+                assert_eq!(out[0].to_bits(), alone.to_bits(), "x = {x:e}, y = {y}");
+                assert_eq!(out[1].is_nan(), y.is_nan() || y.is_infinite());
+                if y == 1e7 {
+                    assert_eq!(out[1].to_bits(), y.cos().to_bits());
+                }
+                long.eval(&[x, y], &mut out);
+                assert_eq!(out[0].to_bits(), alone.to_bits(), "x = {x:e}, y = {y}");
+            }
+        }
     }
 
     /// Beyond the inline range and for non-finite arguments the library is
