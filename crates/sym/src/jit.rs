@@ -33,7 +33,7 @@
 // lengths checked just before), and freeing the code in `Drop`.
 #![allow(unsafe_code)]
 
-mod trig;
+pub(crate) mod trig;
 
 use crate::eval::{Op, Tape};
 use crate::expr::Func;

@@ -18,10 +18,10 @@
 #![allow(unsafe_code)]
 
 use crate::expr::Func;
-use crate::jit::{codegen, host_isa, lagrange_atan2, lagrange_powf, offset, unary, JitError, ATAN2, POWF};
+use crate::jit::{codegen, host_isa, lagrange_atan2, lagrange_powf, offset, trig, unary, JitError, ATAN2, POWF};
 use crate::taylor::{TaylorTape, T};
 use cranelift_codegen::ir::{
-    condcodes::FloatCC, types, AbiParam, FuncRef, InstBuilder, MemFlagsData, UserFuncName, Value,
+    condcodes::FloatCC, types, AbiParam, BlockArg, FuncRef, InstBuilder, MemFlagsData, UserFuncName, Value,
 };
 use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
 use cranelift_jit::{JITBuilder, JITModule};
@@ -148,6 +148,30 @@ impl<const L: usize> Emitter<'_, '_, L> {
 
     fn func(&mut self, f: Func, x: Value) -> Result<Value, JitError> {
         self.call(unary(f).0, &[x])
+    }
+
+    /// `(sin x, cos x)` as `Compiled` computes them: inline from one reduction
+    /// ([`trig::sin_cos`]) for `|x| <` [`trig::INLINE_MAX`], library calls in a
+    /// cold block otherwise (huge, infinite or NaN `x`).
+    fn sin_cos(&mut self, x: Value) -> Result<(Value, Value), JitError> {
+        let (inline, library, done) = (self.b.create_block(), self.b.create_block(), self.b.create_block());
+        let (sin, cos) = (self.b.append_block_param(done, types::F64), self.b.append_block_param(done, types::F64));
+        let ax = self.b.ins().fabs(x);
+        let bound = self.b.ins().f64const(trig::INLINE_MAX);
+        let in_range = self.b.ins().fcmp(FloatCC::LessThan, ax, bound);
+        self.b.ins().brif(in_range, inline, &[], library, &[]);
+        self.b.set_cold_block(library);
+        self.b.switch_to_block(inline);
+        self.b.seal_block(inline);
+        let (s, c) = trig::sin_cos(&mut self.b, x);
+        self.b.ins().jump(done, &[BlockArg::Value(s), BlockArg::Value(c)]);
+        self.b.switch_to_block(library);
+        self.b.seal_block(library);
+        let (s, c) = (self.func(Func::Sin, x)?, self.func(Func::Cos, x)?);
+        self.b.ins().jump(done, &[BlockArg::Value(s), BlockArg::Value(c)]);
+        self.b.switch_to_block(done);
+        self.b.seal_block(done);
+        Ok((sin, cos))
     }
 
     /// `acc + x·y`, fused where the host has FMA (one rounding; the
@@ -300,13 +324,17 @@ impl<const L: usize> Emitter<'_, '_, L> {
                 let x = self.ld(a, 0, lane)?;
                 self.b.ins().fabs(x)
             }
-            T::Sin { u, cos, .. } | T::Sinh { u, cosh: cos, .. } => {
-                let circular = matches!(op, T::Sin { .. });
+            T::Sin { u, cos, .. } => {
                 let x = self.ld(u, 0, lane)?;
-                let (fs, fc) = if circular { (Func::Sin, Func::Cos) } else { (Func::Sinh, Func::Cosh) };
-                let c = self.func(fc, x)?;
+                let (sin, c) = self.sin_cos(x)?;
                 self.st(cos, 0, lane, c)?;
-                self.func(fs, x)?
+                sin
+            }
+            T::Sinh { u, cosh, .. } => {
+                let x = self.ld(u, 0, lane)?;
+                let c = self.func(Func::Cosh, x)?;
+                self.st(cosh, 0, lane, c)?;
+                self.func(Func::Sinh, x)?
             }
             T::Tan { u, aux, sign, .. } => {
                 let x = self.ld(u, 0, lane)?;
