@@ -17,11 +17,13 @@
 //!
 //! `sin` and `cos` are inline code ([`trig`]: fdlibm's reduction and kernels,
 //! within 1 ulp of libm; `sin(u)` and `cos(u)` share one reduction), for
-//! arguments below 2¹⁹·π/2; larger and non-finite ones go to the library.
-//! A tape with them compiles to two functions: the one called, with inline
-//! code only (no call to clobber registers in the hot path), which ends by
-//! calling the other if some argument was out of range; the other decides per
-//! call site (see [`Trig`]). The other elementary functions (`exp`, `atan2`,
+//! arguments below 2¹⁹·π/2; larger and non-finite ones go to the library in
+//! a cold block at each call site. (A variant that compiled a second, call-free
+//! copy of the function for the hot path was measured 10 ns faster per
+//! double-pendulum call, but doubled compile time, which a run of 10⁵ calls
+//! does not win back.) Tapes with them are compiled without cranelift's
+//! optimizer, which took longer on the trigonometric code than it saved. The
+//! other elementary functions (`exp`, `atan2`,
 //! `powf`, ...) are calls to `extern "C"` wrappers of the `f64` methods,
 //! registered as symbols of the JIT module. `sqrt`, `abs`, negation and the
 //! arithmetic are native instructions, and integer powers are unrolled binary
@@ -186,23 +188,6 @@ struct Translator<'a, 'b> {
     b: FunctionBuilder<'b>,
     /// Imported wrappers already declared in this function, by symbol.
     imports: FxHashMap<&'static str, FuncRef>,
-    trig: Trig,
-    /// With [`Trig::Deferred`]: true once some argument of `sin` or `cos`
-    /// was outside the inline range (an `i8`).
-    out_of_range: Option<Value>,
-}
-
-/// How a function treats arguments of `sin` and `cos` beyond
-/// [`trig::INLINE_MAX`] (and non-finite ones).
-#[derive(Clone, Copy)]
-enum Trig {
-    /// At each call site, a cold branch calls the library.
-    Checked,
-    /// Inline code only, so that no call clobbers registers in the hot path;
-    /// if any argument was out of range, the function ends by calling this
-    /// function (the [`Trig::Checked`] version of the same tape), which
-    /// computes every output again. Each result is the same bits either way.
-    Deferred(FuncId),
 }
 
 impl Translator<'_, '_> {
@@ -228,17 +213,6 @@ impl Translator<'_, '_> {
     /// ([`trig::sin_cos`]) for `|x| <` [`trig::INLINE_MAX`], calls to the
     /// wrappers in a cold block otherwise (large, infinite or NaN `x`).
     fn sin_cos(&mut self, x: Value, want: [bool; 2]) -> Result<[Option<Value>; 2], JitError> {
-        if let Trig::Deferred(_) = self.trig {
-            let ax = self.b.ins().fabs(x);
-            let bound = self.b.ins().f64const(trig::INLINE_MAX);
-            let out = self.b.ins().fcmp(FloatCC::UnorderedOrGreaterThanOrEqual, ax, bound);
-            self.out_of_range = Some(match self.out_of_range {
-                Some(before) => self.b.ins().bor(before, out),
-                None => out,
-            });
-            let (s, c) = trig::sin_cos(&mut self.b, x);
-            return Ok([want[0].then_some(s), want[1].then_some(c)]);
-        }
         let (inline, library, done) = (self.b.create_block(), self.b.create_block(), self.b.create_block());
         let results: Vec<Value> =
             want.iter().filter(|&&w| w).map(|_| self.b.append_block_param(done, types::F64)).collect();
@@ -429,18 +403,6 @@ impl Translator<'_, '_> {
                 }
             }
         }
-        if let (Trig::Deferred(checked), Some(out_of_range)) = (self.trig, self.out_of_range) {
-            let (again, done) = (self.b.create_block(), self.b.create_block());
-            self.b.ins().brif(out_of_range, again, &[], done, &[]);
-            self.b.set_cold_block(again);
-            self.b.switch_to_block(again);
-            self.b.seal_block(again);
-            let f = self.module.declare_func_in_func(checked, self.b.func);
-            self.b.ins().call(f, &[inputs, outputs]);
-            self.b.ins().jump(done, &[]);
-            self.b.switch_to_block(done);
-            self.b.seal_block(done);
-        }
         self.b.ins().return_(&[]);
         Ok(())
     }
@@ -505,7 +467,7 @@ pub(crate) fn codegen(e: impl std::fmt::Display) -> JitError {
 }
 
 /// Defines function `id` of `module` with signature `sig` as the code of `tape`.
-fn define(module: &mut JITModule, id: FuncId, sig: &Signature, tape: &Tape, trig: Trig) -> Result<(), JitError> {
+fn define(module: &mut JITModule, id: FuncId, sig: &Signature, tape: &Tape) -> Result<(), JitError> {
     let mut ctx = module.make_context();
     ctx.func.signature = sig.clone();
     ctx.func.name = UserFuncName::user(0, id.as_u32());
@@ -517,7 +479,7 @@ fn define(module: &mut JITModule, id: FuncId, sig: &Signature, tape: &Tape, trig
         b.switch_to_block(entry);
         b.seal_block(entry);
         let (inputs, outputs) = (b.block_params(entry)[0], b.block_params(entry)[1]);
-        let mut t = Translator { module, b, imports: FxHashMap::default(), trig, out_of_range: None };
+        let mut t = Translator { module, b, imports: FxHashMap::default() };
         t.body(tape, inputs, outputs)?;
         let config = t.module.target_config();
         t.b.finalize(config);
@@ -532,7 +494,9 @@ impl Compiled {
     /// outputs. Fails only when cranelift does not support the host (the
     /// caller then keeps using [`Tape::eval`]).
     pub fn new(tape: &Tape) -> Result<Compiled, JitError> {
-        let mut jb = JITBuilder::with_isa(host_isa(tape.len() <= OPTIMIZE_MAX_OPS)?, default_libcall_names());
+        let trig = tape.ops().iter().any(|op| matches!(op, Op::Func(Func::Sin | Func::Cos, _)));
+        let optimize = tape.len() <= OPTIMIZE_MAX_OPS && !trig;
+        let mut jb = JITBuilder::with_isa(host_isa(optimize)?, default_libcall_names());
         for f in Func::ALL {
             let (name, ptr) = unary(f);
             jb.symbol(name, ptr);
@@ -545,19 +509,8 @@ impl Compiled {
         let mut sig: Signature = module.make_signature();
         sig.params.push(AbiParam::new(ptr));
         sig.params.push(AbiParam::new(ptr));
-        // With sines or cosines, two functions: the one called, with inline
-        // code only, and the one it falls back to (see `Trig`). Beyond
-        // `OPTIMIZE_MAX_OPS`, where compile time matters most, only the second.
-        let trig = tape.ops().iter().any(|op| matches!(op, Op::Func(Func::Sin | Func::Cos, _)));
-        let checked = module.declare_function("tape_checked", Linkage::Local, &sig).map_err(codegen)?;
-        define(&mut module, checked, &sig, tape, Trig::Checked)?;
-        let id = if trig && tape.len() <= OPTIMIZE_MAX_OPS {
-            let id = module.declare_function("tape", Linkage::Local, &sig).map_err(codegen)?;
-            define(&mut module, id, &sig, tape, Trig::Deferred(checked))?;
-            id
-        } else {
-            checked
-        };
+        let id = module.declare_function("tape", Linkage::Local, &sig).map_err(codegen)?;
+        define(&mut module, id, &sig, tape)?;
         module.finalize_definitions().map_err(codegen)?;
         let code = module.get_finalized_function(id);
         // SAFETY: `code` is the entry of the function just defined with

@@ -396,8 +396,7 @@ pub(super) mod tests {
     }
 
     /// A sine is the same bits in a tape alone, next to an argument out of
-    /// range (then the function falls back to per-site checks), and in a tape
-    /// long enough to be compiled with per-site checks only.
+    /// range, and in a tape long enough to be compiled without the optimizer.
     #[test]
     fn results_do_not_depend_on_the_rest_of_the_tape() {
         let mut pool = Pool::default();
