@@ -70,13 +70,15 @@ pub(crate) fn propagate(
             }
             return;
         }
-        // Per lane: the norms of the state and of the last two orders, and
-        // whether any coefficient is not finite (one pass over the series).
-        let norm = |k: usize| {
+        // Per lane: the ratios of the last two orders to the state (component by
+        // component, see `num::taylor_ratio`), and whether every coefficient is
+        // finite (one pass over the series).
+        let floor = config.atol / config.rtol;
+        let ratio = |k: usize| {
             let mut m = [0.0f64; LANES];
-            for c in &scratch[k * dim..(k + 1) * dim] {
+            for (c, y) in scratch[k * dim..(k + 1) * dim].iter().zip(&scratch[..dim]) {
                 for l in 0..LANES {
-                    m[l] = m[l].max(c[l].abs());
+                    m[l] = m[l].max(c[l].abs() / y[l].abs().max(floor));
                 }
             }
             m
@@ -87,7 +89,7 @@ pub(crate) fn propagate(
                 finite[l] &= c[l].is_finite();
             }
         }
-        let (norm0, before_last, last) = (norm(0), norm(p - 1), norm(p));
+        let (before_last, last) = (ratio(p - 1), ratio(p));
         let mut h = [0.0; LANES];
         for l in 0..LANES {
             if !live[l] {
@@ -103,7 +105,7 @@ pub(crate) fn propagate(
                     Some(format!("maximal number of steps ({}) reached at t = {}", config.max_steps, batch.t[l]));
                 continue;
             }
-            let mut step = taylor_step(p, norm0[l], before_last[l], last[l], config.rtol, config.atol);
+            let mut step = taylor_step(p, before_last[l], last[l]);
             if let Some(h_max) = config.h_max {
                 step = step.min(h_max);
             }

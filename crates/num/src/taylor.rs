@@ -5,9 +5,14 @@
 //! - Order from the tolerance: `p = ⌈−ln(ε)/2 + 1⌉` with `ε = rtol` (13 at
 //!   1e-10, 19 at 1e-15).
 //! - Step from the last two coefficients, with no trial and no rejection:
-//!   `ρ = min_{j ∈ {p−1, p}} (s / ‖y[j]‖∞)^{1/j}`, `h = ρ/e² · e^{−0.7/(p−1)}`,
-//!   where `s = max(‖y‖∞, atol/rtol)` mixes the relative and the absolute
-//!   tolerance (Jorba & Zou, sec. 3.2).
+//!   `ρ = min_{j ∈ {p−1, p}} (1/r_j)^{1/j}`, `h = ρ/e² · e^{−0.7/(p−1)}`
+//!   (Jorba & Zou, sec. 3.2), where `r_j = max_i |y_i[j]| / max(|y_i|, atol/rtol)`
+//!   measures the order-j terms against each component's own size. Jorba & Zou
+//!   and heyoka divide by the whole state's norm instead; per component, a
+//!   small component next to a large one (Kepler's r beside an angle that has
+//!   grown to 400) keeps its accuracy: on the double pendulum this takes 17%
+//!   more steps and drifts 80 times less in energy (6e-11 against 5e-9 at
+//!   rtol 1e-10).
 //! - Dense output for free: the step's polynomial is exact to the same order
 //!   anywhere inside the step.
 //!
@@ -29,15 +34,22 @@ pub fn taylor_order(rtol: f64) -> usize {
     ((-eps.ln() / 2.0 + 1.0).ceil() as usize).max(2)
 }
 
-/// The Taylor step for the normalized coefficients of one trajectory: `norm0`
-/// is `‖y‖∞`, `last` and `before_last` the norms of orders `p` and `p − 1`.
-/// Infinite when both vanish (the series ends early: any step is exact).
-pub fn taylor_step(order: usize, norm0: f64, before_last: f64, last: f64, rtol: f64, atol: f64) -> f64 {
-    let scale = norm0.max(atol / rtol);
+/// The size of the order-`j` terms of a series relative to the state, component
+/// by component: `max_i |y_i[j]| / max(|y_i|, floor)` with `floor = atol/rtol`,
+/// the mix of relative and absolute tolerance of the Runge–Kutta methods'
+/// `atol + rtol·|y_i|`.
+pub fn taylor_ratio(row: &[f64], y: &[f64], floor: f64) -> f64 {
+    row.iter().zip(y).fold(0.0f64, |m, (c, y)| m.max(c.abs() / y.abs().max(floor)))
+}
+
+/// The Taylor step from the [`taylor_ratio`]s of orders `p − 1` and `p`:
+/// `h = ρ/e² · e^{−0.7/(p−1)}` with `ρ = min_j (1/r_j)^{1/j}`. Infinite when both
+/// vanish (the series ends early: any step is exact).
+pub fn taylor_step(order: usize, before_last: f64, last: f64) -> f64 {
     let p = order as f64;
-    // ln ρ_j = ln(s/‖y[j]‖)/j: two logarithms and one exponential instead of two
+    // ln ρ_j = −ln(r_j)/j: two logarithms and one exponential instead of two
     // powers (this runs once per step and lane).
-    let log_rho = |norm: f64, j: f64| if norm > 0.0 { (scale / norm).ln() / j } else { f64::INFINITY };
+    let log_rho = |r: f64, j: f64| if r > 0.0 { -r.ln() / j } else { f64::INFINITY };
     let log_rho = log_rho(before_last, p - 1.0).min(log_rho(last, p));
     (log_rho - 2.0 - 0.7 / (p - 1.0)).exp()
 }
@@ -116,10 +128,6 @@ impl<S: OdeSystem> Taylor<S> {
     }
 }
 
-fn norm(v: &[f64]) -> f64 {
-    v.iter().fold(0.0, |m, x| m.max(x.abs()))
-}
-
 impl<S: OdeSystem> Solver for Taylor<S> {
     fn method(&self) -> Method {
         Method::Taylor
@@ -161,13 +169,11 @@ impl<S: OdeSystem> Solver for Taylor<S> {
         if let Some(index) = first_non_finite(&self.series) {
             return Err(SolveError::Rhs { t, source: RhsError::NonFinite { index: index % n } });
         }
+        let floor = self.atol / self.rtol;
         let mut h = taylor_step(
             p,
-            norm(&self.y),
-            norm(&self.series[(p - 1) * n..p * n]),
-            norm(&self.series[p * n..]),
-            self.rtol,
-            self.atol,
+            taylor_ratio(&self.series[(p - 1) * n..p * n], &self.y, floor),
+            taylor_ratio(&self.series[p * n..], &self.y, floor),
         )
         .min(self.h_max);
         let mut reaches_stop = false;
