@@ -621,23 +621,8 @@ pub fn sweep(
                             .iter()
                             .map(|&run| {
                                 let inputs = grid.point(run);
-                                let start = match derivation {
-                                    Some(derivation) => {
-                                        for (value, target) in inputs.iter().zip(&grid.targets) {
-                                            if let Target::Parameter(k) = *target {
-                                                derivation.model.parameters[k].value = *value;
-                                            }
-                                        }
-                                        let values: Vec<f64> =
-                                            derivation.model.parameters.iter().map(|p| p.value).collect();
-                                        initial_values(&derivation.model)
-                                            .and_then(|base| complete(&base, grid, &inputs, &derivation.model))
-                                            .map(|(q, qd)| (q, qd, values))
-                                    }
-                                    None => complete(&base, grid, &inputs, &d.model)
-                                        .map(|(q, qd)| (q, qd, d.model.parameters.iter().map(|p| p.value).collect())),
-                                };
-                                (run, inputs, start.map_err(|e| e.message))
+                                let start = start_of(&inputs, grid, &base, d, derivation.as_mut());
+                                (run, inputs, start)
                             })
                             .collect();
                         let rows = plan.run_batch(series, sys, scratch, n, starts);
@@ -655,29 +640,14 @@ pub fn sweep(
                 || (system.clone(), system.clone(), has_parameters.then(|| d.clone())),
                 |(sys, twin, derivation), &run| {
                     let inputs = grid.point(run);
-                    let outcome = match derivation {
-                        Some(derivation) => {
-                            for (value, target) in inputs.iter().zip(&grid.targets) {
-                                if let Target::Parameter(k) = *target {
-                                    derivation.model.parameters[k].value = *value;
-                                }
-                            }
-                            initial_values(&derivation.model)
-                                .and_then(|values| complete(&values, grid, &inputs, &derivation.model))
-                                .map_err(|e| e.message)
-                                .map(|(q, qd)| {
-                                    // The tapes take the parameters as inputs: no recompilation.
-                                    let values: Vec<f64> =
-                                        derivation.model.parameters.iter().map(|p| p.value).collect();
-                                    sys.set_parameters(&values);
-                                    twin.set_parameters(&values);
-                                    plan.run(sys, twin, &q, &qd)
-                                })
+                    let outcome = start_of(&inputs, grid, &base, d, derivation.as_mut()).map(|(q, qd, values)| {
+                        if has_parameters {
+                            // The tapes take the parameters as inputs: no recompilation.
+                            sys.set_parameters(&values);
+                            twin.set_parameters(&values);
                         }
-                        None => complete(&base, grid, &inputs, &d.model)
-                            .map_err(|e| e.message)
-                            .map(|(q, qd)| plan.run(sys, twin, &q, &qd)),
-                    };
+                        plan.run(sys, twin, &q, &qd)
+                    });
                     progress();
                     row(run, inputs, n, outcome)
                 },
@@ -750,6 +720,35 @@ fn row(run: usize, inputs: Vec<f64>, n: usize, outcome: Result<RunOutcome, Strin
     values.push(outcome.energy_drift);
     values.push(outcome.lyapunov);
     TableRow { run, values, failure: outcome.failure.unwrap_or_default() }
+}
+
+/// The initial (q, q') of a run at grid point `inputs` and its parameter values:
+/// from `base` and `d`'s model, or, for grids over parameters, from `derivation`
+/// (a worker's copy) with the grid's parameters set.
+fn start_of(
+    inputs: &[f64],
+    grid: &Grid,
+    base: &Initial,
+    d: &Derivation,
+    derivation: Option<&mut Derivation>,
+) -> Result<Begin, String> {
+    let start = match derivation {
+        Some(derivation) => {
+            for (value, target) in inputs.iter().zip(&grid.targets) {
+                if let Target::Parameter(k) = *target {
+                    derivation.model.parameters[k].value = *value;
+                }
+            }
+            let model = &derivation.model;
+            initial_values(model).and_then(|base| complete(&base, grid, inputs, model)).map(|(q, qd)| {
+                let values = model.parameters.iter().map(|p| p.value).collect();
+                (q, qd, values)
+            })
+        }
+        None => complete(base, grid, inputs, &d.model)
+            .map(|(q, qd)| (q, qd, d.model.parameters.iter().map(|p| p.value).collect())),
+    };
+    start.map_err(|e| e.message)
 }
 
 /// The `[initial]` values of a model at its current parameter values (None where not given).
@@ -987,9 +986,11 @@ impl Plan<'_> {
     }
 }
 
-/// A run of a batch: its index, its grid inputs, and its initial (q, q') with
-/// its parameter values, or why it cannot start.
-type Start = (usize, Vec<f64>, Result<(Vec<f64>, Vec<f64>, Vec<f64>), String>);
+/// A run's initial q, q' and parameter values.
+type Begin = (Vec<f64>, Vec<f64>, Vec<f64>);
+
+/// A run of a batch: its index, its grid inputs, and how it begins, or why it cannot.
+type Start = (usize, Vec<f64>, Result<Begin, String>);
 
 impl Plan<'_> {
     /// The runs of one batch with the Taylor method in lock step

@@ -186,63 +186,89 @@ pub(crate) const ATAN2: &str = "lagrange_atan2";
 struct Translator<'a, 'b> {
     module: &'a mut JITModule,
     b: FunctionBuilder<'b>,
-    /// Imported wrappers already declared in this function, by symbol.
-    imports: FxHashMap<&'static str, FuncRef>,
+    imports: Imports,
 }
 
-impl Translator<'_, '_> {
+/// The wrappers a function calls, each declared in it once.
+#[derive(Default)]
+pub(crate) struct Imports(FxHashMap<&'static str, FuncRef>);
+
+impl Imports {
     /// Calls the wrapper `name` taking `args.len()` floats and returning one.
-    fn call(&mut self, name: &'static str, args: &[Value]) -> Result<Value, JitError> {
-        let f = match self.imports.get(name) {
+    pub(crate) fn call(
+        &mut self,
+        module: &mut JITModule,
+        b: &mut FunctionBuilder<'_>,
+        name: &'static str,
+        args: &[Value],
+    ) -> Result<Value, JitError> {
+        let f = match self.0.get(name) {
             Some(&f) => f,
             None => {
-                let mut sig = self.module.make_signature();
+                let mut sig = module.make_signature();
                 sig.params.extend(args.iter().map(|_| AbiParam::new(types::F64)));
                 sig.returns.push(AbiParam::new(types::F64));
-                let id = self.module.declare_function(name, Linkage::Import, &sig).map_err(codegen)?;
-                let f = self.module.declare_func_in_func(id, self.b.func);
-                self.imports.insert(name, f);
+                let id = module.declare_function(name, Linkage::Import, &sig).map_err(codegen)?;
+                let f = module.declare_func_in_func(id, b.func);
+                self.0.insert(name, f);
                 f
             }
         };
-        let call = self.b.ins().call(f, args);
-        Ok(self.b.inst_results(call)[0])
+        let call = b.ins().call(f, args);
+        Ok(b.inst_results(call)[0])
     }
 
     /// `sin x` and `cos x`, those of the two that `want` asks for: inline
     /// ([`trig::sin_cos`]) for `|x| <` [`trig::INLINE_MAX`], calls to the
     /// wrappers in a cold block otherwise (large, infinite or NaN `x`).
-    fn sin_cos(&mut self, x: Value, want: [bool; 2]) -> Result<[Option<Value>; 2], JitError> {
-        let (inline, library, done) = (self.b.create_block(), self.b.create_block(), self.b.create_block());
-        let results: Vec<Value> =
-            want.iter().filter(|&&w| w).map(|_| self.b.append_block_param(done, types::F64)).collect();
-        let ax = self.b.ins().fabs(x);
-        let bound = self.b.ins().f64const(trig::INLINE_MAX);
-        let in_range = self.b.ins().fcmp(FloatCC::LessThan, ax, bound);
-        self.b.ins().brif(in_range, inline, &[], library, &[]);
-        self.b.set_cold_block(library);
+    pub(crate) fn sin_cos(
+        &mut self,
+        module: &mut JITModule,
+        b: &mut FunctionBuilder<'_>,
+        x: Value,
+        want: [bool; 2],
+    ) -> Result<[Option<Value>; 2], JitError> {
+        let (inline, library, done) = (b.create_block(), b.create_block(), b.create_block());
+        let results: Vec<Value> = want.iter().filter(|&&w| w).map(|_| b.append_block_param(done, types::F64)).collect();
+        let ax = b.ins().fabs(x);
+        let bound = b.ins().f64const(trig::INLINE_MAX);
+        let in_range = b.ins().fcmp(FloatCC::LessThan, ax, bound);
+        b.ins().brif(in_range, inline, &[], library, &[]);
+        b.set_cold_block(library);
 
-        self.b.switch_to_block(inline);
-        self.b.seal_block(inline);
-        let (s, c) = trig::sin_cos(&mut self.b, x);
+        b.switch_to_block(inline);
+        b.seal_block(inline);
+        let (s, c) = trig::sin_cos(b, x);
         let args: Vec<BlockArg> =
             [s, c].into_iter().zip(want).filter(|&(_, w)| w).map(|(v, _)| BlockArg::Value(v)).collect();
-        self.b.ins().jump(done, &args);
+        b.ins().jump(done, &args);
 
-        self.b.switch_to_block(library);
-        self.b.seal_block(library);
+        b.switch_to_block(library);
+        b.seal_block(library);
         let mut args = Vec::with_capacity(2);
         for (f, w) in [Func::Sin, Func::Cos].into_iter().zip(want) {
             if w {
-                args.push(BlockArg::Value(self.call(unary(f).0, &[x])?));
+                args.push(BlockArg::Value(self.call(module, b, unary(f).0, &[x])?));
             }
         }
-        self.b.ins().jump(done, &args);
+        b.ins().jump(done, &args);
 
-        self.b.switch_to_block(done);
-        self.b.seal_block(done);
+        b.switch_to_block(done);
+        b.seal_block(done);
         let mut results = results.into_iter();
         Ok(want.map(|w| if w { results.next() } else { None }))
+    }
+}
+
+impl Translator<'_, '_> {
+    /// Calls the wrapper `name` taking `args.len()` floats and returning one.
+    fn call(&mut self, name: &'static str, args: &[Value]) -> Result<Value, JitError> {
+        self.imports.call(self.module, &mut self.b, name, args)
+    }
+
+    /// `sin x` and `cos x`, those of the two that `want` asks for ([`Imports::sin_cos`]).
+    fn sin_cos(&mut self, x: Value, want: [bool; 2]) -> Result<[Option<Value>; 2], JitError> {
+        self.imports.sin_cos(self.module, &mut self.b, x, want)
     }
 
     /// `x^n` by binary exponentiation: the multiplications of `f64::powi`
@@ -479,7 +505,7 @@ fn define(module: &mut JITModule, id: FuncId, sig: &Signature, tape: &Tape) -> R
         b.switch_to_block(entry);
         b.seal_block(entry);
         let (inputs, outputs) = (b.block_params(entry)[0], b.block_params(entry)[1]);
-        let mut t = Translator { module, b, imports: FxHashMap::default() };
+        let mut t = Translator { module, b, imports: Imports::default() };
         t.body(tape, inputs, outputs)?;
         let config = t.module.target_config();
         t.b.finalize(config);

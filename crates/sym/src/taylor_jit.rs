@@ -18,15 +18,14 @@
 #![allow(unsafe_code)]
 
 use crate::expr::Func;
-use crate::jit::{codegen, host_isa, lagrange_atan2, lagrange_powf, offset, trig, unary, JitError, ATAN2, POWF};
+use crate::jit::{codegen, host_isa, lagrange_atan2, lagrange_powf, offset, unary, Imports, JitError, ATAN2, POWF};
 use crate::taylor::{TaylorTape, T};
 use cranelift_codegen::ir::{
-    condcodes::FloatCC, types, AbiParam, BlockArg, FuncRef, InstBuilder, MemFlagsData, UserFuncName, Value,
+    condcodes::FloatCC, types, AbiParam, InstBuilder, MemFlagsData, Signature, UserFuncName, Value,
 };
 use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
 use cranelift_jit::{JITBuilder, JITModule};
-use cranelift_module::{default_libcall_names, Linkage, Module};
-use rustc_hash::FxHashMap;
+use cranelift_module::{default_libcall_names, FuncId, Linkage, Module};
 use std::sync::{Mutex, PoisonError};
 
 type OrderFn = unsafe extern "C" fn(coef: *mut f64);
@@ -58,7 +57,7 @@ pub(crate) const NATIVE_MAX_WORK: usize = 60_000;
 struct Emitter<'a, 'b, const L: usize> {
     module: &'a mut JITModule,
     b: FunctionBuilder<'b>,
-    imports: FxHashMap<&'static str, FuncRef>,
+    imports: Imports,
     base: Value,
     stride: usize,
     width: usize,
@@ -130,48 +129,17 @@ impl<const L: usize> Emitter<'_, '_, L> {
     }
 
     fn call(&mut self, name: &'static str, args: &[Value]) -> Result<Value, JitError> {
-        let f = match self.imports.get(name) {
-            Some(&f) => f,
-            None => {
-                let mut sig = self.module.make_signature();
-                sig.params.extend(args.iter().map(|_| AbiParam::new(types::F64)));
-                sig.returns.push(AbiParam::new(types::F64));
-                let id = self.module.declare_function(name, Linkage::Import, &sig).map_err(codegen)?;
-                let f = self.module.declare_func_in_func(id, self.b.func);
-                self.imports.insert(name, f);
-                f
-            }
-        };
-        let call = self.b.ins().call(f, args);
-        Ok(self.b.inst_results(call)[0])
+        self.imports.call(self.module, &mut self.b, name, args)
     }
 
     fn func(&mut self, f: Func, x: Value) -> Result<Value, JitError> {
         self.call(unary(f).0, &[x])
     }
 
-    /// `(sin x, cos x)` as `Compiled` computes them: inline from one reduction
-    /// ([`trig::sin_cos`]) for `|x| <` [`trig::INLINE_MAX`], library calls in a
-    /// cold block otherwise (huge, infinite or NaN `x`).
+    /// `(sin x, cos x)` as `Compiled` computes them ([`Imports::sin_cos`]).
     fn sin_cos(&mut self, x: Value) -> Result<(Value, Value), JitError> {
-        let (inline, library, done) = (self.b.create_block(), self.b.create_block(), self.b.create_block());
-        let (sin, cos) = (self.b.append_block_param(done, types::F64), self.b.append_block_param(done, types::F64));
-        let ax = self.b.ins().fabs(x);
-        let bound = self.b.ins().f64const(trig::INLINE_MAX);
-        let in_range = self.b.ins().fcmp(FloatCC::LessThan, ax, bound);
-        self.b.ins().brif(in_range, inline, &[], library, &[]);
-        self.b.set_cold_block(library);
-        self.b.switch_to_block(inline);
-        self.b.seal_block(inline);
-        let (s, c) = trig::sin_cos(&mut self.b, x);
-        self.b.ins().jump(done, &[BlockArg::Value(s), BlockArg::Value(c)]);
-        self.b.switch_to_block(library);
-        self.b.seal_block(library);
-        let (s, c) = (self.func(Func::Sin, x)?, self.func(Func::Cos, x)?);
-        self.b.ins().jump(done, &[BlockArg::Value(s), BlockArg::Value(c)]);
-        self.b.switch_to_block(done);
-        self.b.seal_block(done);
-        Ok((sin, cos))
+        let [s, c] = self.imports.sin_cos(self.module, &mut self.b, x, [true, true])?;
+        Ok((s.expect("asked for"), c.expect("asked for")))
     }
 
     /// `acc + x·y`, fused where the host has FMA (one rounding; the
@@ -753,32 +721,9 @@ impl NativeTaylor {
         layout: &SecondOrderLayout,
         ks: std::ops::Range<usize>,
     ) -> Result<(JITModule, OrderFn), JitError> {
-        let order = tape.order();
         let mut module = new_module()?;
-        let ptr = module.target_config().pointer_type();
-        let mut sig = module.make_signature();
-        sig.params.push(AbiParam::new(ptr));
-        let id = module.declare_function("expand", Linkage::Local, &sig).map_err(codegen)?;
-        let mut ctx = module.make_context();
-        let mut fctx = FunctionBuilderContext::new();
-        ctx.func.signature = sig;
-        ctx.func.name = UserFuncName::user(0, id.as_u32());
-        {
-            let mut b = FunctionBuilder::new(&mut ctx.func, &mut fctx);
-            let entry = b.create_block();
-            b.append_block_params_for_function_params(entry);
-            b.switch_to_block(entry);
-            b.seal_block(entry);
-            let base = b.block_params(entry)[0];
-            let mut e = Emitter::<L> {
-                module: &mut module,
-                b,
-                imports: FxHashMap::default(),
-                base,
-                stride: order + 1,
-                width: 1,
-                fma: host_has_fma(),
-            };
+        let sig = signature(&module);
+        let id = define::<L>(&mut module, "expand", &sig, tape.order(), |e| {
             for k in ks {
                 e.orders(tape.program(), k)?;
                 if k == 0 {
@@ -786,12 +731,8 @@ impl NativeTaylor {
                 }
                 e.couple(layout, k)?;
             }
-            e.b.ins().return_(&[]);
-            let config = e.module.target_config();
-            e.b.finalize(config);
-        }
-        module.define_function(id, &mut ctx).map_err(codegen)?;
-        module.clear_context(&mut ctx);
+            Ok(())
+        })?;
         module.finalize_definitions().map_err(codegen)?;
         let code = module.get_finalized_function(id);
         // SAFETY: as in `NativeTaylor::new`: a function of signature `(ptr) -> ()`
@@ -805,40 +746,10 @@ impl NativeTaylor {
     pub(crate) fn new<const L: usize>(tape: &TaylorTape<L>) -> Result<NativeTaylor, JitError> {
         let order = tape.order();
         let mut module = new_module()?;
-        let ptr = module.target_config().pointer_type();
-        let mut sig = module.make_signature();
-        sig.params.push(AbiParam::new(ptr));
+        let sig = signature(&module);
         let mut ids = Vec::with_capacity(order + 1);
-        let mut ctx = module.make_context();
-        let mut fctx = FunctionBuilderContext::new();
         for k in 0..=order {
-            let id = module.declare_function(&format!("order{k}"), Linkage::Local, &sig).map_err(codegen)?;
-            ctx.func.signature = sig.clone();
-            ctx.func.name = UserFuncName::user(0, id.as_u32());
-            {
-                let mut b = FunctionBuilder::new(&mut ctx.func, &mut fctx);
-                let entry = b.create_block();
-                b.append_block_params_for_function_params(entry);
-                b.switch_to_block(entry);
-                b.seal_block(entry);
-                let base = b.block_params(entry)[0];
-                let mut e = Emitter::<L> {
-                    module: &mut module,
-                    b,
-                    imports: FxHashMap::default(),
-                    base,
-                    stride: order + 1,
-                    width: 1,
-                    fma: host_has_fma(),
-                };
-                e.orders(tape.program(), k)?;
-                e.b.ins().return_(&[]);
-                let config = e.module.target_config();
-                e.b.finalize(config);
-            }
-            module.define_function(id, &mut ctx).map_err(codegen)?;
-            module.clear_context(&mut ctx);
-            ids.push(id);
+            ids.push(define::<L>(&mut module, &format!("order{k}"), &sig, order, |e| e.orders(tape.program(), k))?);
         }
         module.finalize_definitions().map_err(codegen)?;
         let funcs = ids
@@ -884,6 +795,52 @@ impl NativeTaylor {
             self.run(k, coef);
         }
     }
+}
+
+/// The signature of every function here: `(coefficients: *mut f64) -> ()`.
+fn signature(module: &JITModule) -> Signature {
+    let mut sig = module.make_signature();
+    sig.params.push(AbiParam::new(module.target_config().pointer_type()));
+    sig
+}
+
+/// Declares and defines function `name` of `module`, its body emitted by `body`.
+fn define<const L: usize>(
+    module: &mut JITModule,
+    name: &str,
+    sig: &Signature,
+    order: usize,
+    body: impl FnOnce(&mut Emitter<'_, '_, L>) -> Result<(), JitError>,
+) -> Result<FuncId, JitError> {
+    let id = module.declare_function(name, Linkage::Local, sig).map_err(codegen)?;
+    let mut ctx = module.make_context();
+    ctx.func.signature = sig.clone();
+    ctx.func.name = UserFuncName::user(0, id.as_u32());
+    let mut fctx = FunctionBuilderContext::new();
+    {
+        let mut b = FunctionBuilder::new(&mut ctx.func, &mut fctx);
+        let entry = b.create_block();
+        b.append_block_params_for_function_params(entry);
+        b.switch_to_block(entry);
+        b.seal_block(entry);
+        let base = b.block_params(entry)[0];
+        let mut e = Emitter::<L> {
+            module,
+            b,
+            imports: Imports::default(),
+            base,
+            stride: order + 1,
+            width: 1,
+            fma: host_has_fma(),
+        };
+        body(&mut e)?;
+        e.b.ins().return_(&[]);
+        let config = e.module.target_config();
+        e.b.finalize(config);
+    }
+    module.define_function(id, &mut ctx).map_err(codegen)?;
+    module.clear_context(&mut ctx);
+    Ok(id)
 }
 
 /// A JIT module with the elementary functions' wrappers as symbols.
