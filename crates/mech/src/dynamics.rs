@@ -83,20 +83,38 @@ impl Kernel {
     }
 }
 
-/// A kernel compiled when it is first evaluated; clones share the native code
+/// A kernel compiled when it is first needed; clones share the native code
 /// (compiled once for all of them), each keeps its own tape for the fallback.
+///
+/// With a warm-up of `n`, each clone interprets its first `n` evaluations and
+/// compiles only then: a group evaluated a thousand times in a run (the
+/// invariants at the output samples) costs less interpreted than compiled. The
+/// native code agrees with the tape to rounding (an ulp in sin and cos).
 #[derive(Debug, Clone)]
 pub(crate) struct LazyKernel {
     tape: Tape,
     native: Arc<OnceLock<Option<Arc<Compiled>>>>,
+    warm_up: usize,
 }
+
+/// Evaluations of the invariants interpreted before they are compiled: about
+/// the cost of compiling them for a small model.
+const INVARIANTS_WARM_UP: usize = 4000;
 
 impl LazyKernel {
     fn new(tape: Tape) -> LazyKernel {
-        LazyKernel { tape, native: Arc::new(OnceLock::new()) }
+        LazyKernel::with_warm_up(tape, 0)
     }
 
-    fn eval(&mut self, inputs: &[f64], outputs: &mut [f64]) {
+    fn with_warm_up(tape: Tape, warm_up: usize) -> LazyKernel {
+        LazyKernel { tape, native: Arc::new(OnceLock::new()), warm_up }
+    }
+
+    pub(crate) fn eval(&mut self, inputs: &[f64], outputs: &mut [f64]) {
+        if self.warm_up > 0 {
+            self.warm_up -= 1;
+            return self.tape.eval(inputs, outputs);
+        }
         match self.native.get_or_init(|| Compiled::new(&self.tape).ok().map(Arc::new)) {
             Some(native) => native.eval(inputs, outputs),
             None => self.tape.eval(inputs, outputs),
@@ -137,7 +155,7 @@ pub struct Dynamics {
     /// The stored entries of M.
     pattern: MassPattern,
     /// Outputs M's stored entries (`pattern`) and `f` (n) from `[q, q', t, params]`.
-    mass_forcing: Kernel,
+    mass_forcing: LazyKernel,
     /// The tape of `mass_forcing`, for Taylor expansions ([`crate::series`]).
     mass_forcing_tape: Arc<Tape>,
     /// Hamilton's form, two kernels: M's stored entries and `b` (n) from `[q, t, params]`
@@ -147,7 +165,7 @@ pub struct Dynamics {
     /// Scratch for [`Dynamics::eval_mass_forcing`].
     scratch: Vec<f64>,
     /// Outputs the invariants from `[q, q', t, params]`.
-    invariants_tape: Kernel,
+    invariants_tape: LazyKernel,
     invariants: Vec<Invariant>,
     /// Whether H = ½pᵀM⁻¹p + V(q, t) with M constant.
     separable: bool,
@@ -189,7 +207,8 @@ impl Dynamics {
         outs.extend(&d.forcing);
         let mass_forcing_tape =
             Arc::new(Tape::compile(pool, &outs, &input_syms).expect("derivation symbols are inputs"));
-        let mass_forcing = Kernel::new((*mass_forcing_tape).clone());
+        // Compiled on first use: a Taylor run never evaluates it.
+        let mass_forcing = LazyKernel::new((*mass_forcing_tape).clone());
 
         // Which symbols M and f contain, from one traversal each (a chain of a
         // thousand masses has a thousand entries and two thousand symbols).
@@ -226,8 +245,10 @@ impl Dynamics {
         let separable = quadratic && constant_mass && velocity_free_forcing && no_linear_momentum;
 
         let exprs: Vec<ExprId> = invariants.iter().map(|i| i.expr).collect();
-        let invariants_tape =
-            Kernel::new(Tape::compile(pool, &exprs, &input_syms).expect("derivation symbols are inputs"));
+        let invariants_tape = LazyKernel::with_warm_up(
+            Tape::compile(pool, &exprs, &input_syms).expect("derivation symbols are inputs"),
+            INVARIANTS_WARM_UP,
+        );
 
         Dynamics {
             n,

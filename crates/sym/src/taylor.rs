@@ -446,9 +446,13 @@ impl<const L: usize> TaylorTape<L> {
     /// The multiply-adds of one expansion on all lanes: `O(p)` for a linear
     /// instruction, `O(p²)` for a convolution. Native code is this long.
     fn native_work(&self) -> usize {
-        let (linear, quadratic) = (self.order + 1, (self.order + 1) * (self.order + 2) / 2);
-        let per_lane: usize = self
-            .program
+        (0..=self.order).map(|k| self.order_work(k)).sum::<usize>() * L
+    }
+
+    /// The multiply-adds of order `k` on one lane: one per linear instruction,
+    /// `k + 1` per convolution (two for the pairs and the quotients by a root).
+    pub(crate) fn order_work(&self, k: usize) -> usize {
+        self.program
             .iter()
             .map(|(_, op)| match op {
                 T::Add(..)
@@ -460,13 +464,13 @@ impl<const L: usize> TaylorTape<L> {
                 | T::MulC(..)
                 | T::DivVC(..)
                 | T::Abs(_)
+                | T::Deriv(_)
                 | T::CosOf
-                | T::Aux => linear,
-                T::Sin { .. } | T::Sinh { .. } | T::Tan { .. } | T::Asin { .. } | T::Atan2 { .. } => 2 * quadratic,
-                _ => quadratic,
+                | T::Aux => 1,
+                T::Sin { .. } | T::Sinh { .. } | T::Tan { .. } | T::Asin { .. } | T::Atan2 { .. } => 2 * (k + 1),
+                _ => k + 1,
             })
-            .sum();
-        per_lane * L
+            .sum()
     }
 
     /// Whether [`compute`](Self::compute) runs native code.

@@ -678,13 +678,14 @@ impl NativeTaylor {
         buffer_len: usize,
     ) -> Result<NativeTaylor, JitError> {
         let order = tape.order();
-        // Order k costs about k + 1 convolution terms per instruction: split at half the sum.
-        let total: usize = (1..=order).sum();
+        // Split where the work of the orders (each with its coupling) reaches half.
+        let work: Vec<usize> = (0..order).map(|k| tape.order_work(k) + layout.entries.len() * (k + 1)).collect();
+        let total: usize = work.iter().sum();
         let mut split = 0;
         let mut acc = 0;
-        while split < order && 2 * acc < total {
+        while split < order && 2 * (acc + work[split]) <= total {
+            acc += work[split];
             split += 1;
-            acc += split;
         }
         let parts: Vec<std::ops::Range<usize>> =
             if order >= 4 { vec![0..split, split..order] } else { std::iter::once(0..order).collect() };
