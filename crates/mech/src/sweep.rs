@@ -871,10 +871,10 @@ impl Plan<'_> {
             }
             let mut twin_y = cfg.lyapunov.then(|| perturbed(&y0));
             // The twin's solver: kept from segment to segment and restarted from
-            // the renormalized state by the methods that can (DOP853, DOPRI5);
+            // the renormalized state by the methods that can (DOP853, DOPRI5, Taylor);
             // built afresh every segment by the others.
             let mut twin = Twin::Fresh(twin_sys);
-            if let (Some(ty), Method::Dop853 | Method::Dopri5) = (twin_y.as_ref(), self.method) {
+            if let (Some(ty), Method::Dop853 | Method::Dopri5 | Method::Taylor) = (twin_y.as_ref(), self.method) {
                 if let Twin::Fresh(sys) = twin {
                     twin = match build(self.method, self.form, sys, 0.0, ty, &solver_config) {
                         Ok(s) => Twin::Kept(s),
