@@ -48,6 +48,8 @@ pub(crate) struct LagrangeSeries<const L: usize> {
     input_at: Vec<usize>,
     output_at: Vec<usize>,
     inverse: Inverse<L>,
+    /// Lanes whose M[0] could not be inverted in this expansion.
+    failed: [bool; L],
     /// The factorization behind an explicit inverse.
     lu: LinearSolver,
     /// Scratch: M on one lane, the right-hand side of one order.
@@ -97,6 +99,7 @@ impl<const L: usize> LagrangeSeries<L> {
             input_at,
             output_at,
             inverse,
+            failed: [false; L],
             lu: LinearSolver::new(n),
             mass: vec![0.0; n * n],
             column: vec![0.0; n],
@@ -204,6 +207,12 @@ impl<const L: usize> LagrangeSeries<L> {
                 }
                 Inverse::Lu(lu) => {
                     for (l, lu) in lu.iter().enumerate() {
+                        if self.failed[l] {
+                            for a in accel.iter_mut() {
+                                a[l] = f64::NAN;
+                            }
+                            continue;
+                        }
                         for i in 0..n {
                             self.column[i] = self.rhs[i][l];
                         }
@@ -224,19 +233,22 @@ impl<const L: usize> LagrangeSeries<L> {
         Ok(())
     }
 
-    /// Inverts (or factors) M[0] on every lane.
+    /// Inverts (or factors) M[0] on every lane. A single trajectory reports a
+    /// singular M as an error; in a batch, only that lane's series becomes NaN
+    /// (the batch then fails that lane alone).
     fn invert(&mut self) -> Result<(), RhsError> {
         let n = self.n;
+        self.failed = [false; L];
         let c = self.tape.coefficients();
         if let Inverse::Diagonal(d) = &mut self.inverse {
             for (m, &(i, _)) in self.entries.iter().enumerate() {
                 let v = c[self.output_at[m]];
-                if let Some(l) = v.iter().position(|&x| x == 0.0 || !x.is_finite()) {
+                if L == 1 && (v[0] == 0.0 || !v[0].is_finite()) {
                     return Err(RhsError::Singular {
-                        detail: format!("M[{i}][{i}] = {} on a diagonal mass matrix", v[l]),
+                        detail: format!("M[{i}][{i}] = {} on a diagonal mass matrix", v[0]),
                     });
                 }
-                d[i] = std::array::from_fn(|l| 1.0 / v[l]);
+                d[i] = std::array::from_fn(|l| if v[l] == 0.0 { f64::NAN } else { 1.0 / v[l] });
             }
             return Ok(());
         }
@@ -245,11 +257,10 @@ impl<const L: usize> LagrangeSeries<L> {
             for (m, &(i, j)) in self.entries.iter().enumerate() {
                 self.mass[i * n + j] = c[self.output_at[m]][lane];
             }
-            match &mut self.inverse {
+            let result = match &mut self.inverse {
                 Inverse::Diagonal(_) => unreachable!("handled above"),
-                Inverse::Lu(lu) => lu[lane].factor(&self.mass)?,
-                Inverse::Explicit(inv) => {
-                    self.lu.factor(&self.mass)?;
+                Inverse::Lu(lu) => lu[lane].factor(&self.mass),
+                Inverse::Explicit(inv) => self.lu.factor(&self.mass).and_then(|()| {
                     for col in 0..n {
                         self.column.fill(0.0);
                         self.column[col] = 1.0;
@@ -257,6 +268,18 @@ impl<const L: usize> LagrangeSeries<L> {
                         for row in 0..n {
                             inv[row * n + col][lane] = self.column[row];
                         }
+                    }
+                    Ok(())
+                }),
+            };
+            if let Err(e) = result {
+                if L == 1 {
+                    return Err(e.into());
+                }
+                self.failed[lane] = true;
+                if let Inverse::Explicit(inv) = &mut self.inverse {
+                    for x in inv.iter_mut() {
+                        x[lane] = f64::NAN;
                     }
                 }
             }
@@ -340,6 +363,28 @@ c = 0.5
         check(&pendulum(4), false, "interpreted");
         check(CHAIN, true, "whole");
         check(CHAIN, false, "interpreted");
+    }
+
+    #[test]
+    fn a_singular_mass_matrix_fails_its_lane_alone() {
+        // M = diag(1, x²) is singular at x = 0 (lane 1), regular elsewhere.
+        let text = "coordinates = [\"x\", \"y\"]\nlagrangian = \"x'^2/2 + x^2*y'^2/2 - x^2/2\"\n";
+        let mut d = Derivation::new(Model::parse(text, &[]).unwrap()).unwrap();
+        let dynamics = Dynamics::new(&mut d);
+        for native in [true, false] {
+            let mut s = dynamics.lagrange_series_with::<2>(6, native);
+            let y = [[1.0, 0.0], [0.0, 0.0], [0.5, 0.3], [0.2, 0.1]];
+            let mut out = vec![[0.0; 2]; 4 * 7];
+            s.expand([0.0; 2], &y, &mut out).unwrap();
+            assert!(out.iter().all(|c| c[0].is_finite()), "native {native}: {out:?}");
+            assert!(out.iter().any(|c| !c[1].is_finite()), "native {native}: {out:?}");
+            // One trajectory alone gets an error naming the singular matrix.
+            let mut one = dynamics.lagrange_series_with::<1>(6, native);
+            let y1 = [[0.0], [0.0], [0.3], [0.1]];
+            let mut out1 = vec![[0.0]; 4 * 7];
+            let r = one.expand([0.0], &y1, &mut out1);
+            assert!(r.is_err() || out1.iter().any(|c| !c[0].is_finite()), "native {native}");
+        }
     }
 
     #[test]
