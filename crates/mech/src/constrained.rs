@@ -27,8 +27,8 @@ use crate::derive::Derivation;
 use crate::dynamics::{Dynamics, Form, Kernel};
 use crate::error::ModelError;
 use crate::run::{drift_warnings, Audit, InvariantAudit, Row, RunConfig, RunError, RunReport};
+use num::SolveError;
 use num::{integrate_projected, Config, Event, LinearSolver, Method, ObservationKind, OdeSystem, RhsError, Solver};
-use num::{SolveError, StopReason};
 use std::ops::ControlFlow;
 use std::time::Instant;
 use sym::{ExprId, Tape};
@@ -610,16 +610,7 @@ pub(crate) fn simulate(
     match result {
         Ok(summary) => {
             report.t_final = summary.t;
-            report.stopped_by = match summary.stop {
-                StopReason::Event { index } => Some(conditions[index].0.text.clone()),
-                StopReason::Observer => row_error.clone().or(Some("stopped by the caller".into())),
-                StopReason::Finished => None,
-            };
-            if let Some(message) = row_error {
-                report.failure = Some(message.clone());
-                return Err(RunError::Failed { message, report: Box::new(report) });
-            }
-            Ok(report)
+            crate::run::conclude(report, summary.stop, &conditions, row_error)
         }
         Err(e) => {
             let message = match &e {

@@ -244,6 +244,29 @@ pub enum RunError {
     },
 }
 
+/// The end of a run that integrated to its end or stopped: why it stopped (a
+/// stop condition, the caller, or the end), and a failure when a row could
+/// not be produced.
+pub(crate) fn conclude(
+    mut report: RunReport,
+    stop: StopReason,
+    conditions: &[(&StopCondition, bool)],
+    row_error: Option<String>,
+) -> Result<RunReport, RunError> {
+    report.stopped_by = match stop {
+        StopReason::Event { index } => Some(conditions[index].0.text.clone()),
+        StopReason::Observer => row_error.clone().or(Some("stopped by the caller".into())),
+        StopReason::Finished => None,
+    };
+    match row_error {
+        Some(message) => {
+            report.failure = Some(message.clone());
+            Err(RunError::Failed { message, report: Box::new(report) })
+        }
+        None => Ok(report),
+    }
+}
+
 /// The default method and the form it integrates, or the form a requested method needs.
 pub fn choose_method(
     d: &Derivation,
@@ -481,16 +504,7 @@ pub fn simulate(
                     return Err(RunError::Failed { message, report: Box::new(report) });
                 }
             }
-            report.stopped_by = match summary.stop {
-                StopReason::Event { index } => Some(conditions[index].0.text.clone()),
-                StopReason::Observer => row_error.clone().or(Some("stopped by the caller".into())),
-                StopReason::Finished => None,
-            };
-            if let Some(message) = row_error {
-                report.failure = Some(message.clone());
-                return Err(RunError::Failed { message, report: Box::new(report) });
-            }
-            Ok(report)
+            conclude(report, summary.stop, &conditions, row_error)
         }
         Err(e) => {
             let at = (solver.t(), solver.state().to_vec());

@@ -889,11 +889,7 @@ impl Plan<'_> {
             let mut segment = 0u32;
             while t < cfg.until {
                 segment += 1;
-                let mut t_next = f64::from(segment) * LYAPUNOV_INTERVAL;
-                // A last sliver shorter than a millionth of a segment joins the one before.
-                if t_next > cfg.until - 1e-6 * LYAPUNOV_INTERVAL {
-                    t_next = cfg.until;
-                }
+                let t_next = segment_end(segment, cfg.until);
                 let mut gimbal: Option<(f64, &GimbalGuard)> = None;
                 // Two terminal events per body: |sin β| falling to the threshold,
                 // and sin β changing sign (β passing 0 or π within one step,
@@ -944,23 +940,17 @@ impl Plan<'_> {
                         }
                     };
                     match step {
-                        Ok(()) => {
-                            let dist = distance(&y, ty);
-                            if dist > 0.0 && dist.is_finite() {
-                                log_sum += (dist / LYAPUNOV_D0).ln();
-                                for (tk, yk) in ty.iter_mut().zip(&y) {
-                                    *tk = yk + (*tk - yk) * (LYAPUNOV_D0 / dist);
-                                }
+                        Ok(()) => match pull_back(&y, ty, t_next) {
+                            Ok(growth) => {
+                                log_sum += growth;
                                 if let Twin::Kept(s) = &mut twin {
                                     if let Err(e) = s.set_state(ty) {
                                         twin_failure = Some(format!("the perturbed twin failed: {e}"));
                                     }
                                 }
-                            } else {
-                                twin_failure =
-                                    Some(format!("the perturbed twin's distance became {dist} at t = {t_next}"));
                             }
-                        }
+                            Err(message) => twin_failure = Some(message),
+                        },
                         Err(e) => twin_failure = Some(format!("the perturbed twin failed: {e}")),
                     }
                 }
@@ -1032,10 +1022,7 @@ impl Plan<'_> {
             let mut segment = 0u32;
             while t < cfg.until {
                 segment += 1;
-                let mut t_next = f64::from(segment) * LYAPUNOV_INTERVAL;
-                if t_next > cfg.until - 1e-6 * LYAPUNOV_INTERVAL {
-                    t_next = cfg.until;
-                }
+                let t_next = segment_end(segment, cfg.until);
                 propagate(series, &mut batch, t_next, &solver_config, scratch);
                 if cfg.lyapunov {
                     for r in 0..m {
@@ -1048,17 +1035,15 @@ impl Plan<'_> {
                             continue;
                         }
                         let (main, mut other) = (batch.state(r), batch.state(twin));
-                        let dist = distance(&main, &other);
-                        if dist > 0.0 && dist.is_finite() {
-                            log_sum[r] += (dist / LYAPUNOV_D0).ln();
-                            for (tk, yk) in other.iter_mut().zip(&main) {
-                                *tk = yk + (*tk - yk) * (LYAPUNOV_D0 / dist);
+                        match pull_back(&main, &mut other, t_next) {
+                            Ok(growth) => {
+                                log_sum[r] += growth;
+                                batch.set_state(twin, &other);
                             }
-                            batch.set_state(twin, &other);
-                        } else {
-                            twin_failure[r] =
-                                Some(format!("the perturbed twin's distance became {dist} at t = {t_next}"));
-                            batch.failure[twin] = twin_failure[r].clone();
+                            Err(message) => {
+                                twin_failure[r] = Some(message.clone());
+                                batch.failure[twin] = Some(message);
+                            }
                         }
                     }
                 }
@@ -1125,6 +1110,31 @@ enum Twin<'a> {
 fn perturbed(y0: &[f64]) -> Vec<f64> {
     let step = LYAPUNOV_D0 / (y0.len() as f64).sqrt();
     y0.iter().map(|v| v + step).collect()
+}
+
+/// The end of Lyapunov segment `segment` (counted from 1): a last sliver
+/// shorter than a millionth of a segment joins the one before.
+fn segment_end(segment: u32, until: f64) -> f64 {
+    let t = f64::from(segment) * LYAPUNOV_INTERVAL;
+    if t > until - 1e-6 * LYAPUNOV_INTERVAL {
+        until
+    } else {
+        t
+    }
+}
+
+/// Benettin's renormalization at the end of a segment at `t`: pulls `twin`
+/// back to [`LYAPUNOV_D0`] from `main` along their difference and returns
+/// `ln(d/d0)`, or why it cannot (the distance became zero or not finite).
+fn pull_back(main: &[f64], twin: &mut [f64], t: f64) -> Result<f64, String> {
+    let dist = distance(main, twin);
+    if !(dist > 0.0 && dist.is_finite()) {
+        return Err(format!("the perturbed twin's distance became {dist} at t = {t}"));
+    }
+    for (tk, yk) in twin.iter_mut().zip(main) {
+        *tk = yk + (*tk - yk) * (LYAPUNOV_D0 / dist);
+    }
+    Ok((dist / LYAPUNOV_D0).ln())
 }
 
 fn distance(a: &[f64], b: &[f64]) -> f64 {
