@@ -11,33 +11,12 @@
 //!   reaches both (at the rows where β' = 0), the mean precession rate, and the
 //!   free top's α̇ = A/sin β₀ with the fixed z axis along L.
 
+mod common;
+
+use common::{repo_root, run as lagrange};
 use serde_json::Value;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn repo_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-struct Run {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-}
-
-fn lagrange(args: &[&str]) -> Run {
-    let out = Command::new(env!("CARGO_BIN_EXE_lagrange"))
-        .args(args)
-        .current_dir(repo_root())
-        .output()
-        .expect("run lagrange");
-    Run {
-        code: out.status.code(),
-        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-    }
-}
 
 fn json(args: &[&str]) -> Value {
     let r = lagrange(args);

@@ -16,64 +16,16 @@
 //! - bad input: inconsistent initial values, a nonlinear velocity constraint, a
 //!   name clash, a method that cannot be projected — exit 2 with the place.
 
+mod common;
+
+use common::{run as lagrange, Run, TempFile};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::Command;
-use std::sync::atomic::{AtomicUsize, Ordering};
-
-fn repo_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().expect("the repository root exists")
-}
-
-struct Run {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-}
-
-fn lagrange(args: &[&str]) -> Run {
-    let out = Command::new(env!("CARGO_BIN_EXE_lagrange"))
-        .args(args)
-        .current_dir(repo_root())
-        .output()
-        .unwrap_or_else(|e| panic!("cannot start lagrange {args:?}: {e}"));
-    Run {
-        code: out.status.code(),
-        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-    }
-}
 
 #[track_caller]
 fn ok(args: &[&str]) -> Run {
     let r = lagrange(args);
     assert_eq!(r.code, Some(0), "lagrange {args:?}\n{}\n{}", r.stdout, r.stderr);
     r
-}
-
-/// A temporary file removed when dropped.
-struct TempFile(PathBuf);
-
-impl TempFile {
-    fn new(tag: &str, ext: &str) -> TempFile {
-        static COUNTER: AtomicUsize = AtomicUsize::new(0);
-        let k = COUNTER.fetch_add(1, Ordering::Relaxed);
-        TempFile(std::env::temp_dir().join(format!("lagrange-constraints-{}-{k}-{tag}.{ext}", std::process::id())))
-    }
-    fn with_text(tag: &str, text: &str) -> TempFile {
-        let f = TempFile::new(tag, "toml");
-        std::fs::write(&f.0, text).expect("write a model");
-        f
-    }
-    fn path(&self) -> &str {
-        self.0.to_str().expect("temporary paths are UTF-8")
-    }
-}
-
-impl Drop for TempFile {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.0);
-    }
 }
 
 /// The CSV of a run: header and numeric rows.

@@ -18,77 +18,13 @@
 //! the physics (a wrong coefficient shows at 1e-3 or worse). Each check says why
 //! its own tolerance is what it is.
 
+mod common;
+
+use common::{repo_root, run as lagrange, Run, TempFile};
 use serde_json::Value;
 use std::f64::consts::PI;
-use std::path::{Path, PathBuf};
-use std::process::Command;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 // ------------------------------------------------------------------ helpers
-
-fn repo_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().expect("the repository root exists")
-}
-
-/// Exit code, stdout and stderr of one run.
-struct Run {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-    args: Vec<String>,
-}
-
-impl Run {
-    fn describe(&self) -> String {
-        format!(
-            "lagrange {}\nexit code {:?}\n--- stdout ---\n{}\n--- stderr ---\n{}",
-            self.args.join(" "),
-            self.code,
-            self.stdout,
-            self.stderr
-        )
-    }
-}
-
-/// Runs `lagrange ARGS` in the repository root.
-fn lagrange(args: &[&str]) -> Run {
-    let out = Command::new(env!("CARGO_BIN_EXE_lagrange"))
-        .args(args)
-        .current_dir(repo_root())
-        .output()
-        .unwrap_or_else(|e| panic!("cannot start lagrange {args:?}: {e}"));
-    Run {
-        code: out.status.code(),
-        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-        args: args.iter().map(|s| s.to_string()).collect(),
-    }
-}
-
-/// A fresh path in the temporary folder, unique per process and call.
-fn temp_path(tag: &str, ext: &str) -> PathBuf {
-    static COUNTER: AtomicUsize = AtomicUsize::new(0);
-    let k = COUNTER.fetch_add(1, Ordering::Relaxed);
-    std::env::temp_dir().join(format!("lagrange-simulate-analytic-{}-{k}-{tag}.{ext}", std::process::id()))
-}
-
-/// A temporary file removed when dropped.
-struct TempFile(PathBuf);
-
-impl TempFile {
-    fn new(tag: &str, ext: &str) -> TempFile {
-        TempFile(temp_path(tag, ext))
-    }
-    fn path(&self) -> &str {
-        self.0.to_str().expect("temporary paths are UTF-8")
-    }
-}
-
-impl Drop for TempFile {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.0);
-    }
-}
 
 /// A copy of `examples/FILE` with some lines replaced, e.g. another initial
 /// amplitude (initial values are not parameters, so `--set` cannot change them).
