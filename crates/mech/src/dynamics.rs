@@ -376,11 +376,8 @@ pub struct System {
     work: Vec<f64>,
     factored_once: bool,
     /// The Taylor expansion and its scratch, made on first use (Lagrange form).
-    series: Option<Box<ScalarSeries>>,
+    series: Option<Box<LagrangeSeries<1>>>,
 }
-
-/// The expansion of one trajectory, with its state and output in lanes of one.
-type ScalarSeries = (LagrangeSeries<1>, Vec<[f64; 1]>, Vec<[f64; 1]>);
 
 impl System {
     /// The form of the state.
@@ -396,8 +393,7 @@ impl System {
         self.dynamics.inputs[start..start + values.len()].copy_from_slice(values);
         self.factored_once = false;
         if let Some(series) = &mut self.series {
-            let lanes: Vec<[f64; 1]> = values.iter().map(|&v| [v]).collect();
-            series.0.set_parameters(&lanes);
+            series.set_parameters(values.as_chunks::<1>().0);
         }
     }
 
@@ -560,19 +556,14 @@ impl OdeSystem for System {
         if self.form != Form::Lagrange {
             return None;
         }
-        let dim = 2 * self.dynamics.n;
-        if self.series.as_ref().is_none_or(|s| s.0.order() != order) {
-            let series = self.dynamics.lagrange_series::<1>(order);
-            self.series = Some(Box::new((series, vec![[0.0]; dim], vec![[0.0]; dim * (order + 1)])));
+        if self.series.as_ref().is_none_or(|s| s.order() != order) {
+            self.series = Some(Box::new(self.dynamics.lagrange_series::<1>(order)));
         }
-        let (series, y_lanes, out_lanes) = &mut **self.series.as_mut().expect("made above");
-        for (l, &v) in y_lanes.iter_mut().zip(y) {
-            *l = [v];
-        }
+        let series = self.series.as_mut().expect("made above");
+        // One lane: `[f64; 1]` is laid out as `f64`, so the slices are viewed, not copied.
+        let (y_lanes, _) = y.as_chunks::<1>();
+        let (out_lanes, _) = out.as_chunks_mut::<1>();
         let result = series.expand([t], y_lanes, out_lanes);
-        for (o, l) in out.iter_mut().zip(out_lanes.iter()) {
-            *o = l[0];
-        }
         Some(result)
     }
 }
