@@ -9,7 +9,7 @@
 //! with its failure while the others go on.
 
 use crate::series::LagrangeSeries;
-use num::{taylor_step, Config};
+use num::{taylor_advance, taylor_step, Config};
 use sym::Lanes;
 
 /// Trajectories per batch.
@@ -91,6 +91,7 @@ pub(crate) fn propagate(
         }
         let (before_last, last) = (ratio(p - 1), ratio(p));
         let mut h = [0.0; LANES];
+        let mut lands_on_end = [false; LANES];
         for l in 0..LANES {
             if !live[l] {
                 continue;
@@ -105,19 +106,12 @@ pub(crate) fn propagate(
                     Some(format!("maximal number of steps ({}) reached at t = {}", config.max_steps, batch.t[l]));
                 continue;
             }
-            let mut step = taylor_step(p, before_last[l], last[l]);
-            if let Some(h_max) = config.h_max {
-                step = step.min(h_max);
+            // The step rule of `num::Taylor`, so that a lane takes a single run's steps.
+            let step = taylor_step(p, before_last[l], last[l]);
+            match taylor_advance(step, batch.t[l], config.h_max.unwrap_or(f64::INFINITY), Some(t_end)) {
+                Ok((step, lands)) => (h[l], lands_on_end[l]) = (step, lands),
+                Err(step) => batch.failure[l] = Some(format!("step size {step:e} too small at t = {}", batch.t[l])),
             }
-            let rest = t_end - batch.t[l];
-            if !step.is_finite() || batch.t[l] + step * (1.0 + 1e-10) >= t_end {
-                step = rest;
-            }
-            if step <= f64::EPSILON * batch.t[l].abs().max(1.0) && step < rest {
-                batch.failure[l] = Some(format!("step size {step:e} too small at t = {}", batch.t[l]));
-                continue;
-            }
-            h[l] = step;
         }
         // Horner's rule on every lane (h = 0 leaves a lane where it is).
         for i in 0..dim {
@@ -133,8 +127,7 @@ pub(crate) fn propagate(
         for l in 0..LANES {
             if h[l] > 0.0 {
                 batch.steps[l] += 1;
-                batch.t[l] =
-                    if batch.t[l] + h[l] >= t_end || h[l] == t_end - batch.t[l] { t_end } else { batch.t[l] + h[l] };
+                batch.t[l] = if lands_on_end[l] { t_end } else { batch.t[l] + h[l] };
             }
         }
         for l in 0..LANES {

@@ -54,6 +54,25 @@ pub fn taylor_step(order: usize, before_last: f64, last: f64) -> f64 {
     (log_rho - 2.0 - 0.7 / (p - 1.0)).exp()
 }
 
+/// The step to take from `t`, given the step `h` of [`taylor_step`]: capped by
+/// `h_max`, and cut or stretched onto `stop` when that is within reach (then
+/// the flag is true). A series that ends early (infinite `h`) with no stop in
+/// sight takes a unit step, which is exact. `Err(h)` when `h` is too small for
+/// `t + h` to differ from `t`.
+pub fn taylor_advance(h: f64, t: f64, h_max: f64, stop: Option<f64>) -> Result<(f64, bool), f64> {
+    let h = h.min(h_max);
+    if let Some(stop) = stop {
+        if !h.is_finite() || t + h * (1.0 + 1e-10) >= stop {
+            return Ok((stop - t, true));
+        }
+    }
+    let h = if h.is_finite() { h } else { 1.0 };
+    if h <= f64::EPSILON * t.abs().max(1.0) {
+        return Err(h);
+    }
+    Ok((h, false))
+}
+
 /// The Taylor integrator. See the module documentation.
 #[derive(Debug)]
 pub struct Taylor<S> {
@@ -170,27 +189,13 @@ impl<S: OdeSystem> Solver for Taylor<S> {
             return Err(SolveError::Rhs { t, source: RhsError::NonFinite { index: index % n } });
         }
         let floor = self.atol / self.rtol;
-        let mut h = taylor_step(
+        let h = taylor_step(
             p,
             taylor_ratio(&self.series[(p - 1) * n..p * n], &self.y, floor),
             taylor_ratio(&self.series[p * n..], &self.y, floor),
-        )
-        .min(self.h_max);
-        let mut reaches_stop = false;
-        if let Some(stop) = self.stop {
-            if t + h * (1.0 + 1e-10) >= stop {
-                h = stop - t;
-                reaches_stop = true;
-            }
-        }
-        if !h.is_finite() {
-            // A series that ends below order p - 1 with no stop time and no h_max:
-            // any step is exact; take one of unit length.
-            h = 1.0;
-        }
-        if !reaches_stop && h <= f64::EPSILON * t.abs().max(1.0) {
-            return Err(SolveError::StepSizeTooSmall { t, h });
-        }
+        );
+        let (h, reaches_stop) =
+            taylor_advance(h, t, self.h_max, self.stop).map_err(|h| SolveError::StepSizeTooSmall { t, h })?;
         let mut y_new = std::mem::take(&mut self.y);
         self.sum(h, &mut y_new);
         self.y = y_new;
