@@ -21,7 +21,7 @@ use crate::model::Located;
 use crate::probe::{self, Subst};
 use serde::Deserialize;
 use std::ops::Range;
-use sym::{ExprId, NameId, Pool, Symbol, Tape};
+use sym::{ExprId, NameId, Pool, Symbol};
 use toml::Spanned;
 
 /// A `[[constraints]]` table as written.
@@ -529,16 +529,10 @@ fn involutive(pool: &mut Pool, forms: &[Vec<ExprId>], z: &[ExprId], which: &[usi
     if dws.iter().flatten().all(|&w| pool.is_zero(w)) {
         return true;
     }
-    let (inputs, points) = probe::random_points(pool, &roots, 6, 0x5eed_00a3);
-    let Ok(mut tape) = Tape::compile(pool, &roots, &inputs) else { return false };
+    let Some(samples) = probe::finite_samples(pool, &roots, 6, 0x5eed_00a3) else { return false };
     let m = chosen.len();
-    let mut out = vec![0.0; roots.len()];
     let mut tested = 0;
-    for p in &points {
-        tape.eval(p, &mut out);
-        if !out.iter().all(|v| v.is_finite()) {
-            continue;
-        }
+    for out in &samples {
         let omega = &out[..m * dim];
         let Some(basis) = null_space(omega, m, dim) else { continue };
         for k in 0..m {
@@ -589,16 +583,10 @@ fn generic_rank(pool: &Pool, rows: &[Vec<ExprId>]) -> usize {
     let m = rows.len();
     let n = rows.first().map_or(0, Vec::len);
     let roots: Vec<ExprId> = rows.iter().flatten().copied().collect();
-    let (inputs, points) = probe::random_points(pool, &roots, 4, 0x5eed_00a4);
-    let Ok(mut tape) = Tape::compile(pool, &roots, &inputs) else { return m };
-    let mut out = vec![0.0; roots.len()];
+    let Some(samples) = probe::finite_samples(pool, &roots, 4, 0x5eed_00a4) else { return m };
     let mut rank = 0;
-    for p in &points {
-        tape.eval(p, &mut out);
-        if !out.iter().all(|v| v.is_finite()) {
-            continue;
-        }
-        let a = nalgebra::DMatrix::from_row_slice(m, n, &out);
+    for out in &samples {
+        let a = nalgebra::DMatrix::from_row_slice(m, n, out);
         rank = rank.max(a.rank(1e-9 * a.amax().max(f64::MIN_POSITIVE)));
     }
     if rank == 0 {

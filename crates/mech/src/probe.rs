@@ -46,6 +46,23 @@ pub fn random_points(pool: &Pool, roots: &[ExprId], n_points: usize, seed: u64) 
     (symbols, points)
 }
 
+/// The values of `roots` at `n_points` random points ([`random_points`]), at the
+/// points where every value is finite; None when the expressions cannot be
+/// evaluated (a symbol without a value).
+pub fn finite_samples(pool: &Pool, roots: &[ExprId], n_points: usize, seed: u64) -> Option<Vec<Vec<f64>>> {
+    let (inputs, points) = random_points(pool, roots, n_points, seed);
+    let mut tape = Tape::compile(pool, roots, &inputs).ok()?;
+    let mut samples = Vec::with_capacity(points.len());
+    for p in &points {
+        let mut out = vec![0.0; roots.len()];
+        tape.eval(p, &mut out);
+        if out.iter().all(|v| v.is_finite()) {
+            samples.push(out);
+        }
+    }
+    Some(samples)
+}
+
 /// True when `e` vanishes at random points, relative to the size of its terms.
 /// Points where it is not finite are skipped; if every point is, the answer is
 /// false (nothing was shown).
@@ -59,15 +76,9 @@ pub fn is_zero(pool: &Pool, e: ExprId) -> bool {
     let terms = pool.terms(e);
     let mut roots = vec![e];
     roots.extend(&terms);
-    let (inputs, points) = random_points(pool, &roots, 5, 0x5eed_0001);
-    let Ok(mut tape) = Tape::compile(pool, &roots, &inputs) else { return false };
-    let mut out = vec![0.0; roots.len()];
+    let Some(samples) = finite_samples(pool, &roots, 5, 0x5eed_0001) else { return false };
     let mut tested = 0;
-    for p in &points {
-        tape.eval(p, &mut out);
-        if !out.iter().all(|v| v.is_finite()) {
-            continue;
-        }
+    for out in &samples {
         // Relative to the size of the terms, with no absolute floor: a potential
         // 1e-12*k*x^2 is small, not zero.
         let scale: f64 = out[1..].iter().map(|v| v.abs()).sum::<f64>();
