@@ -6,11 +6,15 @@
 //! unrolled (the order, the convolution bounds and the lanes are known when
 //! compiling), reading and writing the tape's coefficient buffer in place,
 //! two lanes per instruction where the lanes pair up. Cranelift's optimizer
-//! is off: the code is straight-line arithmetic on loaded values, which it
-//! cannot improve, and it would triple the compile time. For a second-order
-//! system `M q'' = f` ([`NativeTaylor::second_order`]) the whole expansion,
-//! coupling included, is one function. The interpreter in `taylor.rs` stays the reference and the fallback;
-//! both agree to rounding (the same operations, summed in the same order).
+//! is off and its register allocator is the single-pass one
+//! ([`Codegen::Quick`]): the code is straight-line arithmetic on loaded
+//! values, which neither can improve, and they would triple the compile time,
+//! which a short run pays in full. For a second-order system `M q'' = f`
+//! ([`NativeTaylor::second_order`]) each order's function includes the
+//! coupling, so the functions run in turn make the whole expansion. The
+//! functions are compiled on two threads ([`compile_shared`]). The
+//! interpreter in `taylor.rs` stays the reference and the fallback; both
+//! agree to rounding (the same operations, summed in the same order).
 
 // Calling JIT-compiled code can only be done through a raw function pointer;
 // see `jit.rs` for the same pattern. Two unsafe blocks: the pointer casts in
@@ -18,7 +22,10 @@
 #![allow(unsafe_code)]
 
 use crate::expr::Func;
-use crate::jit::{codegen, host_isa, lagrange_atan2, lagrange_powf, offset, unary, Imports, JitError, ATAN2, POWF};
+use crate::jit::shared::{compile_shared, Part};
+use crate::jit::{
+    codegen, host_isa, lagrange_atan2, lagrange_powf, offset, unary, Codegen, Imports, JitError, ATAN2, POWF,
+};
 use crate::taylor::{TaylorTape, T};
 use cranelift_codegen::ir::{
     condcodes::FloatCC, types, AbiParam, InstBuilder, MemFlagsData, Signature, UserFuncName, Value,
@@ -669,102 +676,63 @@ impl<const L: usize> Emitter<'_, '_, L> {
 impl NativeTaylor {
     /// Compiles the whole expansion of a second-order system (run it with
     /// [`run_all`](Self::run_all)): orders `0..p` of the tape, each followed by
-    /// the coupling that yields the state's next order. The orders are split in
-    /// two functions of about equal length, compiled on two threads (compiling
-    /// costs more than a thousand steps of a small system).
+    /// the coupling that yields the state's next order, one function per
+    /// order, compiled on two threads ([`compile_shared`]: compiling costs
+    /// more than a thousand steps of a small system).
     pub(crate) fn second_order<const L: usize>(
         tape: &TaylorTape<L>,
         layout: &SecondOrderLayout,
         buffer_len: usize,
     ) -> Result<NativeTaylor, JitError> {
         let order = tape.order();
-        // Split where the work of the orders (each with its coupling) reaches half.
-        let work: Vec<usize> = (0..order).map(|k| tape.order_work(k) + layout.entries.len() * (k + 1)).collect();
-        let total: usize = work.iter().sum();
-        let mut split = 0;
-        let mut acc = 0;
-        while split < order && 2 * (acc + work[split]) <= total {
-            acc += work[split];
-            split += 1;
-        }
-        let parts: Vec<std::ops::Range<usize>> =
-            if order >= 4 { vec![0..split, split..order] } else { std::iter::once(0..order).collect() };
-        let compiled: Vec<Result<(JITModule, OrderFn), JitError>> = std::thread::scope(|scope| {
-            let handles: Vec<_> = parts
-                .iter()
-                .skip(1)
-                .map(|ks| {
-                    let ks = ks.clone();
-                    scope.spawn(move || Self::second_order_part(tape, layout, ks))
-                })
-                .collect();
-            let mut all = vec![Self::second_order_part(tape, layout, parts[0].clone())];
-            for h in handles {
-                all.push(
-                    h.join().unwrap_or_else(|_| Err(JitError::Codegen { message: "compiler thread panicked".into() })),
-                );
-            }
-            all
-        });
-        let mut modules = Vec::with_capacity(compiled.len());
-        let mut funcs = Vec::with_capacity(compiled.len());
-        for part in compiled {
-            let (module, func) = part?;
-            modules.push(module);
-            funcs.push(func);
-        }
-        Ok(NativeTaylor { modules: Mutex::new(modules), funcs, len: buffer_len })
-    }
-
-    /// One function computing orders `ks` of a second-order expansion, in its own module.
-    fn second_order_part<const L: usize>(
-        tape: &TaylorTape<L>,
-        layout: &SecondOrderLayout,
-        ks: std::ops::Range<usize>,
-    ) -> Result<(JITModule, OrderFn), JitError> {
-        let mut module = new_module()?;
-        let sig = signature(&module);
-        let id = define::<L>(&mut module, "expand", &sig, tape.order(), |e| {
-            for k in ks {
-                e.orders(tape.program(), k)?;
+        let program = tape.program().to_vec();
+        let layout = layout.clone();
+        // Function i computes order p − 1 − i: the longest first.
+        let parts = compile_shared(order, new_module, move |module, i| {
+            let k = order - 1 - i;
+            let sig = signature(module);
+            define::<L>(module, &format!("expand{k}"), &sig, order, |e| {
+                e.orders(&program, k)?;
                 if k == 0 {
-                    e.invert(layout)?;
+                    e.invert(&layout)?;
                 }
-                e.couple(layout, k)?;
-            }
-            Ok(())
+                e.couple(&layout, k)
+            })
         })?;
-        module.finalize_definitions().map_err(codegen)?;
-        let code = module.get_finalized_function(id);
-        // SAFETY: as in `NativeTaylor::new`: a function of signature `(ptr) -> ()`
-        // in the host's C calling convention, owned by `module`, which the
-        // caller keeps as long as the pointer.
-        let func = unsafe { std::mem::transmute::<*const u8, OrderFn>(code) };
-        Ok((module, func))
+        Ok(NativeTaylor::assemble(parts, order, |i| order - 1 - i, buffer_len))
     }
 
-    /// Compiles every order of `tape`.
+    /// Compiles every order of `tape`, one function each, on two threads.
     pub(crate) fn new<const L: usize>(tape: &TaylorTape<L>) -> Result<NativeTaylor, JitError> {
         let order = tape.order();
-        let mut module = new_module()?;
-        let sig = signature(&module);
-        let mut ids = Vec::with_capacity(order + 1);
-        for k in 0..=order {
-            ids.push(define::<L>(&mut module, &format!("order{k}"), &sig, order, |e| e.orders(tape.program(), k))?);
-        }
-        module.finalize_definitions().map_err(codegen)?;
-        let funcs = ids
-            .into_iter()
-            .map(|id| {
+        let program = tape.program().to_vec();
+        // Function i computes order p − i: the longest first.
+        let parts = compile_shared(order + 1, new_module, move |module, i| {
+            let k = order - i;
+            let sig = signature(module);
+            define::<L>(module, &format!("order{k}"), &sig, order, |e| e.orders(&program, k))
+        })?;
+        Ok(NativeTaylor::assemble(parts, order + 1, |i| order - i, tape.buffer_len()))
+    }
+
+    /// The functions of `parts` by order (`order_of` maps a function's number
+    /// to its order), and the modules that own them.
+    fn assemble(parts: Vec<Part>, count: usize, order_of: impl Fn(usize) -> usize, len: usize) -> NativeTaylor {
+        let mut funcs: Vec<Option<OrderFn>> = vec![None; count];
+        let mut modules = Vec::with_capacity(parts.len());
+        for (module, ids) in parts {
+            for (i, id) in ids {
                 let code = module.get_finalized_function(id);
                 // SAFETY: `code` is the entry of a function just defined with
                 // signature `(ptr) -> ()` in the host's default calling
                 // convention (`extern "C"` on every host cranelift-native
                 // supports); the module owning it lives as long as `self`.
-                unsafe { std::mem::transmute::<*const u8, OrderFn>(code) }
-            })
-            .collect();
-        Ok(NativeTaylor { modules: Mutex::new(vec![module]), funcs, len: tape.buffer_len() })
+                funcs[order_of(i)] = Some(unsafe { std::mem::transmute::<*const u8, OrderFn>(code) });
+            }
+            modules.push(module);
+        }
+        let funcs = funcs.into_iter().map(|f| f.expect("compile_shared compiles every function")).collect();
+        NativeTaylor { modules: Mutex::new(modules), funcs, len }
     }
 
     /// Runs the function of order `k` on the coefficient buffer.
@@ -846,7 +814,7 @@ fn define<const L: usize>(
 
 /// A JIT module with the elementary functions' wrappers as symbols.
 fn new_module() -> Result<JITModule, JitError> {
-    let mut jb = JITBuilder::with_isa(host_isa(false)?, default_libcall_names());
+    let mut jb = JITBuilder::with_isa(host_isa(Codegen::Quick)?, default_libcall_names());
     for f in Func::ALL {
         let (name, ptr) = unary(f);
         jb.symbol(name, ptr);

@@ -1,0 +1,209 @@
+//! Compiling several functions on this thread and one helper thread that
+//! share the work, without ever waiting for the helper to be scheduled.
+//!
+//! A short run pays the compile in full, so it is split in two; but handing
+//! half of it to a thread and joining it costs up to two milliseconds on a
+//! virtual machine whose second CPU is asleep: the thread starts late, and
+//! the join sleeps until the kernel wakes the caller again. Here the
+//! functions are numbered, and both threads take the next number from one
+//! counter until none is left. The calling thread never waits for the
+//! helper to start: if it has not started when the work runs out, the
+//! caller did all of it and the helper, when it runs, finds nothing to do.
+//! When the helper did take a function, the caller spins (it is finishing
+//! one function at most) instead of sleeping in a join. The helper is
+//! never joined; it ends on its own.
+
+use super::JitError;
+use cranelift_jit::JITModule;
+use cranelift_module::FuncId;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex, PoisonError};
+
+/// The functions one thread compiled, in its own module (finalized): their
+/// numbers and ids.
+pub(crate) type Part = (JITModule, Vec<(usize, FuncId)>);
+
+/// The helper has not taken any work.
+const IDLE: usize = 0;
+/// The helper is compiling.
+const WORKING: usize = 1;
+/// The helper's result is in the slot.
+const DONE: usize = 2;
+/// The caller finished everything before the helper started; it must not start.
+const CLOSED: usize = 3;
+
+struct Shared<D> {
+    /// The next function number to take.
+    next: AtomicUsize,
+    /// One of [`IDLE`], [`WORKING`], [`DONE`], [`CLOSED`].
+    helper: AtomicUsize,
+    /// The helper's result, set before `helper` becomes [`DONE`].
+    slot: Mutex<Option<Result<Option<Part>, JitError>>>,
+    count: usize,
+    new_module: fn() -> Result<JITModule, JitError>,
+    define: D,
+}
+
+/// Fills the helper's slot with an error if the helper unwinds before it
+/// reported, so that the caller never spins forever.
+struct Report<'a, D> {
+    shared: &'a Shared<D>,
+    reported: bool,
+}
+
+impl<D> Drop for Report<'_, D> {
+    fn drop(&mut self) {
+        if !self.reported {
+            let mut slot = self.shared.slot.lock().unwrap_or_else(PoisonError::into_inner);
+            *slot = Some(Err(JitError::Codegen { message: "compiler thread panicked".into() }));
+            drop(slot);
+            self.shared.helper.store(DONE, Ordering::Release);
+        }
+    }
+}
+
+/// Compiles functions `0..count`, `define(module, i)` declaring and defining
+/// function `i` in `module` (made by `new_module`), on this thread and one
+/// helper. Returns the (one or two) finalized modules with the functions each
+/// holds. `define` should take the largest functions first (lowest numbers),
+/// so that the last one taken, which the caller may wait for, is short.
+pub(crate) fn compile_shared<D>(
+    count: usize,
+    new_module: fn() -> Result<JITModule, JitError>,
+    define: D,
+) -> Result<Vec<Part>, JitError>
+where
+    D: Fn(&mut JITModule, usize) -> Result<FuncId, JitError> + Send + Sync + 'static,
+{
+    let shared = Arc::new(Shared {
+        next: AtomicUsize::new(0),
+        helper: AtomicUsize::new(IDLE),
+        slot: Mutex::new(None),
+        count,
+        new_module,
+        define,
+    });
+    if count > 1 {
+        let theirs = Arc::clone(&shared);
+        let spawned = std::thread::Builder::new().name("lagrange-jit".into()).spawn(move || {
+            if theirs.helper.compare_exchange(IDLE, WORKING, Ordering::AcqRel, Ordering::Acquire).is_err() {
+                return;
+            }
+            let mut report = Report { shared: &theirs, reported: false };
+            let result = work(&theirs);
+            *theirs.slot.lock().unwrap_or_else(PoisonError::into_inner) = Some(result);
+            report.reported = true;
+            theirs.helper.store(DONE, Ordering::Release);
+        });
+        if spawned.is_err() {
+            // No thread to be had: this thread does all the work.
+            shared.helper.store(CLOSED, Ordering::Release);
+        }
+    }
+    let mine = work(&shared);
+    let mut parts = Vec::with_capacity(2);
+    if shared.helper.compare_exchange(IDLE, CLOSED, Ordering::AcqRel, Ordering::Acquire).is_err() {
+        // The helper is working or done: it holds at most the function it took last.
+        let mut spins = 0u32;
+        while shared.helper.load(Ordering::Acquire) == WORKING {
+            spins += 1;
+            if spins.is_multiple_of(64) {
+                // One CPU only: let the helper run.
+                std::thread::yield_now();
+            } else {
+                std::hint::spin_loop();
+            }
+        }
+        if shared.helper.load(Ordering::Acquire) == DONE {
+            let theirs = shared.slot.lock().unwrap_or_else(PoisonError::into_inner).take();
+            if let Some(part) = theirs.expect("set before DONE")? {
+                parts.push(part);
+            }
+        }
+    }
+    if let Some(part) = mine? {
+        parts.push(part);
+    }
+    Ok(parts)
+}
+
+/// Takes and compiles functions until none is left; `None` if it took none.
+fn work<D>(shared: &Shared<D>) -> Result<Option<Part>, JitError>
+where
+    D: Fn(&mut JITModule, usize) -> Result<FuncId, JitError>,
+{
+    let mut module: Option<JITModule> = None;
+    let mut ids = Vec::new();
+    loop {
+        let i = shared.next.fetch_add(1, Ordering::AcqRel);
+        if i >= shared.count {
+            break;
+        }
+        let m = match &mut module {
+            Some(m) => m,
+            None => module.insert((shared.new_module)()?),
+        };
+        ids.push((i, (shared.define)(m, i)?));
+    }
+    match module {
+        None => Ok(None),
+        Some(mut m) => {
+            m.finalize_definitions().map_err(super::codegen)?;
+            Ok(Some((m, ids)))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every number is compiled exactly once, whichever thread takes it.
+    #[test]
+    fn every_function_is_compiled_once() {
+        for count in [1, 2, 7, 40] {
+            let parts = compile_shared(count, || Ok(JITModule::new(test_builder())), declare).unwrap();
+            let mut seen: Vec<usize> = parts.iter().flat_map(|(_, ids)| ids.iter().map(|&(i, _)| i)).collect();
+            seen.sort_unstable();
+            assert_eq!(seen, (0..count).collect::<Vec<_>>());
+            assert!(parts.len() <= 2);
+        }
+    }
+
+    /// An error on either thread comes back to the caller.
+    #[test]
+    fn errors_reach_the_caller() {
+        let result = compile_shared(
+            30,
+            || Ok(JITModule::new(test_builder())),
+            |m, i| if i == 17 { Err(JitError::Codegen { message: "no".into() }) } else { declare(m, i) },
+        );
+        assert!(matches!(result, Err(JitError::Codegen { .. })));
+    }
+
+    fn test_builder() -> cranelift_jit::JITBuilder {
+        let isa = super::super::host_isa(super::super::Codegen::Quick).unwrap();
+        cranelift_jit::JITBuilder::with_isa(isa, cranelift_module::default_libcall_names())
+    }
+
+    /// A function `() -> ()` named after `i`.
+    fn declare(m: &mut JITModule, i: usize) -> Result<FuncId, JitError> {
+        use cranelift_codegen::ir::{InstBuilder, UserFuncName};
+        use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
+        use cranelift_module::{Linkage, Module};
+        let sig = m.make_signature();
+        let id = m.declare_function(&format!("f{i}"), Linkage::Local, &sig).map_err(super::super::codegen)?;
+        let mut ctx = m.make_context();
+        ctx.func.signature = sig;
+        ctx.func.name = UserFuncName::user(0, id.as_u32());
+        let mut fctx = FunctionBuilderContext::new();
+        let mut b = FunctionBuilder::new(&mut ctx.func, &mut fctx);
+        let entry = b.create_block();
+        b.switch_to_block(entry);
+        b.seal_block(entry);
+        b.ins().return_(&[]);
+        b.finalize(m.target_config());
+        m.define_function(id, &mut ctx).map_err(super::super::codegen)?;
+        Ok(id)
+    }
+}
