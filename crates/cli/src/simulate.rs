@@ -110,6 +110,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
         None => None,
     };
     let mut header_written = false;
+    let mut line: Vec<u8> = Vec::with_capacity(256);
     let with_events = !opts.crossing.is_empty();
     let mut crossings_seen = 0usize;
     let mut csv_error: Option<std::io::Error> = None;
@@ -138,18 +139,25 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
                     writeln!(w, "{}", cols.join(","))?;
                     header_written = true;
                 }
-                write!(w, "{}", row.t)?;
+                line.clear();
+                crate::decimal::push_f64(&mut line, row.t);
                 if let Some(b) = bodies.as_mut() {
                     b.eval(row.t, row.q, row.qd, &mut body_values);
                 }
-                for v in row.q.iter().chain(row.qd).chain(row.invariants).chain(&body_values).chain(row.constraints) {
-                    write!(w, ",{v}")?;
+                for &v in row.q.iter().chain(row.qd).chain(row.invariants).chain(&body_values).chain(row.constraints) {
+                    line.push(b',');
+                    crate::decimal::push_f64(&mut line, v);
                 }
                 if with_events {
                     // Conditions are quoted: they may contain commas (atan2(y, x) < 0).
-                    write!(w, ",{}", row.event.map_or(String::new(), |e| format!("\"{}\"", e.replace('"', "\"\""))))?;
+                    write!(
+                        line,
+                        ",{}",
+                        row.event.map_or(String::new(), |e| format!("\"{}\"", e.replace('"', "\"\"")))
+                    )?;
                 }
-                writeln!(w)
+                line.push(b'\n');
+                w.write_all(&line)
             })();
             if let Err(e) = r {
                 csv_error = Some(e);
