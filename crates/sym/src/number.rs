@@ -10,6 +10,10 @@ use std::cmp::Ordering;
 use std::fmt;
 
 /// An exact rational number `num/den`, always reduced, with `den > 0`.
+/// Neither is ever `i128::MIN`, so that negation and reciprocal stay exact:
+/// a result that would be `i128::MIN` overflows like any larger one
+/// (otherwise `(-2)^127` would be exact and `1/(-2)^127` not, and the same
+/// number would have two forms).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
 pub struct Rational {
     num: i128,
@@ -46,11 +50,24 @@ impl Rational {
             n = n.checked_neg()?;
             d = d.checked_neg()?;
         }
+        if n == i128::MIN {
+            return None;
+        }
         Some(Rational { num: n, den: d })
     }
 
+    /// The integer `n`, or `None` for `i128::MIN` (see [`Rational`]).
+    fn checked_int(n: i128) -> Option<Rational> {
+        (n != i128::MIN).then_some(Rational { num: n, den: 1 })
+    }
+
     /// The integer `n`.
+    ///
+    /// # Panics
+    ///
+    /// For `i128::MIN` (see [`Rational`]).
     pub const fn int(n: i128) -> Rational {
+        assert!(n != i128::MIN, "i128::MIN is not an exact number here");
         Rational { num: n, den: 1 }
     }
 
@@ -93,7 +110,7 @@ impl Rational {
     pub fn checked_add(self, o: Rational) -> Option<Rational> {
         // Integers (the common case) need no gcd: i128 division is slow.
         if self.den == 1 && o.den == 1 {
-            return Some(Rational::int(self.num.checked_add(o.num)?));
+            return Rational::checked_int(self.num.checked_add(o.num)?);
         }
         let g = gcd(self.den, o.den)?;
         let a = self.num.checked_mul(o.den / g)?;
@@ -104,7 +121,7 @@ impl Rational {
     /// Checked product.
     pub fn checked_mul(self, o: Rational) -> Option<Rational> {
         if self.den == 1 && o.den == 1 {
-            return Some(Rational::int(self.num.checked_mul(o.num)?));
+            return Rational::checked_int(self.num.checked_mul(o.num)?);
         }
         let g1 = gcd(self.num, o.den)?.max(1);
         let g2 = gcd(o.num, self.den)?.max(1);
@@ -324,6 +341,13 @@ mod tests {
 
     #[test]
     fn overflow_is_reported_not_wrapped() {
+        // i128::MIN counts as an overflow, so negation stays exact.
+        assert!(Rational::int(-2).pow(127).is_none());
+        assert!(Rational::int(-2).pow(-127).is_none());
+        assert!(Rational::new(i128::MIN, 1).is_none());
+        assert!(Rational::int(i128::MIN + 1).checked_add(Rational::int(-1)).is_none());
+        assert!(Rational::int(-(1 << 64)).checked_mul(Rational::int(1 << 63)).is_none());
+        assert_eq!(Rational::int(-2).pow(126).map(|r| r.numer()), Some(1 << 126));
         let big = Rational::int(i128::MAX / 2);
         assert!(big.checked_mul(Rational::int(3)).is_none());
         assert!(Rational::int(2).pow(200).is_none());

@@ -166,7 +166,8 @@ pub struct Limits {
     /// Largest magnitude of a numeric exponent. Default 1000: the steepest
     /// potentials of physics (Lennard-Jones r^-12, r^-18 softening) are far
     /// below it, while x^1000000000 would only produce meaningless numbers
-    /// (and 2^1000000000 an unbounded exact integer).
+    /// (and 2^1000000000 an unbounded exact integer). `u64::MAX` means no
+    /// limit at all, so that any exponent the pool holds (`x^1e300`) reads back.
     pub max_exponent: u64,
 }
 
@@ -544,7 +545,7 @@ impl Parser<'_, '_, '_> {
         self.leave();
         if let Some(n) = self.pool.as_number(exp) {
             let limit = self.opts.limits.max_exponent;
-            if n.to_f64().abs() > limit as f64 {
+            if limit != u64::MAX && n.to_f64().abs() > limit as f64 {
                 let span = Span::new(exp_start, self.tok.start);
                 return Err(self.error(ParseErrorKind::ExponentTooLarge { value: n.to_string(), limit }, span));
             }
