@@ -89,7 +89,7 @@ impl Kernel {
 /// With a warm-up of `n`, each clone interprets its first `n` evaluations and
 /// compiles only then: a group evaluated a thousand times in a run (the
 /// invariants at the output samples) costs less interpreted than compiled. The
-/// native code agrees with the tape to rounding (an ulp in sin and cos).
+/// native code agrees with the tape bit for bit.
 #[derive(Debug, Clone)]
 pub(crate) struct LazyKernel {
     tape: Tape,

@@ -406,9 +406,10 @@ c = 0.5
                     let mut s = dynamics.lagrange_series_with::<1>(p, native);
                     let mut out1 = vec![[0.0]; dim * (p + 1)];
                     s.expand([0.2], &single, &mut out1).unwrap();
-                    // The native code computes sin and cos inline, within an ulp of
-                    // the interpreter's libm; higher orders carry that difference
-                    // along, so compare each order against its largest coefficient.
+                    // The native code fuses the convolutions' multiply-adds (one
+                    // rounding where the interpreter has two); higher orders carry
+                    // that difference along, so compare each order against its
+                    // largest coefficient.
                     for (k, (a_order, b_order)) in out1.chunks(dim).zip(out4.chunks(dim)).enumerate() {
                         let scale = a_order.iter().fold(0.0f64, |m, a| m.max(a[0].abs()));
                         for (a, b) in a_order.iter().zip(b_order) {

@@ -113,8 +113,10 @@ impl Func {
     /// Applies the function to a float.
     pub fn apply(self, x: f64) -> f64 {
         match self {
-            Func::Sin => x.sin(),
-            Func::Cos => x.cos(),
+            // The native code's sine and cosine, so that every evaluation
+            // agrees with it bit for bit (within an ulp of libm's).
+            Func::Sin => crate::jit::trig::sin_cos_f64(x).0,
+            Func::Cos => crate::jit::trig::sin_cos_f64(x).1,
             Func::Tan => x.tan(),
             Func::Asin => x.asin(),
             Func::Acos => x.acos(),

@@ -12,11 +12,11 @@
 //! the register allocator's time near linear in the tape's length. [`Compiled::eval`] is then one
 //! indirect call. The tape stays the reference and the fallback where
 //! cranelift has no backend: both compute the same IEEE operations in the same
-//! order and call the same `f64` functions, so they agree bit for bit, except
-//! for `sin` and `cos` (below), which agree to an ulp.
+//! order and call the same `f64` functions, so they agree bit for bit.
 //!
 //! `sin` and `cos` are inline code ([`trig`]: fdlibm's reduction and kernels,
-//! within 1 ulp of libm; `sin(u)` and `cos(u)` share one reduction), for
+//! within 1 ulp of libm; `sin(u)` and `cos(u)` share one reduction; the tape
+//! and every other evaluation use the same arithmetic, `trig::sin_cos_f64`), for
 //! arguments below 2¹⁹·π/2; larger and non-finite ones go to the library in
 //! a cold block at each call site. (A variant that compiled a second, call-free
 //! copy of the function for the hot path was measured 10 ns faster per
@@ -629,22 +629,13 @@ impl Drop for Compiled {
 mod tests {
     use super::*;
     use crate::expr::Pool;
-    use trig::tests::ulps;
 
     /// The names of the inputs of every case, in order, and their values.
     const INPUTS: [(&str, f64); 4] = [("x", 0.7), ("y", -1.3), ("z", 2.5), ("q'", 0.25)];
 
-    /// True when the tape computes a sine or cosine, which the JIT computes
-    /// inline to within an ulp of the tape's `f64::sin` and `f64::cos`.
-    fn has_sin_or_cos(tape: &Tape) -> bool {
-        tape.ops().iter().any(|op| matches!(op, Op::Func(Func::Sin | Func::Cos, _)))
-    }
-
     /// Compiles `text` (roots separated by `;`) both ways and checks that the
-    /// native code gives bit for bit what the tape gives, and `expect`. With
-    /// a sine or cosine in the tape, the JIT's inline `sin` and `cos` may
-    /// differ from the tape's by an ulp: then each root agrees to 2 ulps or,
-    /// computed from them, to 1e-13 relative.
+    /// native code gives bit for bit what the tape gives (whose `sin` and
+    /// `cos` are the native code's, `trig::sin_cos_f64`), and `expect`.
     #[track_caller]
     fn check(text: &str, expect: &[f64]) {
         let mut pool = Pool::default();
@@ -657,17 +648,15 @@ mod tests {
         let (mut by_tape, mut by_jit) = (vec![0.0; roots.len()], vec![f64::NAN; roots.len()]);
         tape.eval(&values, &mut by_tape);
         native.eval(&values, &mut by_jit);
-        // `expect` is plain Rust, whose `powi` with a constant exponent may
-        // round differently (about n ulps), hence the loose tolerance.
-        let close =
-            |a: f64, b: f64| a == b || (a - b).abs() <= 1e-13 * a.abs().max(b.abs()) || (a.is_nan() && b.is_nan());
-        let trig = has_sin_or_cos(&tape);
         for k in 0..roots.len() {
             let (a, b) = (by_tape[k], by_jit[k]);
-            let same =
-                a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()) || (trig && (ulps(a, b) <= 2 || close(a, b)));
-            assert!(same, "root {k} of {text}: tape {a} jit {b}");
+            assert!(a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()), "root {k} of {text}: tape {a} jit {b}");
         }
+        // `expect` is plain Rust, whose `powi` with a constant exponent may
+        // round differently (about n ulps) and whose `sin` is libm's (an ulp
+        // away at most), hence the loose tolerance.
+        let close =
+            |a: f64, b: f64| a == b || (a - b).abs() <= 1e-13 * a.abs().max(b.abs()) || (a.is_nan() && b.is_nan());
         assert!(by_jit.iter().zip(expect).all(|(&a, &b)| close(a, b)), "{text}: {by_jit:?} != {expect:?}");
     }
 

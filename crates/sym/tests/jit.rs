@@ -1,14 +1,12 @@
 //! Differential tests of the JIT: on random expressions and random states,
 //! [`Compiled::eval`] agrees with the tape interpreter ([`Tape::eval`], the
-//! reference) to 1e-12 relative. Native code and tape perform the same IEEE
-//! operations in the same order, so they agree bit for bit except for `sin`
-//! and `cos`, which the JIT computes inline to within an ulp of the tape's
-//! libm; the tolerance covers that ulp as long as the expression does not
-//! amplify it a thousandfold (`cos(sin(y)/q''^4)` with `q''` near 0.1 does: a
-//! longer hunt with other seeds finds such cases), and a platform whose
-//! `powi` multiplies in another order. The expression generator is shared with `properties.rs`
-//! (`tests/common/mod.rs`). The
-//! runner is seeded, so every run tries the same cases.
+//! reference) bit for bit. Native code and tape perform the same IEEE
+//! operations in the same order, the tape's `sin` and `cos` are the native
+//! code's (`jit/trig.rs`), and both call the same library for the other
+//! functions; the issue asks for 1e-12 relative, which is what a platform
+//! whose `powi` multiplies in another order than `__powidf2` gets. The
+//! expression generator is shared with `properties.rs` (`tests/common/mod.rs`).
+//! The runner is seeded, so every run tries the same cases.
 
 use proptest::prelude::*;
 use sym::{Compiled, ExprId, Pool, Tape};
@@ -16,6 +14,10 @@ use sym::{Compiled, ExprId, Pool, Tape};
 mod common;
 
 use common::*;
+
+/// Bit for bit where `f64::powi` is compiler-rt's `__powidf2`, whose
+/// multiplications the JIT repeats; 1e-12 relative elsewhere.
+const TOLERANCE: f64 = if cfg!(any(target_arch = "x86_64", target_arch = "aarch64")) { 0.0 } else { 1e-12 };
 
 /// `a` and `b` agree to `rel` relative, or are the same infinity, or both NaN.
 fn agree(a: f64, b: f64, rel: f64) -> bool {
@@ -35,7 +37,7 @@ fn check(pool: &mut Pool, roots: &[ExprId], points: &[[f64; 5]]) -> Result<(), T
         native.eval(p, &mut by_jit);
         for k in 0..roots.len() {
             prop_assert!(
-                agree(by_tape[k], by_jit[k], 1e-12),
+                agree(by_tape[k], by_jit[k], TOLERANCE),
                 "root {} = {}: tape gives {} and the JIT {} at {:?}",
                 k,
                 pool.display(roots[k]),
