@@ -145,13 +145,9 @@ impl<const L: usize> LagrangeSeries<L> {
             }
             c[self.input_at[dim]] = t;
             c[self.input_at[dim] + 1] = [1.0; L];
-            self.tape.expand_second_order();
-            let c = self.tape.coefficients();
-            for k in 0..=p {
-                for i in 0..dim {
-                    series[k * dim + i] = c[self.input_at[i] + k];
-                }
-            }
+            series[..dim].copy_from_slice(y);
+            // The native code writes orders 1..=p into `series` itself.
+            self.tape.expand_second_order(&mut series[..(p + 1) * dim]);
             return Ok(());
         }
         series[..dim].copy_from_slice(y);

@@ -421,14 +421,17 @@ impl<const L: usize> TaylorTape<L> {
 
     /// The whole expansion of the second-order system: from order 0 of `q`, `q'`
     /// and orders 0 and 1 of `t` in the inputs' coefficients, writes orders
-    /// `1..=order` of `q` and `q'` there.
+    /// `1..=order` of `q` and `q'` there and into `series` (order-major:
+    /// `series[k·2n + i]` is order k of `[q, q'][i]`; the caller's order 0 is
+    /// left as it is).
     ///
     /// # Panics
     ///
-    /// When [`compile_second_order`](Self::compile_second_order) did not succeed.
-    pub fn expand_second_order(&mut self) {
+    /// When [`compile_second_order`](Self::compile_second_order) did not
+    /// succeed, or `series` is not `(order + 1)·2n` long.
+    pub fn expand_second_order(&mut self, series: &mut [Lanes<L>]) {
         let (_, native) = self.second_order.as_ref().expect("compile_second_order succeeded");
-        native.run_all(self.coef.as_flattened_mut());
+        native.run_all(self.coef.as_flattened_mut(), series.as_flattened_mut());
     }
 
     /// Compiles every order to native code ([`crate::Compiled`]'s JIT), used by

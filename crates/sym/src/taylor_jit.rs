@@ -35,7 +35,9 @@ use cranelift_jit::{JITBuilder, JITModule};
 use cranelift_module::{default_libcall_names, FuncId, Linkage, Module};
 use std::sync::{Mutex, PoisonError};
 
-type OrderFn = unsafe extern "C" fn(coef: *mut f64);
+/// `(coefficients, series)`: the tape's buffer, and the caller's order-major
+/// series of a second-order expansion (null for the tape's orders alone).
+type OrderFn = unsafe extern "C" fn(coef: *mut f64, series: *mut f64);
 
 /// Orders `0..=p` of a Taylor tape as native functions. Shared by the clones
 /// of a tape (one compilation serves an ensemble's workers).
@@ -45,6 +47,9 @@ pub(crate) struct NativeTaylor {
     funcs: Vec<OrderFn>,
     /// The length of the coefficient buffer the functions address.
     len: usize,
+    /// The length of the series a second-order expansion writes (orders
+    /// `1..=p` of `[q, q']`, order-major); 0 for the tape's orders alone.
+    series_len: usize,
 }
 
 impl std::fmt::Debug for NativeTaylor {
@@ -66,6 +71,8 @@ struct Emitter<'a, 'b, const L: usize> {
     b: FunctionBuilder<'b>,
     imports: Imports,
     base: Value,
+    /// The caller's series (second-order expansions).
+    series: Value,
     stride: usize,
     width: usize,
     /// Whether the host fuses multiply-adds.
@@ -118,6 +125,14 @@ impl<const L: usize> Emitter<'_, '_, L> {
         let at = offset(self.index(slot, j, lane))?;
         let ty = self.ty();
         Ok(self.b.ins().load(ty, MemFlagsData::trusted(), self.base, at))
+    }
+
+    /// Stores `v` as component `at` (of `[q, q']` for all orders, order-major)
+    /// of the caller's series, at `lane`.
+    fn st_series(&mut self, at: usize, lane: usize, v: Value) -> Result<(), JitError> {
+        let at = offset(at * L + lane)?;
+        self.b.ins().store(MemFlagsData::trusted(), v, self.series, at);
+        Ok(())
     }
 
     fn st(&mut self, slot: u32, j: usize, lane: usize, v: Value) -> Result<(), JitError> {
@@ -667,6 +682,10 @@ impl<const L: usize> Emitter<'_, '_, L> {
                 let v = self.ld(s.v[i], k, lane)?;
                 let next_q = self.b.ins().fmul(v, scale);
                 self.st(s.q[i], k + 1, lane, next_q)?;
+                // And into the caller's series, order-major: `[q, q']` of order k + 1.
+                let row = (k + 1) * 2 * n;
+                self.st_series(row + i, lane, next_q)?;
+                self.st_series(row + n + i, lane, next_v)?;
             }
         }
         Ok(())
@@ -686,6 +705,7 @@ impl NativeTaylor {
     ) -> Result<NativeTaylor, JitError> {
         let order = tape.order();
         let program = tape.program().to_vec();
+        let series_len = (order + 1) * 2 * layout.n * L;
         let layout = layout.clone();
         // Function i computes order p − 1 − i: the longest first.
         let parts = compile_shared(order, new_module, move |module, i| {
@@ -699,7 +719,7 @@ impl NativeTaylor {
                 e.couple(&layout, k)
             })
         })?;
-        Ok(NativeTaylor::assemble(parts, order, |i| order - 1 - i, buffer_len))
+        Ok(NativeTaylor::assemble(parts, order, |i| order - 1 - i, buffer_len, series_len))
     }
 
     /// Compiles every order of `tape`, one function each, on two threads.
@@ -712,19 +732,25 @@ impl NativeTaylor {
             let sig = signature(module);
             define::<L>(module, &format!("order{k}"), &sig, order, |e| e.orders(&program, k))
         })?;
-        Ok(NativeTaylor::assemble(parts, order + 1, |i| order - i, tape.buffer_len()))
+        Ok(NativeTaylor::assemble(parts, order + 1, |i| order - i, tape.buffer_len(), 0))
     }
 
     /// The functions of `parts` by order (`order_of` maps a function's number
     /// to its order), and the modules that own them.
-    fn assemble(parts: Vec<Part>, count: usize, order_of: impl Fn(usize) -> usize, len: usize) -> NativeTaylor {
+    fn assemble(
+        parts: Vec<Part>,
+        count: usize,
+        order_of: impl Fn(usize) -> usize,
+        len: usize,
+        series_len: usize,
+    ) -> NativeTaylor {
         let mut funcs: Vec<Option<OrderFn>> = vec![None; count];
         let mut modules = Vec::with_capacity(parts.len());
         for (module, ids) in parts {
             for (i, id) in ids {
                 let code = module.get_finalized_function(id);
                 // SAFETY: `code` is the entry of a function just defined with
-                // signature `(ptr) -> ()` in the host's default calling
+                // signature `(ptr, ptr) -> ()` in the host's default calling
                 // convention (`extern "C"` on every host cranelift-native
                 // supports); the module owning it lives as long as `self`.
                 funcs[order_of(i)] = Some(unsafe { std::mem::transmute::<*const u8, OrderFn>(code) });
@@ -732,44 +758,60 @@ impl NativeTaylor {
             modules.push(module);
         }
         let funcs = funcs.into_iter().map(|f| f.expect("compile_shared compiles every function")).collect();
-        NativeTaylor { modules: Mutex::new(modules), funcs, len }
+        NativeTaylor { modules: Mutex::new(modules), funcs, len, series_len }
     }
 
-    /// Runs the function of order `k` on the coefficient buffer.
+    /// Runs the function of order `k` on the coefficient buffer (the tape's
+    /// orders, [`new`](Self::new)).
     ///
     /// # Panics
     ///
-    /// When `coef` is not the length the code was compiled for, or `k` is above the order.
+    /// When `coef` is not the length the code was compiled for, `k` is above
+    /// the order, or the functions are a second-order expansion's.
     pub(crate) fn run(&self, k: usize, coef: &mut [f64]) {
         assert_eq!(coef.len(), self.len, "NativeTaylor::run: wrong buffer length");
+        assert_eq!(self.series_len, 0, "NativeTaylor::run: a second-order expansion writes a series");
         let f = self.funcs[k];
         // SAFETY: the function reads and writes `coef[i]` only for indices
         // `(slot * (order + 1) + j) * L + lane` of slots, orders and lanes of
         // the tape it was compiled from, all below `self.len`, which was just
-        // checked; the slice is valid and exclusively borrowed. The code is
-        // alive while `self` is, calls only the safe wrappers of `jit.rs`,
-        // and never unwinds.
-        unsafe { f(coef.as_mut_ptr()) }
+        // checked; the slice is valid and exclusively borrowed. Functions of
+        // the tape's orders never touch the second pointer (only `couple`,
+        // of second-order expansions, writes it). The code is alive while
+        // `self` is, calls only the safe wrappers of `jit.rs`, and never
+        // unwinds.
+        unsafe { f(coef.as_mut_ptr(), std::ptr::null_mut()) }
     }
-}
 
-impl NativeTaylor {
-    /// Runs every function in turn (the parts of a second-order expansion).
+    /// Runs every function of a second-order expansion in turn
+    /// ([`second_order`](Self::second_order)), writing orders `1..=p` of
+    /// `[q, q']` into `series` (order-major, `L` lanes each; order 0 is the
+    /// caller's).
     ///
     /// # Panics
     ///
-    /// When `coef` is not the length the code was compiled for.
-    pub(crate) fn run_all(&self, coef: &mut [f64]) {
-        for k in 0..self.funcs.len() {
-            self.run(k, coef);
+    /// When `coef` or `series` is not the length the code was compiled for.
+    pub(crate) fn run_all(&self, coef: &mut [f64], series: &mut [f64]) {
+        assert_eq!(coef.len(), self.len, "NativeTaylor::run_all: wrong buffer length");
+        assert!(self.series_len > 0, "NativeTaylor::run_all: not a second-order expansion");
+        assert_eq!(series.len(), self.series_len, "NativeTaylor::run_all: wrong series length");
+        for &f in &self.funcs {
+            // SAFETY: as in `run` for `coef`; the function writes `series[i]`
+            // only for `i = (order·2n + component)·L + lane` with order ≤ p,
+            // component < 2n and lane < L, all below `self.series_len`, which
+            // was just checked, and the slice is valid and exclusively
+            // borrowed.
+            unsafe { f(coef.as_mut_ptr(), series.as_mut_ptr()) }
         }
     }
 }
 
-/// The signature of every function here: `(coefficients: *mut f64) -> ()`.
+/// The signature of every function here: `(coefficients: *mut f64, series:
+/// *mut f64) -> ()`.
 fn signature(module: &JITModule) -> Signature {
     let mut sig = module.make_signature();
-    sig.params.push(AbiParam::new(module.target_config().pointer_type()));
+    let pointer = AbiParam::new(module.target_config().pointer_type());
+    sig.params.extend([pointer, pointer]);
     sig
 }
 
@@ -792,12 +834,13 @@ fn define<const L: usize>(
         b.append_block_params_for_function_params(entry);
         b.switch_to_block(entry);
         b.seal_block(entry);
-        let base = b.block_params(entry)[0];
+        let (base, series) = (b.block_params(entry)[0], b.block_params(entry)[1]);
         let mut e = Emitter::<L> {
             module,
             b,
             imports: Imports::default(),
             base,
+            series,
             stride: order + 1,
             width: 1,
             fma: host_has_fma(),
