@@ -156,8 +156,17 @@ pub fn finite_difference_jacobian(
 }
 
 /// Index of the first non-finite entry of `v`, if any.
+///
+/// One pass without an early exit first (it compiles to vector compares, where
+/// `position` tests and branches entry by entry: a third of the time of the
+/// Taylor method's step control went there), and the search only when
+/// something is off.
 pub(crate) fn first_non_finite(v: &[f64]) -> Option<usize> {
-    v.iter().position(|x| !x.is_finite())
+    if v.iter().fold(false, |any, x| any | !x.is_finite()) {
+        v.iter().position(|x| !x.is_finite())
+    } else {
+        None
+    }
 }
 
 #[cfg(test)]
