@@ -25,6 +25,48 @@ fn text(path: &Path) -> String {
 
 const GRID: &str = "a=-3:3:4,b=-3:3:4";
 
+/// A lane takes the next run of its job as soon as its own ends. The whole
+/// sweep of 48 runs on one thread runs jobs of 12 (three runs per lane pair
+/// with the Lyapunov twin, one and a half per lane without), its shards of 8
+/// runs jobs that fill the lanes once; both must give the same rows, bit for
+/// bit, however the runs' lengths differ.
+#[test]
+fn lanes_that_take_the_next_run_give_the_rows_of_lanes_that_do_not() {
+    let model = repo().join("examples/double_pendulum.toml");
+    let model = model.to_str().unwrap();
+    let grid = "a=-3:3:6,b=-3:3:8";
+    for lyapunov in [true, false] {
+        let run = |out: &std::path::Path, shard: Option<&str>| {
+            let mut args =
+                vec!["sweep", model, "--until", "3", "--grid", grid, "--threads", "1", "--out", out.to_str().unwrap()];
+            if let Some(shard) = shard {
+                args.extend(["--shard", shard]);
+            }
+            if !lyapunov {
+                args.push("--no-lyapunov");
+            }
+            let out = lagrange(&args);
+            assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        };
+        let whole = scratch(&format!("refill-whole-{lyapunov}.csv"));
+        run(&whole, None);
+        let mut parts = Vec::new();
+        for i in 0..6 {
+            let part = scratch(&format!("refill-part{i}-{lyapunov}.csv"));
+            run(&part, Some(&format!("{i}/6")));
+            parts.push(part.to_str().unwrap().to_string());
+        }
+        let merged = scratch(&format!("refill-merged-{lyapunov}.csv"));
+        let mut args = vec!["sweep", "--merge", merged.to_str().unwrap()];
+        args.extend(parts.iter().map(String::as_str));
+        let out = lagrange(&args);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let (whole, merged) = (text(&whole), text(&merged));
+        assert_eq!(whole.lines().count(), 2 + 48);
+        assert_eq!(merged, whole, "lyapunov: {lyapunov}");
+    }
+}
+
 #[test]
 fn shards_merge_to_the_whole_sweep_and_the_heat_map_is_drawn() {
     let model = repo().join("examples/double_pendulum.toml");

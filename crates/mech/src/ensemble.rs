@@ -1,12 +1,14 @@
 //! Many trajectories in lock step: the Taylor method on [`LANES`] lanes at
 //! once, for sweeps.
 //!
-//! Each lane is an independent trajectory with its own time and step (the
-//! step rule of [`num::Taylor`], per lane); one expansion of the
+//! Each lane is an independent trajectory with its own time, step (the step
+//! rule of [`num::Taylor`], per lane) and end time; one expansion of the
 //! [`LagrangeSeries`] serves all lanes, and its native code handles two lanes
-//! per instruction. A lane that reaches its end time idles (step 0) until the
-//! others are done, and a lane whose expansion stops being finite is frozen
-//! with its failure while the others go on.
+//! per instruction. [`propagate`] returns as soon as a lane reaches its end
+//! time, so that the caller can give the lane its next segment or its next
+//! trajectory; a lane at its end time idles (step 0) until then, and a lane
+//! whose expansion stops being finite is frozen with its failure while the
+//! others go on.
 
 use crate::series::LagrangeSeries;
 use num::{taylor_advance, taylor_step, Config};
@@ -47,23 +49,25 @@ impl Batch {
     }
 }
 
-/// Advances every live lane of `batch` to `t_end` with the Taylor method
-/// (`series` on [`LANES`] lanes, its order chosen from `config.rtol`).
+/// Advances the live lanes of `batch` (not failed, before their end time
+/// `t_end[lane]`) with the Taylor method (`series` on [`LANES`] lanes, its
+/// order chosen from `config.rtol`) until one of them reaches its end time or
+/// fails, or none is live.
 pub(crate) fn propagate(
     series: &mut LagrangeSeries<LANES>,
     batch: &mut Batch,
-    t_end: f64,
+    t_end: &[f64; LANES],
     config: &Config,
     scratch: &mut Vec<Lanes<LANES>>,
 ) {
     let p = series.order();
     let dim = batch.y.len();
     scratch.resize(dim * (p + 1), [0.0; LANES]);
-    loop {
-        let live: [bool; LANES] = std::array::from_fn(|l| batch.failure[l].is_none() && batch.t[l] < t_end);
-        if !live.contains(&true) {
-            return;
-        }
+    let live_lanes = |batch: &Batch| -> [bool; LANES] {
+        std::array::from_fn(|l| batch.failure[l].is_none() && batch.t[l] < t_end[l])
+    };
+    let mut live = live_lanes(batch);
+    while live.contains(&true) {
         if let Err(e) = series.expand(batch.t, &batch.y, scratch) {
             for l in (0..LANES).filter(|&l| live[l]) {
                 batch.failure[l] = Some(format!("right-hand side failed at t = {}: {e}", batch.t[l]));
@@ -108,7 +112,7 @@ pub(crate) fn propagate(
             }
             // The step rule of `num::Taylor`, so that a lane takes a single run's steps.
             let step = taylor_step(p, before_last[l], last[l]);
-            match taylor_advance(step, batch.t[l], config.h_max.unwrap_or(f64::INFINITY), Some(t_end)) {
+            match taylor_advance(step, batch.t[l], config.h_max.unwrap_or(f64::INFINITY), Some(t_end[l])) {
                 Ok((step, lands)) => (h[l], lands_on_end[l]) = (step, lands),
                 Err(step) => batch.failure[l] = Some(format!("step size {step:e} too small at t = {}", batch.t[l])),
             }
@@ -127,7 +131,7 @@ pub(crate) fn propagate(
         for l in 0..LANES {
             if h[l] > 0.0 {
                 batch.steps[l] += 1;
-                batch.t[l] = if lands_on_end[l] { t_end } else { batch.t[l] + h[l] };
+                batch.t[l] = if lands_on_end[l] { t_end[l] } else { batch.t[l] + h[l] };
             }
         }
         for l in 0..LANES {
@@ -135,5 +139,10 @@ pub(crate) fn propagate(
                 batch.failure[l] = Some(format!("the state became non-finite at t = {}", batch.t[l]));
             }
         }
+        let after = live_lanes(batch);
+        if (0..LANES).any(|l| live[l] && !after[l]) {
+            return;
+        }
+        live = after;
     }
 }
