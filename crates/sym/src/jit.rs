@@ -507,12 +507,32 @@ pub(crate) fn offset(k: usize) -> Result<i32, JitError> {
         .ok_or_else(|| JitError::Codegen { message: format!("buffer index {k} exceeds the 2 GiB addressing limit") })
 }
 
+/// A JIT module for `codegen` with the elementary functions' wrappers as
+/// symbols (the code of `Compiled` and of the Taylor expansions calls them).
+pub(crate) fn new_module(codegen: Codegen) -> Result<JITModule, JitError> {
+    let mut jb = JITBuilder::with_isa(host_isa(codegen)?, default_libcall_names());
+    for f in Func::ALL {
+        let (name, ptr) = unary(f);
+        jb.symbol(name, ptr);
+    }
+    jb.symbol(POWF, lagrange_powf as *const u8);
+    jb.symbol(ATAN2, lagrange_atan2 as *const u8);
+    Ok(JITModule::new(jb))
+}
+
 pub(crate) fn codegen(e: impl std::fmt::Display) -> JitError {
     JitError::Codegen { message: e.to_string() }
 }
 
-/// Defines function `id` of `module` with signature `sig` as the code of `tape`.
-fn define(module: &mut JITModule, id: FuncId, sig: &Signature, tape: &Tape) -> Result<(), JitError> {
+/// Defines function `id` of `module` with signature `sig`: `body` gets the
+/// builder in the entry block and the function's parameters, emits the code
+/// (its return included) and hands the builder back.
+pub(crate) fn define_function(
+    module: &mut JITModule,
+    id: FuncId,
+    sig: &Signature,
+    body: impl for<'b> FnOnce(&mut JITModule, FunctionBuilder<'b>, &[Value]) -> Result<FunctionBuilder<'b>, JitError>,
+) -> Result<(), JitError> {
     let mut ctx = module.make_context();
     ctx.func.signature = sig.clone();
     ctx.func.name = UserFuncName::user(0, id.as_u32());
@@ -523,15 +543,22 @@ fn define(module: &mut JITModule, id: FuncId, sig: &Signature, tape: &Tape) -> R
         b.append_block_params_for_function_params(entry);
         b.switch_to_block(entry);
         b.seal_block(entry);
-        let (inputs, outputs) = (b.block_params(entry)[0], b.block_params(entry)[1]);
-        let mut t = Translator { module, b, imports: Imports::default() };
-        t.body(tape, inputs, outputs)?;
-        let config = t.module.target_config();
-        t.b.finalize(config);
+        let params = b.block_params(entry).to_vec();
+        let b = body(module, b, &params)?;
+        b.finalize(module.target_config());
     }
     module.define_function(id, &mut ctx).map_err(codegen)?;
     module.clear_context(&mut ctx);
     Ok(())
+}
+
+/// Defines function `id` of `module` with signature `sig` as the code of `tape`.
+fn define(module: &mut JITModule, id: FuncId, sig: &Signature, tape: &Tape) -> Result<(), JitError> {
+    define_function(module, id, sig, |module, b, params| {
+        let mut t = Translator { module, b, imports: Imports::default() };
+        t.body(tape, params[0], params[1])?;
+        Ok(t.b)
+    })
 }
 
 impl Compiled {
@@ -541,15 +568,7 @@ impl Compiled {
     pub fn new(tape: &Tape) -> Result<Compiled, JitError> {
         let trig = tape.ops().iter().any(|op| matches!(op, Op::Func(Func::Sin | Func::Cos, _)));
         let optimize = tape.len() <= OPTIMIZE_MAX_OPS && !trig;
-        let profile = if optimize { Codegen::Optimized } else { Codegen::Plain };
-        let mut jb = JITBuilder::with_isa(host_isa(profile)?, default_libcall_names());
-        for f in Func::ALL {
-            let (name, ptr) = unary(f);
-            jb.symbol(name, ptr);
-        }
-        jb.symbol(POWF, lagrange_powf as *const u8);
-        jb.symbol(ATAN2, lagrange_atan2 as *const u8);
-        let mut module = JITModule::new(jb);
+        let mut module = new_module(if optimize { Codegen::Optimized } else { Codegen::Plain })?;
 
         let ptr = module.target_config().pointer_type();
         let mut sig: Signature = module.make_signature();

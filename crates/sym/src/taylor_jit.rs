@@ -23,16 +23,12 @@
 
 use crate::expr::Func;
 use crate::jit::shared::{compile_shared, Part};
-use crate::jit::{
-    codegen, host_isa, lagrange_atan2, lagrange_powf, offset, unary, Codegen, Imports, JitError, ATAN2, POWF,
-};
+use crate::jit::{codegen, define_function, offset, unary, Codegen, Imports, JitError, ATAN2, POWF};
 use crate::taylor::{TaylorTape, T};
-use cranelift_codegen::ir::{
-    condcodes::FloatCC, types, AbiParam, InstBuilder, MemFlagsData, Signature, UserFuncName, Value,
-};
-use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
-use cranelift_jit::{JITBuilder, JITModule};
-use cranelift_module::{default_libcall_names, FuncId, Linkage, Module};
+use cranelift_codegen::ir::{condcodes::FloatCC, types, AbiParam, InstBuilder, MemFlagsData, Signature, Value};
+use cranelift_frontend::FunctionBuilder;
+use cranelift_jit::JITModule;
+use cranelift_module::{FuncId, Linkage, Module};
 use std::sync::{Mutex, PoisonError};
 
 /// `(coefficients, series)`: the tape's buffer, and the caller's order-major
@@ -708,7 +704,7 @@ impl NativeTaylor {
         let series_len = (order + 1) * 2 * layout.n * L;
         let layout = layout.clone();
         // Function i computes order p − 1 − i: the longest first.
-        let parts = compile_shared(order, new_module, move |module, i| {
+        let parts = compile_shared(order, Codegen::Quick, move |module, i| {
             let k = order - 1 - i;
             let sig = signature(module);
             define::<L>(module, &format!("expand{k}"), &sig, order, |e| {
@@ -727,7 +723,7 @@ impl NativeTaylor {
         let order = tape.order();
         let program = tape.program().to_vec();
         // Function i computes order p − i: the longest first.
-        let parts = compile_shared(order + 1, new_module, move |module, i| {
+        let parts = compile_shared(order + 1, Codegen::Quick, move |module, i| {
             let k = order - i;
             let sig = signature(module);
             define::<L>(module, &format!("order{k}"), &sig, order, |e| e.orders(&program, k))
@@ -824,47 +820,22 @@ fn define<const L: usize>(
     body: impl FnOnce(&mut Emitter<'_, '_, L>) -> Result<(), JitError>,
 ) -> Result<FuncId, JitError> {
     let id = module.declare_function(name, Linkage::Local, sig).map_err(codegen)?;
-    let mut ctx = module.make_context();
-    ctx.func.signature = sig.clone();
-    ctx.func.name = UserFuncName::user(0, id.as_u32());
-    let mut fctx = FunctionBuilderContext::new();
-    {
-        let mut b = FunctionBuilder::new(&mut ctx.func, &mut fctx);
-        let entry = b.create_block();
-        b.append_block_params_for_function_params(entry);
-        b.switch_to_block(entry);
-        b.seal_block(entry);
-        let (base, series) = (b.block_params(entry)[0], b.block_params(entry)[1]);
+    define_function(module, id, sig, |module, b, params| {
         let mut e = Emitter::<L> {
             module,
             b,
             imports: Imports::default(),
-            base,
-            series,
+            base: params[0],
+            series: params[1],
             stride: order + 1,
             width: 1,
             fma: host_has_fma(),
         };
         body(&mut e)?;
         e.b.ins().return_(&[]);
-        let config = e.module.target_config();
-        e.b.finalize(config);
-    }
-    module.define_function(id, &mut ctx).map_err(codegen)?;
-    module.clear_context(&mut ctx);
+        Ok(e.b)
+    })?;
     Ok(id)
-}
-
-/// A JIT module with the elementary functions' wrappers as symbols.
-fn new_module() -> Result<JITModule, JitError> {
-    let mut jb = JITBuilder::with_isa(host_isa(Codegen::Quick)?, default_libcall_names());
-    for f in Func::ALL {
-        let (name, ptr) = unary(f);
-        jb.symbol(name, ptr);
-    }
-    jb.symbol(POWF, lagrange_powf as *const u8);
-    jb.symbol(ATAN2, lagrange_atan2 as *const u8);
-    Ok(JITModule::new(jb))
 }
 
 impl Drop for NativeTaylor {

@@ -13,7 +13,7 @@
 //! one function at most) instead of sleeping in a join. The helper is
 //! never joined; it ends on its own.
 
-use super::JitError;
+use super::{new_module, Codegen, JitError};
 use cranelift_jit::JITModule;
 use cranelift_module::FuncId;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -40,7 +40,7 @@ struct Shared<D> {
     /// The helper's result, set before `helper` becomes [`DONE`].
     slot: Mutex<Option<Result<Option<Part>, JitError>>>,
     count: usize,
-    new_module: fn() -> Result<JITModule, JitError>,
+    codegen: Codegen,
     define: D,
 }
 
@@ -63,15 +63,11 @@ impl<D> Drop for Report<'_, D> {
 }
 
 /// Compiles functions `0..count`, `define(module, i)` declaring and defining
-/// function `i` in `module` (made by `new_module`), on this thread and one
+/// function `i` in `module` (a [`new_module`] for `codegen`), on this thread and one
 /// helper. Returns the (one or two) finalized modules with the functions each
 /// holds. `define` should take the largest functions first (lowest numbers),
 /// so that the last one taken, which the caller may wait for, is short.
-pub(crate) fn compile_shared<D>(
-    count: usize,
-    new_module: fn() -> Result<JITModule, JitError>,
-    define: D,
-) -> Result<Vec<Part>, JitError>
+pub(crate) fn compile_shared<D>(count: usize, codegen: Codegen, define: D) -> Result<Vec<Part>, JitError>
 where
     D: Fn(&mut JITModule, usize) -> Result<FuncId, JitError> + Send + Sync + 'static,
 {
@@ -80,7 +76,7 @@ where
         helper: AtomicUsize::new(IDLE),
         slot: Mutex::new(None),
         count,
-        new_module,
+        codegen,
         define,
     });
     if count > 1 {
@@ -141,7 +137,7 @@ where
         }
         let m = match &mut module {
             Some(m) => m,
-            None => module.insert((shared.new_module)()?),
+            None => module.insert(new_module(shared.codegen)?),
         };
         ids.push((i, (shared.define)(m, i)?));
     }
@@ -162,7 +158,7 @@ mod tests {
     #[test]
     fn every_function_is_compiled_once() {
         for count in [1, 2, 7, 40] {
-            let parts = compile_shared(count, || Ok(JITModule::new(test_builder())), declare).unwrap();
+            let parts = compile_shared(count, Codegen::Quick, declare).unwrap();
             let mut seen: Vec<usize> = parts.iter().flat_map(|(_, ids)| ids.iter().map(|&(i, _)| i)).collect();
             seen.sort_unstable();
             assert_eq!(seen, (0..count).collect::<Vec<_>>());
@@ -173,37 +169,26 @@ mod tests {
     /// An error on either thread comes back to the caller.
     #[test]
     fn errors_reach_the_caller() {
-        let result = compile_shared(
-            30,
-            || Ok(JITModule::new(test_builder())),
-            |m, i| if i == 17 { Err(JitError::Codegen { message: "no".into() }) } else { declare(m, i) },
-        );
+        let result = compile_shared(30, Codegen::Quick, |m, i| {
+            if i == 17 {
+                Err(JitError::Codegen { message: "no".into() })
+            } else {
+                declare(m, i)
+            }
+        });
         assert!(matches!(result, Err(JitError::Codegen { .. })));
-    }
-
-    fn test_builder() -> cranelift_jit::JITBuilder {
-        let isa = super::super::host_isa(super::super::Codegen::Quick).unwrap();
-        cranelift_jit::JITBuilder::with_isa(isa, cranelift_module::default_libcall_names())
     }
 
     /// A function `() -> ()` named after `i`.
     fn declare(m: &mut JITModule, i: usize) -> Result<FuncId, JitError> {
-        use cranelift_codegen::ir::{InstBuilder, UserFuncName};
-        use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
+        use cranelift_codegen::ir::InstBuilder;
         use cranelift_module::{Linkage, Module};
         let sig = m.make_signature();
         let id = m.declare_function(&format!("f{i}"), Linkage::Local, &sig).map_err(super::super::codegen)?;
-        let mut ctx = m.make_context();
-        ctx.func.signature = sig;
-        ctx.func.name = UserFuncName::user(0, id.as_u32());
-        let mut fctx = FunctionBuilderContext::new();
-        let mut b = FunctionBuilder::new(&mut ctx.func, &mut fctx);
-        let entry = b.create_block();
-        b.switch_to_block(entry);
-        b.seal_block(entry);
-        b.ins().return_(&[]);
-        b.finalize(m.target_config());
-        m.define_function(id, &mut ctx).map_err(super::super::codegen)?;
+        super::super::define_function(m, id, &sig, |_, mut b, _| {
+            b.ins().return_(&[]);
+            Ok(b)
+        })?;
         Ok(id)
     }
 }
