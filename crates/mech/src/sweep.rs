@@ -709,16 +709,24 @@ struct RunOutcome {
     failure: Option<String>,
 }
 
+impl RunOutcome {
+    /// A run of `n` coordinates that ended at `t_final` with `failure`, before
+    /// anything was measured (q, q', drift and exponent NaN).
+    fn ended(n: usize, t_final: f64, failure: Option<String>) -> RunOutcome {
+        RunOutcome {
+            t_final,
+            q: vec![f64::NAN; n],
+            qd: vec![f64::NAN; n],
+            energy_drift: f64::NAN,
+            lyapunov: f64::NAN,
+            failure,
+        }
+    }
+}
+
 /// The row of a run; a run that could not start has only its inputs.
 fn row(run: usize, inputs: Vec<f64>, n: usize, outcome: Result<RunOutcome, String>) -> TableRow {
-    let outcome = outcome.unwrap_or_else(|message| RunOutcome {
-        t_final: 0.0,
-        q: vec![f64::NAN; n],
-        qd: vec![f64::NAN; n],
-        energy_drift: f64::NAN,
-        lyapunov: f64::NAN,
-        failure: Some(message),
-    });
+    let outcome = outcome.unwrap_or_else(|message| RunOutcome::ended(n, 0.0, Some(message)));
     let mut values = inputs;
     values.push(outcome.t_final);
     values.extend(&outcome.q);
@@ -836,14 +844,7 @@ impl Plan<'_> {
     fn run(&self, sys: &mut System, twin_sys: &mut System, q0: &[f64], qd0: &[f64]) -> RunOutcome {
         let n = q0.len();
         let cfg = self.config;
-        let mut out = RunOutcome {
-            t_final: 0.0,
-            q: vec![f64::NAN; n],
-            qd: vec![f64::NAN; n],
-            energy_drift: f64::NAN,
-            lyapunov: f64::NAN,
-            failure: None,
-        };
+        let mut out = RunOutcome::ended(n, 0.0, None);
         if let Some(g) = self.guards.iter().find(|g| g.violated(q0)) {
             out.failure = Some(g.message(0.0));
             return out;
@@ -964,9 +965,28 @@ impl Plan<'_> {
             }
         }
         out.t_final = t;
-        if let Err(e) = sys.invariants_at(t, &y, &mut qd, &mut inv) {
+        self.conclude(&mut out, sys, t, &y, h0, (log_sum, twin_failure));
+        out
+    }
+
+    /// Fills `out` from the end state `y` at `t` of a run that did not fail:
+    /// q and q', the energy's drift from `h0`, the Lyapunov exponent from the
+    /// twin's `log_sum`, or the twin's failure (`twin = (log_sum, failure)`).
+    fn conclude(
+        &self,
+        out: &mut RunOutcome,
+        sys: &mut System,
+        t: f64,
+        y: &[f64],
+        h0: Option<f64>,
+        (log_sum, twin_failure): (f64, Option<String>),
+    ) {
+        let n = out.q.len();
+        let mut qd = vec![0.0; n];
+        let mut inv = vec![0.0; sys.n_invariants()];
+        if let Err(e) = sys.invariants_at(t, y, &mut qd, &mut inv) {
             out.failure = Some(format!("at t = {t}: {e}"));
-            return out;
+            return;
         }
         out.q.copy_from_slice(&y[..n]);
         out.qd.copy_from_slice(&qd);
@@ -974,11 +994,10 @@ impl Plan<'_> {
             let drift = (inv[0] - h0).abs();
             out.energy_drift = if h0 != 0.0 { drift / h0.abs() } else { drift };
         }
-        if cfg.lyapunov && twin_failure.is_none() {
+        if self.config.lyapunov && twin_failure.is_none() {
             out.lyapunov = log_sum / t;
         }
         out.failure = twin_failure;
-        out
     }
 }
 
@@ -1119,39 +1138,15 @@ impl Plan<'_> {
         run: OnLanes,
         n: usize,
     ) -> RunOutcome {
-        let cfg = self.config;
         sys.set_parameters(values);
-        let mut out = RunOutcome {
-            t_final: batch.t[slot],
-            q: vec![f64::NAN; n],
-            qd: vec![f64::NAN; n],
-            energy_drift: f64::NAN,
-            lyapunov: f64::NAN,
-            failure: batch.failure[slot].clone(),
-        };
+        let mut out = RunOutcome::ended(n, batch.t[slot], batch.failure[slot].clone());
         if out.failure.is_some() {
             return out;
         }
-        let t = cfg.until;
-        let y = batch.state(slot);
         let mut qd = vec![0.0; n];
         let mut inv = vec![0.0; sys.n_invariants()];
         let h0 = sys.invariants_at(0.0, &run.y0, &mut qd, &mut inv).ok().map(|()| inv[0]);
-        match sys.invariants_at(t, &y, &mut qd, &mut inv) {
-            Err(e) => out.failure = Some(format!("at t = {t}: {e}")),
-            Ok(()) => {
-                out.q.copy_from_slice(&y[..n]);
-                out.qd.copy_from_slice(&qd);
-                if let Some(h0) = h0 {
-                    let drift = (inv[0] - h0).abs();
-                    out.energy_drift = if h0 != 0.0 { drift / h0.abs() } else { drift };
-                }
-                if cfg.lyapunov && run.twin_failure.is_none() {
-                    out.lyapunov = run.log_sum / t;
-                }
-                out.failure = run.twin_failure;
-            }
-        }
+        self.conclude(&mut out, sys, self.config.until, &batch.state(slot), h0, (run.log_sum, run.twin_failure));
         out
     }
 }
