@@ -8,10 +8,17 @@
 //! `M⁻¹(p − b)`, built block by block (diagonal and small blocks in closed form).
 
 use crate::error::ModelError;
-use crate::model::{Model, RANK_COORDINATE};
+use crate::model::Model;
 use crate::probe::{self, Subst};
-use crate::quadratic::{self, Quadratic, Sparsity, Vars as QVars};
+use quadratic::{Quadratic, Sparsity, Vars as QVars};
 use sym::{ExprId, NameId, Pool, Symbol};
+
+mod body;
+mod constraint;
+mod quadratic;
+
+pub use body::BodyMotion;
+pub use constraint::{Constraint, Constraints};
 
 /// A quantity the derivation shows to be conserved.
 #[derive(Debug, Clone)]
@@ -94,9 +101,9 @@ pub struct Derivation {
     /// part of [`Derivation::new`] comparable with a CAS that derives only those.
     pub equations_seconds: f64,
     /// Each rigid body's angular velocity and angular momentum (body frame).
-    pub bodies: Vec<crate::body::BodyMotion>,
+    pub bodies: Vec<BodyMotion>,
     /// The constraints and the equations with multipliers (empty without `[[constraints]]`).
-    pub constraints: crate::constraint::Constraints,
+    pub constraints: Constraints,
 }
 
 /// Symbols and the "is a variable" predicate used for collecting.
@@ -132,7 +139,6 @@ impl Derivation {
             momenta: names.iter().map(|c| pool.name(&format!("p_{c}"))).collect(),
         };
         debug_assert!(names.iter().all(|c| pool.find_name(c).is_some()));
-        let _ = RANK_COORDINATE;
         let is_var = |s: Symbol| vars.is_var(s);
 
         let vars_q = QVars { q: &q, qd: &qd, t, is_var: &is_var };
@@ -172,10 +178,10 @@ impl Derivation {
             let mut k_terms = Vec::new();
             for body in &model.bodies {
                 let g = model.gravity.as_ref().map(|g| g.expr);
-                let terms = crate::body::terms(pool, body, &q, &qd, t, g);
+                let terms = body::terms(pool, body, &q, &qd, t, g);
                 k_terms.push(terms.kinetic);
                 u_terms.extend(terms.potential);
-                bodies.push(crate::body::motion(pool, body, &terms, &is_var));
+                bodies.push(body::motion(pool, body, &terms, &is_var));
             }
             if let Some(k) = &model.kinetic {
                 k_terms.push(k.expr);
@@ -477,7 +483,7 @@ impl Derivation {
             equations_seconds,
             constraints: Default::default(),
         };
-        crate::constraint::attach(&mut derivation)?;
+        constraint::attach(&mut derivation)?;
         Ok(derivation)
     }
 

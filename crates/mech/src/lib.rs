@@ -18,12 +18,9 @@
 //! assert_eq!(d.pool().display(d.momenta[0]).to_string(), "l^2*m*th'");
 //! ```
 
-pub mod body;
-mod constrained;
-mod constraint;
+// The stages, in the order data flows through them (each module uses only
+// those listed above it; `tests/layers.rs` checks it).
 mod derive;
-mod dynamics;
-mod ensemble;
 mod error;
 pub mod euler;
 mod extremal;
@@ -31,29 +28,29 @@ pub mod inertia;
 mod model;
 mod modes;
 mod orbit;
-pub mod probe;
-mod quadratic;
+mod probe;
 mod report;
 mod run;
-mod series;
+mod source;
 mod sweep;
 mod top;
 
-pub use body::{Body, BodyMotion, BodyRecorder};
-pub use constrained::{constraint_columns, ConstrainedSystem, ConstraintAudit, INITIAL_TOLERANCE};
-pub use constraint::{Constraint, ConstraintKind, ConstraintSpec, Constraints};
+pub use derive::{BodyMotion, Constraint, Constraints};
 pub use derive::{Conserved, Derivation, Verdicts};
-pub use dynamics::{invariants_of, Dynamics, Form, Invariant, System};
 pub use error::ModelError;
 pub use extremal::{
     extremal, tanh_sinh, Candidate, Euler, EulerError, ExtremalConfig, ExtremalError, ExtremalReport, ExtremalSummary,
     Problem, SecondVariation, Start, EXTREMAL_FORMAT,
 };
-pub use model::{Coordinate, InitialValue, Located, Model, Parameter, Particle, MAX_FILE_BYTES};
+pub use model::{Body, ConstraintKind, ConstraintSpec, Coordinate, InitialValue, Located, Model, Parameter, Particle};
 pub use modes::{normal_modes, Mode, ModeKind, Modes, ModesConfig, ModesError, ModesReport, SymbolicModes};
 pub use orbit::{Kepler, Orbit, OrbitError, OrbitKind, OrbitReport};
 pub use report::{BodyReport, ConstraintReport, DeriveReport, HamiltonEquations, NamedExpr, Ordered};
+pub use run::body::BodyRecorder;
+pub use run::constrained::{constraint_columns, ConstrainedSystem, ConstraintAudit, INITIAL_TOLERANCE};
+pub use run::dynamics::{invariants_of, Dynamics, Form, Invariant, System};
 pub use run::{choose_method, simulate, Audit, Row, RunConfig, RunError, RunReport, StopCondition};
+pub use source::MAX_FILE_BYTES;
 pub use sweep::{
     format_axes, merge, parse_axes, sweep, Axis, Grid, Shard, SweepConfig, SweepError, SweepTable, TableRow, Target,
     CSV_MAGIC, DEFAULT_RTOL, LYAPUNOV_D0, LYAPUNOV_INTERVAL, MAX_RUNS,

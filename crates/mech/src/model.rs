@@ -7,46 +7,27 @@
 //! re-reads the text.
 
 use crate::error::ModelError;
+use crate::source::{
+    check_identifier, content_offset, number_expr, read_toml, RANK_COORDINATE, RANK_MOMENTUM, RANK_PARAMETER, RANK_TIME,
+};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::ops::Range;
 use sym::{ExprId, ParseErrorKind, ParseOptions, Pool};
 use toml::Spanned;
 
-/// Largest model file read, in bytes (hostile input is bounded).
-pub const MAX_FILE_BYTES: usize = 1 << 20;
+pub(crate) mod body;
+pub(crate) mod constraint;
 
-/// Names the expression language reserves.
-const RESERVED: &[&str] = &[
-    "t", "pi", "sin", "cos", "tan", "asin", "acos", "atan", "atan2", "sinh", "cosh", "tanh", "exp", "log", "ln",
-    "sqrt", "abs",
-];
-
-/// The symbol rank of parameters: they print first in products (`m*l^2*q''`).
-pub const RANK_PARAMETER: u8 = 0;
-/// The symbol rank of the time.
-pub const RANK_TIME: u8 = 1;
-/// The symbol rank of coordinates, velocities and accelerations.
-pub const RANK_COORDINATE: u8 = 2;
-/// The symbol rank of momenta.
-pub const RANK_MOMENTUM: u8 = 3;
+pub use crate::source::Parameter;
+pub use body::Body;
+pub use constraint::{ConstraintKind, ConstraintSpec};
 
 /// A generalized coordinate.
 #[derive(Debug, Clone)]
 pub struct Coordinate {
     /// Its name (`th`).
     pub name: String,
-    /// Where it is declared.
-    pub span: Range<usize>,
-}
-
-/// A parameter with its numeric value.
-#[derive(Debug, Clone)]
-pub struct Parameter {
-    /// Its name (`g`).
-    pub name: String,
-    /// Its value (from the file or `--set`).
-    pub value: f64,
     /// Where it is declared.
     pub span: Range<usize>,
 }
@@ -112,9 +93,9 @@ pub struct Model {
     /// Initial values from `[initial]`.
     pub initial: Vec<InitialValue>,
     /// Rigid bodies (`[[bodies]]`).
-    pub bodies: Vec<crate::body::Body>,
+    pub bodies: Vec<Body>,
     /// Constraints from `[[constraints]]`, in file order.
-    pub constraints: Vec<crate::constraint::ConstraintSpec>,
+    pub constraints: Vec<ConstraintSpec>,
 }
 
 #[derive(Deserialize)]
@@ -136,9 +117,9 @@ struct RawModel {
     #[serde(default)]
     initial: BTreeMap<Spanned<String>, Spanned<NumOrText>>,
     #[serde(default)]
-    bodies: Vec<Spanned<crate::body::RawBody>>,
+    bodies: Vec<Spanned<body::RawBody>>,
     #[serde(default)]
-    constraints: Vec<Spanned<crate::constraint::RawConstraint>>,
+    constraints: Vec<Spanned<constraint::RawConstraint>>,
 }
 
 #[derive(Deserialize)]
@@ -288,84 +269,6 @@ impl Reader<'_> {
     }
 }
 
-/// A float from the file, kept exact when it is an integer (`2` → 2, `0.5` → 0.5).
-pub(crate) fn number_expr(pool: &mut Pool, x: f64) -> ExprId {
-    if x.fract() == 0.0 && x.abs() < 1e15 {
-        pool.int(x as i64)
-    } else {
-        pool.float(x)
-    }
-}
-
-/// Where the text of a TOML string value starts, if its characters map one to
-/// one onto the file (no escapes); otherwise errors point at the whole value.
-/// Shared by every file the library reads (models, body files, problems).
-pub(crate) fn content_offset(source: &str, span: &Range<usize>, value: &str) -> Option<usize> {
-    let raw = source.get(span.clone())?;
-    for quote in ["\"\"\"", "'''", "\"", "'"] {
-        if raw.len() >= 2 * quote.len() && raw.starts_with(quote) && raw.ends_with(quote) {
-            let mut start = quote.len();
-            let inner = &raw[start..raw.len() - quote.len()];
-            let inner = if quote.len() == 3 {
-                let trimmed = inner.strip_prefix("\r\n").or_else(|| inner.strip_prefix('\n'));
-                if let Some(t) = trimmed {
-                    start += inner.len() - t.len();
-                    t
-                } else {
-                    inner
-                }
-            } else {
-                inner
-            };
-            return (inner == value).then_some(span.start + start);
-        }
-    }
-    None
-}
-
-/// A name is letters, digits and '_', starting with a letter or '_'.
-pub(crate) fn check_name_shape(name: &Spanned<String>, what: &str) -> Result<(), ModelError> {
-    let n = name.get_ref();
-    let mut chars = n.chars();
-    let ok = matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
-        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_');
-    if !ok {
-        return Err(ModelError::at(
-            name.span(),
-            format!("{what} '{n}' is not a valid name: expected letters, digits and '_', starting with a letter"),
-        ));
-    }
-    Ok(())
-}
-
-/// Reads the TOML of a file the library knows (`what`: "model", "body", …),
-/// with the size limit, into its raw table; errors carry the TOML span.
-pub(crate) fn read_toml<T: serde::de::DeserializeOwned>(source: &str, what: &str) -> Result<T, ModelError> {
-    if source.len() > MAX_FILE_BYTES {
-        return Err(ModelError::whole(format!(
-            "the {what} file is {} bytes; the limit is {MAX_FILE_BYTES}",
-            source.len()
-        )));
-    }
-    toml::from_str(source).map_err(|e| {
-        let message = e.message().trim().to_string();
-        match e.span() {
-            Some(span) => ModelError::at(span, message),
-            None => ModelError::whole(message),
-        }
-    })
-}
-
-pub(crate) fn check_identifier(name: &Spanned<String>, what: &str) -> Result<(), ModelError> {
-    check_name_shape(name, what)?;
-    let n = name.get_ref();
-    if RESERVED.contains(&n.as_str()) {
-        return Err(ModelError::at(name.span(), format!("{what} '{n}' uses a reserved name"))
-            .with_help("t is the time, pi the constant; function names cannot be symbols"));
-    }
-    Ok(())
-}
-
 impl Model {
     /// Reads a model file's text. `overrides` are `--set name=value` pairs,
     /// applied to `[parameters]` (an unknown name is an error).
@@ -472,7 +375,7 @@ impl Model {
             }
             particles.push(Particle { mass, position, potential, span: p.span() });
         }
-        let bodies = crate::body::read_all(&mut r, &raw.bodies)?;
+        let bodies = body::read_all(&mut r, &raw.bodies)?;
         if let (Some(_), Some(b), Some(p)) =
             (&gravity, raw.bodies.first(), particles.iter().find(|p| p.position.len() != 3))
         {
@@ -553,7 +456,7 @@ impl Model {
         // Constraints (read by `constraint.rs`).
         let mut constraints = Vec::new();
         for (k, c) in raw.constraints.iter().enumerate() {
-            let spec = crate::constraint::read_spec(c, k, &constraints, &mut |text, scope_state, what| {
+            let spec = constraint::read_spec(c, k, &constraints, &mut |text, scope_state, what| {
                 let scope = if scope_state { Scope::State } else { Scope::Configuration };
                 r.expr(text, scope, what)
             })?;

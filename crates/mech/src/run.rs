@@ -9,10 +9,16 @@
 //! separable → an 8th-order symplectic composition; H conserved, not separable →
 //! Gauss–Legendre (order 6) on Hamilton's equations; otherwise DOP853.
 
+pub(crate) mod body;
+pub(crate) mod constrained;
+pub(crate) mod dynamics;
+pub(crate) mod ensemble;
+pub(crate) mod series;
+
 use crate::derive::Derivation;
-use crate::dynamics::{Dynamics, Form, System};
 use crate::error::ModelError;
 use crate::probe;
+use dynamics::{Dynamics, Form, System};
 use num::{integrate, Config, Direction, Event, Method, ObservationKind, Output, SolveError, Solver, StopReason};
 use std::ops::ControlFlow;
 use std::time::Instant;
@@ -227,7 +233,7 @@ pub struct RunReport {
     /// Wall-clock seconds of the integration (compilation included).
     pub wall_seconds: f64,
     /// With constraints: the audit of each constraint (empty otherwise).
-    pub constraints: Vec<crate::constrained::ConstraintAudit>,
+    pub constraints: Vec<constrained::ConstraintAudit>,
 }
 
 /// Why a run did not complete.
@@ -303,7 +309,7 @@ pub fn simulate(
     mut on_row: impl FnMut(&Row<'_>) -> ControlFlow<()>,
 ) -> Result<RunReport, RunError> {
     if !d.constraints.is_empty() {
-        return crate::constrained::simulate(d, config, on_row);
+        return constrained::simulate(d, config, on_row);
     }
     let start = Instant::now();
     if !(config.until.is_finite() && config.until > 0.0) {
@@ -314,7 +320,7 @@ pub fn simulate(
     }
     let (q0, qd0) = d.model.initial_state().map_err(RunError::Input)?;
     // The events' indices: stop conditions, crossings, then one guard per body.
-    let guards = crate::body::gimbal_guards(d, config.rtol);
+    let guards = body::gimbal_guards(d, config.rtol);
     if let Some(g) = guards.iter().find(|g| g.violated(&q0)) {
         let span =
             d.model.initial.iter().find(|iv| iv.coord == g.beta && iv.order == 0).map(|iv| iv.value.span.clone());

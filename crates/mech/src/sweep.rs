@@ -48,7 +48,7 @@
 //! tolerances a high-order Taylor series (order 13 at 1e-10) takes the fewest
 //! and cheapest steps — the transcendental functions are evaluated once per
 //! step, and its native code is compiled once for the whole sweep. Runs go
-//! [`crate::ensemble::LANES`] trajectories at a time in lock step (the
+//! [`crate::run::ensemble::LANES`] trajectories at a time in lock step (the
 //! Lyapunov twins on their own lanes), each lane with its own step, and a lane
 //! whose run ends takes the next run of its job (so lanes idle only at a job's
 //! end: the 200×200 chaos map on one thread takes 14.5 s instead of the 17.4 s
@@ -57,14 +57,14 @@
 //! rigid bodies default to DOP853, whose events guard the Euler angles'
 //! gimbal singularity. Any other method runs trajectory by trajectory.
 
-use crate::body::GimbalGuard;
 use crate::derive::Derivation;
-use crate::dynamics::{Dynamics, Form, System};
-use crate::ensemble::{propagate, Batch, LANES};
 use crate::error::ModelError;
 use crate::model::Model;
+use crate::run::body::GimbalGuard;
 use crate::run::choose_method;
-use crate::series::LagrangeSeries;
+use crate::run::dynamics::{Dynamics, Form, System};
+use crate::run::ensemble::{propagate, Batch, LANES};
+use crate::run::series::LagrangeSeries;
 use num::{integrate, integrate_to, Config, Direction, Event, Method, Output, SolveError, Solver, StopReason};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -601,7 +601,7 @@ pub fn sweep(
     let n = dynamics.n_coords();
     // Rigid bodies: a run through the Euler angles' gimbal singularity fails
     // there (as `simulate` does) instead of integrating garbage.
-    let guards = crate::body::gimbal_guards(d, config.rtol);
+    let guards = crate::run::body::gimbal_guards(d, config.rtol);
     let d: &Derivation = d;
     let plan = Plan { method, form, config, guards: &guards };
 
@@ -1022,7 +1022,7 @@ struct OnLanes {
 
 impl Plan<'_> {
     /// The runs of one job with the Taylor method in lock step
-    /// ([`crate::ensemble`]), each in the same segments as [`Plan::run`]. A
+    /// ([`crate::run::ensemble`]), each in the same segments as [`Plan::run`]. A
     /// lane (with its twin's) takes the job's next run as soon as its run
     /// ends, so that no lane idles while runs remain.
     fn run_batch(

@@ -267,7 +267,7 @@ impl Top {
         match kind {
             TopKind::Free => top.free = Some(top.free_top()),
             TopKind::Heavy => {
-                if sb.abs() < crate::body::gimbal_threshold(1e-9) {
+                if sb.abs() < crate::run::body::gimbal_threshold(1e-9) {
                     return Err(TopError::whole(
                         format!("the top starts at {} = {} where the Euler angles are singular", top.angle_names[1], angles[1]),
                         "start the top tilted (β away from 0 and π); a top spinning exactly upright is the sleeping top, whose stability is p_γ² > 4 I M g S",

@@ -76,7 +76,7 @@ fn missing(key: &str, example: &str) -> ModelError {
 }
 
 fn check_identifier(name: &Spanned<String>, what: &str) -> Result<(), ModelError> {
-    crate::model::check_name_shape(name, what)?;
+    crate::source::check_name_shape(name, what)?;
     let n = name.get_ref();
     if RESERVED.contains(&n.as_str()) {
         return Err(ModelError::at(name.span(), format!("{what} '{n}' uses a reserved name"))
@@ -89,7 +89,7 @@ impl Problem {
     /// Reads a problem file's text. `overrides` are `--set name=value` pairs,
     /// applied to `[parameters]` (an unknown name is an error).
     pub fn parse(source: &str, overrides: &[(String, f64)]) -> Result<Problem, ModelError> {
-        let raw: RawProblem = crate::model::read_toml(source, "problem")?;
+        let raw: RawProblem = crate::source::read_toml(source, "problem")?;
         let independent = raw.independent.ok_or_else(|| missing("independent", "independent = \"x\""))?;
         let unknown = raw.unknown.ok_or_else(|| missing("unknown", "unknown = \"y\""))?;
         let integrand = raw.integrand.ok_or_else(|| missing("integrand", "integrand = \"sqrt(1 + y'^2)\""))?;
@@ -136,10 +136,10 @@ impl Problem {
 
         let mut pool = Pool::default();
         for (name, _) in &parameters {
-            pool.set_rank(name, crate::model::RANK_PARAMETER);
+            pool.set_rank(name, crate::source::RANK_PARAMETER);
         }
-        pool.set_rank(independent.get_ref(), crate::model::RANK_TIME);
-        pool.set_rank(unknown.get_ref(), crate::model::RANK_COORDINATE);
+        pool.set_rank(independent.get_ref(), crate::source::RANK_TIME);
+        pool.set_rank(unknown.get_ref(), crate::source::RANK_COORDINATE);
         let names = Names { x: independent.get_ref(), y: unknown.get_ref(), parameters: &parameters };
         let f = names.expr(&mut pool, source, integrand.get_ref(), integrand.span(), true, "the integrand")?;
 
@@ -231,7 +231,7 @@ impl Names<'_> {
         };
         let opts = ParseOptions::default().with_known(&known);
         pool.parse_with(text, &opts).map_err(|err| {
-            let at = match crate::model::content_offset(source, &span, text) {
+            let at = match crate::source::content_offset(source, &span, text) {
                 Some(o) => (o + err.span.start as usize)..(o + (err.span.end as usize).max(err.span.start as usize + 1)),
                 None => span.clone(),
             };

@@ -11,7 +11,7 @@
 
 use super::shapes::Shape;
 use crate::error::ModelError;
-use crate::model::Parameter;
+use crate::source::Parameter;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::ops::Range;
@@ -134,7 +134,7 @@ impl Reader<'_> {
             NumOrText::Text(s) => s,
         };
         let span = v.span();
-        let offset = crate::model::content_offset(self.source, &span, text);
+        let offset = crate::source::content_offset(self.source, &span, text);
         let names: Vec<String> = self.parameters.iter().map(|p| p.name.clone()).collect();
         let known = |name: &str, order: u8| {
             order == 0 && (names.iter().any(|p| p == name) || (with_xyz && DENSITY_VARIABLES.contains(&name)))
@@ -349,7 +349,7 @@ fn decimal(text: &str) -> Option<sym::Rational> {
 }
 
 fn check_identifier(name: &Spanned<String>) -> Result<(), ModelError> {
-    crate::model::check_name_shape(name, "parameter")?;
+    crate::source::check_name_shape(name, "parameter")?;
     let n = name.get_ref();
     if RESERVED.contains(&n.as_str()) {
         return Err(ModelError::at(name.span(), format!("parameter '{n}' uses a reserved name"))
@@ -366,7 +366,7 @@ impl BodyFile {
     /// Reads a body file's text. `overrides` are `--set name=value` pairs,
     /// applied to `[parameters]` (an unknown name is an error).
     pub fn parse(source: &str, overrides: &[(String, f64)]) -> Result<BodyFile, ModelError> {
-        let raw: RawBody = crate::model::read_toml(source, "body")?;
+        let raw: RawBody = crate::source::read_toml(source, "body")?;
         let mut params: Vec<(&Spanned<String>, &Spanned<f64>)> = raw.parameters.iter().collect();
         params.sort_by_key(|(k, _)| k.span().start);
         let mut parameters: Vec<Parameter> = Vec::new();

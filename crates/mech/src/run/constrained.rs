@@ -22,10 +22,10 @@
 //! beyond round-off (`INITIAL_TOLERANCE`) is bad input (exit 2) naming the
 //! constraint and by how much; within it the state is projected silently.
 
-use crate::constraint::ConstraintKind;
 use crate::derive::Derivation;
-use crate::dynamics::{Dynamics, Form, Kernel};
 use crate::error::ModelError;
+use crate::model::ConstraintKind;
+use crate::run::dynamics::{Dynamics, Form, Kernel};
 use crate::run::{drift_warnings, Audit, InvariantAudit, Row, RunConfig, RunError, RunReport};
 use num::SolveError;
 use num::{integrate_projected, Config, Event, LinearSolver, Method, ObservationKind, OdeSystem, RhsError, Solver};

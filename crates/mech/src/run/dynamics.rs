@@ -22,7 +22,7 @@
 use crate::derive::Derivation;
 use crate::error::ModelError;
 use crate::probe;
-use crate::series::LagrangeSeries;
+use crate::run::series::LagrangeSeries;
 use num::{LinearSolver, OdeSystem, RhsError, SeparableSystem};
 use rustc_hash::FxHashSet;
 use std::sync::{Arc, OnceLock};
@@ -156,7 +156,7 @@ pub struct Dynamics {
     pattern: MassPattern,
     /// Outputs M's stored entries (`pattern`) and `f` (n) from `[q, q', t, params]`.
     mass_forcing: LazyKernel,
-    /// The tape of `mass_forcing`, for Taylor expansions ([`crate::series`]).
+    /// The tape of `mass_forcing`, for Taylor expansions ([`crate::run::series`]).
     mass_forcing_tape: Arc<Tape>,
     /// Hamilton's form, two kernels: M's stored entries and `b` (n) from `[q, t, params]`
     /// (free of q'), and `∂L/∂q − ∂R/∂q' + Q` (n) from `[q, q', t, params]`. Split so that
@@ -551,7 +551,7 @@ impl OdeSystem for System {
         Ok(())
     }
 
-    /// The Taylor expansion in Lagrange form ([`crate::series`]); the other forms have none.
+    /// The Taylor expansion in Lagrange form ([`crate::run::series`]); the other forms have none.
     fn taylor_series(&mut self, t: f64, y: &[f64], order: usize, out: &mut [f64]) -> Option<Result<(), RhsError>> {
         if self.form != Form::Lagrange {
             return None;

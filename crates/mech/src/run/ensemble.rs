@@ -10,7 +10,7 @@
 //! whose expansion stops being finite is frozen with its failure while the
 //! others go on.
 
-use crate::series::LagrangeSeries;
+use crate::run::series::LagrangeSeries;
 use num::{taylor_advance, taylor_step, Config};
 use sym::Lanes;
 

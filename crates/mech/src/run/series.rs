@@ -286,7 +286,7 @@ impl<const L: usize> LagrangeSeries<L> {
 
 #[cfg(test)]
 mod tests {
-    use crate::dynamics::{Dynamics, Form};
+    use crate::run::dynamics::{Dynamics, Form};
     use crate::{Derivation, Model};
     use num::OdeSystem;
 

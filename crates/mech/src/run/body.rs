@@ -1,0 +1,130 @@
+//! Rigid bodies along a run: the columns of their ω and L, the recorder that
+//! evaluates them row by row, and the guards that stop a run before a body's
+//! Euler angles reach their gimbal singularity.
+
+use crate::derive::BodyMotion;
+use sym::ExprId;
+
+/// The CSV column names of the bodies' ω and L: `omega1..3`, `L1..3`, prefixed
+/// with `NAME_` when the model has more than one body.
+pub fn column_names(bodies: &[BodyMotion]) -> Vec<String> {
+    let mut cols = Vec::new();
+    for b in bodies {
+        let prefix = if bodies.len() > 1 { format!("{}_", b.name) } else { String::new() };
+        for k in 1..=3 {
+            cols.push(format!("{prefix}omega{k}"));
+        }
+        for k in 1..=3 {
+            cols.push(format!("{prefix}L{k}"));
+        }
+    }
+    cols
+}
+
+/// The smallest |sin β| a run accepts for an Euler-angle body at relative
+/// tolerance `rtol`. Solving for the accelerations divides by the angles' mass
+/// matrix, whose determinant is ∝ sin²β; round-off in the accelerations grows
+/// like ε/sin²β (ε the machine epsilon), so below sqrt(ε/rtol) it exceeds the
+/// tolerance asked for. Clamped to [1e-6, 1e-3].
+pub fn gimbal_threshold(rtol: f64) -> f64 {
+    (f64::EPSILON / rtol.max(1e-300)).sqrt().clamp(1e-6, 1e-3)
+}
+
+/// A condition a run stops on, as a failure, before a body's Euler angles
+/// reach their gimbal singularity.
+#[derive(Debug, Clone)]
+pub struct GimbalGuard {
+    /// The index of β among the coordinates.
+    pub beta: usize,
+    /// s, from [`gimbal_threshold`].
+    pub threshold: f64,
+    /// The body's name.
+    pub body: String,
+    /// β's name.
+    pub beta_name: String,
+}
+
+impl GimbalGuard {
+    /// Whether the state is past the guard.
+    pub fn violated(&self, q: &[f64]) -> bool {
+        let s = q[self.beta].sin().abs();
+        s.is_nan() || s < self.threshold
+    }
+
+    /// What happened at time t, in the user's terms.
+    pub fn message(&self, t: f64) -> String {
+        format!(
+            "body '{}' reached the gimbal singularity of its Euler angles at t = {t}: |sin {b}| fell below {:.1e} ({b} near 0 or π), where α and γ turn about the same axis and the angles' mass matrix (determinant ∝ sin²{b}) is singular, so the accelerations cannot be trusted. {}",
+            self.body,
+            self.threshold,
+            self.advice(),
+            b = self.beta_name
+        )
+    }
+
+    /// What to do about it.
+    pub fn advice(&self) -> String {
+        format!(
+            "Euler angles cannot follow a motion through {b} = 0 or π: tilt the fixed frame so that the body's 3-axis stays away from the fixed z axis, or end the run earlier (--until, --stop-when)",
+            b = self.beta_name
+        )
+    }
+}
+
+/// One [`GimbalGuard`] per body, for a run at relative tolerance `rtol`.
+pub fn gimbal_guards(d: &crate::Derivation, rtol: f64) -> Vec<GimbalGuard> {
+    let s = gimbal_threshold(rtol);
+    d.model
+        .bodies
+        .iter()
+        .map(|b| {
+            let beta = b.angles[1];
+            GimbalGuard { beta, threshold: s, body: b.name.clone(), beta_name: d.model.coordinates[beta].name.clone() }
+        })
+        .collect()
+}
+
+/// Evaluates the bodies' ω and L along a run: one tape over `[q, q', t, parameters]`.
+#[derive(Debug, Clone)]
+pub struct BodyRecorder {
+    tape: sym::Tape,
+    inputs: Vec<f64>,
+    n: usize,
+    columns: Vec<String>,
+}
+
+impl BodyRecorder {
+    /// None when the derivation has no bodies.
+    pub fn new(d: &mut crate::Derivation) -> Option<BodyRecorder> {
+        if d.bodies.is_empty() {
+            return None;
+        }
+        let n = d.q.len();
+        let mut input_syms: Vec<ExprId> = d.q.clone();
+        input_syms.extend(&d.qd);
+        input_syms.push(d.t);
+        let mut inputs = vec![0.0; 2 * n + 1];
+        for p in &d.model.parameters {
+            input_syms.push(d.model.pool.symbol(&p.name));
+            inputs.push(p.value);
+        }
+        let exprs: Vec<ExprId> =
+            d.bodies.iter().flat_map(|b| b.omega.iter().chain(&b.angular_momentum).copied()).collect();
+        let tape = sym::Tape::compile(&d.model.pool, &exprs, &input_syms).ok()?;
+        Some(BodyRecorder { tape, inputs, n, columns: column_names(&d.bodies) })
+    }
+
+    /// The column names, six per body.
+    pub fn columns(&self) -> &[String] {
+        &self.columns
+    }
+
+    /// ω and L of every body at (t, q, q'), into `out` (length `columns().len()`).
+    pub fn eval(&mut self, t: f64, q: &[f64], qd: &[f64], out: &mut [f64]) {
+        let n = self.n;
+        self.inputs[..n].copy_from_slice(q);
+        self.inputs[n..2 * n].copy_from_slice(qd);
+        self.inputs[2 * n] = t;
+        self.tape.eval(&self.inputs, out);
+    }
+}

@@ -1,0 +1,116 @@
+//! The stages of `mech` form a one-way pipeline: each top-level module uses
+//! only the modules declared above it in `lib.rs` (model → derive → run →
+//! analyses, with the shared leaves first). This test reads the sources and
+//! fails on any `crate::` path that points at the same level or upward, so
+//! that a module cycle cannot come back unnoticed.
+
+use std::collections::HashMap;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+fn src() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("src")
+}
+
+/// The top-level modules in the order `lib.rs` declares them.
+fn stages(lib: &str) -> Vec<String> {
+    lib.lines()
+        .map(str::trim)
+        .filter_map(|l| l.strip_prefix("pub mod ").or_else(|| l.strip_prefix("mod ")))
+        .filter_map(|rest| rest.strip_suffix(';'))
+        .map(str::to_string)
+        .collect()
+}
+
+/// The names `lib.rs` re-exports, each with the top-level module it comes from,
+/// so that `crate::Derivation` counts as a use of `derive`.
+fn reexports(lib: &str) -> HashMap<String, String> {
+    let mut map = HashMap::new();
+    let flat = lib.lines().filter(|l| !l.trim_start().starts_with("//")).collect::<Vec<_>>().join(" ");
+    for stmt in flat.split(';') {
+        let Some(path) = stmt.trim().strip_prefix("pub use ") else { continue };
+        let module = path.split("::").next().unwrap_or_default().trim().to_string();
+        let names = match (path.find('{'), path.rfind('}')) {
+            (Some(a), Some(b)) => path[a + 1..b].to_string(),
+            _ => path.rsplit("::").next().unwrap_or_default().to_string(),
+        };
+        for name in names.split(',').map(str::trim).filter(|n| !n.is_empty()) {
+            map.insert(name.to_string(), module.clone());
+        }
+    }
+    map
+}
+
+fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    for entry in fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            rust_files(&path, out);
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            out.push(path);
+        }
+    }
+}
+
+/// The top-level modules a source text names through `crate::`, comments left out.
+fn uses(text: &str, reexports: &HashMap<String, String>) -> Vec<String> {
+    let mut found = Vec::new();
+    for line in text.lines().filter(|l| !l.trim_start().starts_with("//")) {
+        let mut rest = line;
+        while let Some(at) = rest.find("crate::") {
+            rest = &rest[at + "crate::".len()..];
+            let items: Vec<&str> = match rest.strip_prefix('{') {
+                Some(group) => group.split('}').next().unwrap_or_default().split(',').collect(),
+                None => vec![rest],
+            };
+            for item in items {
+                let ident: String =
+                    item.trim().chars().take_while(|c| c.is_ascii_alphanumeric() || *c == '_').collect();
+                if ident.is_empty() {
+                    continue;
+                }
+                found.push(reexports.get(&ident).cloned().unwrap_or(ident));
+            }
+        }
+    }
+    found
+}
+
+#[test]
+fn every_stage_uses_only_the_stages_before_it() {
+    let lib = fs::read_to_string(src().join("lib.rs")).unwrap();
+    let order = stages(&lib);
+    let reexports = reexports(&lib);
+    let rank = |m: &str| order.iter().position(|s| s == m);
+    let mut files = Vec::new();
+    rust_files(&src(), &mut files);
+    let mut wrong = Vec::new();
+    for file in &files {
+        let rel = file.strip_prefix(src()).unwrap();
+        let top = rel.components().next().unwrap().as_os_str().to_string_lossy().trim_end_matches(".rs").to_string();
+        if top == "lib" {
+            continue;
+        }
+        let own = rank(&top).unwrap_or_else(|| panic!("{} is not declared in lib.rs", rel.display()));
+        let text = fs::read_to_string(file).unwrap();
+        for used in uses(&text, &reexports) {
+            match rank(&used) {
+                Some(r) if r < own || used == top => {}
+                Some(_) => wrong.push(format!("{} uses `{used}`, a later stage", rel.display())),
+                None => wrong.push(format!(
+                    "{} names `crate::{used}`, which lib.rs neither declares nor re-exports",
+                    rel.display()
+                )),
+            }
+        }
+    }
+    assert!(wrong.is_empty(), "the stages of mech must form a one-way pipeline:\n{}", wrong.join("\n"));
+}
+
+#[test]
+fn the_checker_sees_uses_in_groups_and_through_reexports() {
+    let reexports = HashMap::from([("Derivation".to_string(), "derive".to_string())]);
+    let text =
+        "use crate::{Derivation, model::Model};\n// crate::run in a comment\nlet x = crate::probe::is_zero(p, e);";
+    assert_eq!(uses(text, &reexports), ["derive", "model", "probe"]);
+}
