@@ -18,22 +18,31 @@
 //! assert_eq!(d.pool().display(d.momenta[0]).to_string(), "l^2*m*th'");
 //! ```
 
-// The stages, in the order data flows through them (each module uses only
-// those listed above it; `tests/layers.rs` checks it).
-mod derive;
+// The stages, in the order data flows through them: a module uses only the
+// modules of the groups above its own (`tests/layers.rs` checks it).
+// Errors.
 mod error;
+// Leaves: the numeric probe of symbolic facts, Euler angles, TOML files.
 pub mod euler;
+mod probe;
+mod source;
+// Siblings of the pipeline: body files and inertia tensors, variational problems.
 mod extremal;
 pub mod inertia;
+// A model file, read.
 mod model;
-mod modes;
-mod orbit;
-mod probe;
+// The derivation: a pure function of the model.
+mod derive;
+// The derivation as the `lagrange.derive/1` report.
 mod report;
+// Runs: the derivation compiled, integrated, audited.
 mod run;
-mod source;
+// Analyses of a derivation.
+mod modes;
 mod sweep;
 mod top;
+// Analyses built on other analyses.
+mod orbit;
 
 pub use derive::{BodyMotion, Constraint, Constraints};
 pub use derive::{Conserved, Derivation, Verdicts};
