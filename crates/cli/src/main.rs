@@ -251,7 +251,7 @@ fn derive(path: &Path, format: Format, set: &[(String, f64)]) -> Result<(), Fail
                 map.insert("derive_seconds".into(), serde_json::json!(derive_seconds));
                 // Extra field: parse + L, M and f only, the steps a CAS such as
                 // SymEngine's benchmark script performs.
-                let equations = parse_seconds + derivation.equations_seconds;
+                let equations = parse_seconds + derivation.equations_seconds();
                 map.insert("equations_seconds".into(), serde_json::json!(equations));
             }
             let mut s =

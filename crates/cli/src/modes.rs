@@ -50,10 +50,10 @@ const MAX_PRINTED_SHAPE: usize = 8;
 /// Runs the command.
 pub fn run(args: &Args) -> Result<(), Failure> {
     let path = &args.model;
-    let (source, mut d) = crate::derive_file(path, &args.set)?;
+    let (source, d) = crate::derive_file(path, &args.set)?;
     d.reject_constraints("`lagrange modes`").map_err(|e| Failure::model(path, &source, e))?;
     let config = ModesConfig { at: args.at.clone() };
-    let modes = mech::normal_modes(&mut d, &config).map_err(|e| failure(path, &source, e))?;
+    let modes = mech::normal_modes(&d, &config).map_err(|e| failure(path, &source, e))?;
     if !modes.stable && !args.allow_unstable {
         let unstable: Vec<String> = modes
             .modes
@@ -138,10 +138,9 @@ fn matrix_lines(m: &[Vec<f64>]) -> Vec<String> {
 }
 
 fn text(d: &Derivation, m: &Modes, from_initial: bool) -> String {
-    let pool = d.pool();
     let n = m.coordinates.len();
     let mut s = String::new();
-    let _ = writeln!(s, "{} — small oscillations (notes, Sec. 3.3)\n", d.model.name);
+    let _ = writeln!(s, "{} — small oscillations (notes, Sec. 3.3)\n", d.model().name);
     let _ = writeln!(
         s,
         "Equilibrium (∂U/∂q = 0; damped Newton from {}, {} iteration{}, |∂U/∂q| = {}):",
@@ -174,6 +173,7 @@ fn text(d: &Derivation, m: &Modes, from_initial: bool) -> String {
         let _ = writeln!(s, "  ({n}×{n} matrices; see --format json)");
     }
     if let Some(sym) = &m.symbolic {
+        let pool = &sym.pool;
         let rows = |mm: &[Vec<sym::ExprId>]| -> String {
             let r: Vec<String> = mm
                 .iter()
@@ -189,7 +189,7 @@ fn text(d: &Derivation, m: &Modes, from_initial: bool) -> String {
         let _ = writeln!(s, "  {} = 0", pool.display(sym.secular));
     }
     let _ = writeln!(s, "\nNormal frequencies, ascending; mode shapes a with aᵀ T a = 1 (U a = Ω² T a):");
-    let exact = m.symbolic.as_ref().and_then(|x| x.frequencies.as_ref());
+    let exact = m.symbolic.as_ref().and_then(|x| x.frequencies.as_ref().map(|f| (f, &x.pool)));
     for (j, mode) in m.modes.iter().enumerate() {
         let label = format!("Ω{}", j + 1);
         let value = match mode.kind {
@@ -204,7 +204,7 @@ fn text(d: &Derivation, m: &Modes, from_initial: bool) -> String {
             }
         };
         let _ = writeln!(s, "  {label} = {value}");
-        if let Some(ex) = exact {
+        if let Some((ex, pool)) = exact {
             let _ = writeln!(s, "       = {}", pool.display(ex[j]));
         }
         if n <= MAX_PRINTED_SHAPE {
@@ -253,7 +253,7 @@ fn animation(d: &Derivation, m: &Modes) -> String {
     let _ = writeln!(
         s,
         r#"<text x="20" y="30" font-size="20" font-weight="bold">{} — normal modes</text>"#,
-        escape(&d.model.name)
+        escape(&d.model().name)
     );
     let _ = writeln!(
         s,

@@ -34,9 +34,9 @@ pub struct Args {
 /// Runs the command.
 pub fn run(args: &Args) -> Result<(), Failure> {
     let path = &args.model;
-    let (source, mut d) = crate::derive_file(path, &args.set)?;
+    let (source, d) = crate::derive_file(path, &args.set)?;
     d.reject_constraints("`lagrange orbit`").map_err(|e| Failure::model(path, &source, e))?;
-    let mut orbit = Orbit::new(&mut d).map_err(|e| failure(path, &source, e))?;
+    let mut orbit = Orbit::new(&d).map_err(|e| failure(path, &source, e))?;
     if let Some(svg) = &args.plot {
         let text = figure(&d, &mut orbit).map_err(|e| Failure::input(svg, format!("cannot draw the plot: {e}")))?;
         std::fs::write(svg, text).map_err(|e| Failure::input(svg, format!("cannot write the plot: {e}")))?;
@@ -66,10 +66,10 @@ fn failure(path: &Path, source: &str, e: OrbitError) -> Failure {
 }
 
 fn text(d: &Derivation, o: &Orbit) -> String {
-    let pool = d.pool();
+    let pool = &o.pool;
     let [rn, an] = &o.names;
     let mut s = String::new();
-    let _ = writeln!(s, "{} — central-force orbit (notes, Sec. 3.1)\n", d.model.name);
+    let _ = writeln!(s, "{} — central-force orbit (notes, Sec. 3.1)\n", d.model().name);
     let _ = writeln!(s, "L = μ/2·({rn}'^2 + {rn}^2*{an}'^2) − U({rn}), read from the derivation:");
     let _ = writeln!(s, "  reduced mass      μ = {} = {}", pool.display(o.mu_expr), num(o.mu));
     let _ = writeln!(s, "  potential         U({rn}) = {}", pool.display(o.potential_expr));
@@ -195,7 +195,7 @@ fn figure(d: &Derivation, o: &mut Orbit) -> Result<String, Box<dyn Error>> {
         root.fill(&WHITE)?;
         let (header, body) = root.split_vertically(50);
         header.draw(&Text::new(
-            format!("{} — E = {}, l = {}, {}", d.model.name, num(o.energy), num(o.angular_momentum), o.kind.name()),
+            format!("{} — E = {}, l = {}, {}", d.model().name, num(o.energy), num(o.angular_momentum), o.kind.name()),
             (20, 15),
             ("sans-serif", 22).into_font(),
         ))?;

@@ -9,7 +9,7 @@
 use crate::diagnostics::Failure;
 use crate::plot::{self, PlotData, Series};
 use mech::{Derivation, RunConfig, RunError, RunReport, StopCondition};
-use num::{Direction, Method, Output};
+use num::{Method, Output};
 use serde_json::json;
 use std::fs::File;
 use std::io::{BufWriter, IsTerminal, Write};
@@ -53,7 +53,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     // and, for fixed-step methods, the pilot runs that choose the step.
     let started = Instant::now();
     let path = &opts.model;
-    let (source, mut derivation) = crate::derive_file(path, &opts.set)?;
+    let (source, derivation) = crate::derive_file(path, &opts.set)?;
     let derived = started.elapsed().as_secs_f64();
     let mut first_row: Option<f64> = None;
 
@@ -73,11 +73,11 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     }
     let mut stop_when = Vec::new();
     for text in &opts.stop_when {
-        stop_when.push(parse_stop(&mut derivation, text, "--stop-when")?);
+        stop_when.push(parse_stop(&derivation, text, "--stop-when")?);
     }
     let mut crossings = Vec::new();
     for text in &opts.crossing {
-        crossings.push(parse_stop(&mut derivation, text, "--crossing")?);
+        crossings.push(parse_stop(&derivation, text, "--crossing")?);
     }
     let defaults = RunConfig::default();
     let rtol = opts.rtol.unwrap_or(defaults.rtol);
@@ -118,11 +118,11 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     let progress = progress_bar(opts.until);
     let inv_names: Vec<String> = mech::invariants_of(&derivation).into_iter().map(|i| i.name).collect();
     // Rigid bodies: ω and L per body as extra columns.
-    let mut bodies = mech::BodyRecorder::new(&mut derivation);
+    let mut bodies = mech::BodyRecorder::new(&derivation);
     let mut body_values = vec![0.0; bodies.as_ref().map_or(0, |b| b.columns().len())];
     let constraint_cols = mech::constraint_columns(&derivation);
 
-    let result = mech::simulate(&mut derivation, &config, |row| {
+    let result = mech::simulate(&derivation, &config, |row| {
         first_row.get_or_insert_with(|| started.elapsed().as_secs_f64());
         if let Some(w) = csv.as_mut() {
             let r = (|| -> std::io::Result<()> {
@@ -189,12 +189,15 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     }
     let (report, failure) = match result {
         Ok(r) => (r, None),
+        Err(RunError::Until { until }) => {
+            return Err(Failure::usage(format!("--until must be a positive time, not {until}")))
+        }
         Err(RunError::Input(e)) => return Err(Failure::model(path, &source, e)),
         Err(RunError::Failed { message, report }) => (*report, Some(message)),
     };
 
     if let Some(plot_path) = &opts.plot {
-        let data = plot_data.into_plot(&derivation.model.name, &report, &names, &inv_names);
+        let data = plot_data.into_plot(&derivation.model().name, &report, &names, &inv_names);
         plot::write_svg(plot_path, &data).map_err(Failure::run)?;
     }
     let mut text = if opts.summary_json {
@@ -222,30 +225,9 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     }
 }
 
-/// `EXPR < RHS`, `EXPR > RHS` or `EXPR` (any crossing of zero).
-fn parse_stop(d: &mut Derivation, text: &str, option: &str) -> Result<StopCondition, Failure> {
-    let (lhs, rhs, direction) = match text.find(['<', '>', '=']) {
-        Some(i) => {
-            let dir = match text.as_bytes()[i] {
-                b'<' => Direction::Falling,
-                b'>' => Direction::Rising,
-                _ => Direction::Both,
-            };
-            let rest = text[i + 1..].strip_prefix('=').unwrap_or(&text[i + 1..]);
-            (&text[..i], Some((i + 1 + (text[i + 1..].len() - rest.len()), rest)), dir)
-        }
-        None => (text, None, Direction::Both),
-    };
-    let located = |e: mech::ModelError, offset: usize| Failure::expression(option, text, e, offset);
-    let g_lhs = d.model.parse_state_expr(lhs, option).map_err(|e| located(e, 0))?;
-    let g = match rhs {
-        Some((offset, rhs)) => {
-            let g_rhs = d.model.parse_state_expr(rhs, option).map_err(|e| located(e, offset))?;
-            d.model.pool.sub(g_lhs, g_rhs)
-        }
-        None => g_lhs,
-    };
-    Ok(StopCondition { expr: g, direction, text: text.to_string() })
+/// `EXPR < RHS`, `EXPR > RHS` or `EXPR` (any crossing of zero), for the option `option`.
+fn parse_stop(d: &Derivation, text: &str, option: &str) -> Result<StopCondition, Failure> {
+    StopCondition::parse(d, text, option).map_err(|e| Failure::expression(option, text, e, 0))
 }
 
 fn progress_bar(until: f64) -> Option<indicatif::ProgressBar> {
@@ -334,7 +316,7 @@ fn summary_json(r: &RunReport, names: &[String], timing: Timing) -> String {
 
 fn summary_text(r: &RunReport, names: &[String], d: &Derivation) -> String {
     let mut s = String::new();
-    s.push_str(&format!("{}\n", d.model.name));
+    s.push_str(&format!("{}\n", d.model().name));
     let step = match r.dt {
         Some(h) => format!("fixed step {h:.3e}"),
         None => format!("rtol {:.0e}, atol {:.0e}", r.rtol, r.atol),

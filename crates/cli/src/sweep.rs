@@ -98,7 +98,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     };
     let (source, mut derivation) = crate::derive_file(path, &args.set)?;
     derivation.reject_constraints("`lagrange sweep`").map_err(|e| Failure::model(path, &source, e))?;
-    let grid = Grid::parse(args.grid.as_deref().unwrap_or_default(), &derivation.model).map_err(usage)?;
+    let grid = Grid::parse(args.grid.as_deref().unwrap_or_default(), derivation.model()).map_err(usage)?;
     if args.heatmap.is_some() {
         let mut columns: Vec<String> = vec!["t_final".into(), "energy_drift".into()];
         if !args.no_lyapunov {

@@ -62,7 +62,7 @@ fn failure(path: &Path, source: &str, e: TopError) -> Failure {
 fn text(d: &Derivation, t: &Top) -> String {
     let [a, b, g] = &t.angle_names;
     let mut s = String::new();
-    let _ = writeln!(s, "{} — {} symmetric top '{}' (notes, Sec. 3.2.7)\n", d.model.name, t.kind.name(), t.body);
+    let _ = writeln!(s, "{} — {} symmetric top '{}' (notes, Sec. 3.2.7)\n", d.model().name, t.kind.name(), t.body);
     let _ = writeln!(s, "  I = I1 = I2 = {}, I3 = {}", num(t.i), num(t.i3));
     let _ = writeln!(
         s,
@@ -179,7 +179,7 @@ fn text(d: &Derivation, t: &Top) -> String {
 /// a short simulation of the model.
 fn axis_path(d: &mut Derivation, t: &Top) -> Vec<[f64; 3]> {
     let idx: Vec<usize> =
-        t.angle_names.iter().map(|n| d.model.coordinates.iter().position(|c| &c.name == n).unwrap_or(0)).collect();
+        t.angle_names.iter().map(|n| d.model().coordinates.iter().position(|c| &c.name == n).unwrap_or(0)).collect();
     let until = match (&t.heavy, &t.free) {
         (Some(h), _) if h.nutation_period.is_finite() && h.nutation_period > 0.0 => {
             // Enough nutations to go once around, at most 40.
@@ -225,7 +225,7 @@ fn figure(d: &mut Derivation, t: &Top) -> Result<String, Box<dyn Error>> {
         root.fill(&WHITE)?;
         let (header, body) = root.split_vertically(50);
         header.draw(&Text::new(
-            format!("{} — {} top, p_α = {}, p_γ = {}", d.model.name, t.kind.name(), num(t.p_alpha), num(t.p_gamma)),
+            format!("{} — {} top, p_α = {}, p_γ = {}", d.model().name, t.kind.name(), num(t.p_alpha), num(t.p_gamma)),
             (20, 15),
             ("sans-serif", 22).into_font(),
         ))?;

@@ -15,10 +15,12 @@ use sym::{ExprId, NameId, Pool, Symbol};
 
 mod body;
 mod constraint;
+mod layout;
 mod quadratic;
 
 pub use body::BodyMotion;
 pub use constraint::{Constraint, Constraints};
+pub use layout::Layout;
 
 /// A quantity the derivation shows to be conserved.
 #[derive(Debug, Clone)]
@@ -46,64 +48,66 @@ pub struct Verdicts {
 #[derive(Debug, Clone)]
 pub struct Derivation {
     /// The model it was derived from (it owns the pool).
-    pub model: Model,
+    pub(crate) model: Model,
     /// Coordinate symbols q.
-    pub q: Vec<ExprId>,
+    pub(crate) q: Vec<ExprId>,
     /// Velocity symbols q'.
-    pub qd: Vec<ExprId>,
+    pub(crate) qd: Vec<ExprId>,
     /// Acceleration symbols q''.
-    pub qdd: Vec<ExprId>,
+    pub(crate) qdd: Vec<ExprId>,
     /// Momentum symbols p_q.
-    pub p: Vec<ExprId>,
+    pub(crate) p: Vec<ExprId>,
     /// The time symbol.
-    pub t: ExprId,
+    pub(crate) t: ExprId,
     /// Kinetic energy T (None when the model gives only a Lagrangian).
-    pub kinetic: Option<ExprId>,
+    pub(crate) kinetic: Option<ExprId>,
     /// Potential U, possibly velocity-dependent (None for a Lagrangian-only model).
-    pub potential: Option<ExprId>,
+    pub(crate) potential: Option<ExprId>,
     /// The Lagrangian L = T − U.
-    pub lagrangian: ExprId,
+    pub(crate) lagrangian: ExprId,
     /// Rayleigh's dissipation function R.
-    pub dissipation: Option<ExprId>,
+    pub(crate) dissipation: Option<ExprId>,
     /// Generalized forces Q (zero where none is given).
-    pub forces: Vec<ExprId>,
+    pub(crate) forces: Vec<ExprId>,
     /// Generalized momenta p_q = ∂L/∂q'.
-    pub momenta: Vec<ExprId>,
+    pub(crate) momenta: Vec<ExprId>,
     /// E_q = d/dt ∂L/∂q' − ∂L/∂q + ∂R/∂q' − Q_q.
-    pub equations: Vec<ExprId>,
+    pub(crate) equations: Vec<ExprId>,
     /// M with E = M q'' − f.
-    pub mass_matrix: Vec<Vec<ExprId>>,
+    pub(crate) mass_matrix: Vec<Vec<ExprId>>,
     /// f with E = M q'' − f.
-    pub forcing: Vec<ExprId>,
+    pub(crate) forcing: Vec<ExprId>,
     /// Indices of cyclic coordinates (∂L/∂q = 0).
-    pub cyclic: Vec<usize>,
+    pub(crate) cyclic: Vec<usize>,
     /// Conserved quantities.
-    pub conserved: Vec<Conserved>,
+    pub(crate) conserved: Vec<Conserved>,
     /// The energy function h = Σ q' ∂L/∂q' − L, in (q, q', t).
-    pub energy_function: ExprId,
+    pub(crate) energy_function: ExprId,
     /// The Hamiltonian H(q, p, t), when L is quadratic in the velocities.
-    pub hamiltonian: Option<ExprId>,
+    pub(crate) hamiltonian: Option<ExprId>,
     /// The velocities in terms of momenta, q'(q, p, t), when H exists.
-    pub velocities: Option<Vec<ExprId>>,
+    pub(crate) velocities: Option<Vec<ExprId>>,
     /// T + U₀ (U₀ the velocity-independent part of U); None for a Lagrangian-only model.
-    pub energy: Option<ExprId>,
+    pub(crate) energy: Option<ExprId>,
     /// Whether H is the energy T + U₀; None for a Lagrangian-only model.
-    pub hamiltonian_is_energy: Option<bool>,
+    pub(crate) hamiltonian_is_energy: Option<bool>,
     /// Whether H is conserved (∂L/∂t = 0, no dissipation, no forces).
-    pub hamiltonian_conserved: bool,
+    pub(crate) hamiltonian_conserved: bool,
     /// Hamilton's equations (dq/dt, dp/dt) per coordinate, in (q, p, t).
-    pub hamilton: Option<Vec<(ExprId, ExprId)>>,
+    pub(crate) hamilton: Option<Vec<(ExprId, ExprId)>>,
     /// Whether L depends explicitly on time.
-    pub explicit_time: bool,
+    pub(crate) explicit_time: bool,
     /// Explanations of the verdicts.
-    pub verdicts: Verdicts,
+    pub(crate) verdicts: Verdicts,
     /// Seconds spent from the model to L, M and f (the equations of motion), the
     /// part of [`Derivation::new`] comparable with a CAS that derives only those.
-    pub equations_seconds: f64,
+    pub(crate) equations_seconds: f64,
     /// Each rigid body's angular velocity and angular momentum (body frame).
-    pub bodies: Vec<BodyMotion>,
+    pub(crate) bodies: Vec<BodyMotion>,
     /// The constraints and the equations with multipliers (empty without `[[constraints]]`).
-    pub constraints: Constraints,
+    pub(crate) constraints: Constraints,
+    /// The input layout of every compiled expression: `[q, q', t, parameters]`.
+    pub(crate) layout: Layout,
 }
 
 /// Symbols and the "is a variable" predicate used for collecting.
@@ -451,6 +455,7 @@ impl Derivation {
             }
         };
 
+        let layout = Layout::new(pool, &q, &qd, t, &model.parameters);
         model.pool = pool_owned;
         let mut derivation = Derivation {
             model,
@@ -482,9 +487,161 @@ impl Derivation {
             bodies,
             equations_seconds,
             constraints: Default::default(),
+            layout,
         };
         constraint::attach(&mut derivation)?;
         Ok(derivation)
+    }
+
+    /// The model it was derived from (it owns the pool).
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    /// Coordinate symbols q.
+    pub fn q(&self) -> &[ExprId] {
+        &self.q
+    }
+
+    /// Velocity symbols q'.
+    pub fn qd(&self) -> &[ExprId] {
+        &self.qd
+    }
+
+    /// Acceleration symbols q''.
+    pub fn qdd(&self) -> &[ExprId] {
+        &self.qdd
+    }
+
+    /// Momentum symbols p_q.
+    pub fn p(&self) -> &[ExprId] {
+        &self.p
+    }
+
+    /// The time symbol.
+    pub fn t(&self) -> ExprId {
+        self.t
+    }
+
+    /// Kinetic energy T (None when the model gives only a Lagrangian).
+    pub fn kinetic(&self) -> Option<ExprId> {
+        self.kinetic
+    }
+
+    /// Potential U, possibly velocity-dependent (None for a Lagrangian-only model).
+    pub fn potential(&self) -> Option<ExprId> {
+        self.potential
+    }
+
+    /// The Lagrangian L = T − U.
+    pub fn lagrangian(&self) -> ExprId {
+        self.lagrangian
+    }
+
+    /// Rayleigh's dissipation function R.
+    pub fn dissipation(&self) -> Option<ExprId> {
+        self.dissipation
+    }
+
+    /// Generalized forces Q (zero where none is given).
+    pub fn forces(&self) -> &[ExprId] {
+        &self.forces
+    }
+
+    /// Generalized momenta p_q = ∂L/∂q'.
+    pub fn momenta(&self) -> &[ExprId] {
+        &self.momenta
+    }
+
+    /// E_q = d/dt ∂L/∂q' − ∂L/∂q + ∂R/∂q' − Q_q.
+    pub fn equations(&self) -> &[ExprId] {
+        &self.equations
+    }
+
+    /// M with E = M q'' − f.
+    pub fn mass_matrix(&self) -> &[Vec<ExprId>] {
+        &self.mass_matrix
+    }
+
+    /// f with E = M q'' − f.
+    pub fn forcing(&self) -> &[ExprId] {
+        &self.forcing
+    }
+
+    /// Indices of cyclic coordinates (∂L/∂q = 0).
+    pub fn cyclic(&self) -> &[usize] {
+        &self.cyclic
+    }
+
+    /// Conserved quantities.
+    pub fn conserved(&self) -> &[Conserved] {
+        &self.conserved
+    }
+
+    /// The energy function h = Σ q' ∂L/∂q' − L, in (q, q', t).
+    pub fn energy_function(&self) -> ExprId {
+        self.energy_function
+    }
+
+    /// The Hamiltonian H(q, p, t), when L is quadratic in the velocities.
+    pub fn hamiltonian(&self) -> Option<ExprId> {
+        self.hamiltonian
+    }
+
+    /// The velocities in terms of momenta, q'(q, p, t), when H exists.
+    pub fn velocities(&self) -> Option<&[ExprId]> {
+        self.velocities.as_deref()
+    }
+
+    /// T + U₀ (U₀ the velocity-independent part of U); None for a Lagrangian-only model.
+    pub fn energy(&self) -> Option<ExprId> {
+        self.energy
+    }
+
+    /// Whether H is the energy T + U₀; None for a Lagrangian-only model.
+    pub fn hamiltonian_is_energy(&self) -> Option<bool> {
+        self.hamiltonian_is_energy
+    }
+
+    /// Whether H is conserved (∂L/∂t = 0, no dissipation, no forces).
+    pub fn hamiltonian_conserved(&self) -> bool {
+        self.hamiltonian_conserved
+    }
+
+    /// Hamilton's equations (dq/dt, dp/dt) per coordinate, in (q, p, t).
+    pub fn hamilton(&self) -> Option<&[(ExprId, ExprId)]> {
+        self.hamilton.as_deref()
+    }
+
+    /// Whether L depends explicitly on time.
+    pub fn explicit_time(&self) -> bool {
+        self.explicit_time
+    }
+
+    /// Explanations of the verdicts.
+    pub fn verdicts(&self) -> &Verdicts {
+        &self.verdicts
+    }
+
+    /// Seconds spent from the model to L, M and f (the equations of motion), the
+    /// part of [`Derivation::new`] comparable with a CAS that derives only those.
+    pub fn equations_seconds(&self) -> f64 {
+        self.equations_seconds
+    }
+
+    /// Each rigid body's angular velocity and angular momentum (body frame).
+    pub fn bodies(&self) -> &[BodyMotion] {
+        &self.bodies
+    }
+
+    /// The constraints and the equations with multipliers (empty without `[[constraints]]`).
+    pub fn constraints(&self) -> &Constraints {
+        &self.constraints
+    }
+
+    /// The input layout of every compiled expression: `[q, q', t, parameters]`.
+    pub fn layout(&self) -> &Layout {
+        &self.layout
     }
 
     /// The pool holding every expression.

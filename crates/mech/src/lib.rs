@@ -15,7 +15,7 @@
 //! "#;
 //! let model = mech::Model::parse(text, &[]).unwrap();
 //! let d = mech::Derivation::new(model).unwrap();
-//! assert_eq!(d.pool().display(d.momenta[0]).to_string(), "l^2*m*th'");
+//! assert_eq!(d.pool().display(d.momenta()[0]).to_string(), "l^2*m*th'");
 //! ```
 
 // The stages, in the order data flows through them: a module uses only the

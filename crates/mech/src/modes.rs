@@ -69,6 +69,8 @@ pub struct Mode {
 /// The secular equation and the frequencies in closed form.
 #[derive(Debug, Clone)]
 pub struct SymbolicModes {
+    /// The pool of these expressions: the derivation's, extended.
+    pub pool: Pool,
     /// T at the equilibrium, in the parameters.
     pub t_matrix: Vec<Vec<ExprId>>,
     /// U at the equilibrium, in the parameters.
@@ -238,25 +240,9 @@ fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
-/// The symbols a derivation's expressions may contain, in tape input order:
-/// coordinates, velocities, time, parameters.
-pub(crate) fn inputs_of(d: &mut Derivation) -> (Vec<ExprId>, Vec<f64>) {
-    let n = d.q.len();
-    let mut ids: Vec<ExprId> = d.q.clone();
-    ids.extend(&d.qd);
-    ids.push(d.t);
-    let mut values = vec![0.0; 2 * n + 1];
-    let params: Vec<(String, f64)> = d.model.parameters.iter().map(|p| (p.name.clone(), p.value)).collect();
-    for (name, v) in params {
-        ids.push(d.model.pool.symbol(&name));
-        values.push(v);
-    }
-    (ids, values)
-}
-
 /// The velocity-independent potential U(q) = −L(q, 0) and the checks that
 /// small oscillations apply.
-fn potential_of(d: &mut Derivation) -> Result<(ExprId, Vec<String>), ModesError> {
+fn potential_of(d: &Derivation, pool: &mut Pool) -> Result<(ExprId, Vec<String>), ModesError> {
     let mut notes = Vec::new();
     if d.explicit_time {
         return Err(ModesError::NotConservative {
@@ -271,7 +257,6 @@ fn potential_of(d: &mut Derivation) -> Result<(ExprId, Vec<String>), ModesError>
     if d.dissipation.is_some() {
         notes.push("Rayleigh's dissipation function is left out: these are the undamped normal modes".into());
     }
-    let pool = &mut d.model.pool;
     let zero_vel: Subst = d.qd.iter().map(|&v| (v, pool.zero())).collect();
     // Terms linear in the velocities, b(q)·q', act like a magnetic field (gyroscopic
     // forces) unless b is a gradient; small oscillations as in the notes need none.
@@ -293,14 +278,17 @@ fn potential_of(d: &mut Derivation) -> Result<(ExprId, Vec<String>), ModesError>
 }
 
 /// Finds the equilibrium near the starting point and the normal modes about it.
-pub fn normal_modes(d: &mut Derivation, config: &ModesConfig) -> Result<Modes, ModesError> {
+pub fn normal_modes(d: &Derivation, config: &ModesConfig) -> Result<Modes, ModesError> {
     let n = d.q.len();
     let names: Vec<String> = d.model.coordinates.iter().map(|c| c.name.clone()).collect();
     let start = starting_point(d, config)?;
-    let (u, mut notes) = potential_of(d)?;
+    // The derivation's pool is frozen: U, its derivatives and the closed forms
+    // are built in a copy, which the symbolic result keeps.
+    let mut pool_owned = d.pool().clone();
+    let pool = &mut pool_owned;
+    let (u, mut notes) = potential_of(d, pool)?;
 
     // Compile U, ∇U and the upper triangle of the Hessian.
-    let pool = &mut d.model.pool;
     let grad: Vec<ExprId> = d.q.iter().map(|&q| pool.diff(u, q)).collect();
     let mut roots = vec![u];
     roots.extend(&grad);
@@ -313,9 +301,8 @@ pub fn normal_modes(d: &mut Derivation, config: &ModesConfig) -> Result<Modes, M
             roots.push(h);
         }
     }
-    let (input_ids, input_values) = inputs_of(d);
-    let pool = &d.model.pool;
-    let tape = Tape::compile(pool, &roots, &input_ids)
+    let (input_ids, input_values) = (d.layout.symbols(), d.layout.values());
+    let tape = Tape::compile(pool, &roots, input_ids)
         .map_err(|e| ModesError::NotConservative { reason: format!("U cannot be evaluated: {e}") })?;
     let n_out = roots.len();
     let mut pot = Potential { tape, n, inputs: input_values.clone(), out: vec![0.0; n_out] };
@@ -328,7 +315,7 @@ pub fn normal_modes(d: &mut Derivation, config: &ModesConfig) -> Result<Modes, M
 
     // T = M(q₀).
     let m_roots: Vec<ExprId> = d.mass_matrix.iter().flatten().copied().collect();
-    let mut mtape = Tape::compile(pool, &m_roots, &input_ids)
+    let mut mtape = Tape::compile(pool, &m_roots, input_ids)
         .map_err(|e| ModesError::NotConservative { reason: format!("T cannot be evaluated: {e}") })?;
     let mut inputs = input_values;
     inputs[..n].copy_from_slice(&q0);
@@ -404,7 +391,7 @@ pub fn normal_modes(d: &mut Derivation, config: &ModesConfig) -> Result<Modes, M
     }
 
     let symbolic = if n <= MAX_SYMBOLIC {
-        let r = symbolic_modes(d, &hess, &q0, &modes);
+        let r = symbolic_modes(d, pool_owned, &hess, &q0, &modes);
         if let Err(why) = &r {
             notes.push(format!("no closed form: {why}"));
         }
@@ -535,7 +522,8 @@ fn fresh_name(d: &Derivation, base: &str) -> String {
 
 /// The secular equation det(U − Ω²T) and, where it factors, its roots.
 fn symbolic_modes(
-    d: &mut Derivation,
+    d: &Derivation,
+    mut pool_owned: Pool,
     hess: &[Vec<ExprId>],
     q0: &[f64],
     modes: &[Mode],
@@ -553,10 +541,8 @@ fn symbolic_modes(
     // T and U as they are (constant for a quadratic U), else at the
     // equilibrium, which must then be exact: 0, ±1, ... (not a float).
     let mut subst = Subst::default();
-    let constant = {
-        let pool = &d.model.pool;
-        d.mass_matrix.iter().chain(hess).flatten().all(|&e| param_only(pool, e))
-    };
+    let pool = &mut pool_owned;
+    let constant = d.mass_matrix.iter().chain(hess).flatten().all(|&e| param_only(pool, e));
     if !constant {
         for (i, &v) in q0.iter().enumerate() {
             let r = v.round();
@@ -567,11 +553,9 @@ fn symbolic_modes(
                     short(v)
                 ));
             }
-            let pool = &mut d.model.pool;
             subst.insert(d.q[i], pool.int(r as i64));
         }
     }
-    let pool = &mut d.model.pool;
     let mut tm = vec![vec![pool.zero(); n]; n];
     let mut um = vec![vec![pool.zero(); n]; n];
     for i in 0..n {
@@ -649,20 +633,24 @@ fn symbolic_modes(
     }
     let roots = solve(pool, coeffs, &candidates);
     let (omega_squared, frequencies) = match roots {
-        Some(roots) => match_roots(d, roots, modes),
+        Some(roots) => match_roots(d, pool, roots, modes),
         None => (None, None),
     };
-    Ok(SymbolicModes { t_matrix: tm, u_matrix: um, omega: om, secular, omega_squared, frequencies })
+    Ok(SymbolicModes { pool: pool_owned, t_matrix: tm, u_matrix: um, omega: om, secular, omega_squared, frequencies })
 }
 
 /// Orders the exact roots like the numeric Ω² and takes their square roots;
 /// None when they do not match (a closed form must agree with the numbers).
-fn match_roots(d: &mut Derivation, roots: Vec<ExprId>, modes: &[Mode]) -> (Option<Vec<ExprId>>, Option<Vec<ExprId>>) {
-    let model = &d.model;
-    let env = |name: &str| model.parameter(name);
+fn match_roots(
+    d: &Derivation,
+    pool: &mut Pool,
+    roots: Vec<ExprId>,
+    modes: &[Mode],
+) -> (Option<Vec<ExprId>>, Option<Vec<ExprId>>) {
+    let env = |name: &str| d.model.parameter(name);
     let mut valued = Vec::new();
     for r in roots {
-        match model.pool.eval(r, &env) {
+        match pool.eval(r, &env) {
             Ok(v) if v.is_finite() => valued.push((v, r)),
             _ => return (None, None),
         }
@@ -674,7 +662,6 @@ fn match_roots(d: &mut Derivation, roots: Vec<ExprId>, modes: &[Mode]) -> (Optio
     {
         return (None, None);
     }
-    let pool = &mut d.model.pool;
     let sq: Vec<ExprId> = valued.iter().map(|&(_, r)| r).collect();
     let om: Vec<ExprId> = sq
         .iter()
@@ -804,7 +791,6 @@ pub struct ModesReport {
 impl ModesReport {
     /// The report of computed modes.
     pub fn new(d: &Derivation, m: &Modes) -> ModesReport {
-        let pool = d.pool();
         let sym = m.symbolic.as_ref();
         ModesReport {
             format: "lagrange.modes/1",
@@ -817,10 +803,10 @@ impl ModesReport {
             stable: m.stable,
             omega_squared: m.modes.iter().map(|x| x.omega_squared).collect(),
             kinds: m.modes.iter().map(|x| x.kind).collect(),
-            secular_equation: sym.map(|s| format!("{} = 0", pool.display(s.secular))),
+            secular_equation: sym.map(|s| format!("{} = 0", s.pool.display(s.secular))),
             exact_frequencies: sym
-                .and_then(|s| s.frequencies.as_ref())
-                .map(|f| f.iter().map(|&e| pool.display(e).to_string()).collect()),
+                .and_then(|s| s.frequencies.as_ref().map(|f| (f, &s.pool)))
+                .map(|(f, pool)| f.iter().map(|&e| pool.display(e).to_string()).collect()),
             newton_iterations: m.newton_iterations,
         }
     }
@@ -873,8 +859,8 @@ mod tests {
 
     #[test]
     fn coupled_oscillators_match_the_notes() {
-        let mut d = derive(&example("coupled_oscillators"), &[]);
-        let m = normal_modes(&mut d, &ModesConfig::default()).unwrap();
+        let d = derive(&example("coupled_oscillators"), &[]);
+        let m = normal_modes(&d, &ModesConfig::default()).unwrap();
         // m = k = 1, k12 = 0.625: Ω₁ = sqrt(k/m) = 1, Ω₂ = sqrt((k + 2k12)/m) = 1.5 (Fig. 3.3).
         check_frequencies(&m, &[1.0, 1.5]);
         check_eigen(&m);
@@ -891,8 +877,8 @@ mod tests {
 
     #[test]
     fn triatomic_molecule_has_a_free_translation_and_the_notes_frequencies() {
-        let mut d = derive(&example("triatomic"), &[]);
-        let m = normal_modes(&mut d, &ModesConfig::default()).unwrap();
+        let d = derive(&example("triatomic"), &[]);
+        let m = normal_modes(&d, &ModesConfig::default()).unwrap();
         let (mm, big, k) = (16.0f64, 12.0f64, 1.0f64);
         check_frequencies(&m, &[0.0, (k / mm).sqrt(), (k / mm * (1.0 + 2.0 * mm / big)).sqrt()]);
         check_eigen(&m);
@@ -911,7 +897,7 @@ mod tests {
         // Exact: Ω² = 0, k/m, k/m (1 + 2m/M).
         let s = m.symbolic.as_ref().unwrap_or_else(|| panic!("no symbolic modes: {:?}", m.notes));
         let om2 = s.omega_squared.as_ref().expect("the cubic factors");
-        let pool = d.pool();
+        let pool = &s.pool;
         let mut expect_exprs = Vec::new();
         let mut p = pool.clone();
         for text in ["0", "k/m", "k/m*(1 + 2*m/M)"] {
@@ -925,9 +911,9 @@ mod tests {
 
     #[test]
     fn double_pendulum_about_its_lowest_position() {
-        let mut d = derive(&example("double_pendulum"), &[]);
+        let d = derive(&example("double_pendulum"), &[]);
         let at = vec![("a".to_string(), 0.1), ("b".to_string(), -0.2)];
-        let m = normal_modes(&mut d, &ModesConfig { at }).unwrap();
+        let m = normal_modes(&d, &ModesConfig { at }).unwrap();
         assert!(m.equilibrium.iter().all(|q| q.abs() < 1e-12), "{:?}", m.equilibrium);
         // Equal masses and lengths: Ω² = (2 ∓ √2) g/l.
         let g = 9.81f64;
@@ -938,8 +924,8 @@ mod tests {
 
     #[test]
     fn double_pendulum_upside_down_is_unstable() {
-        let mut d = derive(&example("double_pendulum"), &[]);
-        let m = normal_modes(&mut d, &ModesConfig::default()).unwrap();
+        let d = derive(&example("double_pendulum"), &[]);
+        let m = normal_modes(&d, &ModesConfig::default()).unwrap();
         let pi = std::f64::consts::PI;
         assert!(m.equilibrium.iter().all(|q| (q - pi).abs() < 1e-9), "{:?}", m.equilibrium);
         assert!(!m.stable);
@@ -948,8 +934,8 @@ mod tests {
 
     #[test]
     fn chain_of_fifty_masses() {
-        let mut d = derive(&example("chain50"), &[]);
-        let m = normal_modes(&mut d, &ModesConfig::default()).unwrap();
+        let d = derive(&example("chain50"), &[]);
+        let m = normal_modes(&d, &ModesConfig::default()).unwrap();
         let n = 50.0;
         let expect: Vec<f64> =
             (1..=50).map(|j| 2.0 * (j as f64 * std::f64::consts::PI / (2.0 * (n + 1.0))).sin()).collect();
@@ -962,17 +948,17 @@ mod tests {
     fn bad_equilibria_are_errors() {
         let flat =
             "coordinates = [\"x\"]\nkinetic = \"x'^2/2\"\npotential = \"x^4\"\n[initial]\nx = 1.0\n\"x'\" = 0.0\n";
-        let mut d = derive(flat, &[]);
-        let e = normal_modes(&mut d, &ModesConfig::default()).unwrap_err();
+        let d = derive(flat, &[]);
+        let e = normal_modes(&d, &ModesConfig::default()).unwrap_err();
         assert!(matches!(e, ModesError::Degenerate { .. }), "{e}");
 
         let none = "coordinates = [\"x\"]\nkinetic = \"x'^2/2\"\npotential = \"x\"\n[initial]\nx = 1.0\n\"x'\" = 0.0\n";
-        let mut d = derive(none, &[]);
-        let e = normal_modes(&mut d, &ModesConfig::default()).unwrap_err();
+        let d = derive(none, &[]);
+        let e = normal_modes(&d, &ModesConfig::default()).unwrap_err();
         assert!(matches!(e, ModesError::NoEquilibrium { .. }), "{e}");
 
-        let mut d = derive(&example("kepler"), &[]);
-        let e = normal_modes(&mut d, &ModesConfig::default()).unwrap_err();
+        let d = derive(&example("kepler"), &[]);
+        let e = normal_modes(&d, &ModesConfig::default()).unwrap_err();
         assert!(matches!(e, ModesError::NoEquilibrium { .. }), "{e}");
     }
 
@@ -981,8 +967,8 @@ mod tests {
     #[test]
     fn a_simulation_started_in_a_mode_stays_in_it() {
         let text = example("triatomic");
-        let mut d = derive(&text, &[]);
-        let m = normal_modes(&mut d, &ModesConfig::default()).unwrap();
+        let d = derive(&text, &[]);
+        let m = normal_modes(&d, &ModesConfig::default()).unwrap();
         let amp = 0.05;
         for (k, mode) in m.modes.iter().enumerate().skip(1) {
             let head = text.split("[initial]").next().unwrap();
@@ -991,14 +977,14 @@ mod tests {
             for (i, c) in m.coordinates.iter().enumerate() {
                 model.push_str(&format!("{c} = {}\n\"{c}'\" = 0.0\n", m.equilibrium[i] + amp * mode.shape[i]));
             }
-            let mut sim = derive(&model, &[]);
+            let sim = derive(&model, &[]);
             let config = crate::RunConfig { until: 60.0, rtol: 1e-11, atol: 1e-13, ..Default::default() };
             let n = m.coordinates.len();
             let t = nalgebra::DMatrix::from_fn(n, n, |i, j| m.t_matrix[i][j]);
             let mut worst: f64 = 0.0;
             let mut main_err: f64 = 0.0;
             let omega = mode.frequency.unwrap();
-            crate::simulate(&mut sim, &config, |row| {
+            crate::simulate(&sim, &config, |row| {
                 let dq = nalgebra::DVector::from_iterator(n, row.q.iter().zip(&m.equilibrium).map(|(a, b)| a - b));
                 for (j, other) in m.modes.iter().enumerate() {
                     let av = nalgebra::DVector::from_column_slice(&other.shape);

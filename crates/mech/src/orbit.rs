@@ -20,7 +20,7 @@
 
 use crate::derive::Derivation;
 use crate::error::ModelError;
-use crate::modes::{inputs_of, short};
+use crate::modes::short;
 use crate::probe::{self, Subst};
 use serde::Serialize;
 use std::f64::consts::PI;
@@ -76,6 +76,8 @@ pub struct Kepler {
 /// A central-force orbit from a model's initial state.
 #[derive(Debug)]
 pub struct Orbit {
+    /// The pool of the orbit's expressions: the derivation's, extended.
+    pub pool: sym::Pool,
     /// The radial and angular coordinate names.
     pub names: [String; 2],
     /// μ as an expression in the parameters.
@@ -196,7 +198,7 @@ static SHORT_RULE: std::sync::OnceLock<Vec<(f64, f64)>> = std::sync::OnceLock::n
 
 impl Orbit {
     /// Reads μ and U(r) from the derivation and computes the orbit of the initial state.
-    pub fn new(d: &mut Derivation) -> Result<Orbit, OrbitError> {
+    pub fn new(d: &Derivation) -> Result<Orbit, OrbitError> {
         let names: Vec<String> = d.model.coordinates.iter().map(|c| c.name.clone()).collect();
         if names.len() != 2 {
             return Err(not_central(format!(
@@ -214,7 +216,10 @@ impl Orbit {
         let (r, th, rd, thd) = (d.q[0], d.q[1], d.qd[0], d.qd[1]);
         let m = &d.mass_matrix;
         let (m00, m01, m11) = (m[0][0], m[0][1], m[1][1]);
-        let pool = &mut d.model.pool;
+        // The derivation's pool is frozen: U(r), μ and their derivatives are
+        // built in a copy, which the orbit keeps for printing them.
+        let mut pool_owned = d.pool().clone();
+        let pool = &mut pool_owned;
         let (rn, an) = (&names[0], &names[1]);
         for q in [r, th] {
             let dm = pool.diff(m00, q);
@@ -275,9 +280,8 @@ impl Orbit {
         let u1 = pool.diff(u, r);
         let u2 = pool.diff(u1, r);
         let u3 = pool.diff(u2, r);
-        let (input_ids, input_values) = inputs_of(d);
-        let pool = &d.model.pool;
-        let tape = Tape::compile(pool, &[u, u1, u2, u3], &input_ids)
+        let (input_ids, input_values) = (d.layout().symbols(), d.layout().values());
+        let tape = Tape::compile(pool, &[u, u1, u2, u3], input_ids)
             .map_err(|e| not_central(format!("U cannot be evaluated: {e}")))?;
         let model = &d.model;
         let env = |name: &str| model.parameter(name);
@@ -294,6 +298,7 @@ impl Orbit {
         };
         let (q, qd) = model.initial_state()?;
         let mut orbit = Orbit {
+            pool: pool_owned,
             names: [names[0].clone(), names[1].clone()],
             mu_expr,
             potential_expr: u,
@@ -679,7 +684,7 @@ impl Orbit {
 
     /// The orbit as the JSON contract `lagrange.orbit/1`.
     pub fn report(&self, d: &Derivation) -> OrbitReport {
-        let pool = d.pool();
+        let pool = &self.pool;
         OrbitReport {
             format: "lagrange.orbit/1",
             name: d.model.name.clone(),
@@ -763,8 +768,8 @@ mod tests {
             initial[0], initial[2], initial[1], initial[3]
         );
         let model = Model::parse(&text, &[]).expect("model");
-        let mut d = Derivation::new(model).expect("derivation");
-        let o = Orbit::new(&mut d)?;
+        let d = Derivation::new(model).expect("derivation");
+        let o = Orbit::new(&d)?;
         Ok((o, d))
     }
 
@@ -874,10 +879,10 @@ mod tests {
             ("m*(r'^2 + r^2*th'^2)/2 + k*exp(-r/a)/r", "m = 1.0\nk = 1.0\na = 5.0", false),
             ("m*(r'^2 + r^2*th'^2)/2 + k/r", "m = 0.8\nk = 1.0\na = 1.0", true),
         ] {
-            let (mut o, mut d) = orbit_of(l, params, [1.0, 0.4, 0.1, 1.1]).unwrap();
+            let (mut o, d) = orbit_of(l, params, [1.0, 0.4, 0.1, 1.1]).unwrap();
             let config = crate::RunConfig { until: 30.0, rtol: 1e-12, atol: 1e-14, ..Default::default() };
             let mut rows = Vec::new();
-            crate::simulate(&mut d, &config, |row| {
+            crate::simulate(&d, &config, |row| {
                 rows.push([row.q[0], row.q[1], row.qd[0], row.qd[1]]);
                 std::ops::ControlFlow::Continue(())
             })

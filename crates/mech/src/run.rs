@@ -9,30 +9,83 @@
 //! separable → an 8th-order symplectic composition; H conserved, not separable →
 //! Gauss–Legendre (order 6) on Hamilton's equations; otherwise DOP853.
 
+mod audit;
 pub(crate) mod body;
 pub(crate) mod constrained;
 pub(crate) mod dynamics;
 pub(crate) mod ensemble;
+mod plain;
 pub(crate) mod series;
 
 use crate::derive::Derivation;
 use crate::error::ModelError;
-use crate::probe;
-use dynamics::{Dynamics, Form, System};
-use num::{integrate, Config, Direction, Event, Method, ObservationKind, Output, SolveError, Solver, StopReason};
+use audit::InvariantAudit;
+use dynamics::{Dynamics, Form};
+use num::{
+    integrate, integrate_projected, Direction, Event, Method, ObservationKind, Output, RhsError, SolveError, Solver,
+    StopReason,
+};
 use std::ops::ControlFlow;
 use std::time::Instant;
-use sym::{ExprId, Tape};
+use sym::Tape;
 
-/// A condition that ends the run when an expression crosses zero.
+/// A condition that ends the run (or records a row) where an expression g(q,
+/// q', t) crosses zero: `lhs < rhs` (falling through), `lhs > rhs` (rising),
+/// `lhs = rhs` or `lhs` alone (either way).
 #[derive(Debug, Clone)]
 pub struct StopCondition {
-    /// The expression g(q, q', t); the run stops where it crosses zero.
-    pub expr: ExprId,
+    /// g = lhs − rhs, compiled over the derivation's [`Layout`](crate::Layout).
+    tape: Tape,
     /// Which crossings count.
     pub direction: Direction,
     /// The condition as the user wrote it.
     pub text: String,
+}
+
+impl StopCondition {
+    /// Reads a condition in the expression language. `what` names it in
+    /// messages (`the stop condition`); the spans of errors are byte offsets
+    /// into `text`.
+    pub fn parse(d: &Derivation, text: &str, what: &str) -> Result<StopCondition, ModelError> {
+        let (lhs, rhs, direction) = match text.find(['<', '>', '=']) {
+            Some(i) => {
+                let direction = match text.as_bytes()[i] {
+                    b'<' => Direction::Falling,
+                    b'>' => Direction::Rising,
+                    _ => Direction::Both,
+                };
+                let rest = text[i + 1..].strip_prefix('=').unwrap_or(&text[i + 1..]);
+                (&text[..i], Some((text.len() - rest.len(), rest)), direction)
+            }
+            None => (text, None, Direction::Both),
+        };
+        let shift = |mut e: ModelError, offset: usize| {
+            if let Some(span) = &mut e.span {
+                *span = span.start + offset..span.end + offset;
+            }
+            e
+        };
+        // The derivation is frozen: the condition is read into a copy of the model.
+        let mut model = d.model.clone();
+        let g_lhs = model.parse_state_expr(lhs, what)?;
+        let g = match rhs {
+            Some((offset, rhs)) => {
+                let g_rhs = model.parse_state_expr(rhs, what).map_err(|e| shift(e, offset))?;
+                model.pool.sub(g_lhs, g_rhs)
+            }
+            None => g_lhs,
+        };
+        let tape = Tape::compile(&model.pool, &[g], d.layout.symbols())
+            .map_err(|e| ModelError::at(0..text.len(), format!("{what} cannot be evaluated: {e}")))?;
+        Ok(StopCondition { tape, direction, text: text.to_string() })
+    }
+
+    /// g at the inputs `values` (laid out as the derivation's [`Layout`](crate::Layout)).
+    pub(crate) fn eval(&mut self, values: &[f64]) -> f64 {
+        let mut out = [0.0];
+        self.tape.eval(values, &mut out);
+        out[0]
+    }
 }
 
 /// Options of a run.
@@ -110,91 +163,6 @@ pub struct Audit {
     pub max_rel_drift: f64,
 }
 
-/// The audit of the invariants, row by row: the first row is the reference,
-/// the drift is the largest departure from it, the final value the last row's.
-/// Plain and constrained runs share it.
-pub(crate) struct InvariantAudit {
-    names: Vec<String>,
-    conserved: Vec<bool>,
-    initial: Option<Vec<f64>>,
-    last: Vec<f64>,
-    max_abs: Vec<f64>,
-    max_rel: Vec<f64>,
-}
-
-impl InvariantAudit {
-    /// The audit of the invariants `dynamics` evaluates; H is conserved as the
-    /// derivation says, E never on its own, the conserved momenta always.
-    pub(crate) fn new(d: &Derivation, dynamics: &Dynamics) -> InvariantAudit {
-        let invariants = dynamics.invariants();
-        let n = invariants.len();
-        InvariantAudit {
-            names: invariants.iter().map(|i| i.name.clone()).collect(),
-            conserved: invariants
-                .iter()
-                .map(|inv| if inv.name == "H" { d.hamiltonian_conserved } else { inv.name != "E" })
-                .collect(),
-            initial: None,
-            last: vec![0.0; n],
-            max_abs: vec![0.0; n],
-            max_rel: vec![0.0; n],
-        }
-    }
-
-    /// How many invariants there are.
-    pub(crate) fn len(&self) -> usize {
-        self.names.len()
-    }
-
-    /// Records one row's values. Event rows are interpolated between two steps
-    /// (cubic Hermite for the compositions): their error is the interpolant's,
-    /// not the integrator's, so they do not enter the drift.
-    pub(crate) fn observe(&mut self, inv: &[f64], interpolated_event: bool) {
-        let init = self.initial.get_or_insert_with(|| inv.to_vec());
-        if !interpolated_event {
-            for k in 0..inv.len() {
-                let a = (inv[k] - init[k]).abs();
-                if a.is_finite() {
-                    self.max_abs[k] = self.max_abs[k].max(a);
-                    let scale = init[k].abs();
-                    self.max_rel[k] = self.max_rel[k].max(if scale > 0.0 { a / scale } else { a });
-                }
-            }
-        }
-        self.last.copy_from_slice(inv);
-    }
-
-    /// One audit per invariant.
-    pub(crate) fn audits(&self) -> Vec<Audit> {
-        let initial = self.initial.as_ref().unwrap_or(&self.last);
-        (0..self.len())
-            .map(|k| Audit {
-                name: self.names[k].clone(),
-                conserved: self.conserved[k],
-                initial: initial[k],
-                final_value: self.last[k],
-                max_abs_drift: self.max_abs[k],
-                max_rel_drift: self.max_rel[k],
-            })
-            .collect()
-    }
-}
-
-/// A warning for each conserved invariant that drifted by more than
-/// `explained` (relative), the drift the method's tolerance accounts for.
-pub(crate) fn drift_warnings(audits: &[Audit], explained: f64) -> Vec<String> {
-    audits
-        .iter()
-        .filter(|a| a.conserved && a.max_rel_drift > explained)
-        .map(|a| {
-            format!(
-                "{} is conserved, but drifted by {:.3e} (relative), more than the tolerance explains ({:.1e})",
-                a.name, a.max_rel_drift, explained
-            )
-        })
-        .collect()
-}
-
 /// What a run did.
 #[derive(Debug, Clone)]
 pub struct RunReport {
@@ -239,6 +207,11 @@ pub struct RunReport {
 /// Why a run did not complete.
 #[derive(Debug)]
 pub enum RunError {
+    /// The end time is not a positive, finite number.
+    Until {
+        /// The end time asked for.
+        until: f64,
+    },
     /// Bad input: an impossible method, a missing initial value (exit 2).
     Input(ModelError),
     /// The run failed midway (exit 1); the report covers what was done.
@@ -301,30 +274,74 @@ pub fn choose_method(
     })
 }
 
-/// Runs a simulation. `on_row` receives every output row in time order and may
-/// stop the run with `ControlFlow::Break`.
-pub fn simulate(
-    d: &mut Derivation,
-    config: &RunConfig,
-    mut on_row: impl FnMut(&Row<'_>) -> ControlFlow<()>,
-) -> Result<RunReport, RunError> {
-    if !d.constraints.is_empty() {
-        return constrained::simulate(d, config, on_row);
+/// The solver of a run at its initial state, and how it was chosen.
+pub(crate) struct Start {
+    pub(crate) solver: Box<dyn Solver>,
+    /// The initial state in the solver's variables.
+    pub(crate) y0: Vec<f64>,
+    /// The initial coordinates and velocities, as the run reports them when it ends before its first row.
+    pub(crate) initial: (Vec<f64>, Vec<f64>),
+    pub(crate) method: Method,
+    pub(crate) form: Form,
+    /// The fixed step, for fixed-step methods.
+    pub(crate) dt: Option<f64>,
+    pub(crate) pilot_rhs_evaluations: usize,
+}
+
+/// q' of a solver state (t, y), for the stop conditions.
+pub(crate) type VelocityMap = Box<dyn FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>>;
+
+/// A map of the state after every step (the projection onto constraints).
+pub(crate) type ProjectionMap = Box<dyn FnMut(f64, &mut [f64]) -> Result<(), RhsError>>;
+
+/// One row in the making: the stepping fills q, q', the invariants and the
+/// constraint columns of a solver state.
+pub(crate) struct RowBuffer {
+    pub(crate) q: Vec<f64>,
+    pub(crate) qd: Vec<f64>,
+    pub(crate) invariants: Vec<f64>,
+    pub(crate) constraints: Vec<f64>,
+    /// Whether the row is an event, interpolated between two steps.
+    pub(crate) is_event: bool,
+}
+
+/// What differs between runs of a plain model and of one with constraints;
+/// [`simulate`] does the rest (validation, events, rows, audit, report) once.
+pub(crate) trait Stepping {
+    /// A map from solver states to velocities, one per stop condition.
+    fn velocity_map(&self) -> VelocityMap;
+    /// The map applied after every step, if any.
+    fn projection(&self) -> Option<ProjectionMap> {
+        None
     }
+    /// Fills `row` (all but `is_event`) from the solver state (t, y).
+    fn row(&mut self, t: f64, y: &[f64], row: &mut RowBuffer) -> Result<(), RhsError>;
+    /// Adds the stepping's own audits at the end of the run.
+    fn audits(&mut self, _invariants: &mut Vec<Audit>, _constraints: &mut Vec<constrained::ConstraintAudit>) {}
+    /// Adds the stepping's own warnings at the end of the run.
+    fn warnings(&self, _warnings: &mut Vec<String>) {}
+    /// A solver failure in the user's terms, from the initial state and the last good one.
+    fn describe(&mut self, e: &SolveError, y0: &[f64], at: (f64, Vec<f64>)) -> String;
+}
+
+/// Runs a simulation, with or without constraints. `on_row` receives every
+/// output row in time order and may stop the run with `ControlFlow::Break`.
+pub fn simulate(
+    d: &Derivation,
+    config: &RunConfig,
+    on_row: impl FnMut(&Row<'_>) -> ControlFlow<()>,
+) -> Result<RunReport, RunError> {
     let start = Instant::now();
     if !(config.until.is_finite() && config.until > 0.0) {
-        return Err(RunError::Input(ModelError::whole(format!(
-            "--until must be a positive time, not {}",
-            config.until
-        ))));
+        return Err(RunError::Until { until: config.until });
     }
     let (q0, qd0) = d.model.initial_state().map_err(RunError::Input)?;
-    // The events' indices: stop conditions, crossings, then one guard per body.
+    // Rigid bodies: a terminal event before the Euler angles' gimbal singularity.
     let guards = body::gimbal_guards(d, config.rtol);
     if let Some(g) = guards.iter().find(|g| g.violated(&q0)) {
         let span =
             d.model.initial.iter().find(|iv| iv.coord == g.beta && iv.order == 0).map(|iv| iv.value.span.clone());
-        let e = crate::ModelError {
+        let e = ModelError {
             message: format!(
                 "the initial state is at the gimbal singularity of body '{}': |sin {}| < {:.1e}",
                 g.body, g.beta_name, g.threshold
@@ -335,150 +352,121 @@ pub fn simulate(
         return Err(RunError::Input(e));
     }
     let dynamics = Dynamics::new(d);
-    let (method, form) = choose_method(d, &dynamics, config.method).map_err(RunError::Input)?;
-    let n = dynamics.n_coords();
-    let names: Vec<String> = dynamics.coordinate_names().to_vec();
-    let mut invariant_audit = InvariantAudit::new(d, &dynamics);
-
-    let mut system = dynamics.system(form);
-    let y0 = system.initial_state(0.0, &q0, &qd0).map_err(RunError::Input)?;
-    let mut probe_system = system.clone();
-    let solver_config =
-        Config { rtol: config.rtol, atol: config.atol, dt: config.dt, h_max: Some(config.until), ..Config::default() };
-    let build = |system: System, config: &Config| -> Result<Box<dyn Solver>, SolveError> {
-        if form == Form::Separable {
-            method.build_separable(system, 0.0, &y0, config)
-        } else {
-            method.build(system, 0.0, &y0, config)
-        }
-    };
-    let input_error = |e: SolveError| RunError::Input(ModelError::whole(e.to_string()));
-    let mut solver = build(system.clone(), &solver_config).map_err(input_error)?;
-    let mut dt = None;
-    let mut pilot_rhs = 0;
-    if !method.is_adaptive() {
-        // A fixed step chosen from the tolerance at the start may be too long
-        // later in the run (a pendulum released from rest speeds up): pilot
-        // runs check the drift of H along the whole run and shorten the step
-        // until it meets the tolerance. Then the step is made to divide the
-        // sample spacing, so that every output row is an integrator state,
-        // not an interpolation between two.
-        let mut h = solver.step_size();
-        pilot_rhs += solver.statistics().rhs_evaluations;
-        if config.dt.is_none() && d.hamiltonian_conserved {
-            let target = 10.0 * config.rtol.max(1e-14);
-            for _ in 0..4 {
-                let cfg = Config { dt: Some(h), ..solver_config };
-                let pilot = build(system.clone(), &cfg).map_err(input_error)?;
-                let (drift, evaluations) = pilot_drift(pilot, &mut probe_system, config.until, n);
-                pilot_rhs += evaluations;
-                let Some(drift) = drift else { break };
-                if drift <= target {
-                    break;
-                }
-                h *= (0.9 * (target / drift).powf(1.0 / f64::from(method.order()))).clamp(0.05, 0.9);
-            }
-        }
-        if let Output::Samples(k) = config.output {
-            let spacing = config.until / (k.max(2) - 1) as f64;
-            h = spacing / (spacing / h).ceil();
-        }
-        let cfg = Config { dt: Some(h), ..solver_config };
-        solver = build(system.clone(), &cfg).map_err(input_error)?;
-        dt = Some(h);
+    if d.constraints.is_empty() {
+        let (stepping, begin) = plain::Plain::start(d, &dynamics, config, &q0, &qd0)?;
+        drive(d, config, &dynamics, stepping, begin, &guards, start, on_row)
+    } else {
+        let (stepping, begin) = constrained::Constrained::start(d, &dynamics, config, &q0, &qd0)?;
+        drive(d, config, &dynamics, stepping, begin, &guards, start, on_row)
     }
+}
 
-    // Rigid bodies: a terminal event before the Euler angles' gimbal singularity.
-    let first_guard = config.stop_when.len() + config.crossings.len();
-    // Stop conditions, each compiled over [q, q', t, params].
-    let param_syms: Vec<ExprId> = d.model.parameters.iter().map(|p| d.model.pool.symbol(&p.name)).collect();
-    let mut inputs: Vec<ExprId> = d.q.clone();
-    inputs.extend(&d.qd);
-    inputs.push(d.t);
-    inputs.extend(&param_syms);
-    let mut values = vec![0.0; 2 * n + 1];
-    values.extend(d.model.parameters.iter().map(|p| p.value));
-    // Stop conditions first (terminal), then crossings (recorded, not stopping).
+/// The one run driver: events, rows, audit and report around a [`Stepping`].
+#[allow(clippy::too_many_arguments)]
+fn drive(
+    d: &Derivation,
+    config: &RunConfig,
+    dynamics: &Dynamics,
+    mut stepping: impl Stepping,
+    begin: Start,
+    guards: &[body::GimbalGuard],
+    started: Instant,
+    mut on_row: impl FnMut(&Row<'_>) -> ControlFlow<()>,
+) -> Result<RunReport, RunError> {
+    let Start { mut solver, y0, initial, method, form, dt, pilot_rhs_evaluations } = begin;
+    let n = d.q.len();
+    let layout = &d.layout;
+    let mut invariant_audit = InvariantAudit::new(d, dynamics);
+
+    // Stop conditions first (terminal), then crossings (recorded, not stopping),
+    // then one guard per body.
     let conditions: Vec<(&StopCondition, bool)> =
         config.stop_when.iter().map(|c| (c, true)).chain(config.crossings.iter().map(|c| (c, false))).collect();
-    let mut stop_tapes = Vec::new();
-    for &(cond, terminal) in &conditions {
-        let tape = Tape::compile(&d.model.pool, &[cond.expr], &inputs)
-            .map_err(|e| RunError::Input(ModelError::whole(format!("in the condition '{}': {e}", cond.text))))?;
-        stop_tapes.push((tape, values.clone(), cond.direction, terminal));
-    }
+    let first_guard = conditions.len();
     let mut events: Vec<Event<'_>> = Vec::new();
-    for (tape, values, direction, terminal) in stop_tapes {
-        let mut sys = probe_system.clone();
-        let mut tape = tape;
-        let mut values = values;
+    for &(cond, terminal) in &conditions {
+        let mut velocities = stepping.velocity_map();
+        let direction = cond.direction;
+        let mut cond = cond.clone();
+        let mut values = layout.values();
         let mut qd = vec![0.0; n];
-        let mut out = [0.0];
         events.push(
             Event::new(move |t, y| {
-                if sys.velocities(t, y, &mut qd).is_err() {
+                if velocities(t, y, &mut qd).is_err() {
                     return f64::NAN;
                 }
-                values[..n].copy_from_slice(&y[..n]);
-                values[n..2 * n].copy_from_slice(&qd);
-                values[2 * n] = t;
-                tape.eval(&values, &mut out);
-                out[0]
+                layout.set_state(&mut values, t, &y[..n], &qd);
+                cond.eval(&values)
             })
             .with_direction(direction)
             .with_terminal(terminal),
         );
     }
-
-    for g in &guards {
+    for g in guards {
         let (beta, s2) = (g.beta, g.threshold * g.threshold);
         events.push(
             Event::new(move |_t, y| y[beta].sin().powi(2) - s2).with_direction(Direction::Falling).with_terminal(true),
         );
     }
 
-    // The audit, row by row.
-    let mut qd = vec![0.0; n];
-    let mut inv = vec![0.0; invariant_audit.len()];
-    let mut last_q = q0.clone();
-    let mut last_qd = qd0.clone();
-    let mut last_t = 0.0;
+    // The rows and their audit.
+    let mut row = RowBuffer {
+        q: vec![0.0; n],
+        qd: vec![0.0; n],
+        invariants: vec![0.0; invariant_audit.len()],
+        constraints: vec![0.0; constrained::constraint_columns(d).len()],
+        is_event: false,
+    };
+    let projection = stepping.projection();
+    let mut last = (0.0, initial.0, initial.1);
     let mut row_error: Option<String> = None;
-    let result = integrate(&mut solver, config.until, config.output, &mut events, |obs| {
-        if let Err(e) = probe_system.invariants_at(obs.t, obs.y, &mut qd, &mut inv) {
+    let observer = |obs: &num::Observation<'_>| {
+        row.is_event = matches!(obs.kind, ObservationKind::Event { .. });
+        if let Err(e) = stepping.row(obs.t, obs.y, &mut row) {
             row_error = Some(format!("at t = {}: {e}", obs.t));
             return ControlFlow::Break(());
         }
-        invariant_audit.observe(&inv, matches!(obs.kind, ObservationKind::Event { .. }));
-        last_t = obs.t;
-        last_q.copy_from_slice(&obs.y[..n]);
-        last_qd.copy_from_slice(&qd);
+        invariant_audit.observe(&row.invariants, row.is_event);
+        last.0 = obs.t;
+        last.1.copy_from_slice(&row.q);
+        last.2.copy_from_slice(&row.qd);
         let flow = on_row(&Row {
             t: obs.t,
-            q: &obs.y[..n],
-            qd: &qd,
-            invariants: &inv,
-            is_event: matches!(obs.kind, ObservationKind::Event { .. }),
+            q: &row.q,
+            qd: &row.qd,
+            invariants: &row.invariants,
+            is_event: row.is_event,
             event: match obs.kind {
                 ObservationKind::Event { index } if index < first_guard => Some(conditions[index].0.text.as_str()),
                 _ => None,
             },
-            constraints: &[],
+            constraints: &row.constraints,
         });
         // The row is kept; past a gimbal guard the run ends as a failure.
-        if let Some(g) = guards.iter().find(|g| g.violated(&obs.y[..n])) {
+        if let Some(g) = guards.iter().find(|g| g.violated(&row.q)) {
             row_error = Some(g.message(obs.t));
             return ControlFlow::Break(());
         }
         flow
-    });
+    };
+    let result = match projection {
+        Some(mut project) => {
+            integrate_projected(&mut solver, config.until, config.output, &mut events, &mut project, observer)
+        }
+        None => integrate(&mut solver, config.until, config.output, &mut events, observer),
+    };
+    drop(events);
 
     let stats = solver.statistics();
-    let audits = invariant_audit.audits();
+    let mut audits = invariant_audit.audits();
+    let mut constraint_audits = Vec::new();
+    stepping.audits(&mut audits, &mut constraint_audits);
     // What the method's tolerance explains: a few hundred local errors of size
     // rtol (fixed-step methods had their step chosen from rtol as well).
     let explained = if config.dt.is_some() { 1e-2 } else { (1e3 * config.rtol).max(1e-12) };
-    let warnings = drift_warnings(&audits, explained);
+    let mut warnings = audit::drift_warnings(&audits, explained);
+    stepping.warnings(&mut warnings);
+    let (t_last, final_q, final_qd) = last;
     let mut report = RunReport {
         method,
         form,
@@ -488,18 +476,17 @@ pub fn simulate(
         steps: stats.steps,
         rejected: stats.rejected,
         rhs_evaluations: stats.rhs_evaluations,
-        t_final: last_t,
-        final_q: last_q,
-        final_qd: last_qd,
+        t_final: t_last,
+        final_q,
+        final_qd,
         invariants: audits,
         stopped_by: None,
         warnings,
         failure: None,
-        pilot_rhs_evaluations: pilot_rhs,
-        wall_seconds: 0.0,
-        constraints: Vec::new(),
+        pilot_rhs_evaluations,
+        wall_seconds: started.elapsed().as_secs_f64(),
+        constraints: constraint_audits,
     };
-    report.wall_seconds = start.elapsed().as_secs_f64();
     match result {
         Ok(summary) => {
             report.t_final = summary.t;
@@ -519,106 +506,10 @@ pub fn simulate(
             let gimbal = near.filter(|g| at.1[g.beta].sin().abs() < 0.1).map(|g| g.message(at.0));
             let message = match gimbal {
                 Some(m) => format!("{m} ({e})"),
-                None => describe_failure(&e, &names, form, &mut probe_system, &y0, at),
+                None => stepping.describe(&e, &y0, at),
             };
             report.failure = Some(message.clone());
             Err(RunError::Failed { message, report: Box::new(report) })
         }
-    }
-}
-
-/// Why the integrator could not go on, judged from the last good state: a mass
-/// matrix that has become singular (measured against its size at the start, so
-/// that a 1×1 M → 0 counts), or the component that grows without bound.
-fn diagnose(system: &mut System, names: &[String], form: Form, y0: &[f64], t: f64, y: &[f64]) -> Option<String> {
-    let n = names.len();
-    let m0 = system.mass_matrix_at(0.0, y0);
-    let m = system.mass_matrix_at(t, y);
-    // A step that cannot be taken near a state where M has lost most of its
-    // smallest pivot (x^2 x'^2/2 with x → 0) is M becoming singular; the step
-    // that fails may still be a little before the singular point.
-    if let (Some(p0), Some(p)) = (probe::smallest_pivot(&m0, n), probe::smallest_pivot(&m, n)) {
-        if p < 0.05 * p0 {
-            return Some(format!(
-                "the mass matrix becomes singular at t ≈ {t} (its smallest pivot fell from {p0:.3e} at the start to {p:.3e}): the accelerations are undetermined there"
-            ));
-        }
-    }
-    // The fastest-growing component relative to where it started.
-    let (k, size) = y
-        .iter()
-        .zip(y0)
-        .map(|(v, v0)| v.abs() / v0.abs().max(1.0))
-        .enumerate()
-        .fold((0, 0.0f64), |best, (k, r)| if r > best.1 { (k, r) } else { best });
-    (size > 1e3)
-        .then(|| format!("the motion blew up at t = {t}: {} has grown to {:.3e}", component_name(k, names, form), y[k]))
-}
-
-fn component_name(index: usize, names: &[String], form: Form) -> String {
-    let n = names.len();
-    if index < n {
-        format!("the coordinate '{}'", names[index])
-    } else if index < 2 * n {
-        match form {
-            Form::Lagrange => format!("the velocity '{}''", names[index - n]),
-            _ => format!("the momentum 'p_{}'", names[index - n]),
-        }
-    } else {
-        format!("component {index}")
-    }
-}
-
-/// The largest relative drift of H (the first invariant) over every step of a
-/// run without output; None when the pilot fails (the real run reports why).
-fn pilot_drift(mut solver: Box<dyn Solver>, system: &mut System, until: f64, n: usize) -> (Option<f64>, usize) {
-    let mut qd = vec![0.0; n];
-    let mut inv = vec![0.0; system.n_invariants()];
-    let mut h0: Option<f64> = None;
-    let mut drift = 0.0f64;
-    let mut failed = false;
-    let result = integrate(&mut solver, until, Output::EveryStep, &mut [], |obs| {
-        if system.invariants_at(obs.t, obs.y, &mut qd, &mut inv).is_err() {
-            failed = true;
-            return ControlFlow::Break(());
-        }
-        let h = *h0.get_or_insert(inv[0]);
-        let d = (inv[0] - h).abs() / h.abs().max(f64::MIN_POSITIVE);
-        if !d.is_finite() {
-            failed = true;
-            return ControlFlow::Break(());
-        }
-        drift = drift.max(d);
-        ControlFlow::Continue(())
-    });
-    ((result.is_ok() && !failed).then_some(drift), solver.statistics().rhs_evaluations)
-}
-
-/// A failure in the user's terms: the time and the coordinate concerned.
-fn describe_failure(
-    e: &SolveError,
-    names: &[String],
-    form: Form,
-    system: &mut System,
-    y0: &[f64],
-    (t_last, y_last): (f64, Vec<f64>),
-) -> String {
-    let component = |index: usize| component_name(index, names, form);
-    match e {
-        SolveError::NonFiniteState { t, index } => {
-            format!("the motion blew up at t = {t}: {} is no longer finite", component(*index))
-        }
-        SolveError::Rhs { t, source: num::RhsError::NonFinite { index } } => {
-            format!("the equations of motion gave a non-finite rate of change of {} at t = {t}", component(*index))
-        }
-        SolveError::Rhs { t, source: num::RhsError::Singular { detail } } => {
-            format!("the mass matrix became singular at t = {t} ({detail}): the accelerations are undetermined there")
-        }
-        // A step that cannot be taken (too small, or implicit stages that do not
-        // converge): say why from the last good state when it can be told.
-        other => match diagnose(system, names, form, y0, t_last, &y_last) {
-            Some(why) => format!("{why} ({other})"),
-            None => other.to_string(),
-        },
     }
 }

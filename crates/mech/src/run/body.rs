@@ -89,29 +89,25 @@ pub fn gimbal_guards(d: &crate::Derivation, rtol: f64) -> Vec<GimbalGuard> {
 pub struct BodyRecorder {
     tape: sym::Tape,
     inputs: Vec<f64>,
-    n: usize,
+    layout: crate::derive::Layout,
     columns: Vec<String>,
 }
 
 impl BodyRecorder {
     /// None when the derivation has no bodies.
-    pub fn new(d: &mut crate::Derivation) -> Option<BodyRecorder> {
+    pub fn new(d: &crate::Derivation) -> Option<BodyRecorder> {
         if d.bodies.is_empty() {
             return None;
         }
-        let n = d.q.len();
-        let mut input_syms: Vec<ExprId> = d.q.clone();
-        input_syms.extend(&d.qd);
-        input_syms.push(d.t);
-        let mut inputs = vec![0.0; 2 * n + 1];
-        for p in &d.model.parameters {
-            input_syms.push(d.model.pool.symbol(&p.name));
-            inputs.push(p.value);
-        }
         let exprs: Vec<ExprId> =
             d.bodies.iter().flat_map(|b| b.omega.iter().chain(&b.angular_momentum).copied()).collect();
-        let tape = sym::Tape::compile(&d.model.pool, &exprs, &input_syms).ok()?;
-        Some(BodyRecorder { tape, inputs, n, columns: column_names(&d.bodies) })
+        let tape = sym::Tape::compile(d.pool(), &exprs, d.layout.symbols()).ok()?;
+        Some(BodyRecorder {
+            tape,
+            inputs: d.layout.values(),
+            layout: d.layout.clone(),
+            columns: column_names(&d.bodies),
+        })
     }
 
     /// The column names, six per body.
@@ -121,10 +117,7 @@ impl BodyRecorder {
 
     /// ω and L of every body at (t, q, q'), into `out` (length `columns().len()`).
     pub fn eval(&mut self, t: f64, q: &[f64], qd: &[f64], out: &mut [f64]) {
-        let n = self.n;
-        self.inputs[..n].copy_from_slice(q);
-        self.inputs[n..2 * n].copy_from_slice(qd);
-        self.inputs[2 * n] = t;
+        self.layout.set_state(&mut self.inputs, t, q, qd);
         self.tape.eval(&self.inputs, out);
     }
 }

@@ -17,7 +17,7 @@
 //! level too, at F = F(q(0), 0), so it keeps its holonomic meaning over long runs.
 //!
 //! M and f come from the kernel of [`Dynamics`]; A, c, a_t and f(q, t) are this
-//! module's kernels. Entry point: [`simulate`] (called by `run.rs` for models with
+//! module's kernels. Entry point: [`Constrained::start`] (called by [`crate::simulate`] for models with
 //! `[[constraints]]`). Initial values must satisfy the constraints: a residual
 //! beyond round-off (`INITIAL_TOLERANCE`) is bad input (exit 2) naming the
 //! constraint and by how much; within it the state is projected silently.
@@ -26,11 +26,8 @@ use crate::derive::Derivation;
 use crate::error::ModelError;
 use crate::model::ConstraintKind;
 use crate::run::dynamics::{Dynamics, Form, Kernel};
-use crate::run::{drift_warnings, Audit, InvariantAudit, Row, RunConfig, RunError, RunReport};
-use num::SolveError;
-use num::{integrate_projected, Config, Event, LinearSolver, Method, ObservationKind, OdeSystem, RhsError, Solver};
-use std::ops::ControlFlow;
-use std::time::Instant;
+use crate::run::{Audit, ProjectionMap, RowBuffer, RunConfig, RunError, Start, Stepping, VelocityMap};
+use num::{Config, LinearSolver, Method, OdeSystem, RhsError, SolveError};
 use sym::{ExprId, Tape};
 
 /// The largest initial residual (relative to the size of the constraint's
@@ -159,16 +156,12 @@ fn min_norm_correction(
 
 impl ConstrainedSystem {
     /// Compiles the constraint kernels of a derivation next to its dynamics.
-    pub fn new(d: &mut Derivation, dynamics: Dynamics) -> ConstrainedSystem {
+    pub fn new(d: &Derivation, dynamics: Dynamics) -> ConstrainedSystem {
         let n = d.q.len();
         let list = d.constraints.list.clone();
         let m = list.len();
-        let param_syms: Vec<ExprId> = d.model.parameters.iter().map(|p| d.model.pool.symbol(&p.name)).collect();
-        let mut input_syms: Vec<ExprId> = d.q.clone();
-        input_syms.extend(&d.qd);
-        input_syms.push(d.t);
-        input_syms.extend(&param_syms);
-        let pool = &mut d.model.pool;
+        let input_syms = d.layout.symbols();
+        let pool = d.pool();
         let a: Vec<ExprId> = list.iter().flat_map(|c| c.jacobian.iter().copied()).collect();
         let mut accel_out = a.clone();
         accel_out.extend(list.iter().map(|c| c.acceleration_rhs));
@@ -181,7 +174,7 @@ impl ConstrainedSystem {
         let positional: Vec<usize> = holonomic.iter().chain(&integrals).copied().collect();
         geo_out.extend(positional.iter().map(|&k| list[k].integral.unwrap_or(list[k].expr)));
         let compile =
-            |outs: &[ExprId]| Kernel::new(Tape::compile(pool, outs, &input_syms).expect("model symbols are inputs"));
+            |outs: &[ExprId]| Kernel::new(Tape::compile(pool, outs, input_syms).expect("model symbols are inputs"));
         let accel = compile(&accel_out);
         let geometry = compile(&geo_out);
         let inputs = dynamics.input_template().to_vec();
@@ -378,249 +371,212 @@ impl OdeSystem for ConstrainedSystem {
     }
 }
 
-/// Runs a model with constraints (see the module documentation). Methods: DOP853
-/// (default) and DOPRI5, which restart cheaply from a projected state.
-pub(crate) fn simulate(
-    d: &mut Derivation,
-    config: &RunConfig,
-    mut on_row: impl FnMut(&Row<'_>) -> ControlFlow<()>,
-) -> Result<RunReport, RunError> {
-    let start = Instant::now();
-    if !(config.until.is_finite() && config.until > 0.0) {
-        return Err(RunError::Input(ModelError::whole(format!(
-            "--until must be a positive time, not {}",
-            config.until
-        ))));
-    }
-    let method = match config.method {
-        None => Method::Dop853,
-        Some(m @ (Method::Dop853 | Method::Dopri5)) => m,
-        Some(m) => {
+/// A run of a model with constraints: DOP853 (default) or DOPRI5, which restart
+/// cheaply from a projected state, with the constraint columns and audits.
+pub(crate) struct Constrained {
+    /// The system rows are projected and evaluated with.
+    system: ConstrainedSystem,
+    /// The invariants are those of the unconstrained dynamics, at the projected state.
+    dynamics: Dynamics,
+    list: Vec<crate::derive::Constraint>,
+    n: usize,
+    /// The projected row state `[q, q', W]`.
+    y: Vec<f64>,
+    audits: Vec<ConstraintAudit>,
+    /// H − W, audited when the constraints' work is all that changes H. Its
+    /// relative drift is measured against the largest |H| of the run: H and W
+    /// grow together, and their difference cannot be better than H's own digits.
+    work: bool,
+    hw_initial: Option<f64>,
+    hw_last: f64,
+    hw_abs: f64,
+    h_size: f64,
+}
+
+impl Constrained {
+    /// Checks the method and the constraints, projects the initial values onto
+    /// the constraints (rejecting more than round-off), and builds the solver.
+    pub(crate) fn start(
+        d: &Derivation,
+        dynamics: &Dynamics,
+        config: &RunConfig,
+        q0: &[f64],
+        qd0: &[f64],
+    ) -> Result<(Constrained, Start), RunError> {
+        let method = match config.method {
+            None => Method::Dop853,
+            Some(m @ (Method::Dop853 | Method::Dopri5)) => m,
+            Some(m) => {
+                return Err(RunError::Input(
+                    ModelError::whole(format!(
+                        "method '{}' cannot run a model with constraints: the state is projected onto the constraints after every step, and only the explicit Runge–Kutta methods restart from a projected state",
+                        m.name()
+                    ))
+                    .with_help("use dop853 (the default) or dopri5"),
+                ));
+            }
+        };
+        let set = &d.constraints;
+        let (m, n) = (set.list.len(), d.q.len());
+        if set.independent < m {
             return Err(RunError::Input(
                 ModelError::whole(format!(
-                    "method '{}' cannot run a model with constraints: the state is projected onto the constraints after every step, and only the explicit Runge–Kutta methods restart from a projected state",
-                    m.name()
+                    "the {m} constraints are not independent (A has rank {}): their multipliers are not determined",
+                    set.independent
                 ))
-                .with_help("use dop853 (the default) or dopri5"),
+                .with_help("drop the constraints that follow from the others"),
             ));
         }
-    };
-    let set = &d.constraints;
-    let (m, n) = (set.list.len(), d.q.len());
-    if set.independent < m {
-        return Err(RunError::Input(
-            ModelError::whole(format!(
-                "the {m} constraints are not independent (A has rank {}): their multipliers are not determined",
-                set.independent
-            ))
-            .with_help("drop the constraints that follow from the others"),
-        ));
-    }
-    let (q0, qd0) = d.model.initial_state().map_err(RunError::Input)?;
-    let dynamics = Dynamics::new(d);
-    let mut invariant_audit = InvariantAudit::new(d, &dynamics);
-    let mut inv_dynamics = dynamics.clone();
-    let mut system = ConstrainedSystem::new(d, dynamics);
-    let list = d.constraints.list.clone();
+        let mut system = ConstrainedSystem::new(d, dynamics.clone());
+        let list = d.constraints.list.clone();
 
-    // Initial values: round-off is projected away, anything more is an error.
-    let mut y0: Vec<f64> = q0.iter().chain(&qd0).copied().collect();
-    if d.constraints.work_balances_h {
-        y0.push(0.0);
-    }
-    let (mut pos, mut vel, mut scale) = (vec![0.0; m], vec![0.0; m], vec![(0.0, 0.0); m]);
-    system.residuals(0.0, &y0, &mut pos, &mut vel, &mut scale);
-    for k in 0..m {
-        let (what, r) = if pos[k].abs() > INITIAL_TOLERANCE * scale[k].0 {
-            ("", pos[k])
-        } else if vel[k].abs() > INITIAL_TOLERANCE * scale[k].1 {
-            (" at velocity level (A q' + a_t)", vel[k])
-        } else {
-            continue;
-        };
-        let c = &list[k];
-        return Err(RunError::Input(
-            ModelError::at(
-                c.span.clone(),
-                format!(
-                    "the initial values violate the constraint '{}'{what}: its residual at t = 0 is {r:.3e}, not 0",
-                    c.name
-                ),
-            )
-            .with_help(format!(
-                "give [initial] values that satisfy the constraint (velocities too: A q' + a_t = 0); residuals up to {INITIAL_TOLERANCE:.0e} of the terms' size are taken for round-off and projected away"
-            )),
-        ));
-    }
-    system.fix_integral_levels(0.0, &y0);
-    system.project(0.0, &mut y0).map_err(|e| RunError::Input(ModelError::whole(format!("at t = 0: {e}"))))?;
-
-    let solver_config = Config { rtol: config.rtol, atol: config.atol, h_max: Some(config.until), ..Config::default() };
-    let mut solver = method
-        .build(system.clone(), 0.0, &y0, &solver_config)
-        .map_err(|e| RunError::Input(ModelError::whole(e.to_string())))?;
-
-    // Stop conditions and crossings over [q, q', t, params].
-    let param_syms: Vec<ExprId> = d.model.parameters.iter().map(|p| d.model.pool.symbol(&p.name)).collect();
-    let mut inputs: Vec<ExprId> = d.q.clone();
-    inputs.extend(&d.qd);
-    inputs.push(d.t);
-    inputs.extend(&param_syms);
-    let mut values = vec![0.0; 2 * n + 1];
-    values.extend(d.model.parameters.iter().map(|p| p.value));
-    let conditions: Vec<(&crate::run::StopCondition, bool)> =
-        config.stop_when.iter().map(|c| (c, true)).chain(config.crossings.iter().map(|c| (c, false))).collect();
-    let mut events: Vec<Event<'_>> = Vec::new();
-    for &(cond, terminal) in &conditions {
-        let mut tape = Tape::compile(&d.model.pool, &[cond.expr], &inputs)
-            .map_err(|e| RunError::Input(ModelError::whole(format!("in the condition '{}': {e}", cond.text))))?;
-        let mut values = values.clone();
-        let mut out = [0.0];
-        events.push(
-            Event::new(move |t, y| {
-                values[..2 * n].copy_from_slice(&y[..2 * n]);
-                values[2 * n] = t;
-                tape.eval(&values, &mut out);
-                out[0]
-            })
-            .with_direction(cond.direction)
-            .with_terminal(terminal),
-        );
-    }
-
-    // The audit, row by row.
-    let n_cols = constraint_columns(d).len();
-    let mut inv = vec![0.0; invariant_audit.len()];
-    let mut cols = vec![0.0; n_cols];
-    let mut audits: Vec<ConstraintAudit> = list
-        .iter()
-        .map(|c| ConstraintAudit {
-            name: c.name.clone(),
-            kind: c.kind,
-            max_abs_residual: 0.0,
-            max_abs_velocity_residual: 0.0,
-            final_lambda: 0.0,
-            max_force: 0.0,
-        })
-        .collect();
-    let work = d.constraints.work_balances_h;
-    let mut row_y = vec![0.0; 2 * n + usize::from(work)];
-    // H − W, audited when the constraints' work is all that changes H.
-    // Its relative drift is measured against the largest |H| of the run: H and W
-    // grow together, and their difference cannot be better than H's own digits.
-    let (mut hw_initial, mut hw_last, mut hw_abs, mut h_size) = (None::<f64>, 0.0, 0.0f64, 0.0f64);
-    let mut last_y = y0.clone();
-    let mut last_t = 0.0;
-    let mut row_error: Option<String> = None;
-    let mut projector = system.clone();
-    let mut row_system = system;
-    let mut project = |t: f64, y: &mut [f64]| projector.project(t, y);
-    let result = integrate_projected(&mut solver, config.until, config.output, &mut events, &mut project, |obs| {
-        // Samples come from the step's dense output: project them too.
-        row_y.copy_from_slice(obs.y);
-        let r = row_system.project(obs.t, &mut row_y).and_then(|_| row_system.columns(obs.t, &row_y, &mut cols));
-        if let Err(e) = r {
-            row_error = Some(format!("at t = {}: {e}", obs.t));
-            return ControlFlow::Break(());
+        // Initial values: round-off is projected away, anything more is an error.
+        let mut y0: Vec<f64> = q0.iter().chain(qd0).copied().collect();
+        let work = d.constraints.work_balances_h;
+        if work {
+            y0.push(0.0);
         }
-        let (q, rest) = row_y.split_at(n);
-        let qd = &rest[..n];
-        inv_dynamics.eval_invariants(obs.t, q, qd, &mut inv);
-        let interpolated_event = matches!(obs.kind, ObservationKind::Event { .. });
-        invariant_audit.observe(&inv, interpolated_event);
+        let (mut pos, mut vel, mut scale) = (vec![0.0; m], vec![0.0; m], vec![(0.0, 0.0); m]);
+        system.residuals(0.0, &y0, &mut pos, &mut vel, &mut scale);
+        for k in 0..m {
+            let (what, r) = if pos[k].abs() > INITIAL_TOLERANCE * scale[k].0 {
+                ("", pos[k])
+            } else if vel[k].abs() > INITIAL_TOLERANCE * scale[k].1 {
+                (" at velocity level (A q' + a_t)", vel[k])
+            } else {
+                continue;
+            };
+            let c = &list[k];
+            return Err(RunError::Input(
+                ModelError::at(
+                    c.span.clone(),
+                    format!(
+                        "the initial values violate the constraint '{}'{what}: its residual at t = 0 is {r:.3e}, not 0",
+                        c.name
+                    ),
+                )
+                .with_help(format!(
+                    "give [initial] values that satisfy the constraint (velocities too: A q' + a_t = 0); residuals up to {INITIAL_TOLERANCE:.0e} of the terms' size are taken for round-off and projected away"
+                )),
+            ));
+        }
+        system.fix_integral_levels(0.0, &y0);
+        system.project(0.0, &mut y0).map_err(|e| RunError::Input(ModelError::whole(format!("at t = 0: {e}"))))?;
+
+        let solver_config =
+            Config { rtol: config.rtol, atol: config.atol, h_max: Some(config.until), ..Config::default() };
+        let solver = method
+            .build(system.clone(), 0.0, &y0, &solver_config)
+            .map_err(|e| RunError::Input(ModelError::whole(e.to_string())))?;
+        let audits = list
+            .iter()
+            .map(|c| ConstraintAudit {
+                name: c.name.clone(),
+                kind: c.kind,
+                max_abs_residual: 0.0,
+                max_abs_velocity_residual: 0.0,
+                final_lambda: 0.0,
+                max_force: 0.0,
+            })
+            .collect();
+        let constrained = Constrained {
+            system,
+            dynamics: dynamics.clone(),
+            list,
+            n,
+            y: vec![0.0; y0.len()],
+            audits,
+            work,
+            hw_initial: None,
+            hw_last: 0.0,
+            hw_abs: 0.0,
+            h_size: 0.0,
+        };
+        let initial = (y0[..n].to_vec(), y0[n..2 * n].to_vec());
+        let start = Start { solver, y0, initial, method, form: Form::Lagrange, dt: None, pilot_rhs_evaluations: 0 };
+        Ok((constrained, start))
+    }
+}
+
+impl Stepping for Constrained {
+    fn velocity_map(&self) -> VelocityMap {
+        let n = self.n;
+        Box::new(move |_t, y, qd| {
+            qd.copy_from_slice(&y[n..2 * n]);
+            Ok(())
+        })
+    }
+
+    fn projection(&self) -> Option<ProjectionMap> {
+        let mut projector = self.system.clone();
+        Some(Box::new(move |t, y| projector.project(t, y)))
+    }
+
+    fn row(&mut self, t: f64, y: &[f64], row: &mut RowBuffer) -> Result<(), RhsError> {
+        // Samples come from the step's dense output: project them too.
+        let n = self.n;
+        self.y.copy_from_slice(y);
+        self.system.project(t, &mut self.y)?;
+        self.system.columns(t, &self.y, &mut row.constraints)?;
+        row.q.copy_from_slice(&self.y[..n]);
+        row.qd.copy_from_slice(&self.y[n..2 * n]);
+        self.dynamics.eval_invariants(t, &row.q, &row.qd, &mut row.invariants);
+        let cols = &row.constraints;
         let mut c = 0;
-        for (k, audit) in audits.iter_mut().enumerate() {
+        for (k, audit) in self.audits.iter_mut().enumerate() {
             audit.final_lambda = cols[c];
             audit.max_force = audit.max_force.max(cols[c + 1]);
             audit.max_abs_residual = audit.max_abs_residual.max(cols[c + 2].abs());
             c += 3;
-            if list[k].kind == ConstraintKind::Holonomic {
+            if self.list[k].kind == ConstraintKind::Holonomic {
                 audit.max_abs_velocity_residual = audit.max_abs_velocity_residual.max(cols[c].abs());
                 c += 1;
             } else {
                 audit.max_abs_velocity_residual = audit.max_abs_residual;
             }
         }
-        if work && !interpolated_event {
-            let hw = inv[0] - row_y[2 * n];
-            let h0 = *hw_initial.get_or_insert(hw);
-            hw_abs = hw_abs.max((hw - h0).abs());
-            h_size = h_size.max(inv[0].abs());
-            hw_last = hw;
+        if self.work && !row.is_event {
+            let hw = row.invariants[0] - self.y[2 * n];
+            let h0 = *self.hw_initial.get_or_insert(hw);
+            self.hw_abs = self.hw_abs.max((hw - h0).abs());
+            self.h_size = self.h_size.max(row.invariants[0].abs());
+            self.hw_last = hw;
         }
-        last_t = obs.t;
-        last_y.copy_from_slice(&row_y);
-        on_row(&Row {
-            t: obs.t,
-            q,
-            qd,
-            invariants: &inv,
-            is_event: interpolated_event,
-            event: match obs.kind {
-                ObservationKind::Event { index } => Some(conditions[index].0.text.as_str()),
-                _ => None,
-            },
-            constraints: &cols,
-        })
-    });
+        Ok(())
+    }
 
-    let stats = solver.statistics();
-    let mut inv_audits = invariant_audit.audits();
-    if let Some(h0) = hw_initial {
-        inv_audits.push(Audit {
-            name: "H-W".into(),
-            conserved: true,
-            initial: h0,
-            final_value: hw_last,
-            max_abs_drift: hw_abs,
-            max_rel_drift: if h_size > 0.0 { hw_abs / h_size } else { hw_abs },
-        });
+    fn audits(&mut self, invariants: &mut Vec<Audit>, constraints: &mut Vec<ConstraintAudit>) {
+        if let Some(h0) = self.hw_initial {
+            invariants.push(Audit {
+                name: "H-W".into(),
+                conserved: true,
+                initial: h0,
+                final_value: self.hw_last,
+                max_abs_drift: self.hw_abs,
+                max_rel_drift: if self.h_size > 0.0 { self.hw_abs / self.h_size } else { self.hw_abs },
+            });
+        }
+        constraints.clone_from(&self.audits);
     }
-    let explained = (1e3 * config.rtol).max(1e-12);
-    let mut warnings = drift_warnings(&inv_audits, explained);
-    for a in &audits {
-        if a.max_abs_residual > 1e-9 || a.max_abs_velocity_residual > 1e-9 {
-            warnings.push(format!(
-                "the constraint {} is violated by up to {:.3e} despite the projection",
-                a.name,
-                a.max_abs_residual.max(a.max_abs_velocity_residual)
-            ));
+
+    fn warnings(&self, warnings: &mut Vec<String>) {
+        for a in &self.audits {
+            if a.max_abs_residual > 1e-9 || a.max_abs_velocity_residual > 1e-9 {
+                warnings.push(format!(
+                    "the constraint {} is violated by up to {:.3e} despite the projection",
+                    a.name,
+                    a.max_abs_residual.max(a.max_abs_velocity_residual)
+                ));
+            }
         }
     }
-    let mut report = RunReport {
-        method,
-        form: Form::Lagrange,
-        dt: None,
-        rtol: config.rtol,
-        atol: config.atol,
-        steps: stats.steps,
-        rejected: stats.rejected,
-        rhs_evaluations: stats.rhs_evaluations,
-        t_final: last_t,
-        final_q: last_y[..n].to_vec(),
-        final_qd: last_y[n..2 * n].to_vec(),
-        invariants: inv_audits,
-        stopped_by: None,
-        warnings,
-        failure: None,
-        pilot_rhs_evaluations: 0,
-        wall_seconds: start.elapsed().as_secs_f64(),
-        constraints: audits,
-    };
-    match result {
-        Ok(summary) => {
-            report.t_final = summary.t;
-            crate::run::conclude(report, summary.stop, &conditions, row_error)
-        }
-        Err(e) => {
-            let message = match &e {
-                SolveError::Rhs { t, source: RhsError::Singular { detail } } => format!(
-                    "the constrained equations became singular at t = {t} ({detail}): the constraints are no longer independent there"
-                ),
-                other => other.to_string(),
-            };
-            report.failure = Some(message.clone());
-            Err(RunError::Failed { message, report: Box::new(report) })
+
+    fn describe(&mut self, e: &SolveError, _y0: &[f64], _at: (f64, Vec<f64>)) -> String {
+        match e {
+            SolveError::Rhs { t, source: RhsError::Singular { detail } } => format!(
+                "the constrained equations became singular at t = {t} ({detail}): the constraints are no longer independent there"
+            ),
+            other => other.to_string(),
         }
     }
 }
@@ -646,9 +602,9 @@ holonomic = "x^2 + y^2 - l^2"
 
     #[test]
     fn the_saddle_point_solve_gives_the_tension() {
-        let mut d = Derivation::new(Model::parse(PENDULUM, &[]).unwrap()).unwrap();
-        let dynamics = Dynamics::new(&mut d);
-        let mut sys = ConstrainedSystem::new(&mut d, dynamics);
+        let d = Derivation::new(Model::parse(PENDULUM, &[]).unwrap()).unwrap();
+        let dynamics = Dynamics::new(&d);
+        let mut sys = ConstrainedSystem::new(&d, dynamics);
         let (m, l, g) = (2.0, 1.5, 9.81);
         let th: f64 = 0.4;
         let om = 1.3;

@@ -176,20 +176,15 @@ pub struct Dynamics {
 
 impl Dynamics {
     /// Compiles the expressions of a derivation.
-    pub fn new(d: &mut Derivation) -> Dynamics {
+    pub fn new(d: &Derivation) -> Dynamics {
         let n = d.q.len();
-        let param_syms: Vec<ExprId> = d.model.parameters.iter().map(|p| d.model.pool.symbol(&p.name)).collect();
         let invariants = invariants_of(d);
-        let pool = &mut d.model.pool;
-        let mut input_syms: Vec<ExprId> = Vec::with_capacity(2 * n + 1 + param_syms.len());
-        input_syms.extend(&d.q);
-        input_syms.extend(&d.qd);
-        input_syms.push(d.t);
-        input_syms.extend(&param_syms);
-        let mut inputs = vec![0.0; input_syms.len()];
-        for (k, p) in d.model.parameters.iter().enumerate() {
-            inputs[2 * n + 1 + k] = p.value;
-        }
+        // The derivation's pool is frozen: the Hamilton kernels' expressions are
+        // built in a copy.
+        let mut pool_owned = d.pool().clone();
+        let pool = &mut pool_owned;
+        let input_syms = d.layout.symbols();
+        let inputs = d.layout.values();
 
         let mut entries = Vec::new();
         let mut stored: Vec<ExprId> = Vec::new();
@@ -206,7 +201,7 @@ impl Dynamics {
         let mut outs: Vec<ExprId> = stored.clone();
         outs.extend(&d.forcing);
         let mass_forcing_tape =
-            Arc::new(Tape::compile(pool, &outs, &input_syms).expect("derivation symbols are inputs"));
+            Arc::new(Tape::compile(pool, &outs, input_syms).expect("derivation symbols are inputs"));
         // Compiled on first use: a Taylor run never evaluates it.
         let mass_forcing = LazyKernel::new((*mass_forcing_tape).clone());
 
@@ -231,7 +226,7 @@ impl Dynamics {
                 rates.push(pool.add(&terms));
             }
             let compile = |pool: &sym::Pool, outs: &[ExprId]| {
-                LazyKernel::new(Tape::compile(pool, outs, &input_syms).expect("derivation symbols are inputs"))
+                LazyKernel::new(Tape::compile(pool, outs, input_syms).expect("derivation symbols are inputs"))
             };
             (compile(pool, &outs), compile(pool, &rates))
         });
@@ -246,7 +241,7 @@ impl Dynamics {
 
         let exprs: Vec<ExprId> = invariants.iter().map(|i| i.expr).collect();
         let invariants_tape = LazyKernel::with_warm_up(
-            Tape::compile(pool, &exprs, &input_syms).expect("derivation symbols are inputs"),
+            Tape::compile(pool, &exprs, input_syms).expect("derivation symbols are inputs"),
             INVARIANTS_WARM_UP,
         );
 
@@ -625,8 +620,8 @@ position = ["l*sin(th)", "-l*cos(th)"]
 "#;
 
     fn dynamics(text: &str) -> Dynamics {
-        let mut d = Derivation::new(Model::parse(text, &[]).unwrap()).unwrap();
-        Dynamics::new(&mut d)
+        let d = Derivation::new(Model::parse(text, &[]).unwrap()).unwrap();
+        Dynamics::new(&d)
     }
 
     #[test]

@@ -315,8 +315,8 @@ c = 0.5
 
     /// y[1] = F(y) and y[2] = (dF/dt along the flow)/2, by central differences.
     fn check(text: &str, native: bool, expect_code: &str) {
-        let mut d = Derivation::new(Model::parse(text, &[]).unwrap()).unwrap();
-        let dynamics = Dynamics::new(&mut d);
+        let d = Derivation::new(Model::parse(text, &[]).unwrap()).unwrap();
+        let dynamics = Dynamics::new(&d);
         let n = dynamics.n_coords();
         let dim = 2 * n;
         let mut sys = dynamics.system(Form::Lagrange);
@@ -365,8 +365,8 @@ c = 0.5
     fn a_singular_mass_matrix_fails_its_lane_alone() {
         // M = diag(1, x²) is singular at x = 0 (lane 1), regular elsewhere.
         let text = "coordinates = [\"x\", \"y\"]\nlagrangian = \"x'^2/2 + x^2*y'^2/2 - x^2/2\"\n";
-        let mut d = Derivation::new(Model::parse(text, &[]).unwrap()).unwrap();
-        let dynamics = Dynamics::new(&mut d);
+        let d = Derivation::new(Model::parse(text, &[]).unwrap()).unwrap();
+        let dynamics = Dynamics::new(&d);
         for native in [true, false] {
             let mut s = dynamics.lagrange_series_with::<2>(6, native);
             let y = [[1.0, 0.0], [0.0, 0.0], [0.5, 0.3], [0.2, 0.1]];
@@ -386,8 +386,8 @@ c = 0.5
     #[test]
     fn every_way_of_running_gives_the_same_series_and_lanes_are_independent() {
         for text in [pendulum(3), pendulum(4), CHAIN.to_string()] {
-            let mut d = Derivation::new(Model::parse(&text, &[]).unwrap()).unwrap();
-            let dynamics = Dynamics::new(&mut d);
+            let d = Derivation::new(Model::parse(&text, &[]).unwrap()).unwrap();
+            let dynamics = Dynamics::new(&d);
             let dim = 2 * dynamics.n_coords();
             let p = 12;
             let states: Vec<Vec<f64>> =

@@ -1,0 +1,202 @@
+//! The stepping of a model without constraints: the method the derivation
+//! calls for (or the one asked for), the form it integrates (Lagrange `[q, q']`,
+//! Hamilton `[q, p]`, separable `[q, p]`), pilot runs that fix the step of a
+//! fixed-step method from the tolerance, and failures told in the user's terms.
+
+use super::dynamics::{Dynamics, Form, System};
+use super::{choose_method, RowBuffer, RunConfig, RunError, Start, Stepping};
+use crate::derive::Derivation;
+use crate::error::ModelError;
+use crate::probe;
+use num::{integrate, Config, Output, RhsError, SolveError, Solver};
+use std::ops::ControlFlow;
+
+/// A run of a model without constraints.
+pub(crate) struct Plain {
+    /// The system rows and failure diagnoses are evaluated with.
+    system: System,
+    names: Vec<String>,
+    form: Form,
+    n: usize,
+}
+
+impl Plain {
+    /// Chooses the method and form and builds the solver at (q0, q0').
+    pub(crate) fn start(
+        d: &Derivation,
+        dynamics: &Dynamics,
+        config: &RunConfig,
+        q0: &[f64],
+        qd0: &[f64],
+    ) -> Result<(Plain, Start), RunError> {
+        let (method, form) = choose_method(d, dynamics, config.method).map_err(RunError::Input)?;
+        let n = dynamics.n_coords();
+        let mut system = dynamics.system(form);
+        let y0 = system.initial_state(0.0, q0, qd0).map_err(RunError::Input)?;
+        let mut probe_system = system.clone();
+        let solver_config = Config {
+            rtol: config.rtol,
+            atol: config.atol,
+            dt: config.dt,
+            h_max: Some(config.until),
+            ..Config::default()
+        };
+        let build = |system: System, config: &Config| -> Result<Box<dyn Solver>, SolveError> {
+            if form == Form::Separable {
+                method.build_separable(system, 0.0, &y0, config)
+            } else {
+                method.build(system, 0.0, &y0, config)
+            }
+        };
+        let input_error = |e: SolveError| RunError::Input(ModelError::whole(e.to_string()));
+        let mut solver = build(system.clone(), &solver_config).map_err(input_error)?;
+        let mut dt = None;
+        let mut pilot_rhs = 0;
+        if !method.is_adaptive() {
+            // A fixed step chosen from the tolerance at the start may be too long
+            // later in the run (a pendulum released from rest speeds up): pilot
+            // runs check the drift of H along the whole run and shorten the step
+            // until it meets the tolerance. Then the step is made to divide the
+            // sample spacing, so that every output row is an integrator state,
+            // not an interpolation between two.
+            let mut h = solver.step_size();
+            pilot_rhs += solver.statistics().rhs_evaluations;
+            if config.dt.is_none() && d.hamiltonian_conserved() {
+                let target = 10.0 * config.rtol.max(1e-14);
+                for _ in 0..4 {
+                    let cfg = Config { dt: Some(h), ..solver_config };
+                    let pilot = build(system.clone(), &cfg).map_err(input_error)?;
+                    let (drift, evaluations) = pilot_drift(pilot, &mut probe_system, config.until, n);
+                    pilot_rhs += evaluations;
+                    let Some(drift) = drift else { break };
+                    if drift <= target {
+                        break;
+                    }
+                    h *= (0.9 * (target / drift).powf(1.0 / f64::from(method.order()))).clamp(0.05, 0.9);
+                }
+            }
+            if let Output::Samples(k) = config.output {
+                let spacing = config.until / (k.max(2) - 1) as f64;
+                h = spacing / (spacing / h).ceil();
+            }
+            let cfg = Config { dt: Some(h), ..solver_config };
+            solver = build(system.clone(), &cfg).map_err(input_error)?;
+            dt = Some(h);
+        }
+        let plain = Plain { system: probe_system, names: dynamics.coordinate_names().to_vec(), form, n };
+        let initial = (q0.to_vec(), qd0.to_vec());
+        Ok((plain, Start { solver, y0, initial, method, form, dt, pilot_rhs_evaluations: pilot_rhs }))
+    }
+}
+
+impl Stepping for Plain {
+    fn velocity_map(&self) -> super::VelocityMap {
+        let mut system = self.system.clone();
+        Box::new(move |t, y, qd| system.velocities(t, y, qd))
+    }
+
+    fn row(&mut self, t: f64, y: &[f64], row: &mut RowBuffer) -> Result<(), RhsError> {
+        row.q.copy_from_slice(&y[..self.n]);
+        self.system.invariants_at(t, y, &mut row.qd, &mut row.invariants)
+    }
+
+    fn describe(&mut self, e: &SolveError, y0: &[f64], at: (f64, Vec<f64>)) -> String {
+        describe_failure(e, &self.names, self.form, &mut self.system, y0, at)
+    }
+}
+
+/// Why the integrator could not go on, judged from the last good state: a mass
+/// matrix that has become singular (measured against its size at the start, so
+/// that a 1×1 M → 0 counts), or the component that grows without bound.
+fn diagnose(system: &mut System, names: &[String], form: Form, y0: &[f64], t: f64, y: &[f64]) -> Option<String> {
+    let n = names.len();
+    let m0 = system.mass_matrix_at(0.0, y0);
+    let m = system.mass_matrix_at(t, y);
+    // A step that cannot be taken near a state where M has lost most of its
+    // smallest pivot (x^2 x'^2/2 with x → 0) is M becoming singular; the step
+    // that fails may still be a little before the singular point.
+    if let (Some(p0), Some(p)) = (probe::smallest_pivot(&m0, n), probe::smallest_pivot(&m, n)) {
+        if p < 0.05 * p0 {
+            return Some(format!(
+                "the mass matrix becomes singular at t ≈ {t} (its smallest pivot fell from {p0:.3e} at the start to {p:.3e}): the accelerations are undetermined there"
+            ));
+        }
+    }
+    // The fastest-growing component relative to where it started.
+    let (k, size) = y
+        .iter()
+        .zip(y0)
+        .map(|(v, v0)| v.abs() / v0.abs().max(1.0))
+        .enumerate()
+        .fold((0, 0.0f64), |best, (k, r)| if r > best.1 { (k, r) } else { best });
+    (size > 1e3)
+        .then(|| format!("the motion blew up at t = {t}: {} has grown to {:.3e}", component_name(k, names, form), y[k]))
+}
+
+fn component_name(index: usize, names: &[String], form: Form) -> String {
+    let n = names.len();
+    if index < n {
+        format!("the coordinate '{}'", names[index])
+    } else if index < 2 * n {
+        match form {
+            Form::Lagrange => format!("the velocity '{}''", names[index - n]),
+            _ => format!("the momentum 'p_{}'", names[index - n]),
+        }
+    } else {
+        format!("component {index}")
+    }
+}
+
+/// The largest relative drift of H (the first invariant) over every step of a
+/// run without output; None when the pilot fails (the real run reports why).
+fn pilot_drift(mut solver: Box<dyn Solver>, system: &mut System, until: f64, n: usize) -> (Option<f64>, usize) {
+    let mut qd = vec![0.0; n];
+    let mut inv = vec![0.0; system.n_invariants()];
+    let mut h0: Option<f64> = None;
+    let mut drift = 0.0f64;
+    let mut failed = false;
+    let result = integrate(&mut solver, until, Output::EveryStep, &mut [], |obs| {
+        if system.invariants_at(obs.t, obs.y, &mut qd, &mut inv).is_err() {
+            failed = true;
+            return ControlFlow::Break(());
+        }
+        let h = *h0.get_or_insert(inv[0]);
+        let d = (inv[0] - h).abs() / h.abs().max(f64::MIN_POSITIVE);
+        if !d.is_finite() {
+            failed = true;
+            return ControlFlow::Break(());
+        }
+        drift = drift.max(d);
+        ControlFlow::Continue(())
+    });
+    ((result.is_ok() && !failed).then_some(drift), solver.statistics().rhs_evaluations)
+}
+
+/// A failure in the user's terms: the time and the coordinate concerned.
+fn describe_failure(
+    e: &SolveError,
+    names: &[String],
+    form: Form,
+    system: &mut System,
+    y0: &[f64],
+    (t_last, y_last): (f64, Vec<f64>),
+) -> String {
+    let component = |index: usize| component_name(index, names, form);
+    match e {
+        SolveError::NonFiniteState { t, index } => {
+            format!("the motion blew up at t = {t}: {} is no longer finite", component(*index))
+        }
+        SolveError::Rhs { t, source: num::RhsError::NonFinite { index } } => {
+            format!("the equations of motion gave a non-finite rate of change of {} at t = {t}", component(*index))
+        }
+        SolveError::Rhs { t, source: num::RhsError::Singular { detail } } => {
+            format!("the mass matrix became singular at t = {t} ({detail}): the accelerations are undetermined there")
+        }
+        // A step that cannot be taken (too small, or implicit stages that do not
+        // converge): say why from the last good state when it can be told.
+        other => match diagnose(system, names, form, y0, t_last, &y_last) {
+            Some(why) => format!("{why} ({other})"),
+            None => other.to_string(),
+        },
+    }
+}
