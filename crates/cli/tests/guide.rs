@@ -345,20 +345,20 @@ fn guide_examples_match_the_program() {
     let scratch = Scratch::new(&root);
     let mut failures = String::new();
     for example in &guide.examples {
-        let expected: Vec<&str> = example.expected.iter().map(|l| l.trim_end()).collect();
-        let expected = normalized_lines(&expected);
+        let expected = example.expected.join("\n");
+        let expected = normalized(&expected);
         match run(example, &scratch.0) {
             Err(e) => writeln!(failures, "{}: $ {}\n  {e}\n", example.place, example.command).unwrap(),
             Ok((code, printed)) => {
                 let actual = normalized(&printed);
-                if code != example.code || !lines_match(expected, &actual) {
+                if code != example.code || !lines_match(&expected, &actual) {
                     writeln!(
                         failures,
                         "{}: $ {}\nexit code {code} (the guide says {}); {}\n--- it printed:\n{}\n",
                         example.place,
                         example.command,
                         example.code,
-                        first_mismatch(expected, &actual),
+                        first_mismatch(&expected, &actual),
                         actual.join("\n")
                     )
                     .unwrap();
@@ -375,26 +375,16 @@ fn guide_examples_match_the_program() {
                 continue;
             }
         };
-        let expected: Vec<&str> = shown.lines.iter().map(|l| l.trim_end()).collect();
-        if !lines_match(normalized_lines(&expected), &normalized(&text)) {
-            writeln!(failures, "{}: the block differs from {}:\n{}\n", shown.place, shown.path, expected.join("\n"))
-                .unwrap();
+        let expected = shown.lines.join("\n");
+        if !lines_match(&normalized(&expected), &normalized(&text)) {
+            writeln!(failures, "{}: the block differs from {}:\n{}\n", shown.place, shown.path, expected).unwrap();
         }
-        if !guide.examples.iter().any(|e| e.words.iter().any(|w| *w == shown.path)) {
+        if !guide.examples.iter().any(|e| e.words.contains(&shown.path)) {
             writeln!(failures, "{}: no console example runs {}\n", shown.place, shown.path).unwrap();
         }
     }
     drop(scratch);
     assert!(failures.is_empty(), "the guide and the program disagree:\n\n{failures}");
-}
-
-/// `lines` without trailing empty lines.
-fn normalized_lines<'a>(lines: &'a [&'a str]) -> &'a [&'a str] {
-    let mut end = lines.len();
-    while end > 0 && lines[end - 1].is_empty() {
-        end -= 1;
-    }
-    &lines[..end]
 }
 
 #[test]
