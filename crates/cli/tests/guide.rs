@@ -29,7 +29,8 @@
 //! The commands run in a scratch directory that mirrors the repository root (a symbolic link
 //! to every top-level entry but `target` and `.git`), so relative paths read as in the root
 //! while files a command writes (`--out run.csv`) land in the scratch directory, which is
-//! removed afterwards. The blocks of all files share it and run in order, so a later block
+//! removed afterwards. (A path into a linked directory, `--out examples/run.csv`, would write
+//! into the repository: the guide writes plain file names.) The blocks of all files share it and run in order, so a later block
 //! may read what an earlier one wrote.
 //!
 //! A ```` ```toml ```` block whose first line is `# examples/NAME.toml` (any `.toml` path in
@@ -281,6 +282,8 @@ struct Scratch(PathBuf);
 impl Scratch {
     fn new(root: &Path) -> Scratch {
         let dir = std::env::temp_dir().join(format!("lagrange-guide-{}", std::process::id()));
+        // A directory left by an earlier run that had this process id goes first.
+        let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).expect("create the scratch directory");
         let scratch = Scratch(dir);
         for entry in std::fs::read_dir(root).expect("list the repository root") {
