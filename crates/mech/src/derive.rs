@@ -17,10 +17,12 @@ mod body;
 mod constraint;
 mod layout;
 mod quadratic;
+mod verdict;
 
 pub use body::BodyMotion;
 pub use constraint::{Constraint, Constraints};
 pub use layout::Layout;
+pub use verdict::{ConservationReason, ConservedReason, EnergyReason, HamiltonianReason, RateTerm, Verdicts};
 
 /// A quantity the derivation shows to be conserved.
 #[derive(Debug, Clone)]
@@ -29,19 +31,8 @@ pub struct Conserved {
     pub name: String,
     /// The quantity as an expression in (q, q', t).
     pub expr: ExprId,
-    /// Why it is conserved, in one sentence.
-    pub reason: String,
-}
-
-/// Why the Hamiltonian is or is not the energy, and is or is not conserved.
-#[derive(Debug, Clone, Default)]
-pub struct Verdicts {
-    /// Sentences explaining `hamiltonian_is_energy`.
-    pub energy: Vec<String>,
-    /// Sentences explaining `hamiltonian_conserved`.
-    pub conservation: Vec<String>,
-    /// Why H is not given in closed form, when it is not.
-    pub hamiltonian: Vec<String>,
+    /// Why it is conserved.
+    pub reason: ConservedReason,
 }
 
 /// Everything derived from a model. Expressions live in `model.pool`.
@@ -353,10 +344,7 @@ impl Derivation {
                 conserved.push(Conserved {
                     name: format!("p_{}", names[i]),
                     expr: momenta[i],
-                    reason: format!(
-                        "'{}' is cyclic: L does not depend on it, so p_{} = ∂L/∂{}' is constant",
-                        names[i], names[i], names[i]
-                    ),
+                    reason: ConservedReason::Cyclic { coordinate: names[i].clone() },
                 });
             }
         }
@@ -380,28 +368,23 @@ impl Derivation {
         // dH/dt = −∂L/∂t − Σ q'·∂R/∂q' + Σ Q·q': name each term that is there.
         let mut rate = Vec::new();
         if explicit_time {
-            verdicts.conservation.push("L depends explicitly on the time (∂L/∂t ≠ 0).".into());
-            rate.push("−∂L/∂t");
+            verdicts.conservation.push(ConservationReason::ExplicitTime);
+            rate.push(RateTerm::ExplicitTime);
         }
         if dissipative {
-            verdicts.conservation.push("The dissipation function R takes energy out.".into());
-            rate.push("− Σ q'·∂R/∂q'");
+            verdicts.conservation.push(ConservationReason::Dissipation);
+            rate.push(RateTerm::Dissipation);
         }
         if !forced.is_empty() {
-            let list: Vec<&str> = forced.iter().map(|&i| names[i].as_str()).collect();
-            verdicts.conservation.push(format!("Generalized forces act on {} and do work.", list.join(", ")));
-            rate.push("+ Σ Q·q'");
+            let coordinates = forced.iter().map(|&i| names[i].clone()).collect();
+            verdicts.conservation.push(ConservationReason::GeneralizedForces { coordinates });
+            rate.push(RateTerm::GeneralizedForces);
         }
         if !rate.is_empty() {
-            verdicts
-                .conservation
-                .push(format!("So dH/dt = {} ≠ 0.", rate.join(" ")).replace("= − ", "= −").replace("= + ", "= "));
+            verdicts.conservation.push(ConservationReason::Rate { terms: rate });
         }
         if hamiltonian_conserved {
-            verdicts.conservation.push(
-                "L does not depend explicitly on t, and no dissipation or generalized force acts: dH/dt = −∂L/∂t = 0."
-                    .into(),
-            );
+            verdicts.conservation.push(ConservationReason::Conserved);
         }
         let (energy, hamiltonian_is_energy) = match (kinetic, potential) {
             (Some(tt), Some(uu)) => {
@@ -414,9 +397,7 @@ impl Derivation {
                 (Some(e), Some(same))
             }
             _ => {
-                verdicts
-                    .energy
-                    .push("The model gives only L, so T and U (and hence the energy) are not known separately.".into());
+                verdicts.energy.push(EnergyReason::OnlyLagrangian);
                 (None, None)
             }
         };
@@ -425,9 +406,9 @@ impl Derivation {
                 name: "H".into(),
                 expr: energy_function,
                 reason: if hamiltonian_is_energy == Some(true) {
-                    "H is the energy, and it is conserved".into()
+                    ConservedReason::EnergyConserved
                 } else {
-                    "H is conserved (it is not the energy T + U)".into()
+                    ConservedReason::HamiltonianConserved
                 },
             });
         }
@@ -435,9 +416,7 @@ impl Derivation {
         // The Hamiltonian, by the Legendre transform for L quadratic in q'.
         let (hamiltonian, velocities, hamilton) = match form.as_ref().zip(sparsity.as_ref()) {
             None => {
-                verdicts.hamiltonian.push(
-                    "L is not quadratic in the velocities, so p = ∂L/∂q' cannot be solved for q' in closed form; H is not given.".into(),
-                );
+                verdicts.hamiltonian.push(HamiltonianReason::NotQuadratic);
                 (None, None, None)
             }
             Some((form, sparsity)) => {
@@ -445,10 +424,8 @@ impl Derivation {
                 match legendre(pool, &sys, &is_var) {
                     Some((h, v, eqs)) => (Some(h), Some(v), Some(eqs)),
                     None => {
-                        verdicts.hamiltonian.push(format!(
-                            "M couples {} coordinates densely: H = ½(p − b)ᵀM⁻¹(p − b) − L₀ written out would be too long to print, so H and Hamilton's equations are left to numerics, which solve M q' = p − b at each step.",
-                            largest_block(pool, &mass_matrix)
-                        ));
+                        let coupled = largest_block(pool, &mass_matrix);
+                        verdicts.hamiltonian.push(HamiltonianReason::TooLong { coupled });
                         (None, None, None)
                     }
                 }
@@ -1027,21 +1004,15 @@ fn explain_energy(
     let euler = pool.add(&terms);
     let homogeneous = probe::is_zero(pool, euler);
     let velocity_potential = !probe::are_equal(pool, potential, u0);
-    if homogeneous {
-        verdicts.energy.push(
-            "T is a homogeneous quadratic function of the velocities (no term of T is linear in or free of q').".into(),
-        );
+    verdicts.energy.push(if homogeneous {
+        EnergyReason::KineticHomogeneous
     } else {
-        verdicts.energy.push("T is not homogeneous quadratic in the velocities: it has terms linear in or free of q' (as when the positions x(q, t) depend on time).".into());
-    }
+        EnergyReason::KineticNotHomogeneous
+    });
     if velocity_potential {
-        verdicts.energy.push("U depends on the velocities (a generalized potential); only its velocity-independent part enters the energy.".into());
+        verdicts.energy.push(EnergyReason::VelocityDependentPotential);
     }
-    if same {
-        verdicts.energy.push("So H = Σ q'·p − L equals T + U: H is the energy.".into());
-    } else {
-        verdicts.energy.push("So H = Σ q'·p − L differs from T + U: H is not the energy.".into());
-    }
+    verdicts.energy.push(if same { EnergyReason::IsEnergy } else { EnergyReason::NotEnergy });
 }
 
 #[cfg(test)]

@@ -38,6 +38,9 @@ pub struct NamedExpr {
     pub expr: String,
     /// Why (for people; not part of the contract).
     pub reason: String,
+    /// Why, as a stable code a program can branch on (`cyclic`, `energy_conserved`,
+    /// `hamiltonian_conserved`) with its facts (extra field).
+    pub why: crate::derive::ConservedReason,
 }
 
 /// Hamilton's equations for one coordinate.
@@ -98,6 +101,9 @@ pub struct DeriveReport {
     pub explicit_time: bool,
     /// Explanations of the verdicts, sentence by sentence (extra field).
     pub explanations: Explanations,
+    /// The same verdicts as data: each reason an object with its `code` and
+    /// the facts it names, one per sentence of `explanations` (extra field).
+    pub reasons: crate::derive::Verdicts,
     /// Each rigid body's body-frame ω and L (extra field; absent without bodies).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub bodies: Vec<BodyReport>,
@@ -197,7 +203,12 @@ impl DeriveReport {
             conserved: d
                 .conserved
                 .iter()
-                .map(|c| NamedExpr { name: c.name.clone(), expr: s(c.expr), reason: c.reason.clone() })
+                .map(|c| NamedExpr {
+                    name: c.name.clone(),
+                    expr: s(c.expr),
+                    reason: c.reason.to_string(),
+                    why: c.reason.clone(),
+                })
                 .collect(),
             hamiltonian: d.hamiltonian.map(s),
             energy: d.energy.map(s),
@@ -216,10 +227,11 @@ impl DeriveReport {
             velocities: d.velocities.as_ref().map(|v| by_coord(v)),
             explicit_time: d.explicit_time,
             explanations: Explanations {
-                energy: d.verdicts.energy.clone(),
-                conservation: d.verdicts.conservation.clone(),
-                hamiltonian: d.verdicts.hamiltonian.clone(),
+                energy: d.verdicts.energy.iter().map(ToString::to_string).collect(),
+                conservation: d.verdicts.conservation.iter().map(ToString::to_string).collect(),
+                hamiltonian: d.verdicts.hamiltonian.iter().map(ToString::to_string).collect(),
             },
+            reasons: d.verdicts.clone(),
             bodies: d
                 .bodies
                 .iter()

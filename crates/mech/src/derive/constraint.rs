@@ -15,7 +15,7 @@
 //! (called at the end of [`crate::Derivation::new`]); the numbers of a run are in
 //! `constrained.rs`.
 
-use crate::derive::Derivation;
+use crate::derive::{ConservationReason, Derivation};
 use crate::error::ModelError;
 use crate::model::ConstraintKind;
 use crate::probe::{self, Subst};
@@ -144,23 +144,12 @@ pub(crate) fn attach(d: &mut Derivation) -> Result<(), ModelError> {
         d.hamiltonian_conserved = false;
         set.work_balances_h = true;
         d.conserved.retain(|c| c.name != "H");
-        d.verdicts.conservation.retain(|s| !s.starts_with("L does not depend explicitly on t"));
-        d.verdicts.conservation.push(format!(
-            "L does not depend on t, but the constraint{} {} depend{} explicitly on the time: {} force does work, dH/dt = Σ λ·Aq' = −Σ λ a_t ≠ 0.",
-            if working.len() == 1 { "" } else { "s" },
-            working.join(", "),
-            if working.len() == 1 { "s" } else { "" },
-            if working.len() == 1 { "its" } else { "their" }
-        ));
-        d.verdicts.conservation.push(
-            "H − W is conserved instead, W = ∫ Aᵀλ·q' dt the work of the constraint forces (simulate audits it as H-W)."
-                .into(),
-        );
+        d.verdicts.conservation.retain(|r| *r != ConservationReason::Conserved);
+        let constraints = working.iter().map(|w| w.to_string()).collect();
+        d.verdicts.conservation.push(ConservationReason::ConstraintWork { constraints });
+        d.verdicts.conservation.push(ConservationReason::WorkBalance);
     } else if working.is_empty() && d.hamiltonian_conserved {
-        d.verdicts.conservation.push(
-            "The constraints do not depend on t: their forces do no work (Aᵀλ·q' = −λ·a_t = 0), so H stays conserved."
-                .into(),
-        );
+        d.verdicts.conservation.push(ConservationReason::ConstraintsDoNoWork);
     }
     let mut lost = Vec::new();
     d.conserved.retain(|c| {

@@ -1,0 +1,285 @@
+//! The verdicts of a derivation as data: why H is or is not the energy, why it
+//! is or is not conserved, why it is not given in closed form, and why each
+//! conserved quantity is conserved. Each reason is an enum variant with the
+//! facts it rests on; its `Display` is the sentence the notes would write, and
+//! [`code`](ConservationReason::code) a stable name a program can branch on
+//! (the `reasons` of the `lagrange.derive/1` report).
+
+use serde::Serialize;
+use std::fmt;
+
+/// Why H = Σ q'·p − L is or is not the energy T + U₀, step by step (notes 2.4.2).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(tag = "code", rename_all = "snake_case")]
+pub enum EnergyReason {
+    /// T is a homogeneous quadratic function of the velocities.
+    KineticHomogeneous,
+    /// T has terms linear in or free of the velocities (rheonomic positions).
+    KineticNotHomogeneous,
+    /// U depends on the velocities; only its velocity-free part is energy.
+    VelocityDependentPotential,
+    /// The conclusion: H equals T + U₀.
+    IsEnergy,
+    /// The conclusion: H differs from T + U₀.
+    NotEnergy,
+    /// The model gives only L, so T and U are not known separately.
+    OnlyLagrangian,
+}
+
+/// A term of dH/dt = −∂L/∂t − Σ q'·∂R/∂q' + Σ Q·q'.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RateTerm {
+    /// −∂L/∂t.
+    ExplicitTime,
+    /// − Σ q'·∂R/∂q'.
+    Dissipation,
+    /// + Σ Q·q'.
+    GeneralizedForces,
+}
+
+/// Why H is or is not conserved.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(tag = "code", rename_all = "snake_case")]
+pub enum ConservationReason {
+    /// L depends explicitly on the time.
+    ExplicitTime,
+    /// Rayleigh's dissipation function takes energy out.
+    Dissipation,
+    /// Generalized forces act on these coordinates and do work.
+    GeneralizedForces {
+        /// The coordinates with a nonzero Q.
+        coordinates: Vec<String>,
+    },
+    /// The conclusion: dH/dt is the sum of these terms, not zero.
+    Rate {
+        /// The terms present.
+        terms: Vec<RateTerm>,
+    },
+    /// Nothing changes H: dH/dt = −∂L/∂t = 0.
+    Conserved,
+    /// L is free of t, but these constraints depend on it and their forces do work.
+    ConstraintWork {
+        /// The constraints with a_t ≠ 0.
+        constraints: Vec<String>,
+    },
+    /// H − W is conserved instead (W the work of the constraint forces).
+    WorkBalance,
+    /// The constraints are free of t: their forces do no work, H stays conserved.
+    ConstraintsDoNoWork,
+}
+
+/// Why H is not given in closed form.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(tag = "code", rename_all = "snake_case")]
+pub enum HamiltonianReason {
+    /// L is not quadratic in the velocities: p = ∂L/∂q' has no closed-form inverse.
+    NotQuadratic,
+    /// M couples this many coordinates densely: H would be too long to print.
+    TooLong {
+        /// The size of the largest block of M.
+        coupled: usize,
+    },
+}
+
+/// Why a quantity is conserved.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(tag = "code", rename_all = "snake_case")]
+pub enum ConservedReason {
+    /// The coordinate is cyclic: its momentum is constant.
+    Cyclic {
+        /// The coordinate's name.
+        coordinate: String,
+    },
+    /// H is the energy, and it is conserved.
+    EnergyConserved,
+    /// H is conserved, but it is not the energy T + U.
+    HamiltonianConserved,
+}
+
+/// Why H is or is not the energy, and is or is not conserved.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
+pub struct Verdicts {
+    /// The reasons behind `hamiltonian_is_energy`.
+    pub energy: Vec<EnergyReason>,
+    /// The reasons behind `hamiltonian_conserved`.
+    pub conservation: Vec<ConservationReason>,
+    /// Why H is not given in closed form, when it is not.
+    pub hamiltonian: Vec<HamiltonianReason>,
+}
+
+impl EnergyReason {
+    /// The reason's stable name.
+    pub fn code(&self) -> &'static str {
+        match self {
+            EnergyReason::KineticHomogeneous => "kinetic_homogeneous",
+            EnergyReason::KineticNotHomogeneous => "kinetic_not_homogeneous",
+            EnergyReason::VelocityDependentPotential => "velocity_dependent_potential",
+            EnergyReason::IsEnergy => "is_energy",
+            EnergyReason::NotEnergy => "not_energy",
+            EnergyReason::OnlyLagrangian => "only_lagrangian",
+        }
+    }
+}
+
+impl ConservationReason {
+    /// The reason's stable name.
+    pub fn code(&self) -> &'static str {
+        match self {
+            ConservationReason::ExplicitTime => "explicit_time",
+            ConservationReason::Dissipation => "dissipation",
+            ConservationReason::GeneralizedForces { .. } => "generalized_forces",
+            ConservationReason::Rate { .. } => "rate",
+            ConservationReason::Conserved => "conserved",
+            ConservationReason::ConstraintWork { .. } => "constraint_work",
+            ConservationReason::WorkBalance => "work_balance",
+            ConservationReason::ConstraintsDoNoWork => "constraints_do_no_work",
+        }
+    }
+}
+
+impl fmt::Display for EnergyReason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            EnergyReason::KineticHomogeneous => {
+                "T is a homogeneous quadratic function of the velocities (no term of T is linear in or free of q')."
+            }
+            EnergyReason::KineticNotHomogeneous => {
+                "T is not homogeneous quadratic in the velocities: it has terms linear in or free of q' (as when the positions x(q, t) depend on time)."
+            }
+            EnergyReason::VelocityDependentPotential => {
+                "U depends on the velocities (a generalized potential); only its velocity-independent part enters the energy."
+            }
+            EnergyReason::IsEnergy => "So H = Σ q'·p − L equals T + U: H is the energy.",
+            EnergyReason::NotEnergy => "So H = Σ q'·p − L differs from T + U: H is not the energy.",
+            EnergyReason::OnlyLagrangian => {
+                "The model gives only L, so T and U (and hence the energy) are not known separately."
+            }
+        })
+    }
+}
+
+impl fmt::Display for ConservationReason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ConservationReason::ExplicitTime => f.write_str("L depends explicitly on the time (∂L/∂t ≠ 0)."),
+            ConservationReason::Dissipation => f.write_str("The dissipation function R takes energy out."),
+            ConservationReason::GeneralizedForces { coordinates } => {
+                write!(f, "Generalized forces act on {} and do work.", coordinates.join(", "))
+            }
+            ConservationReason::Rate { terms } => {
+                let mut rate = String::new();
+                for (k, term) in terms.iter().enumerate() {
+                    let (sign, text) = match term {
+                        RateTerm::ExplicitTime => ("−", "∂L/∂t"),
+                        RateTerm::Dissipation => ("−", "Σ q'·∂R/∂q'"),
+                        RateTerm::GeneralizedForces => ("+", "Σ Q·q'"),
+                    };
+                    // The first term carries its sign without a space, and a plus not at all.
+                    match (k, sign) {
+                        (0, "+") => rate.push_str(text),
+                        (0, _) => rate.push_str(&format!("{sign}{text}")),
+                        _ => rate.push_str(&format!(" {sign} {text}")),
+                    }
+                }
+                write!(f, "So dH/dt = {rate} ≠ 0.")
+            }
+            ConservationReason::Conserved => f.write_str(
+                "L does not depend explicitly on t, and no dissipation or generalized force acts: dH/dt = −∂L/∂t = 0.",
+            ),
+            ConservationReason::ConstraintWork { constraints } => {
+                let one = constraints.len() == 1;
+                write!(
+                    f,
+                    "L does not depend on t, but the constraint{} {} depend{} explicitly on the time: {} force does work, dH/dt = Σ λ·Aq' = −Σ λ a_t ≠ 0.",
+                    if one { "" } else { "s" },
+                    constraints.join(", "),
+                    if one { "s" } else { "" },
+                    if one { "its" } else { "their" }
+                )
+            }
+            ConservationReason::WorkBalance => f.write_str(
+                "H − W is conserved instead, W = ∫ Aᵀλ·q' dt the work of the constraint forces (simulate audits it as H-W).",
+            ),
+            ConservationReason::ConstraintsDoNoWork => f.write_str(
+                "The constraints do not depend on t: their forces do no work (Aᵀλ·q' = −λ·a_t = 0), so H stays conserved.",
+            ),
+        }
+    }
+}
+
+impl HamiltonianReason {
+    /// The reason's stable name.
+    pub fn code(&self) -> &'static str {
+        match self {
+            HamiltonianReason::NotQuadratic => "not_quadratic",
+            HamiltonianReason::TooLong { .. } => "too_long",
+        }
+    }
+}
+
+impl fmt::Display for HamiltonianReason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            HamiltonianReason::NotQuadratic => f.write_str(
+                "L is not quadratic in the velocities, so p = ∂L/∂q' cannot be solved for q' in closed form; H is not given.",
+            ),
+            HamiltonianReason::TooLong { coupled } => write!(
+                f,
+                "M couples {coupled} coordinates densely: H = ½(p − b)ᵀM⁻¹(p − b) − L₀ written out would be too long to print, so H and Hamilton's equations are left to numerics, which solve M q' = p − b at each step."
+            ),
+        }
+    }
+}
+
+impl ConservedReason {
+    /// The reason's stable name.
+    pub fn code(&self) -> &'static str {
+        match self {
+            ConservedReason::Cyclic { .. } => "cyclic",
+            ConservedReason::EnergyConserved => "energy_conserved",
+            ConservedReason::HamiltonianConserved => "hamiltonian_conserved",
+        }
+    }
+}
+
+impl fmt::Display for ConservedReason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ConservedReason::Cyclic { coordinate: c } => {
+                write!(f, "'{c}' is cyclic: L does not depend on it, so p_{c} = ∂L/∂{c}' is constant")
+            }
+            ConservedReason::EnergyConserved => f.write_str("H is the energy, and it is conserved"),
+            ConservedReason::HamiltonianConserved => f.write_str("H is conserved (it is not the energy T + U)"),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[track_caller]
+    fn check_rate(terms: &[RateTerm], expect: &str) {
+        assert_eq!(ConservationReason::Rate { terms: terms.to_vec() }.to_string(), expect);
+    }
+
+    #[test]
+    fn the_rate_of_h_names_each_term_with_its_sign() {
+        check_rate(&[RateTerm::ExplicitTime], "So dH/dt = −∂L/∂t ≠ 0.");
+        check_rate(&[RateTerm::GeneralizedForces], "So dH/dt = Σ Q·q' ≠ 0.");
+        check_rate(&[RateTerm::Dissipation, RateTerm::GeneralizedForces], "So dH/dt = −Σ q'·∂R/∂q' + Σ Q·q' ≠ 0.");
+        check_rate(
+            &[RateTerm::ExplicitTime, RateTerm::Dissipation, RateTerm::GeneralizedForces],
+            "So dH/dt = −∂L/∂t − Σ q'·∂R/∂q' + Σ Q·q' ≠ 0.",
+        );
+    }
+
+    #[test]
+    fn reasons_serialize_with_their_code_and_facts() {
+        let r = ConservationReason::GeneralizedForces { coordinates: vec!["x".into()] };
+        assert_eq!(serde_json::to_string(&r).unwrap(), r#"{"code":"generalized_forces","coordinates":["x"]}"#);
+        assert_eq!(serde_json::to_string(&EnergyReason::IsEnergy).unwrap(), r#"{"code":"is_energy"}"#);
+        assert_eq!(r.code(), "generalized_forces");
+    }
+}
