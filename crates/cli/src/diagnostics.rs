@@ -25,9 +25,21 @@ impl Failure {
     pub fn model(path: &Path, source: &str, e: mech::ModelError) -> Failure {
         Failure::Input {
             file: path.display().to_string(),
-            message: e.message,
+            message: with_flag(e.setting.as_ref(), e.message),
             located: e.span.map(|s| (source.to_string(), clamp(s, source))),
             help: e.help,
+        }
+    }
+
+    /// An analysis' error: a model error located in the model file, or its
+    /// message and hint (exit 2).
+    pub fn analysis<E: Explained>(path: &Path, source: &str, e: E) -> Failure {
+        let help = e.help();
+        match e.into_model() {
+            Ok(m) => Failure::model(path, source, m),
+            Err(other) => {
+                Failure::Input { file: path.display().to_string(), message: other.to_string(), located: None, help }
+            }
         }
     }
 
@@ -128,6 +140,64 @@ pub fn line_col(source: &str, offset: usize) -> (usize, usize) {
     let line = before.matches('\n').count() + 1;
     let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
     (line, col)
+}
+
+/// The message of an error about a setting, prefixed with the flag that gives
+/// it: the library names settings by what they are, the CLI by its flags.
+fn with_flag(setting: Option<&mech::Setting>, message: String) -> String {
+    match setting {
+        Some(mech::Setting::Parameter { name }) => format!("--set {name}: {message}"),
+        Some(mech::Setting::Start { name }) => format!("--at {name}: {message}"),
+        None => message,
+    }
+}
+
+/// What the CLI needs of an analysis' error.
+pub trait Explained: std::fmt::Display + Sized {
+    /// The model error inside, or the error itself when it is not one.
+    fn into_model(self) -> Result<mech::ModelError, Self>;
+    /// A hint on how to fix it, in the CLI's terms.
+    fn help(&self) -> Option<String>;
+}
+
+impl Explained for mech::ModesError {
+    fn into_model(self) -> Result<mech::ModelError, Self> {
+        match self {
+            mech::ModesError::Model(m) => Ok(m),
+            other => Err(other),
+        }
+    }
+    fn help(&self) -> Option<String> {
+        match self {
+            mech::ModesError::NoEquilibrium { .. } => {
+                Some("start elsewhere with --at q=v (e.g. --at th=0), or check that U has a minimum".into())
+            }
+            other => other.help(),
+        }
+    }
+}
+
+impl Explained for mech::OrbitError {
+    fn into_model(self) -> Result<mech::ModelError, Self> {
+        match self {
+            mech::OrbitError::Model(m) => Ok(m),
+            other => Err(other),
+        }
+    }
+    fn help(&self) -> Option<String> {
+        self.help()
+    }
+}
+
+impl Explained for mech::TopError {
+    fn into_model(self) -> Result<mech::ModelError, Self> {
+        match self {
+            mech::TopError::Model(m) => Ok(m),
+        }
+    }
+    fn help(&self) -> Option<String> {
+        None
+    }
 }
 
 #[cfg(test)]

@@ -172,7 +172,7 @@ fn main() -> ExitCode {
             list_methods: false,
         } => simulate::run(&simulate::Options {
             model: model.unwrap_or_default(),
-            until: until.unwrap_or(f64::NAN),
+            until,
             method,
             rtol,
             atol,

@@ -7,9 +7,9 @@
 //! equilibrium is bad input (exit 2) unless `--allow-unstable` asks to see it.
 
 use crate::diagnostics::Failure;
-use mech::{Derivation, ModeKind, Modes, ModesConfig, ModesError};
+use mech::{Derivation, ModeKind, Modes, ModesConfig};
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Options of `modes`.
 #[derive(clap::Args)]
@@ -53,7 +53,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let (source, d) = crate::derive_file(path, &args.set)?;
     d.reject_constraints("`lagrange modes`").map_err(|e| Failure::model(path, &source, e))?;
     let config = ModesConfig { at: args.at.clone() };
-    let modes = mech::normal_modes(&d, &config).map_err(|e| failure(path, &source, e))?;
+    let modes = mech::normal_modes(&d, &config).map_err(|e| Failure::analysis(path, &source, e))?;
     if !modes.stable && !args.allow_unstable {
         let unstable: Vec<String> = modes
             .modes
@@ -90,18 +90,6 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         Format::Text => text(&d, &modes, args.at.is_empty()),
     };
     crate::write_stdout(&text)
-}
-
-fn failure(path: &Path, source: &str, e: ModesError) -> Failure {
-    match e {
-        ModesError::Model(m) => Failure::model(path, source, m),
-        other => Failure::Input {
-            file: path.display().to_string(),
-            message: other.to_string(),
-            located: None,
-            help: other.help(),
-        },
-    }
 }
 
 /// A number for people: up to 10 significant digits, no trailing zeros.

@@ -8,12 +8,12 @@
 
 use crate::diagnostics::Failure;
 use crate::modes::{num, Format};
-use mech::{Derivation, Orbit, OrbitError, OrbitKind};
+use mech::{Derivation, Orbit, OrbitKind};
 use plotters::prelude::*;
 use std::error::Error;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Options of `orbit`.
 #[derive(clap::Args)]
@@ -36,7 +36,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let path = &args.model;
     let (source, d) = crate::derive_file(path, &args.set)?;
     d.reject_constraints("`lagrange orbit`").map_err(|e| Failure::model(path, &source, e))?;
-    let mut orbit = Orbit::new(&d).map_err(|e| failure(path, &source, e))?;
+    let mut orbit = Orbit::new(&d).map_err(|e| Failure::analysis(path, &source, e))?;
     if let Some(svg) = &args.plot {
         let text = figure(&d, &mut orbit).map_err(|e| Failure::input(svg, format!("cannot draw the plot: {e}")))?;
         std::fs::write(svg, text).map_err(|e| Failure::input(svg, format!("cannot write the plot: {e}")))?;
@@ -51,18 +51,6 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         Format::Text => text(&d, &orbit),
     };
     crate::write_stdout(&out)
-}
-
-fn failure(path: &Path, source: &str, e: OrbitError) -> Failure {
-    match e {
-        OrbitError::Model(m) => Failure::model(path, source, m),
-        other => Failure::Input {
-            file: path.display().to_string(),
-            message: other.to_string(),
-            located: None,
-            help: other.help(),
-        },
-    }
 }
 
 fn text(d: &Derivation, o: &Orbit) -> String {

@@ -20,7 +20,8 @@ use std::time::Instant;
 /// Options of `simulate`, as parsed by clap.
 pub struct Options {
     pub model: PathBuf,
-    pub until: f64,
+    /// `--until` (clap requires it; None is reported, not assumed).
+    pub until: Option<f64>,
     pub method: Option<String>,
     pub rtol: Option<f64>,
     pub atol: Option<f64>,
@@ -68,9 +69,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
             }
         }
     }
-    if !(opts.until.is_finite() && opts.until > 0.0) {
-        return Err(Failure::usage(format!("--until must be a positive time, not {}", opts.until)));
-    }
+    let Some(until) = opts.until else { return Err(Failure::usage("simulate needs --until T")) };
     let mut stop_when = Vec::new();
     for text in &opts.stop_when {
         stop_when.push(parse_stop(&derivation, text, "--stop-when")?);
@@ -82,7 +81,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     let defaults = RunConfig::default();
     let rtol = opts.rtol.unwrap_or(defaults.rtol);
     let config = RunConfig {
-        until: opts.until,
+        until,
         method,
         rtol,
         atol: opts.atol.unwrap_or(if opts.rtol.is_some() { rtol * 1e-3 } else { defaults.atol }),
@@ -100,6 +99,9 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
         crossings,
     };
 
+    // Bad settings are reported before any file is created.
+    config.check().map_err(|e| input_failure(path, &source, e))?;
+
     // Columns: t, coordinates, velocities, invariants.
     let names: Vec<String> = derivation.coordinate_names().iter().map(|s| s.to_string()).collect();
     let n = names.len();
@@ -115,7 +117,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     let mut crossings_seen = 0usize;
     let mut csv_error: Option<std::io::Error> = None;
     let mut plot_data = PlotKeeper::new(n);
-    let progress = progress_bar(opts.until);
+    let progress = progress_bar(until);
     let inv_names: Vec<String> = mech::invariants_of(&derivation).into_iter().map(|i| i.name).collect();
     // Rigid bodies: ω and L per body as extra columns.
     let mut bodies = mech::BodyRecorder::new(&derivation);
@@ -171,7 +173,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
             plot_data.push(row.t, row.q, row.qd, row.invariants);
         }
         if let Some(pb) = &progress {
-            pb.set_position((row.t / opts.until * 1000.0) as u64);
+            pb.set_position((row.t / until * 1000.0) as u64);
         }
         ControlFlow::Continue(())
     });
@@ -189,11 +191,8 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     }
     let (report, failure) = match result {
         Ok(r) => (r, None),
-        Err(RunError::Until { until }) => {
-            return Err(Failure::usage(format!("--until must be a positive time, not {until}")))
-        }
-        Err(RunError::Input(e)) => return Err(Failure::model(path, &source, e)),
         Err(RunError::Failed { message, report }) => (*report, Some(message)),
+        Err(e) => return Err(input_failure(path, &source, e)),
     };
 
     if let Some(plot_path) = &opts.plot {
@@ -222,6 +221,15 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
             opts.out.as_ref().map_or(String::new(), |p| format!(" ({} keeps the rows up to there)", p.display()))
         ))),
         None => Ok(()),
+    }
+}
+
+/// A run that could not start, in the CLI's terms (exit 2).
+fn input_failure(path: &Path, source: &str, e: RunError) -> Failure {
+    match e {
+        RunError::Until { until } => Failure::usage(format!("--until must be a positive time, not {until}")),
+        RunError::Input(e) => Failure::model(path, source, e),
+        RunError::Failed { message, .. } => Failure::run(message),
     }
 }
 

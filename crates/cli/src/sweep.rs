@@ -74,10 +74,8 @@ pub fn run(args: &Args) -> Result<(), Failure> {
             args.files.len()
         )));
     };
-    let until = args.until.unwrap_or(f64::NAN);
-    if !(until.is_finite() && until > 0.0) {
-        return Err(Failure::usage(format!("--until must be a positive time, not {until}")));
-    }
+    // clap requires --until without --merge; None is reported, not assumed.
+    let Some(until) = args.until else { return Err(Failure::usage("sweep needs --until T")) };
     for (name, v) in [("--rtol", args.rtol), ("--atol", args.atol)] {
         if let Some(v) = v {
             if !(v.is_finite() && v > 0.0) {
@@ -152,8 +150,15 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     Ok(())
 }
 
+/// A sweep's error in the CLI's terms: its settings named by their flags.
 fn usage(e: SweepError) -> Failure {
-    Failure::usage(e.to_string())
+    match e {
+        SweepError::ShardSyntax { text } => {
+            Failure::usage(format!("--shard must be I/N with 0 <= I < N (the I-th of N slices), not '{text}'"))
+        }
+        SweepError::Until { until } => Failure::usage(format!("--until must be a positive time, not {until}")),
+        other => Failure::usage(other.to_string()),
+    }
 }
 
 /// `sweep --merge OUT.csv SHARD.csv...`.

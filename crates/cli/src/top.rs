@@ -8,13 +8,13 @@
 
 use crate::diagnostics::Failure;
 use crate::modes::{num, Format};
-use mech::{Derivation, NutationKind, RunConfig, Top, TopError};
+use mech::{Derivation, NutationKind, RunConfig, Top};
 use plotters::prelude::*;
 use std::error::Error;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
 use std::ops::ControlFlow;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Options of `top`.
 #[derive(clap::Args)]
@@ -36,7 +36,7 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<(), Failure> {
     let path = &args.model;
     let (source, mut d) = crate::derive_file(path, &args.set)?;
-    let top = Top::new(&d).map_err(|e| failure(path, &source, e))?;
+    let top = Top::new(&d).map_err(|e| Failure::analysis(path, &source, e))?;
     if let Some(svg) = &args.plot {
         let text = figure(&mut d, &top).map_err(|e| Failure::input(svg, format!("cannot draw the plot: {e}")))?;
         std::fs::write(svg, text).map_err(|e| Failure::input(svg, format!("cannot write the plot: {e}")))?;
@@ -51,12 +51,6 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         Format::Text => text(&d, &top),
     };
     crate::write_stdout(&out)
-}
-
-fn failure(path: &Path, source: &str, e: TopError) -> Failure {
-    match e {
-        TopError::Model(m) => Failure::model(path, source, m),
-    }
 }
 
 fn text(d: &Derivation, t: &Top) -> String {

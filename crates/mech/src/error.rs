@@ -15,17 +15,41 @@ pub struct ModelError {
     pub span: Option<Range<usize>>,
     /// A hint on how to fix it.
     pub help: Option<String>,
+    /// The caller's setting the error is about, when it is not a place in a
+    /// file (a front end names it in its own terms, e.g. a command-line flag).
+    pub setting: Option<Setting>,
+}
+
+/// A value the caller set beside the files: the library names it by what it
+/// is, and a front end by how it is given (the CLI: `--set`, `--at`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Setting {
+    /// A parameter's value, overriding the file's.
+    Parameter {
+        /// The parameter's name.
+        name: String,
+    },
+    /// A coordinate's value at the start of an analysis (`modes`).
+    Start {
+        /// The coordinate's name.
+        name: String,
+    },
 }
 
 impl ModelError {
     /// An error at a span.
     pub fn at(span: Range<usize>, message: impl Into<String>) -> ModelError {
-        ModelError { message: message.into(), span: Some(span), help: None }
+        ModelError { message: message.into(), span: Some(span), help: None, setting: None }
     }
 
     /// An error about the file as a whole.
     pub fn whole(message: impl Into<String>) -> ModelError {
-        ModelError { message: message.into(), span: None, help: None }
+        ModelError { message: message.into(), span: None, help: None, setting: None }
+    }
+
+    /// An error about a setting of the caller's.
+    pub fn setting(setting: Setting, message: impl Into<String>) -> ModelError {
+        ModelError { message: message.into(), span: None, help: None, setting: Some(setting) }
     }
 
     /// Adds a hint.

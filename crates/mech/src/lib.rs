@@ -46,7 +46,7 @@ mod orbit;
 
 pub use derive::{BodyMotion, Constraint, Constraints};
 pub use derive::{Conserved, Derivation, Verdicts};
-pub use error::ModelError;
+pub use error::{ModelError, Setting};
 pub use extremal::{
     extremal, tanh_sinh, Candidate, Euler, EulerError, ExtremalConfig, ExtremalError, ExtremalReport, ExtremalSummary,
     Problem, SecondVariation, Start, EXTREMAL_FORMAT,

@@ -329,8 +329,11 @@ impl Model {
                 Some(p) => p.value = *value,
                 None => {
                     let known: Vec<&str> = r.parameters.iter().map(|p| p.name.as_str()).collect();
-                    return Err(ModelError::whole(format!("--set {name}: the model has no parameter '{name}'"))
-                        .with_help(format!("its parameters are: {}", known.join(", "))));
+                    return Err(ModelError::setting(
+                        crate::error::Setting::Parameter { name: name.clone() },
+                        format!("the model has no parameter '{name}'"),
+                    )
+                    .with_help(format!("its parameters are: {}", known.join(", "))));
                 }
             }
         }

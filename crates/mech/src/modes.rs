@@ -165,9 +165,9 @@ impl ModesError {
             ModesError::NotConservative { .. } => {
                 Some("small oscillations need L = T − U with T quadratic in q' and U(q) not depending on t".into())
             }
-            ModesError::NoEquilibrium { .. } => {
-                Some("start elsewhere with --at q=v (e.g. --at th=0), or check that U has a minimum".into())
-            }
+            ModesError::NoEquilibrium { .. } => Some(
+                "start elsewhere (give the coordinates other starting values), or check that U has a minimum".into(),
+            ),
             ModesError::SingularKinetic { .. } => {
                 Some("the coordinates are singular there (like polar coordinates at r = 0); choose others".into())
             }
@@ -432,12 +432,19 @@ fn starting_point(d: &Derivation, config: &ModesConfig) -> Result<Vec<f64>, Mode
     for (name, v) in &config.at {
         let Some(i) = model.coordinates.iter().position(|c| &c.name == name) else {
             let known: Vec<&str> = model.coordinates.iter().map(|c| c.name.as_str()).collect();
-            return Err(ModelError::whole(format!("--at {name}: the model has no coordinate '{name}'"))
-                .with_help(format!("its coordinates are: {}", known.join(", ")))
-                .into());
+            return Err(ModelError::setting(
+                crate::error::Setting::Start { name: name.clone() },
+                format!("the model has no coordinate '{name}'"),
+            )
+            .with_help(format!("its coordinates are: {}", known.join(", ")))
+            .into());
         };
         if !v.is_finite() {
-            return Err(ModelError::whole(format!("--at {name}: the value must be finite")).into());
+            return Err(ModelError::setting(
+                crate::error::Setting::Start { name: name.clone() },
+                "the value must be finite",
+            )
+            .into());
         }
         q[i] = *v;
     }

@@ -126,6 +126,22 @@ impl Default for RunConfig {
     }
 }
 
+impl RunConfig {
+    /// Checks what a run cannot start without: a positive, finite end time.
+    pub fn check(&self) -> Result<(), RunError> {
+        if is_positive_time(self.until) {
+            Ok(())
+        } else {
+            Err(RunError::Until { until: self.until })
+        }
+    }
+}
+
+/// Whether an end time is positive and finite (runs and sweeps start at t = 0).
+pub(crate) fn is_positive_time(t: f64) -> bool {
+    t.is_finite() && t > 0.0
+}
+
 /// One output row.
 #[derive(Debug)]
 pub struct Row<'a> {
@@ -332,9 +348,7 @@ pub fn simulate(
     on_row: impl FnMut(&Row<'_>) -> ControlFlow<()>,
 ) -> Result<RunReport, RunError> {
     let start = Instant::now();
-    if !(config.until.is_finite() && config.until > 0.0) {
-        return Err(RunError::Until { until: config.until });
-    }
+    config.check()?;
     let (q0, qd0) = d.model.initial_state().map_err(RunError::Input)?;
     // Rigid bodies: a terminal event before the Euler angles' gimbal singularity.
     let guards = body::gimbal_guards(d, config.rtol);
@@ -348,6 +362,7 @@ pub fn simulate(
             ),
             span,
             help: Some(g.advice()),
+            setting: None,
         };
         return Err(RunError::Input(e));
     }

@@ -137,13 +137,13 @@ pub enum SweepError {
         max: usize,
     },
     /// A `--shard` that is not `i/n` with `i < n`.
-    #[error("--shard must be I/N with 0 <= I < N (the I-th of N slices), not '{text}'")]
+    #[error("a shard must be I/N with 0 <= I < N (the I-th of N slices), not '{text}'")]
     ShardSyntax {
         /// The text found.
         text: String,
     },
     /// An end time that is not positive.
-    #[error("--until must be a positive time, not {until}")]
+    #[error("the end time must be positive and finite, not {until}")]
     Until {
         /// The value found.
         until: f64,
@@ -579,7 +579,7 @@ pub fn sweep(
     config: &SweepConfig,
     progress: &(dyn Fn() + Sync),
 ) -> Result<SweepTable, SweepError> {
-    if !(config.until.is_finite() && config.until > 0.0) {
+    if !crate::run::is_positive_time(config.until) {
         return Err(SweepError::Until { until: config.until });
     }
     let dynamics = Dynamics::new(d);
@@ -805,7 +805,7 @@ fn complete(base: &Initial, grid: &Grid, inputs: &[f64], model: &Model) -> Resul
             "no initial value for {}: neither [initial] nor the grid gives one",
             missing.join(", ")
         ))
-        .with_help("add them under [initial] or as axes of --grid"));
+        .with_help("add them under [initial] or as axes of the grid"));
     }
     if let Some(v) = q.iter().chain(&qd).flatten().find(|v| !v.is_finite()) {
         return Err(ModelError::whole(format!("an initial value evaluates to {v}")));

@@ -125,11 +125,14 @@ impl Problem {
             match parameters.iter_mut().find(|(n, _)| n == name) {
                 Some(p) => p.1 = *value,
                 None => {
-                    return Err(ModelError::whole(format!("--set {name}: the problem has no parameter '{name}'"))
-                        .with_help(format!(
-                            "its parameters are: {}",
-                            parameters.iter().map(|p| p.0.as_str()).collect::<Vec<_>>().join(", ")
-                        )))
+                    return Err(ModelError::setting(
+                        crate::error::Setting::Parameter { name: name.clone() },
+                        format!("the problem has no parameter '{name}'"),
+                    )
+                    .with_help(format!(
+                        "its parameters are: {}",
+                        parameters.iter().map(|p| p.0.as_str()).collect::<Vec<_>>().join(", ")
+                    )))
                 }
             }
         }

@@ -382,8 +382,11 @@ impl BodyFile {
                 Some(p) => p.value = *value,
                 None => {
                     let known: Vec<&str> = parameters.iter().map(|p| p.name.as_str()).collect();
-                    return Err(ModelError::whole(format!("--set {name}: the body has no parameter '{name}'"))
-                        .with_help(format!("its parameters are: {}", known.join(", "))));
+                    return Err(ModelError::setting(
+                        crate::error::Setting::Parameter { name: name.clone() },
+                        format!("the body has no parameter '{name}'"),
+                    )
+                    .with_help(format!("its parameters are: {}", known.join(", "))));
                 }
             }
         }

@@ -65,7 +65,7 @@ impl GimbalGuard {
     /// What to do about it.
     pub fn advice(&self) -> String {
         format!(
-            "Euler angles cannot follow a motion through {b} = 0 or π: tilt the fixed frame so that the body's 3-axis stays away from the fixed z axis, or end the run earlier (--until, --stop-when)",
+            "Euler angles cannot follow a motion through {b} = 0 or π: tilt the fixed frame so that the body's 3-axis stays away from the fixed z axis, or end the run earlier (a shorter end time, or a stop condition)",
             b = self.beta_name
         )
     }
