@@ -54,7 +54,7 @@ impl StopCondition {
                     b'>' => Direction::Rising,
                     _ => Direction::Both,
                 };
-                let rest = text[i + 1..].strip_prefix('=').unwrap_or(&text[i + 1..]);
+                let rest = text[i + 1..].strip_prefix('=').unwrap_or(&text[i + 1..]).trim_start();
                 (&text[..i], Some((text.len() - rest.len(), rest)), direction)
             }
             None => (text, None, Direction::Both),
@@ -221,16 +221,19 @@ pub struct RunReport {
 }
 
 /// Why a run did not complete.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum RunError {
     /// The end time is not a positive, finite number.
+    #[error("the end time must be positive and finite, not {until}")]
     Until {
         /// The end time asked for.
         until: f64,
     },
     /// Bad input: an impossible method, a missing initial value (exit 2).
+    #[error("{0}")]
     Input(ModelError),
     /// The run failed midway (exit 1); the report covers what was done.
+    #[error("{message}")]
     Failed {
         /// What happened, naming the time and the coordinate.
         message: String,

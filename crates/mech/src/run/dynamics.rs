@@ -375,11 +375,6 @@ pub struct System {
 }
 
 impl System {
-    /// The form of the state.
-    pub fn form(&self) -> Form {
-        self.form
-    }
-
     /// Sets the parameter values (in the model's order) for the next
     /// evaluations: an ensemble over parameters reuses the compiled tapes.
     pub fn set_parameters(&mut self, values: &[f64]) {

@@ -1,0 +1,68 @@
+//! Runs through the library's API on the shared test models of `common`: the
+//! one driver for plain and constrained models, stop conditions, and its
+//! typed errors.
+
+mod common;
+
+use common::{derive, run, CONSTRAINED_PENDULUM, PENDULUM};
+use mech::{RunConfig, RunError, StopCondition};
+use std::f64::consts::PI;
+
+/// A small swing's period, 2π√(l/g), for the pendulum of `common`.
+fn period() -> f64 {
+    2.0 * PI * (1.5f64 / 9.81).sqrt()
+}
+
+#[test]
+fn a_small_swing_returns_after_one_period() {
+    let d = derive(PENDULUM);
+    let (report, rows) = run(&d, &RunConfig { until: period(), ..RunConfig::default() });
+    let (t, q, _, _) = rows.last().unwrap();
+    assert_eq!(*t, period());
+    // The amplitude's correction to the period is (1 + θ₀²/16): 6e-6 here.
+    assert!((q[0] - 0.01).abs() < 1e-7, "{}", q[0]);
+    assert_eq!(report.stopped_by, None);
+    assert!(report.invariants.iter().filter(|a| a.conserved).all(|a| a.max_rel_drift < 1e-8));
+}
+
+#[test]
+fn a_stop_condition_ends_the_run_where_it_crosses() {
+    let d = derive(PENDULUM);
+    let stop = StopCondition::parse(&d, "ph < 0", "the stop condition").unwrap();
+    let config = RunConfig { until: 10.0, stop_when: vec![stop], ..RunConfig::default() };
+    let (report, rows) = run(&d, &config);
+    assert_eq!(report.stopped_by.as_deref(), Some("ph < 0"));
+    // A quarter period, up to the amplitude's correction.
+    let t = rows.last().unwrap().0;
+    assert!((t / (period() / 4.0) - 1.0).abs() < 1e-4, "{t}");
+}
+
+#[test]
+fn a_stop_condition_with_an_unknown_name_points_at_it() {
+    let d = derive(PENDULUM);
+    let e = StopCondition::parse(&d, "ph < qq", "the stop condition").unwrap_err();
+    assert_eq!(e.span, Some(5..7), "{}", e.message);
+}
+
+#[test]
+fn the_same_driver_runs_a_constrained_model_and_reports_the_rod_tension() {
+    let d = derive(CONSTRAINED_PENDULUM);
+    let (report, rows) = run(&d, &RunConfig { until: 1.0, ..RunConfig::default() });
+    assert_eq!(mech::constraint_columns(&d), ["lambda_rod", "force_rod", "residual_rod", "residual_rod'"]);
+    // At the bottom with speed v: T = m g + m v²/l.
+    let (_, _, _, cols) = &rows[0];
+    assert!((cols[1] - (9.81 + 1.0)).abs() < 1e-9, "{}", cols[1]);
+    let rod = &report.constraints[0];
+    assert!(rod.max_abs_residual < 1e-10 && rod.max_abs_velocity_residual < 1e-10, "{rod:?}");
+    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+}
+
+#[test]
+fn an_end_time_that_is_not_positive_is_a_typed_error() {
+    let d = derive(PENDULUM);
+    for until in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        let e =
+            mech::simulate(&d, &RunConfig { until, ..RunConfig::default() }, |_| std::ops::ControlFlow::Continue(()));
+        assert!(matches!(e, Err(RunError::Until { .. })), "{until}");
+    }
+}
