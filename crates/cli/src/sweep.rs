@@ -94,7 +94,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         Some(name) => Some(name.parse::<Method>().map_err(|e| Failure::usage(e.to_string()))?),
         None => None,
     };
-    let (source, mut derivation) = crate::derive_file(path, &args.set)?;
+    let (source, derivation) = crate::derive_file(path, &args.set)?;
     derivation.reject_constraints("`lagrange sweep`").map_err(|e| Failure::model(path, &source, e))?;
     let grid = Grid::parse(args.grid.as_deref().unwrap_or_default(), derivation.model()).map_err(usage)?;
     if args.heatmap.is_some() {
@@ -126,7 +126,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
             pb.inc(1);
         }
     };
-    let result = mech::sweep(&mut derivation, &grid, &config, &tick);
+    let result = mech::sweep(&derivation, &grid, &config, &tick);
     if let Some(pb) = &progress {
         pb.finish_and_clear();
     }

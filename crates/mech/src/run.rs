@@ -420,12 +420,7 @@ fn drive(
             .with_terminal(terminal),
         );
     }
-    for g in guards {
-        let (beta, s2) = (g.beta, g.threshold * g.threshold);
-        events.push(
-            Event::new(move |_t, y| y[beta].sin().powi(2) - s2).with_direction(Direction::Falling).with_terminal(true),
-        );
-    }
+    events.extend(body::guard_events(guards));
 
     // The rows and their audit.
     let mut row = RowBuffer {
@@ -510,7 +505,7 @@ fn drive(
             report.t_final = summary.t;
             if let StopReason::Event { index } = summary.stop {
                 if index >= first_guard {
-                    let message = guards[index - first_guard].message(summary.t);
+                    let message = guards[(index - first_guard) / 2].message(summary.t);
                     report.failure = Some(message.clone());
                     return Err(RunError::Failed { message, report: Box::new(report) });
                 }

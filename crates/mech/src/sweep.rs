@@ -65,7 +65,7 @@ use crate::run::choose_method;
 use crate::run::dynamics::{Dynamics, Form, System};
 use crate::run::ensemble::{propagate, Batch, LANES};
 use crate::run::series::LagrangeSeries;
-use num::{integrate, integrate_to, Config, Direction, Event, Method, Output, SolveError, Solver, StopReason};
+use num::{integrate, integrate_to, Config, Method, Output, SolveError, Solver, StopReason};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -574,7 +574,7 @@ fn unquote(field: &str) -> String {
 /// per finished run, from any thread. A run that fails does not stop the sweep:
 /// its row holds NaN where values are missing and the reason in `failure`.
 pub fn sweep(
-    d: &mut Derivation,
+    d: &Derivation,
     grid: &Grid,
     config: &SweepConfig,
     progress: &(dyn Fn() + Sync),
@@ -602,7 +602,6 @@ pub fn sweep(
     // Rigid bodies: a run through the Euler angles' gimbal singularity fails
     // there (as `simulate` does) instead of integrating garbage.
     let guards = crate::run::body::gimbal_guards(d, config.rtol);
-    let d: &Derivation = d;
     let plan = Plan { method, form, config, guards: &guards };
 
     // The Taylor method on smooth Lagrange-form models runs batches of
@@ -621,7 +620,7 @@ pub fn sweep(
             return runs
                 .par_chunks(per_job)
                 .map_init(
-                    || (series.clone(), system.clone(), Vec::new(), has_parameters.then(|| d.clone())),
+                    || (series.clone(), system.clone(), Vec::new(), has_parameters.then(|| d.model.clone())),
                     |(series, sys, scratch, derivation), chunk| {
                         let starts: Vec<Start> = chunk
                             .iter()
@@ -643,7 +642,7 @@ pub fn sweep(
         }
         runs.par_iter()
             .map_init(
-                || (system.clone(), system.clone(), has_parameters.then(|| d.clone())),
+                || (system.clone(), system.clone(), has_parameters.then(|| d.model.clone())),
                 |(sys, twin, derivation), &run| {
                     let inputs = grid.point(run);
                     let outcome = start_of(&inputs, grid, &base, d, derivation.as_mut()).map(|(q, qd, values)| {
@@ -744,16 +743,18 @@ fn start_of(
     grid: &Grid,
     base: &Initial,
     d: &Derivation,
-    derivation: Option<&mut Derivation>,
+    model: Option<&mut Model>,
 ) -> Result<Begin, String> {
-    let start = match derivation {
-        Some(derivation) => {
+    // A parameter grid sets the worker's own copy of the model: the initial
+    // values may depend on the parameters.
+    let start = match model {
+        Some(model) => {
             for (value, target) in inputs.iter().zip(&grid.targets) {
                 if let Target::Parameter(k) = *target {
-                    derivation.model.parameters[k].value = *value;
+                    model.parameters[k].value = *value;
                 }
             }
-            let model = &derivation.model;
+            let model = &*model;
             initial_values(model).and_then(|base| complete(&base, grid, inputs, model)).map(|(q, qd)| {
                 let values = model.parameters.iter().map(|p| p.value).collect();
                 (q, qd, values)
@@ -898,19 +899,7 @@ impl Plan<'_> {
                 segment += 1;
                 let t_next = segment_end(segment, cfg.until);
                 let mut gimbal: Option<(f64, &GimbalGuard)> = None;
-                // Two terminal events per body: |sin β| falling to the threshold,
-                // and sin β changing sign (β passing 0 or π within one step,
-                // between two step ends that are both clear of the threshold).
-                let mut events: Vec<Event<'_>> = Vec::with_capacity(2 * self.guards.len());
-                for g in self.guards {
-                    let (beta, s2) = (g.beta, g.threshold * g.threshold);
-                    events.push(
-                        Event::new(move |_t, y| y[beta].sin().powi(2) - s2)
-                            .with_direction(Direction::Falling)
-                            .with_terminal(true),
-                    );
-                    events.push(Event::new(move |_t, y| y[beta].sin()).with_terminal(true));
-                }
+                let mut events = crate::run::body::guard_events(self.guards);
                 let result = integrate(main.as_mut(), t_next, Output::EveryStep, &mut events, |obs| {
                     match self.guards.iter().find(|g| g.violated(&obs.y[..n])) {
                         Some(g) => {
@@ -1390,17 +1379,17 @@ mod tests {
     #[test]
     fn lyapunov_exponents_tell_chaos_from_order() {
         // Released from a = 2, b = 2.5 the double pendulum is chaotic; at small amplitude it is nearly linear.
-        let mut d = derivation(DOUBLE_PENDULUM);
+        let d = derivation(DOUBLE_PENDULUM);
         let grid = Grid::parse("a=0.05:2:2,b=0.05:2.5:2", &d.model).unwrap();
-        let t = sweep(&mut d, &grid, &config(30.0), &|| {}).unwrap();
+        let t = sweep(&d, &grid, &config(30.0), &|| {}).unwrap();
         let lyapunov = column(&t, "lyapunov");
         assert!(lyapunov[3] > 0.5, "chaotic: {lyapunov:?}");
         assert!(lyapunov[0].abs() < 0.2, "near-linear: {lyapunov:?}");
         assert!(column(&t, "energy_drift").iter().all(|&e| e < 1e-7), "{t:?}");
 
-        let mut d = derivation(OSCILLATOR);
+        let d = derivation(OSCILLATOR);
         let grid = Grid::parse("x=0.5:2:3,om=0.5:2:2", &d.model).unwrap();
-        let t = sweep(&mut d, &grid, &config(20.0), &|| {}).unwrap();
+        let t = sweep(&d, &grid, &config(20.0), &|| {}).unwrap();
         for (row, l) in t.rows.iter().zip(column(&t, "lyapunov")) {
             assert!(l.abs() < 0.05, "harmonic oscillator {:?}: {l}", row.values);
         }
@@ -1412,15 +1401,15 @@ mod tests {
 
     #[test]
     fn rows_are_in_run_order_whatever_the_threads_and_shards_merge_back() {
-        let mut d = derivation(DOUBLE_PENDULUM);
+        let d = derivation(DOUBLE_PENDULUM);
         let grid = Grid::parse("a=-3:3:3,b'=-1:1:3", &d.model).unwrap();
-        let whole = sweep(&mut d, &grid, &SweepConfig { threads: Some(3), ..config(1.5) }, &|| {}).unwrap();
+        let whole = sweep(&d, &grid, &SweepConfig { threads: Some(3), ..config(1.5) }, &|| {}).unwrap();
         assert_eq!(whole.rows.iter().map(|r| r.run).collect::<Vec<_>>(), (0..9).collect::<Vec<_>>());
         let text = whole.to_csv();
         assert_eq!(SweepTable::parse(&text, "whole.csv").unwrap(), whole);
         let part = |i: usize| {
             let cfg = SweepConfig { shard: Shard { index: i, count: 2 }, threads: Some(1), ..config(1.5) };
-            let t = sweep(&mut d.clone(), &grid, &cfg, &|| {}).unwrap();
+            let t = sweep(&d.clone(), &grid, &cfg, &|| {}).unwrap();
             (format!("part{i}.csv"), SweepTable::parse(&t.to_csv(), "part").unwrap())
         };
         let (p0, p1) = (part(0), part(1));
@@ -1454,9 +1443,9 @@ mod tests {
     fn a_run_that_fails_is_a_row_with_its_reason() {
         // x'' = -x^3 * 1e6 from x = 1e3 overflows: the run fails, the sweep goes on.
         let text = "coordinates = [\"x\"]\nkinetic = \"x'^2/2\"\npotential = \"k*x^4/4\"\n[parameters]\nk = 1e6\n[initial]\n\"x'\" = 0\n";
-        let mut d = derivation(text);
+        let d = derivation(text);
         let grid = Grid::parse("x=1:1e200:2", &d.model).unwrap();
-        let t = sweep(&mut d, &grid, &config(1.0), &|| {}).unwrap();
+        let t = sweep(&d, &grid, &config(1.0), &|| {}).unwrap();
         assert_eq!(t.rows[0].failure, "");
         assert!(!t.rows[1].failure.is_empty(), "{t:?}");
         assert!(column(&t, "lyapunov")[1].is_nan());
@@ -1467,9 +1456,9 @@ mod tests {
 
     #[test]
     fn a_value_missing_from_initial_and_grid_is_an_error() {
-        let mut d = derivation("coordinates = [\"x\"]\nkinetic = \"x'^2/2\"\n[initial]\nx = 1\n");
+        let d = derivation("coordinates = [\"x\"]\nkinetic = \"x'^2/2\"\n[initial]\nx = 1\n");
         let grid = Grid::parse("x=0:1:2", &d.model).unwrap();
-        let e = sweep(&mut d, &grid, &config(1.0), &|| {}).unwrap_err();
+        let e = sweep(&d, &grid, &config(1.0), &|| {}).unwrap_err();
         assert_eq!(e.to_string(), "no initial value for x': neither [initial] nor the grid gives one");
     }
 
@@ -1479,15 +1468,15 @@ mod tests {
     /// fails at once.
     #[test]
     fn a_run_through_the_gimbal_singularity_fails_with_its_reason() {
-        let mut d = derivation(include_str!("../../../examples/tops/heavy_top.toml"));
+        let d = derivation(include_str!("../../../examples/tops/heavy_top.toml"));
         let grid = Grid::parse("ga'=0:12:2,be'=-6:-6:1", &d.model).unwrap();
-        let t = sweep(&mut d, &grid, &config(3.0), &|| {}).unwrap();
+        let t = sweep(&d, &grid, &config(3.0), &|| {}).unwrap();
         let t_final = column(&t, "t_final");
         assert!(t.rows[0].failure.contains("gimbal singularity"), "{:?}", t.rows[0]);
         assert!(t_final[0] > 0.0 && t_final[0] < 3.0, "{t_final:?}");
         assert!(t.rows[1].failure.is_empty() && t_final[1] == 3.0, "{:?}", t.rows[1]);
         let grid = Grid::parse("be=0:0:1", &d.model).unwrap();
-        let t = sweep(&mut d, &grid, &config(1.0), &|| {}).unwrap();
+        let t = sweep(&d, &grid, &config(1.0), &|| {}).unwrap();
         assert!(t.rows[0].failure.contains("gimbal singularity"), "{:?}", t.rows[0]);
     }
 }

@@ -3,6 +3,7 @@
 //! Euler angles reach their gimbal singularity.
 
 use crate::derive::BodyMotion;
+use num::{Direction, Event};
 use sym::ExprId;
 
 /// The CSV column names of the bodies' ω and L: `omega1..3`, `L1..3`, prefixed
@@ -69,6 +70,22 @@ impl GimbalGuard {
             b = self.beta_name
         )
     }
+}
+
+/// The terminal events of the guards, two per body in the guards' order: |sin β|
+/// falling to the threshold, and sin β changing sign (β passing 0 or π within
+/// one step, between two step ends that are both clear of the threshold). The
+/// guard of event `k` is `guards[k / 2]`.
+pub(crate) fn guard_events(guards: &[GimbalGuard]) -> Vec<Event<'static>> {
+    let mut events = Vec::with_capacity(2 * guards.len());
+    for g in guards {
+        let (beta, s2) = (g.beta, g.threshold * g.threshold);
+        events.push(
+            Event::new(move |_t, y| y[beta].sin().powi(2) - s2).with_direction(Direction::Falling).with_terminal(true),
+        );
+        events.push(Event::new(move |_t, y| y[beta].sin()).with_terminal(true));
+    }
+    events
 }
 
 /// One [`GimbalGuard`] per body, for a run at relative tolerance `rtol`.
