@@ -46,8 +46,8 @@ pub use derive::{Conserved, Derivation, Verdicts};
 pub use dynamics::{invariants_of, Dynamics, Form, Invariant, System};
 pub use error::ModelError;
 pub use extremal::{
-    extremal, tanh_sinh, Candidate, Euler, EulerError, ExtremalConfig, ExtremalError, ExtremalReport, ExtremalSummary,
-    Problem, SecondVariation, Start, EXTREMAL_FORMAT,
+    extremal, Candidate, Euler, EulerError, ExtremalConfig, ExtremalError, ExtremalReport, ExtremalSummary, Problem,
+    SecondVariation, Start, EXTREMAL_FORMAT,
 };
 pub use model::{Coordinate, InitialValue, Located, Model, Parameter, Particle, MAX_FILE_BYTES};
 pub use modes::{normal_modes, Mode, ModeKind, Modes, ModesConfig, ModesError, ModesReport, SymbolicModes};

@@ -78,10 +78,10 @@ pub use linalg::{LinearSolver, DEFAULT_PIVOT_RATIO};
 pub use method::Method;
 pub use newton::{newton, newton_fd, NewtonConfig, NewtonSolution, FD_RELATIVE_STEP};
 pub use quadrature::{
-    adaptive_gauss_kronrod, gauss_kronrod, gauss_kronrod_15, gauss_legendre, gauss_legendre_doubling,
-    gauss_legendre_rule, tanh_sinh, Adaptive, AdaptiveConfig, Doubling, DoublingConfig, Estimate, Integral, Integrand,
-    GAUSS_7_WEIGHTS, KRONROD_15_NODES, KRONROD_15_WEIGHTS, KRONROD_MAX_INTERVALS, KRONROD_ROUND_OFF,
-    MAX_GAUSS_LEGENDRE_ORDER,
+    adaptive_gauss_kronrod, gauss_kronrod, gauss_kronrod_15, gauss_legendre, gauss_legendre_centered,
+    gauss_legendre_doubling, gauss_legendre_rule, tanh_sinh, Adaptive, AdaptiveConfig, Doubling, DoublingConfig,
+    Estimate, Integral, Integrand, GAUSS_7_WEIGHTS, KRONROD_15_NODES, KRONROD_15_WEIGHTS, KRONROD_MAX_INTERVALS,
+    KRONROD_ROUND_OFF, MAX_GAUSS_LEGENDRE_ORDER,
 };
 pub use radau5::Radau5;
 pub use root::brent;

@@ -1,5 +1,5 @@
 //! One-dimensional quadrature: Gauss–Legendre rules ([`gauss_legendre_rule`], applied
-//! by [`gauss_legendre`], with doubling order by [`gauss_legendre_doubling`]),
+//! by [`gauss_legendre`] and [`gauss_legendre_centered`], with doubling order by [`gauss_legendre_doubling`]),
 //! tanh-sinh for integrable endpoint singularities ([`tanh_sinh`]), and the 7/15-point
 //! Gauss–Kronrod pair ([`gauss_kronrod_15`], one interval; [`adaptive_gauss_kronrod`],
 //! bisection of the worst interval) as the 1-D building block of nested cubature.
@@ -62,21 +62,27 @@ pub fn gauss_legendre_rule(n: usize) -> Result<Vec<(f64, f64)>, QuadratureError>
 }
 
 /// `∫_a^b f(x) dx` by the rule `rule` (from [`gauss_legendre_rule`]) mapped onto
-/// `[a, b]`: `(b − a)/2 · Σ w_i f((a + b)/2 + (b − a)/2 · x_i)`, summed in the rule's
-/// order, each component of the array separately.
+/// `[a, b]`: [`gauss_legendre_centered`] about `(a + b)/2` with half-width `(b − a)/2`.
 ///
 /// ```
 /// let rule = num::gauss_legendre_rule(2).unwrap();
 /// let [v] = num::gauss_legendre(&rule, |x| [x * x * x], 1.0, 3.0);
 /// assert!((v - 20.0).abs() < 1e-13);
 /// ```
-pub fn gauss_legendre<const N: usize>(
+pub fn gauss_legendre<const N: usize>(rule: &[(f64, f64)], f: impl FnMut(f64) -> [f64; N], a: f64, b: f64) -> [f64; N] {
+    gauss_legendre_centered(rule, f, 0.5 * (a + b), 0.5 * (b - a))
+}
+
+/// The integral over `[mid − half, mid + half]` by the rule `rule`:
+/// `half · Σ w_i f(mid + half · x_i)`, summed in the rule's order, each component of
+/// the array separately. Given the centre and half-width, a short interval next to
+/// a large `a` keeps its length exactly (`(a + x) − a` would round `x`).
+pub fn gauss_legendre_centered<const N: usize>(
     rule: &[(f64, f64)],
     mut f: impl FnMut(f64) -> [f64; N],
-    a: f64,
-    b: f64,
+    mid: f64,
+    half: f64,
 ) -> [f64; N] {
-    let (mid, half) = (0.5 * (a + b), 0.5 * (b - a));
     let mut sum = [0.0; N];
     for &(x, w) in rule {
         let v = f(mid + half * x);

@@ -25,7 +25,6 @@
 //! Entry point: [`solve`].
 
 use super::euler::Euler;
-use super::quadrature::tanh_sinh;
 use num::{Config, Direction, Event, Method, ObservationKind, OdeSystem, Output, RhsError};
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::ops::ControlFlow;
@@ -44,6 +43,10 @@ const U0_MAX: f64 = 1e-2;
 const MAX_LENGTH: f64 = 50.0;
 /// Largest accepted miss of a solved extremal, in units of D.
 const MISS_TOL: f64 = 1e-9;
+/// Relative tolerance of J over the series' start piece, by tanh-sinh (its
+/// integrand may be singular at s = 0): a little tighter than [`RTOL`], since the
+/// integration continues from it.
+const SERIES_VALUE_RTOL: f64 = 1e-13;
 /// |cos φ| below which y'' is too noisy for the tight tolerance (|y'| > 100).
 const VERTICAL_COS: f64 = 0.01;
 /// How far φ turns (in units of the family parameter c) before the tight integration takes over.
@@ -240,7 +243,11 @@ impl Family<'_> {
                 // ∫ f·cos φ ds over [0, s0] along the series; the integrand may be
                 // singular at s = 0 (the brachistochrone's 1/sqrt(y)).
                 // Shots only need the miss; the value is integrated on the final trace.
-                let v0 = if self.with_value { tanh_sinh(density, 0.0, s0, 1e-13).0 } else { 0.0 };
+                let v0 = if self.with_value {
+                    num::tanh_sinh(density, 0.0, s0, SERIES_VALUE_RTOL).map_or(f64::NAN, |i| i.value)
+                } else {
+                    0.0
+                };
                 let [x, y, phi] = at(s0);
                 // The variation with a: δφ = u0 and the bend's δ-position.
                 let bend_a = s0 * u0 / (1.0 + lambda);
