@@ -2,8 +2,9 @@
 //! [`newton_fd`] with it by forward differences. Each step solves `J s = −F` with
 //! [`LinearSolver`] and is damped by backtracking on `|F|²`; where `J` is singular (a
 //! flat direction, such as a free translation of a molecule for `F = ∇U`) the step is
-//! the regularized least-squares one, `(JᵀJ + λI) s = −JᵀF`, which takes no step
-//! along the flat direction.
+//! the minimum-norm least-squares one, `s = −J⁺F` with the pseudo-inverse from a
+//! one-sided Jacobi SVD of `J` (singular values below `singular_ratio·σ_max` count as
+//! zero), which takes no step along the flat direction.
 
 use crate::error::NewtonError;
 use crate::linalg::LinearSolver;
@@ -16,14 +17,10 @@ pub struct NewtonConfig {
     /// needs about 90 from `x = 1` to round-off.
     pub max_iterations: usize,
     /// `J` counts as singular when the ratio of its smallest to largest LU pivot is
-    /// below this. Default `1e-12`: a solve would keep at most four digits, and a
-    /// flat direction of a Hessian built from round-off shows pivots of `1e-16`.
+    /// below this, and then its singular values below this fraction of the largest
+    /// count as zero. Default `1e-12`: a solve would keep at most four digits, and a
+    /// flat direction of a Hessian built from round-off shows `1e-16`.
     pub singular_ratio: f64,
-    /// `λ` of the regularized step, relative to the largest diagonal entry of
-    /// `JᵀJ`. Default `1e-10`: far above round-off of `JᵀJ` (whose condition squares
-    /// `J`'s), yet each step then misses the Newton step by a relative `λ/σ²` only,
-    /// σ the smallest nonzero singular value.
-    pub regularization: f64,
     /// Converged when a step is below `step_tol·(1 + |x|)`. Default `1e-14`: steps
     /// shrink to round-off of `x` (quadratically at a regular root, geometrically at a
     /// degenerate one).
@@ -48,7 +45,6 @@ impl Default for NewtonConfig {
         NewtonConfig {
             max_iterations: 200,
             singular_ratio: 1e-12,
-            regularization: 1e-10,
             step_tol: 1e-14,
             residual_tol: 1e-8,
             armijo: 1e-4,
@@ -100,9 +96,8 @@ pub fn newton(
     let (mut f, mut jac) = (vec![0.0; n], vec![0.0; n * n]);
     let (mut f_trial, mut jac_trial, mut trial) = (vec![0.0; n], vec![0.0; n * n], vec![0.0; n]);
     let mut step = vec![0.0; n];
-    let mut normal = vec![0.0; n * n];
+    let mut svd = Svd::new(n);
     let mut lu = LinearSolver::new(n).with_pivot_threshold(config.singular_ratio);
-    let mut lu_regularized = LinearSolver::new(n).with_pivot_threshold(0.0);
     system(&x, &mut f, &mut jac);
     let size0 = 1.0 + norm(x0);
     for iter in 0..=config.max_iterations {
@@ -118,7 +113,14 @@ pub fn newton(
         if iter == config.max_iterations {
             break;
         }
-        newton_step(&mut lu, &mut lu_regularized, &jac, &f, &mut normal, &mut step, config.regularization);
+        for i in 0..n {
+            step[i] = -f[i];
+        }
+        if lu.factor(&jac).is_err() || lu.solve_in_place(&mut step).is_err() {
+            svd.factor(&jac);
+            svd.solve_min_norm(&f, config.singular_ratio, &mut step);
+            step.iter_mut().for_each(|s| *s = -*s);
+        }
         if norm(&step) <= config.step_tol * xscale {
             if fnorm <= config.residual_tol * jscale.max(1.0) * xscale {
                 return Ok(NewtonSolution { x, iterations: iter, residual: fnorm });
@@ -151,40 +153,87 @@ pub fn newton(
     Err(NewtonError::NoConvergence { x, iterations: config.max_iterations, residual })
 }
 
-/// The Newton step `s` with `J s = −F`, or where `J` is singular the regularized
-/// least-squares step `(JᵀJ + λI) s = −JᵀF`, `λ = regularization·max_k (JᵀJ)_kk`.
-fn newton_step(
-    lu: &mut LinearSolver,
-    lu_regularized: &mut LinearSolver,
-    jac: &[f64],
-    f: &[f64],
-    normal: &mut [f64],
-    step: &mut [f64],
-    regularization: f64,
-) {
-    let n = f.len();
-    for i in 0..n {
-        step[i] = -f[i];
+/// Most sweeps of the one-sided Jacobi SVD; it converges quadratically, in 6 to 10
+/// sweeps for any small matrix.
+const SVD_MAX_SWEEPS: usize = 60;
+
+/// A pair of columns counts as orthogonal when `|a_p·a_q| ≤ SVD_ORTHOGONAL·|a_p||a_q|`:
+/// at round-off, a rotation would change nothing.
+const SVD_ORTHOGONAL: f64 = f64::EPSILON;
+
+/// A one-sided Jacobi (Hestenes) SVD of a small square matrix, `A = U Σ Vᵀ`: plane
+/// rotations from the right orthogonalize the columns of `A`, which then are `U Σ`,
+/// and accumulate into `V`. Accurate in every singular value, and storage reused.
+struct Svd {
+    n: usize,
+    /// `U Σ`, column-major (`us[j * n + i]` is row `i` of column `j`).
+    us: Vec<f64>,
+    /// `V`, column-major.
+    v: Vec<f64>,
+}
+
+impl Svd {
+    fn new(n: usize) -> Self {
+        Svd { n, us: vec![0.0; n * n], v: vec![0.0; n * n] }
     }
-    if lu.factor(jac).is_ok() && lu.solve_in_place(step).is_ok() {
-        return;
-    }
-    let mut diag_max = 0.0f64;
-    for i in 0..n {
-        for j in 0..n {
-            normal[i * n + j] = (0..n).map(|k| jac[k * n + i] * jac[k * n + j]).sum();
+
+    /// Factors the row-major `a`.
+    fn factor(&mut self, a: &[f64]) {
+        let n = self.n;
+        for i in 0..n {
+            for j in 0..n {
+                self.us[j * n + i] = a[i * n + j];
+                self.v[j * n + i] = if i == j { 1.0 } else { 0.0 };
+            }
         }
-        diag_max = diag_max.max(normal[i * n + i]);
+        for _ in 0..SVD_MAX_SWEEPS {
+            let mut rotated = false;
+            for p in 0..n {
+                for q in p + 1..n {
+                    let (cp, cq) = (&self.us[p * n..(p + 1) * n], &self.us[q * n..(q + 1) * n]);
+                    let alpha: f64 = cp.iter().map(|x| x * x).sum();
+                    let beta: f64 = cq.iter().map(|x| x * x).sum();
+                    let gamma: f64 = cp.iter().zip(cq).map(|(x, y)| x * y).sum();
+                    if gamma == 0.0 || gamma.abs() <= SVD_ORTHOGONAL * (alpha * beta).sqrt() {
+                        continue;
+                    }
+                    rotated = true;
+                    let zeta = (beta - alpha) / (2.0 * gamma);
+                    let t = zeta.signum() / (zeta.abs() + zeta.hypot(1.0));
+                    let c = 1.0 / t.hypot(1.0);
+                    let s = c * t;
+                    for m in [&mut self.us, &mut self.v] {
+                        for i in 0..n {
+                            let (x, y) = (m[p * n + i], m[q * n + i]);
+                            m[p * n + i] = c * x - s * y;
+                            m[q * n + i] = s * x + c * y;
+                        }
+                    }
+                }
+            }
+            if !rotated {
+                break;
+            }
+        }
     }
-    let lambda = regularization * diag_max.max(f64::MIN_POSITIVE);
-    for i in 0..n {
-        normal[i * n + i] += lambda;
-        step[i] = -(0..n).map(|k| jac[k * n + i] * f[k]).sum::<f64>();
-    }
-    // JᵀJ + λI is symmetric positive definite, so the factorization cannot fail but
-    // for non-finite entries, which were excluded before the step.
-    if lu_regularized.factor(normal).is_err() || lu_regularized.solve_in_place(step).is_err() {
-        step.iter_mut().for_each(|s| *s = 0.0);
+
+    /// `x = A⁺ b`, the singular values below `cutoff·σ_max` taken as zero.
+    fn solve_min_norm(&self, b: &[f64], cutoff: f64, x: &mut [f64]) {
+        let n = self.n;
+        let sigma = |j: usize| self.us[j * n..(j + 1) * n].iter().map(|v| v * v).sum::<f64>().sqrt();
+        let sigma_max = (0..n).map(sigma).fold(0.0f64, f64::max);
+        x.iter_mut().for_each(|v| *v = 0.0);
+        for j in 0..n {
+            let s = sigma(j);
+            if s == 0.0 || s <= cutoff * sigma_max {
+                continue;
+            }
+            // U_jᵀ b / σ_j = (UΣ)_jᵀ b / σ_j².
+            let coef = self.us[j * n..(j + 1) * n].iter().zip(b).map(|(u, b)| u * b).sum::<f64>() / (s * s);
+            for i in 0..n {
+                x[i] += coef * self.v[j * n + i];
+            }
+        }
     }
 }
 
@@ -279,8 +328,37 @@ mod tests {
             &NewtonConfig::default(),
         )
         .unwrap();
-        // Every point of x = y is a root: the first step lands within λ of (2, 2).
-        assert!((sol.x[0] - 2.0).abs() < 1e-9 && sol.x[0] == sol.x[1], "{sol:?}");
+        assert_eq!(sol.iterations, 1);
+        check(&sol.x, &[2.0, 2.0]);
+    }
+
+    #[test]
+    fn the_svd_solves_least_squares_with_minimum_norm() {
+        let mut svd = Svd::new(3);
+        // Rank 2: the third row is the sum of the first two.
+        let a = [1.0, 2.0, 0.5, -1.0, 0.5, 3.0, 0.0, 2.5, 3.5];
+        svd.factor(&a);
+        let mut x = [0.0; 3];
+        // b in the range of A: the solution solves A x = b exactly.
+        let x_true = [0.3, -0.7, 1.1];
+        let b: Vec<f64> = (0..3).map(|i| (0..3).map(|j| a[i * 3 + j] * x_true[j]).sum()).collect();
+        svd.solve_min_norm(&b, 1e-12, &mut x);
+        let ax: Vec<f64> = (0..3).map(|i| (0..3).map(|j| a[i * 3 + j] * x[j]).sum()).collect();
+        check(&ax, &b);
+        // The null space of A is spanned by the cross product of its first two rows;
+        // the minimum-norm solution is orthogonal to it.
+        let null = {
+            let (r, s) = ([1.0, 2.0, 0.5], [-1.0, 0.5, 3.0]);
+            [r[1] * s[2] - r[2] * s[1], r[2] * s[0] - r[0] * s[2], r[0] * s[1] - r[1] * s[0]]
+        };
+        let dot: f64 = x.iter().zip(null).map(|(x, n)| x * n).sum();
+        assert!(dot.abs() < 1e-12, "{x:?} · {null:?} = {dot}");
+        // A regular matrix: the plain solution.
+        let a = [4.0, 1.0, 0.0, 1.0, 3.0, 1.0, 0.0, 1.0, 2.0];
+        svd.factor(&a);
+        svd.solve_min_norm(&[1.0, 2.0, 3.0], 1e-12, &mut x);
+        let ax: Vec<f64> = (0..3).map(|i| (0..3).map(|j| a[i * 3 + j] * x[j]).sum()).collect();
+        check(&ax, &[1.0, 2.0, 3.0]);
     }
 
     #[test]
