@@ -38,7 +38,8 @@
 //! - [`integrate`] drives a solver with output sampling and [`Event`]s.
 //! - [`LinearSolver`] solves `M x = f` (dense or banded LU); [`brent`] finds roots
 //!   of a function of one variable, [`newton`] and [`newton_fd`] of small systems.
-//! - Quadrature: Gauss–Legendre rules ([`gauss_legendre_rule`], [`gauss_legendre`],
+//! - Quadrature: the [`midpoint`] rule (Gauss–Chebyshev after `x = cos φ`),
+//!   Gauss–Legendre rules ([`gauss_legendre_rule`], [`gauss_legendre`],
 //!   [`gauss_legendre_doubling`]), [`tanh_sinh`] for endpoint singularities, and
 //!   7/15-point Gauss–Kronrod ([`gauss_kronrod_15`], [`adaptive_gauss_kronrod`],
 //!   [`gauss_kronrod`]) as the 1-D building block of nested cubature.
@@ -79,9 +80,9 @@ pub use method::Method;
 pub use newton::{newton, newton_fd, NewtonConfig, NewtonSolution, FD_RELATIVE_STEP};
 pub use quadrature::{
     adaptive_gauss_kronrod, gauss_kronrod, gauss_kronrod_15, gauss_legendre, gauss_legendre_centered,
-    gauss_legendre_doubling, gauss_legendre_rule, tanh_sinh, Adaptive, AdaptiveConfig, Doubling, DoublingConfig,
-    Estimate, Integral, Integrand, GAUSS_7_WEIGHTS, KRONROD_15_NODES, KRONROD_15_WEIGHTS, KRONROD_MAX_INTERVALS,
-    KRONROD_ROUND_OFF, MAX_GAUSS_LEGENDRE_ORDER,
+    gauss_legendre_doubling, gauss_legendre_rule, midpoint, tanh_sinh, Adaptive, AdaptiveConfig, Doubling,
+    DoublingConfig, Estimate, Integral, Integrand, GAUSS_7_WEIGHTS, KRONROD_15_NODES, KRONROD_15_WEIGHTS,
+    KRONROD_MAX_INTERVALS, KRONROD_ROUND_OFF, MAX_GAUSS_LEGENDRE_ORDER,
 };
 pub use radau5::Radau5;
 pub use root::brent;

@@ -1,4 +1,4 @@
-//! One-dimensional quadrature: Gauss–Legendre rules ([`gauss_legendre_rule`], applied
+//! One-dimensional quadrature: the composite [`midpoint`] rule, Gauss–Legendre rules ([`gauss_legendre_rule`], applied
 //! by [`gauss_legendre`] and [`gauss_legendre_centered`], with doubling order by [`gauss_legendre_doubling`]),
 //! tanh-sinh for integrable endpoint singularities ([`tanh_sinh`]), and the 7/15-point
 //! Gauss–Kronrod pair ([`gauss_kronrod_15`], one interval; [`adaptive_gauss_kronrod`],
@@ -91,6 +91,29 @@ pub fn gauss_legendre_centered<const N: usize>(
         }
     }
     sum.map(|s| s * half)
+}
+
+/// `∫_a^b f(x) dx` by the composite midpoint rule with `n` equal pieces:
+/// `(b − a)/n · Σ f(a + (b − a)(j + ½)/n)`, summed in order. After `x = cos φ` it is
+/// the Gauss–Chebyshev rule of the first kind, exact for `∫ p(x)/sqrt(1 − x²)` with `p`
+/// of degree below `2n`: the rule for an integrand with inverse-square-root
+/// singularities at both ends, such as a period between two turning points.
+///
+/// ```
+/// // ∫_0^π cos²φ dφ = π/2.
+/// let [v] = num::midpoint(|phi| [phi.cos().powi(2)], 0.0, std::f64::consts::PI, 8);
+/// assert!((v - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+/// ```
+pub fn midpoint<const N: usize>(mut f: impl FnMut(f64) -> [f64; N], a: f64, b: f64, n: usize) -> [f64; N] {
+    let mut sum = [0.0; N];
+    for j in 0..n {
+        let v = f(a + (b - a) * (j as f64 + 0.5) / n as f64);
+        for k in 0..N {
+            sum[k] += v[k];
+        }
+    }
+    let h = (b - a) / n as f64;
+    sum.map(|s| s * h)
 }
 
 /// Options of [`gauss_legendre_doubling`].
@@ -515,6 +538,22 @@ mod tests {
             gauss_legendre_rule(0),
             Err(QuadratureError::InvalidOrder { order: 0, max: MAX_GAUSS_LEGENDRE_ORDER })
         );
+    }
+
+    #[test]
+    fn midpoint_is_gauss_chebyshev() {
+        // ∫_{−1}^{1} x^k/sqrt(1 − x²) dx = ∫_0^π cos^k φ dφ, exact for k < 2n.
+        let n = 5;
+        for k in 0..2 * n as i32 {
+            // π·(k − 1)!!/k!! for even k, 0 for odd.
+            let want = if k % 2 == 1 {
+                0.0
+            } else {
+                (1..=k / 2).fold(PI, |acc, j| acc * f64::from(2 * j - 1) / f64::from(2 * j))
+            };
+            check(midpoint(|phi| [phi.cos().powi(k)], 0.0, PI, n)[0], want, 1e-14);
+        }
+        assert_eq!(midpoint(|x| [x, 1.0], 0.0, 2.0, 4), [2.0, 2.0]);
     }
 
     #[test]
