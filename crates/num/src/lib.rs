@@ -86,7 +86,7 @@ pub use quadrature::{
 };
 pub use radau5::Radau5;
 pub use root::brent;
-pub use solver::{Config, Controller, Solver, Statistics, StepOutcome};
+pub use solver::{Config, Controller, Solver, SolverState, Statistics, StepOutcome};
 pub use stepsize::{run_fixed, select_step};
 pub use system::{finite_difference_jacobian, OdeSystem, Separable, SeparableSystem};
 pub use taylor::{taylor_advance, taylor_order, taylor_ratio, taylor_step, Taylor};
