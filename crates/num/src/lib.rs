@@ -65,6 +65,13 @@ mod solver;
 mod stepsize;
 mod system;
 mod taylor;
+#[cfg(test)]
+mod test_models;
+
+// `num::` names this crate inside it as well, so that `test_models.rs` reads the same
+// compiled as a unit-test module and included by the integration tests.
+#[cfg(test)]
+extern crate self as num;
 
 pub use composition::{Composition, Scheme};
 pub use dop853::Dop853;

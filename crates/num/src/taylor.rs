@@ -213,30 +213,7 @@ impl<S: OdeSystem> Solver for Taylor<S> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// x'' = -x with its Taylor series computed by hand: x[k+1] = v[k]/(k+1),
-    /// v[k+1] = -x[k]/(k+1).
-    struct Oscillator;
-
-    impl OdeSystem for Oscillator {
-        fn dim(&self) -> usize {
-            2
-        }
-        fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), RhsError> {
-            dy[0] = y[1];
-            dy[1] = -y[0];
-            Ok(())
-        }
-        fn taylor_series(&mut self, _t: f64, y: &[f64], order: usize, s: &mut [f64]) -> Option<Result<(), RhsError>> {
-            s[..2].copy_from_slice(y);
-            for k in 0..order {
-                let kf = (k + 1) as f64;
-                s[2 * (k + 1)] = s[2 * k + 1] / kf;
-                s[2 * (k + 1) + 1] = -s[2 * k] / kf;
-            }
-            Some(Ok(()))
-        }
-    }
+    use crate::test_models::Oscillator;
 
     #[derive(Debug)]
     struct NoSeries;
