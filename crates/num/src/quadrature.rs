@@ -116,6 +116,14 @@ pub fn midpoint<const N: usize>(mut f: impl FnMut(f64) -> [f64; N], a: f64, b: f
     sum.map(|s| s * h)
 }
 
+/// A tolerance must be a number and not negative.
+fn check_tolerance(value: f64) -> Result<(), QuadratureError> {
+    if value.is_nan() || value < 0.0 {
+        return Err(QuadratureError::InvalidTolerance { value });
+    }
+    Ok(())
+}
+
 /// Options of [`gauss_legendre_doubling`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DoublingConfig {
@@ -160,9 +168,7 @@ pub fn gauss_legendre_doubling<const N: usize>(
     b: f64,
     config: &DoublingConfig,
 ) -> Result<Doubling<N>, QuadratureError> {
-    if !(config.rtol >= 0.0) {
-        return Err(QuadratureError::InvalidTolerance { value: config.rtol });
-    }
+    check_tolerance(config.rtol)?;
     if !(a.is_finite() && b.is_finite()) {
         return Err(QuadratureError::InvalidInterval { a, b });
     }
@@ -226,9 +232,7 @@ pub fn tanh_sinh(mut g: impl FnMut(f64) -> f64, a: f64, b: f64, rtol: f64) -> Re
     if !(a.is_finite() && b.is_finite()) {
         return Err(QuadratureError::InvalidInterval { a, b });
     }
-    if !(rtol >= 0.0) {
-        return Err(QuadratureError::InvalidTolerance { value: rtol });
-    }
+    check_tolerance(rtol)?;
     if b < a {
         let i = tanh_sinh(g, b, a, rtol)?;
         return Ok(Integral { value: -i.value, error: i.error });
@@ -497,9 +501,7 @@ pub fn gauss_kronrod(f: impl FnMut(f64) -> f64, a: f64, b: f64, atol: f64) -> Re
     if !(a.is_finite() && b.is_finite()) {
         return Err(QuadratureError::InvalidInterval { a, b });
     }
-    if !(atol >= 0.0) {
-        return Err(QuadratureError::InvalidTolerance { value: atol });
-    }
+    check_tolerance(atol)?;
     adaptive_gauss_kronrod(&mut Scalar(f), a, b, &AdaptiveConfig::new([atol]))
 }
 
