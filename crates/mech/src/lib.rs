@@ -81,8 +81,8 @@ pub use derive::{
 };
 pub use error::{ModelError, Setting};
 pub use extremal::{
-    extremal, tanh_sinh, Candidate, Euler, EulerError, ExtremalConfig, ExtremalError, ExtremalReport, ExtremalSummary,
-    Problem, SecondVariation, Start, EXTREMAL_FORMAT,
+    extremal, Candidate, Euler, EulerError, ExtremalConfig, ExtremalError, ExtremalReport, ExtremalSummary, Problem,
+    SecondVariation, Start, EXTREMAL_FORMAT,
 };
 pub use model::{Body, ConstraintKind, ConstraintSpec, Coordinate, InitialValue, Located, Model, Parameter, Particle};
 pub use modes::{normal_modes, Mode, ModeKind, Modes, ModesConfig, ModesError, ModesReport, SymbolicModes};

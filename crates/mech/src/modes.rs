@@ -236,10 +236,6 @@ pub(crate) fn short(v: f64) -> String {
     }
 }
 
-fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
-
 /// The velocity-independent potential U(q) = −L(q, 0) and the checks that
 /// small oscillations apply.
 fn potential_of(d: &Derivation, pool: &mut Pool) -> Result<(ExprId, Vec<String>), ModesError> {
@@ -451,71 +447,39 @@ fn starting_point(d: &Derivation, config: &ModesConfig) -> Result<Vec<f64>, Mode
     Ok(q)
 }
 
-/// A damped Newton method on ∇U = 0, with |∇U|² as merit function and a
-/// pseudo-inverse of the Hessian (flat directions, such as a free translation,
-/// get no step). Returns the point, the iterations and |∇U| there.
+/// The equilibrium search: `num::newton` on ∇U = 0 with the Hessian as
+/// Jacobian (|∇U|² as merit function; a flat direction, such as a free
+/// translation, gets no step), with its defaults but [`MAX_NEWTON`] iterations.
+/// Returns the point, the iterations and |∇U| there.
 fn newton(pot: &mut Potential, start: &[f64], names: &[String]) -> Result<(Vec<f64>, usize, f64), ModesError> {
     let n = start.len();
     let fail = |why: String| ModesError::NoEquilibrium { start: pairs(names, start), why };
-    let mut q = start.to_vec();
-    let (_, mut g, mut h) = pot.eval(&q);
-    let size0 = 1.0 + norm(start);
-    for iter in 0..=MAX_NEWTON {
-        if !g.iter().chain(h.iter()).all(|v| v.is_finite()) {
-            return Err(fail(format!("U or its derivatives are not finite at {}", pairs(names, &q))));
-        }
-        let gnorm = norm(&g);
-        let hscale = h.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let qscale = 1.0 + norm(&q);
-        if gnorm == 0.0 {
-            return Ok((q, iter, gnorm));
-        }
-        if iter == MAX_NEWTON {
-            break;
-        }
-        let eig = h.clone().symmetric_eigen();
-        let lmax = eig.eigenvalues.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let gv = nalgebra::DVector::from_column_slice(&g);
-        let mut step = nalgebra::DVector::zeros(n);
-        for k in 0..n {
-            let lam = eig.eigenvalues[k];
-            if lam.abs() > 1e-12 * lmax {
-                let v = eig.eigenvectors.column(k);
-                step -= v * (v.dot(&gv) / lam);
+    let gradient = |q: &[f64], g: &mut [f64], jac: &mut [f64]| {
+        let (_, grad, hess) = pot.eval(q);
+        g.copy_from_slice(&grad);
+        for i in 0..n {
+            for j in 0..n {
+                jac[i * n + j] = hess[(i, j)];
             }
         }
-        if step.norm() <= 1e-14 * qscale {
-            // Converged: Newton's steps shrink to nothing (quadratically at a
-            // regular equilibrium, geometrically at a degenerate one).
-            if gnorm <= 1e-8 * hscale.max(1.0) * qscale {
-                return Ok((q, iter, gnorm));
-            }
-            return Err(fail(format!(
-                "Newton's method stalls at {} with |∂U/∂q| = {}",
-                pairs(names, &q),
-                short(gnorm)
-            )));
+    };
+    let config = num::NewtonConfig { max_iterations: MAX_NEWTON, ..num::NewtonConfig::default() };
+    match num::newton(gradient, start, &config) {
+        Ok(sol) => Ok((sol.x, sol.iterations, sol.residual)),
+        Err(num::NewtonError::NotFinite { x, .. }) => {
+            Err(fail(format!("U or its derivatives are not finite at {}", pairs(names, &x))))
         }
-        // Backtracking on |∇U|².
-        let mut t = 1.0;
-        let merit = gnorm * gnorm;
-        loop {
-            let trial: Vec<f64> = q.iter().zip(step.iter()).map(|(a, b)| a + t * b).collect();
-            let (_, g2, h2) = pot.eval(&trial);
-            let m2: f64 = g2.iter().map(|x| x * x).sum();
-            if m2.is_finite() && (m2 <= (1.0 - 1e-4 * t) * merit || t < 1e-4) {
-                q = trial;
-                g = g2;
-                h = h2;
-                break;
-            }
-            t *= 0.5;
+        Err(num::NewtonError::Stalled { x, residual }) => {
+            Err(fail(format!("Newton's method stalls at {} with |∂U/∂q| = {}", pairs(names, &x), short(residual))))
         }
-        if norm(&q.iter().zip(start).map(|(a, b)| a - b).collect::<Vec<_>>()) > 1e3 * size0 {
-            return Err(fail(format!("Newton's method runs away (to {})", pairs(names, &q))));
+        Err(num::NewtonError::RunAway { x }) => {
+            Err(fail(format!("Newton's method runs away (to {})", pairs(names, &x))))
         }
+        Err(num::NewtonError::NoConvergence { residual, .. }) => Err(fail(format!(
+            "Newton's method did not converge in {MAX_NEWTON} iterations (|∂U/∂q| = {})",
+            short(residual)
+        ))),
     }
-    Err(fail(format!("Newton's method did not converge in {MAX_NEWTON} iterations (|∂U/∂q| = {})", short(norm(&g)))))
 }
 
 /// A name for Ω that is not one of the model's names.

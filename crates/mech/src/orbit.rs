@@ -14,17 +14,112 @@
 //! `r = (r₁ + r₂)/2 + (r₂ − r₁)/2·sin φ` turns the inverse-square-root
 //! singularities of `dt = dr/sqrt(2(E − U_eff)/μ)` into a smooth integrand in φ
 //! (E − U_eff has simple zeros there), integrated by Gauss–Legendre rules of
-//! doubling order until two agree to 1e-13. Near a turning point E − U_eff is
-//! taken from its Taylor series about the root, which avoids the cancellation
-//! of E against U_eff.
+//! doubling order until two agree to [`QUADRATURE_RTOL`]
+//! (`num::gauss_legendre_doubling`). Near a turning point E − U_eff is taken as
+//! an integral of U' from the root, which avoids the cancellation of E against
+//! U_eff. Turning points are bracketed by geometric steps out from r₀ and found
+//! by Brent's method (`num::brent`). The tolerances are the named constants
+//! below, each with what it bounds.
 
 use crate::derive::Derivation;
 use crate::error::ModelError;
 use crate::modes::short;
 use crate::probe::{self, Subst};
+use num::DoublingConfig;
 use serde::Serialize;
 use std::f64::consts::PI;
 use sym::{ExprId, Tape};
+
+/// First Gauss–Legendre order of the quadratures in φ: the smooth integrand of a
+/// mildly eccentric orbit is exact to round-off with 24 points, so most
+/// quadratures stop at the first doubling (48).
+const FIRST_ORDER: usize = 24;
+
+/// Largest Gauss–Legendre order tried (the doubling stops at the first order at
+/// or beyond it, 3072): a highly eccentric orbit, whose integrand is steep near
+/// periapsis, converges before it; beyond it the work (about 6000 evaluations of
+/// U per quadrature) outweighs what another doubling could add.
+const MAX_ORDER: usize = 2048;
+
+/// Two successive orders agree when they differ by this relative amount: a few
+/// hundred ulps, what a sum of up to 3072 terms can promise; periods and apsidal
+/// angles are reported to about 1e-12.
+const QUADRATURE_RTOL: f64 = 1e-13;
+
+/// The doubling quadrature of the period and the angle.
+const QUADRATURE: DoublingConfig =
+    DoublingConfig { first_order: FIRST_ORDER, max_order: MAX_ORDER, rtol: QUADRATURE_RTOL };
+
+/// Points of the Gauss–Legendre rule for ∫ U' over the short distance from a
+/// turning point (at most a quarter of the orbit's width): U' is smooth there,
+/// and a 12-point rule (exact to degree 23) reaches round-off.
+const SHORT_RULE_ORDER: usize = 12;
+
+/// Points of the Gauss–Legendre rule per piece of an unbounded orbit's path,
+/// whose pieces are short (the branch is cut into at least four); the path is
+/// drawn, so 16 points (degree 31) are plenty.
+const PATH_RULE_ORDER: usize = 16;
+
+/// Closer to a turning point than this fraction of the orbit's half-width
+/// (or of the periapsis, on an unbounded orbit), E − U_eff is measured from the
+/// root ([`Orbit::radial_from_root`]): there the direct difference E − U_eff
+/// would lose digits to cancellation, further out it costs 12 evaluations for nothing.
+const NEAR_ROOT_FRACTION: f64 = 0.25;
+
+/// Relative offset from r₀ at which a start at rest (r' = 0, so r₀ is itself a
+/// turning point) looks for the other: far enough that E − U_eff is above its
+/// round-off (≈ 1e-16·|U|/δ² in r), close enough not to skip a nearby root.
+const AT_REST_OFFSET: f64 = 1e-7;
+
+/// The start is at rest (a turning point) when E − U_eff(r₀) is below this
+/// fraction of |E| + |U_eff(r₀)|: a hundred ulps of the terms it is the difference of.
+const AT_REST_RTOL: f64 = 1e-14;
+
+/// Factor of the geometric steps inward from r₀ that bracket the periapsis: 5%
+/// per step brackets any root within about 50 evaluations per decade of r and
+/// does not step over two close roots of a well-resolved U_eff.
+const INWARD_STEP: f64 = 0.95;
+
+/// Factor of the steps outward that bracket the apoapsis (5%, as inward).
+const OUTWARD_STEP: f64 = 1.05;
+
+/// Inward search ends (the particle falls in) below this fraction of r₀: a
+/// periapsis 10¹² times closer than the start is the centre, numerically.
+const FALL_IN_RATIO: f64 = 1e-12;
+
+/// Outward search ends (the orbit is unbounded) beyond this multiple of r₀,
+/// about 420 steps: an apoapsis 10⁹ times farther out is escape, numerically.
+const ESCAPE_RATIO: f64 = 1e9;
+
+/// Absolute tolerance of Brent's method for the turning points: none beyond its
+/// own 4ε|r|, so they are found to round-off, since the quadrature measures
+/// E − U_eff from them and an error δ there leaves U_eff'·δ at the ends.
+const TURNING_POINT_TOL: f64 = 0.0;
+
+/// Absolute tolerance of Brent's method for φ in [`Orbit::r_at`] (φ ∈ [−π/2, π/2]):
+/// a few ulps of π/2, r to round-off.
+const R_AT_PHI_TOL: f64 = 1e-15;
+
+/// A Kepler orbit is a circle when 1 + 2El²/(μk²) = ε² is below this: ε below
+/// 1e-5, where r₀ and the turning points agree to 1e-10 and the quadrature of
+/// the nearly-circular motion is not needed.
+const CIRCLE_EPS2: f64 = 1e-10;
+
+/// A Kepler orbit is a parabola when |E| is below this fraction of k/r₀: E is
+/// the difference of two terms of that size, so below a few hundred ulps of
+/// them its sign is round-off.
+const PARABOLA_RTOL: f64 = 1e-12;
+
+/// A periapsis angle this close below 2π is reported as 0, not as 2π − ulp.
+const ANGLE_WRAP_TOL: f64 = 1e-12;
+
+/// Fewest pieces of a path (per half-period or branch): the quadrature per
+/// piece assumes a short piece.
+const MIN_PATH_PIECES: usize = 4;
+
+/// An unbounded branch is drawn out to at least this multiple of the periapsis,
+/// so that a `r_max` inside it still gives a branch to draw.
+const MIN_BRANCH_REACH: f64 = 1.0001;
 
 /// What kind of orbit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -165,33 +260,11 @@ fn not_central(reason: impl Into<String>) -> OrbitError {
     OrbitError::NotCentral { reason: reason.into() }
 }
 
-/// Gauss–Legendre nodes and weights on [−1, 1] (Newton on P_n from Chebyshev guesses).
-fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
-    let mut out = Vec::with_capacity(n);
-    for i in 0..n {
-        let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-        let mut dp = 1.0;
-        for _ in 0..100 {
-            let (mut p0, mut p1) = (1.0, x);
-            for k in 2..=n {
-                let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
-            let dx = p1 / dp;
-            x -= dx;
-            if dx.abs() < 1e-16 {
-                break;
-            }
-        }
-        out.push((x, 2.0 / ((1.0 - x * x) * dp * dp)));
-    }
-    out
+/// The Gauss–Legendre rule of a constant order (within `num`'s range, so it
+/// is always built).
+fn rule(order: usize) -> Vec<(f64, f64)> {
+    num::gauss_legendre_rule(order).expect("a constant order within num's range")
 }
-
-/// Largest Gauss–Legendre order tried.
-const MAX_ORDER: usize = 2048;
 
 /// The rule for short integrals of U'.
 static SHORT_RULE: std::sync::OnceLock<Vec<(f64, f64)>> = std::sync::OnceLock::new();
@@ -340,7 +413,7 @@ impl Orbit {
         if orbit.kepler.is_some() {
             // A closed orbit: any periapsis passage will do; report it in [0, 2π).
             let a = orbit.periapsis_angle.rem_euclid(2.0 * PI);
-            orbit.periapsis_angle = if 2.0 * PI - a < 1e-12 { 0.0 } else { a };
+            orbit.periapsis_angle = if 2.0 * PI - a < ANGLE_WRAP_TOL { 0.0 } else { a };
         }
         Ok(orbit)
     }
@@ -371,57 +444,42 @@ impl Orbit {
     }
 
     /// E − U_eff(r) near a root `a` of it, without cancellation:
-    /// l²/(2μ)·(1/a² − 1/r²) − ∫ₐʳ U'(s) ds, the integral by a 12-point Gauss–Legendre rule.
+    /// l²/(2μ)·(1/a² − 1/r²) − ∫ₐʳ U'(s) ds, the integral by a
+    /// [`SHORT_RULE_ORDER`]-point Gauss–Legendre rule.
     fn radial_from_root(&mut self, a: f64, x: f64) -> f64 {
         let r = a + x;
         let c = self.angular_momentum * self.angular_momentum / (2.0 * self.mu);
         let centrifugal = c * x * (r + a) / (a * a * r * r);
-        let (mid, half) = (a + 0.5 * x, 0.5 * x);
-        let mut integral = 0.0;
-        for &(x, w) in SHORT_RULE.get_or_init(|| gauss_legendre(12)) {
-            integral += w * self.derivs(mid + half * x)[1];
-        }
-        centrifugal - integral * half
+        let short = SHORT_RULE.get_or_init(|| rule(SHORT_RULE_ORDER));
+        // About the centre a + x/2 with half-width x/2: x, not (a + x) − a, which rounds.
+        let [integral] = num::gauss_legendre_centered(short, |s| [self.derivs(s)[1]], a + 0.5 * x, 0.5 * x);
+        centrifugal - integral
     }
 
-    /// The root of E − U_eff between `lo` (where it is ≥ 0 if `pos_lo`) and `hi`, by bisection.
-    fn bisect(&mut self, mut lo: f64, mut hi: f64, pos_lo: bool) -> f64 {
-        for _ in 0..200 {
-            let mid = 0.5 * (lo + hi);
-            if mid <= lo || mid >= hi {
-                break;
-            }
-            let f = self.radial(mid)[0];
-            if (f >= 0.0) == pos_lo {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        0.5 * (lo + hi)
+    /// The root of E − U_eff between `a` and `b`, where it takes the values `fa`
+    /// and `fb` of opposite signs, by Brent's method.
+    fn root(&mut self, a: f64, b: f64, fa: f64, fb: f64) -> f64 {
+        num::brent(|r| Ok::<_, std::convert::Infallible>(self.radial(r)[0]), a, b, fa, fb, TURNING_POINT_TOL)
+            .unwrap_or_else(|never| match never {})
     }
 
     fn turning_points(&mut self) -> Result<(), OrbitError> {
         let r0 = self.initial[0];
-        let delta = 1e-7;
+        let delta = AT_REST_OFFSET;
         let f0 = self.radial(r0)[0];
         let scale = self.energy.abs() + self.u_eff(r0).abs();
-        let at_rest = self.initial[2] == 0.0 || f0.abs() <= 1e-14 * scale;
-        let (inner_ok, outer_ok) = if at_rest {
-            let fi = self.radial(r0 * (1.0 - delta))[0];
-            let fo = self.radial(r0 * (1.0 + delta))[0];
-            (fi > 0.0, fo > 0.0)
-        } else {
-            (true, true)
-        };
+        let at_rest = self.initial[2] == 0.0 || f0.abs() <= AT_REST_RTOL * scale;
+        let (r_in, r_out) = (r0 * (1.0 - delta), r0 * (1.0 + delta));
+        let (f_in, f_out) = if at_rest { (self.radial(r_in)[0], self.radial(r_out)[0]) } else { (f0, f0) };
+        let (inner_ok, outer_ok) = if at_rest { (f_in > 0.0, f_out > 0.0) } else { (true, true) };
         // Inner turning point.
         self.periapsis = if at_rest && !inner_ok {
             r0
         } else {
-            let mut r = if at_rest { r0 * (1.0 - delta) } else { r0 };
+            let (mut r, mut f_r) = if at_rest { (r_in, f_in) } else { (r0, f0) };
             loop {
-                let next = r * 0.95;
-                if next < 1e-12 * r0 {
+                let next = r * INWARD_STEP;
+                if next < FALL_IN_RATIO * r0 {
                     return Err(OrbitError::FallsIn);
                 }
                 let f = self.radial(next)[0];
@@ -429,26 +487,26 @@ impl Orbit {
                     return Err(OrbitError::NotFinite { r: short(next) });
                 }
                 if f < 0.0 {
-                    break self.bisect(next, r, false);
+                    break self.root(next, r, f, f_r);
                 }
-                r = next;
+                (r, f_r) = (next, f);
             }
         };
         // Outer turning point.
         self.apoapsis = if !at_rest || outer_ok {
-            let mut r = if at_rest { r0 * (1.0 + delta) } else { r0 };
+            let (mut r, mut f_r) = if at_rest { (r_out, f_out) } else { (r0, f0) };
             let mut found = None;
-            while r < 1e9 * r0 {
-                let next = r * 1.05;
+            while r < ESCAPE_RATIO * r0 {
+                let next = r * OUTWARD_STEP;
                 let f = self.radial(next)[0];
                 if !f.is_finite() {
                     return Err(OrbitError::NotFinite { r: short(next) });
                 }
                 if f < 0.0 {
-                    found = Some(self.bisect(r, next, true));
+                    found = Some(self.root(r, next, f_r, f));
                     break;
                 }
-                r = next;
+                (r, f_r) = (next, f);
             }
             found
         } else {
@@ -468,9 +526,9 @@ impl Orbit {
         let (vx, vy) = (rd * c - r * thd * s, rd * s + r * thd * c);
         let runge_lenz = [mu * l * vy - mu * k * c, -mu * l * vx - mu * k * s];
         let u_scale = k / r;
-        self.kind = if arg.abs() <= 1e-10 {
+        self.kind = if arg.abs() <= CIRCLE_EPS2 {
             OrbitKind::Circle
-        } else if e.abs() <= 1e-12 * u_scale {
+        } else if e.abs() <= PARABOLA_RTOL * u_scale {
             OrbitKind::Parabola
         } else if e < 0.0 {
             OrbitKind::Ellipse
@@ -507,36 +565,22 @@ impl Orbit {
         let (near, x) = if phi < 0.0 { (r1, h * cos * cos / (1.0 - sin)) } else { (r2, -h * cos * cos / (1.0 + sin)) };
         let r = near + x;
         // E − U_eff(r) measured from the nearer root where the direct difference would cancel.
-        let f = if x.abs() < 0.25 * h { self.radial_from_root(near, x) } else { self.radial(r)[0] };
+        let f = if x.abs() < NEAR_ROOT_FRACTION * h { self.radial_from_root(near, x) } else { self.radial(r)[0] };
         let rate = (2.0 * f.max(0.0) / self.mu).sqrt();
         // h cos φ / sqrt(2f/μ); both vanish together at the ends.
         let dt = if rate > 0.0 { h * cos / rate } else { 0.0 };
         (dt, self.angular_momentum.abs() / (self.mu * r * r) * dt)
     }
 
-    /// ∫ (dt, dθ) over φ ∈ [a, b] with Gauss–Legendre of increasing order.
+    /// ∫ (dt, dθ) over φ ∈ [a, b] with Gauss–Legendre of increasing order
+    /// ([`QUADRATURE`]); NaN where the bounds are not finite.
     fn integrate(&mut self, a: f64, b: f64, r1: f64, r2: f64) -> (f64, f64) {
-        let mut prev: Option<(f64, f64)> = None;
-        let mut order = 24;
-        loop {
-            let rule = gauss_legendre(order);
-            let (mid, half) = (0.5 * (a + b), 0.5 * (b - a));
-            let (mut st, mut sth) = (0.0, 0.0);
-            for &(x, w) in &rule {
-                let (dt, dth) = self.integrand(mid + half * x, r1, r2);
-                st += w * dt;
-                sth += w * dth;
-            }
-            let cur = (st * half, sth * half);
-            if let Some(p) = prev {
-                let close = |u: f64, v: f64| (u - v).abs() <= 1e-13 * u.abs().max(v.abs()) + 1e-300;
-                if (close(cur.0, p.0) && close(cur.1, p.1)) || order >= MAX_ORDER {
-                    return cur;
-                }
-            }
-            prev = Some(cur);
-            order *= 2;
-        }
+        let integrand = |phi: f64| {
+            let (dt, dth) = self.integrand(phi, r1, r2);
+            [dt, dth]
+        };
+        num::gauss_legendre_doubling(integrand, a, b, &QUADRATURE)
+            .map_or((f64::NAN, f64::NAN), |d| (d.value[0], d.value[1]))
     }
 
     /// The time and the angle from r1 to r2.
@@ -586,7 +630,7 @@ impl Orbit {
         }
     }
 
-    /// r at the angle θ on a bounded orbit (by inverting θ(r) with bisection).
+    /// r at the angle θ on a bounded orbit (by inverting θ(φ) with Brent's method).
     pub fn r_at(&mut self, theta: f64) -> Option<f64> {
         let r2 = self.apoapsis?;
         let r1 = self.periapsis;
@@ -599,17 +643,16 @@ impl Orbit {
         if psi > apsidal {
             psi = 2.0 * apsidal - psi;
         }
-        let (mut lo, mut hi) = (-PI / 2.0, PI / 2.0);
-        for _ in 0..60 {
-            let mid = 0.5 * (lo + hi);
-            let a = self.integrate(-PI / 2.0, mid, r1, r2).1;
-            if a < psi {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        let phi = 0.5 * (lo + hi);
+        // The angle swept grows with φ from 0 at −π/2 to the apsidal angle at π/2.
+        let phi = num::brent(
+            |phi| Ok::<_, std::convert::Infallible>(self.integrate(-PI / 2.0, phi, r1, r2).1 - psi),
+            -PI / 2.0,
+            PI / 2.0,
+            -psi,
+            apsidal - psi,
+            R_AT_PHI_TOL,
+        )
+        .unwrap_or_else(|never| match never {});
         Some(0.5 * (r1 + r2) + 0.5 * (r2 - r1) * phi.sin())
     }
 
@@ -617,7 +660,7 @@ impl Orbit {
     /// periapsis, or along the outgoing branch of an unbounded one up to
     /// `r_max`.
     pub fn path(&mut self, n: usize, r_max: f64) -> Vec<(f64, f64)> {
-        let n = n.max(4);
+        let n = n.max(MIN_PATH_PIECES);
         let sign = self.angular_momentum.signum();
         let r1 = self.periapsis;
         let mut pts = Vec::with_capacity(2 * n + 1);
@@ -645,26 +688,22 @@ impl Orbit {
             }
             None => {
                 // dθ/dr = l/(μr²)/sqrt(2f/μ) with r = r1/(1 − w²): smooth at w = 0.
-                let w_max = (1.0 - r1 / r_max.max(r1 * 1.0001)).sqrt();
-                let rule = gauss_legendre(16);
+                let w_max = (1.0 - r1 / r_max.max(r1 * MIN_BRANCH_REACH)).sqrt();
+                let rule = rule(PATH_RULE_ORDER);
                 let mut theta = 0.0;
                 let mut prev = 0.0;
                 pts.push((0.0, r1));
                 for i in 1..=n {
                     let w = w_max * i as f64 / n as f64;
-                    let (mid, hw) = (0.5 * (prev + w), 0.5 * (w - prev));
-                    let mut s = 0.0;
-                    for &(x, wt) in &rule {
-                        let ww = mid + hw * x;
+                    let dtheta_dw = |ww: f64| {
                         let r = r1 / (1.0 - ww * ww);
                         let drdw = 2.0 * r1 * ww / (1.0 - ww * ww).powi(2);
-                        let f = if r - r1 < 0.25 * r1 { self.radial_from_root(r1, r - r1) } else { self.radial(r)[0] };
+                        let near = r - r1 < NEAR_ROOT_FRACTION * r1;
+                        let f = if near { self.radial_from_root(r1, r - r1) } else { self.radial(r)[0] };
                         let rate = (2.0 * f.max(0.0) / self.mu).sqrt();
-                        if rate > 0.0 {
-                            s += wt * self.angular_momentum.abs() / (self.mu * r * r) * drdw / rate;
-                        }
-                    }
-                    theta += s * hw;
+                        [if rate > 0.0 { self.angular_momentum.abs() / (self.mu * r * r) * drdw / rate } else { 0.0 }]
+                    };
+                    theta += num::gauss_legendre(&rule, dtheta_dw, prev, w)[0];
                     prev = w;
                     pts.push((theta, r1 / (1.0 - w * w)));
                 }

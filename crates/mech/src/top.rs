@@ -24,6 +24,43 @@ use crate::error::ModelError;
 use crate::euler;
 use serde::Serialize;
 
+/// Points of the midpoint rule over one swing of the nutation (φ from 0 to π):
+/// Gauss–Chebyshev in u = cos β, exact for the smooth part up to degree 8191, so
+/// the period and the mean precession rate are good to round-off unless a turning
+/// point nearly meets the third root u₃ (then the integrand steepens, and 4096
+/// points still resolve it for u₃ − u₂ down to about 1e-6 of the swing).
+const SWING_POINTS: usize = 4096;
+
+/// The start is off a turning point when f(u₀) = u̇² exceeds this fraction of
+/// the cubic's coefficients' size: a few thousand ulps of its terms.
+const AT_TURNING_RTOL: f64 = 1e-12;
+
+/// The slope f'(u₀) at a turning point start counts as zero (a steady motion)
+/// below this fraction of the coefficients' size.
+const SLOPE_RTOL: f64 = 1e-9;
+
+/// How far past u₀ the other turning point is looked for when u₀ is one: far
+/// enough that the root at u₀ itself, found to round-off, is not taken again.
+const ROOT_GAP: f64 = 1e-9;
+
+/// Turning points closer than this in u = cos β make a steady precession.
+const STEADY_GAP: f64 = 1e-9;
+
+/// α̇ = (a − b u)/(1 − u²) counts as vanishing at a turning point (cusps) below
+/// this fraction of |a| + |b|.
+const CUSP_RTOL: f64 = 1e-7;
+
+/// I cos β₀ counts as zero (a horizontal top, one steady precession rate)
+/// below this fraction of I.
+const HORIZONTAL_RTOL: f64 = 1e-12;
+
+/// Absolute tolerance of Brent's method for the roots of the cubic in
+/// u ∈ [−1, 1]: a few ulps of 1.
+const CUBIC_ROOT_TOL: f64 = 1e-15;
+
+/// Roots of the cubic closer than this are one (a double root found twice).
+const DUPLICATE_ROOT: f64 = 1e-14;
+
 /// Free or heavy.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum TopKind {
@@ -320,16 +357,16 @@ impl Top {
         let u0 = self.angles[1].cos();
         let scale = c.iter().map(|x| x.abs()).sum::<f64>().max(f64::MIN_POSITIVE);
         let f0 = f(u0);
-        let near = 1e-9;
+        let near = ROOT_GAP;
         let below = |limit: f64| roots.iter().copied().filter(|&r| r < limit).fold(-1.0f64, f64::max);
         let above = |limit: f64| roots.iter().copied().filter(|&r| r > limit).fold(1.0f64, f64::min);
-        let (u1, u2) = if f0 > 1e-12 * scale {
+        let (u1, u2) = if f0 > AT_TURNING_RTOL * scale {
             (below(u0), above(u0))
         } else {
             let s = df(u0);
-            if s > 1e-9 * scale {
+            if s > SLOPE_RTOL * scale {
                 (u0, above(u0 + near))
-            } else if s < -1e-9 * scale {
+            } else if s < -SLOPE_RTOL * scale {
                 (below(u0 - near), u0)
             } else {
                 (u0, u0)
@@ -337,11 +374,11 @@ impl Top {
         };
         let (a, b) = (self.p_alpha / self.i, self.p_gamma / self.i);
         let rate = |u: f64| (a - b * u) / (1.0 - u * u);
-        let kind = if (u2 - u1).abs() < 1e-9 {
+        let kind = if (u2 - u1).abs() < STEADY_GAP {
             NutationKind::Steady
         } else {
             let (s1, s2) = (a - b * u1, a - b * u2);
-            let tol = 1e-7 * (a.abs() + b.abs());
+            let tol = CUSP_RTOL * (a.abs() + b.abs());
             if s1.abs() <= tol || s2.abs() <= tol {
                 NutationKind::Cusps
             } else if s1 * s2 < 0.0 {
@@ -355,7 +392,7 @@ impl Top {
         let cb = u0;
         let (i, pg) = (self.i, self.p_gamma);
         let disc = pg * pg - 4.0 * i * cb * mgs;
-        let steady_precession = if (i * cb).abs() <= 1e-12 * i {
+        let steady_precession = if (i * cb).abs() <= HORIZONTAL_RTOL * i {
             (pg != 0.0).then(|| [Some(mgs / pg), None])
         } else if disc < 0.0 {
             None
@@ -370,17 +407,14 @@ impl Top {
         let k = c[3];
         let u3 = -c[2] / k - u1 - u2;
         let (mid, h) = ((u1 + u2) / 2.0, (u2 - u1) / 2.0);
-        let n = 4096;
-        let (mut half_t, mut half_alpha) = (0.0, 0.0);
-        for j in 0..n {
-            let phi = std::f64::consts::PI * (j as f64 + 0.5) / n as f64;
+        // The midpoint rule in φ is Gauss–Chebyshev in u, made for the inverse
+        // square roots at the turning points.
+        let swing = |phi: f64| {
             let u = mid - h * phi.cos();
             let w = 1.0 / (k * (u3 - u)).sqrt();
-            half_t += w;
-            half_alpha += w * rate(u);
-        }
-        let dphi = std::f64::consts::PI / n as f64;
-        let (half_t, half_alpha) = (half_t * dphi, half_alpha * dphi);
+            [w, w * rate(u)]
+        };
+        let [half_t, half_alpha] = num::midpoint(swing, 0.0, std::f64::consts::PI, SWING_POINTS);
         HeavyTop {
             mgs,
             energy_prime: self.energy - pg * pg / (2.0 * self.i3),
@@ -472,7 +506,7 @@ fn real_roots(c: &[f64; 4], lo: f64, hi: f64) -> Vec<f64> {
             continue;
         }
         if fa * fb < 0.0 {
-            if let Ok(r) = num::brent(|u| Ok::<_, ()>(f(u)), a, b, fa, fb, 1e-15) {
+            if let Ok(r) = num::brent(|u| Ok::<_, ()>(f(u)), a, b, fa, fb, CUBIC_ROOT_TOL) {
                 roots.push(r);
             }
         }
@@ -480,7 +514,7 @@ fn real_roots(c: &[f64; 4], lo: f64, hi: f64) -> Vec<f64> {
     if f(hi) == 0.0 {
         roots.push(hi);
     }
-    roots.dedup_by(|x, y| (*x - *y).abs() < 1e-14);
+    roots.dedup_by(|x, y| (*x - *y).abs() < DUPLICATE_ROOT);
     roots
 }
 

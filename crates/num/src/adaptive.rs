@@ -12,7 +12,6 @@ pub(crate) struct StepControl {
     pub(crate) rtol: f64,
     pub(crate) atol: f64,
     pub(crate) h_max: f64,
-    pub(crate) max_steps: usize,
     /// Safety factor: aim a little below the tolerance so the next step is accepted.
     safety: f64,
     /// Largest allowed step decrease `h_new >= fac_min · h`.
@@ -42,7 +41,6 @@ impl StepControl {
             rtol: config.rtol.max(100.0 * f64::EPSILON),
             atol: config.atol,
             h_max: config.h_max.unwrap_or(f64::INFINITY),
-            max_steps: config.max_steps,
             safety: 0.9,
             fac_min,
             fac_max,

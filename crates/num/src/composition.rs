@@ -16,8 +16,8 @@
 use crate::error::SolveError;
 use crate::method::Method;
 use crate::solver::{
-    check_initial, check_interpolation, check_len, compensated_add, hermite, Config, FixedClock, Solver, Statistics,
-    StepOutcome,
+    check_initial, check_interpolation, check_len, compensated_add, hermite, Config, FixedClock, Solver, SolverState,
+    Statistics, StepOutcome,
 };
 use crate::system::{first_non_finite, SeparableSystem};
 
@@ -109,12 +109,11 @@ impl Scheme {
 pub struct Composition<S> {
     system: S,
     scheme: Scheme,
+    /// Time, state, step, stop time and counters (what the accessors read).
+    state: SolverState,
     clock: FixedClock,
-    t_old: f64,
-    max_steps: usize,
     n: usize,
     /// Accepted state `[q, p]`, its derivative `[v(p), F(t, q)]` and compensation.
-    y: Vec<f64>,
     dy: Vec<f64>,
     comp: Vec<f64>,
     /// Previous accepted state and derivative (dense output).
@@ -125,7 +124,6 @@ pub struct Composition<S> {
     dy_new: Vec<f64>,
     comp_new: Vec<f64>,
     incr: Vec<f64>,
-    stats: Statistics,
 }
 
 impl<S: SeparableSystem> Composition<S> {
@@ -154,11 +152,9 @@ impl<S: SeparableSystem> Composition<S> {
         Ok(Composition {
             system,
             scheme,
-            clock: FixedClock::new(t0, dt),
-            t_old: t0,
-            max_steps: config.max_steps,
+            clock: FixedClock::new(t0),
+            state: SolverState::new(t0, y0, dt, stats, config),
             n,
-            y: y0.to_vec(),
             dy: dy.clone(),
             comp: vec![0.0; 2 * n],
             y_old: y0.to_vec(),
@@ -167,7 +163,6 @@ impl<S: SeparableSystem> Composition<S> {
             dy_new: dy,
             comp_new: vec![0.0; 2 * n],
             incr: vec![0.0; n],
-            stats,
         })
     }
 
@@ -185,7 +180,7 @@ impl<S: SeparableSystem> Composition<S> {
     fn advance(&mut self, t: f64, t_next: f64) -> Result<(), SolveError> {
         let n = self.n;
         let h = t_next - t;
-        self.y_new.copy_from_slice(&self.y);
+        self.y_new.copy_from_slice(&self.state.y);
         self.comp_new.copy_from_slice(&self.comp);
         self.dy_new.copy_from_slice(&self.dy);
         let coefficients = self.scheme.coefficients();
@@ -209,7 +204,7 @@ impl<S: SeparableSystem> Composition<S> {
             t_sub = if i + 1 == coefficients.len() { t_next } else { t_sub + tau };
             // Kick.
             self.system.force(t_sub, q, dp).map_err(|source| SolveError::Rhs { t: t_sub, source })?;
-            self.stats.rhs_evaluations += 1;
+            self.state.stats.rhs_evaluations += 1;
             for j in 0..n {
                 self.incr[j] = 0.5 * tau * dp[j];
             }
@@ -227,57 +222,43 @@ impl<S: SeparableSystem> Solver for Composition<S> {
     fn method(&self) -> Method {
         self.scheme.method()
     }
-    fn t(&self) -> f64 {
-        self.clock.t()
+    fn solver_state(&self) -> &SolverState {
+        &self.state
     }
-    fn state(&self) -> &[f64] {
-        &self.y
-    }
-    fn step_start(&self) -> f64 {
-        self.t_old
-    }
-    fn step_size(&self) -> f64 {
-        self.clock.h
-    }
-    fn statistics(&self) -> Statistics {
-        self.stats
-    }
-    fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolveError> {
-        self.clock.set_stop(t_stop)
+    fn solver_state_mut(&mut self) -> &mut SolverState {
+        &mut self.state
     }
 
     fn step(&mut self) -> Result<StepOutcome, SolveError> {
-        let t = self.clock.t();
-        if self.stats.steps >= self.max_steps {
-            return Err(SolveError::MaxStepsExceeded { t, max_steps: self.max_steps });
-        }
-        let (t_next, reached) = self.clock.next();
+        let t = self.state.t;
+        self.state.check_max_steps()?;
+        let (t_next, reached) = self.clock.next(self.state.h, self.state.stop);
         self.advance(t, t_next)?;
         if let Some(index) = first_non_finite(&self.y_new).or_else(|| first_non_finite(&self.dy_new)) {
             return Err(SolveError::NonFiniteState { t: t_next, index });
         }
-        std::mem::swap(&mut self.y_old, &mut self.y);
+        std::mem::swap(&mut self.y_old, &mut self.state.y);
         std::mem::swap(&mut self.dy_old, &mut self.dy);
-        std::mem::swap(&mut self.y, &mut self.y_new);
+        std::mem::swap(&mut self.state.y, &mut self.y_new);
         std::mem::swap(&mut self.dy, &mut self.dy_new);
         std::mem::swap(&mut self.comp, &mut self.comp_new);
-        self.t_old = t;
-        self.clock.advance(reached);
-        self.stats.steps += 1;
+        self.state.t_old = t;
+        self.state.t = self.clock.advance(self.state.h, reached, &mut self.state.stop);
+        self.state.stats.steps += 1;
         Ok(if reached { StepOutcome::ReachedStop } else { StepOutcome::Stepped })
     }
 
     fn interpolate(&self, t: f64, out: &mut [f64]) -> Result<(), SolveError> {
-        check_len(self.y.len(), out.len())?;
-        let t1 = self.clock.t();
-        check_interpolation(t, self.t_old, t1)?;
-        let h = t1 - self.t_old;
+        check_len(self.state.y.len(), out.len())?;
+        let t1 = self.state.t;
+        check_interpolation(t, self.state.t_old, t1)?;
+        let h = t1 - self.state.t_old;
         if h == 0.0 {
-            out.copy_from_slice(&self.y);
+            out.copy_from_slice(&self.state.y);
             return Ok(());
         }
-        let theta = (t - self.t_old) / h;
-        hermite(theta, h, &self.y_old, &self.dy_old, &self.y, &self.dy, out);
+        let theta = (t - self.state.t_old) / h;
+        hermite(theta, h, &self.y_old, &self.dy_old, &self.state.y, &self.dy, out);
         Ok(())
     }
 }

@@ -13,7 +13,7 @@ use crate::adaptive::{first_step, step_failure, StepControl};
 use crate::error::SolveError;
 use crate::method::Method;
 use crate::solver::{
-    check_initial, check_interpolation, check_len, check_stop, Config, Solver, Statistics, StepOutcome,
+    check_initial, check_interpolation, check_len, Config, Solver, SolverState, Statistics, StepOutcome,
 };
 use crate::system::{first_non_finite, OdeSystem};
 
@@ -231,11 +231,8 @@ const D: [[(usize, f64); 12]; 4] = [
 pub struct Dop853<S> {
     system: S,
     control: StepControl,
-    t: f64,
-    t_old: f64,
-    h: f64,
-    stop: Option<f64>,
-    y: Vec<f64>,
+    /// Time, state, step, stop time and counters (what the accessors read).
+    state: SolverState,
     /// Stages: 0..12 of the step, 12 = F(t + h, y1) (first stage of the next step),
     /// 13..16 the dense-output stages.
     k: [Vec<f64>; 16],
@@ -243,7 +240,6 @@ pub struct Dop853<S> {
     y_stage: Vec<f64>,
     /// Dense output: `y_old` and the seven interpolant coefficients.
     cont: [Vec<f64>; 8],
-    stats: Statistics,
     /// Whether the dense output waits for [`Solver::prepare_dense`].
     lazy_dense: bool,
     /// The step size of the last step, while its dense output is pending.
@@ -269,16 +265,11 @@ impl<S: OdeSystem> Dop853<S> {
         Ok(Dop853 {
             system,
             control,
-            t: t0,
-            t_old: t0,
-            h,
-            stop: None,
-            y: y0.to_vec(),
+            state: SolverState::new(t0, y0, h, stats, config),
             k,
             y1,
             y_stage,
             cont,
-            stats,
             lazy_dense: false,
             dense_pending: None,
         })
@@ -291,22 +282,22 @@ impl<S: OdeSystem> Dop853<S> {
 
     /// Evaluates stage `s` (`1..12` or `13..16`) at `t + c_s h`.
     fn stage(&mut self, s: usize, h: f64) -> Result<(), SolveError> {
-        let n = self.y.len();
+        let n = self.state.y.len();
         for i in 0..n {
             let mut acc = 0.0;
             for &(j, a) in A[s] {
                 acc += a * self.k[j][i];
             }
-            self.y_stage[i] = self.y[i] + h * acc;
+            self.y_stage[i] = self.state.y[i] + h * acc;
         }
-        let t = self.t + C[s] * h;
-        self.stats.rhs_evaluations += 1;
+        let t = self.state.t + C[s] * h;
+        self.state.stats.rhs_evaluations += 1;
         self.system.rhs(t, &self.y_stage, &mut self.k[s]).map_err(|source| SolveError::Rhs { t, source })
     }
 
     /// One attempt with step `h`; returns the scaled error.
     fn attempt(&mut self, h: f64) -> Result<f64, SolveError> {
-        let n = self.y.len();
+        let n = self.state.y.len();
         for s in 1..12 {
             self.stage(s, h)?;
         }
@@ -315,15 +306,15 @@ impl<S: OdeSystem> Dop853<S> {
             for &(j, b) in A[12] {
                 acc += b * self.k[j][i];
             }
-            self.y1[i] = self.y[i] + h * acc;
+            self.y1[i] = self.state.y[i] + h * acc;
         }
-        let t1 = self.t + h;
-        self.stats.rhs_evaluations += 1;
+        let t1 = self.state.t + h;
+        self.state.stats.rhs_evaluations += 1;
         self.system.rhs(t1, &self.y1, &mut self.k[12]).map_err(|source| SolveError::Rhs { t: t1, source })?;
         let mut err5 = 0.0;
         let mut err3 = 0.0;
         for i in 0..n {
-            let sk = self.control.scale(self.y[i], self.y1[i]);
+            let sk = self.control.scale(self.state.y[i], self.y1[i]);
             let mut e5 = 0.0;
             for &(j, e) in &E5 {
                 e5 += e * self.k[j][i];
@@ -350,11 +341,11 @@ impl<S: OdeSystem> Dop853<S> {
         for s in 13..16 {
             self.stage(s, h)?;
         }
-        let n = self.y.len();
+        let n = self.state.y.len();
         for i in 0..n {
-            let dy = self.y1[i] - self.y[i];
+            let dy = self.y1[i] - self.state.y[i];
             let bspl = h * self.k[0][i] - dy;
-            self.cont[0][i] = self.y[i];
+            self.cont[0][i] = self.state.y[i];
             self.cont[1][i] = dy;
             self.cont[2][i] = bspl;
             self.cont[3][i] = dy - h * self.k[12][i] - bspl;
@@ -374,56 +365,40 @@ impl<S: OdeSystem> Solver for Dop853<S> {
     fn method(&self) -> Method {
         Method::Dop853
     }
-    fn t(&self) -> f64 {
-        self.t
+    fn solver_state(&self) -> &SolverState {
+        &self.state
     }
-    fn state(&self) -> &[f64] {
-        &self.y
-    }
-    fn step_start(&self) -> f64 {
-        self.t_old
-    }
-    fn step_size(&self) -> f64 {
-        self.h
-    }
-    fn statistics(&self) -> Statistics {
-        self.stats
-    }
-    fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolveError> {
-        check_stop(self.t, t_stop)?;
-        self.stop = Some(t_stop);
-        Ok(())
+    fn solver_state_mut(&mut self) -> &mut SolverState {
+        &mut self.state
     }
 
     fn step(&mut self) -> Result<StepOutcome, SolveError> {
-        if self.stats.steps >= self.control.max_steps {
-            return Err(SolveError::MaxStepsExceeded { t: self.t, max_steps: self.control.max_steps });
-        }
+        self.state.check_max_steps()?;
         // This step overwrites the stages a pending dense output would need.
         self.dense_pending = None;
         loop {
-            let mut h = self.h;
+            let mut h = self.state.h;
             let mut reaches_stop = false;
-            if let Some(stop) = self.stop {
-                if self.t + h * (1.0 + 1e-10) >= stop {
-                    h = stop - self.t;
+            if let Some(stop) = self.state.stop {
+                if self.state.t + h * (1.0 + 1e-10) >= stop {
+                    h = stop - self.state.t;
                     reaches_stop = true;
                 }
             }
-            if !reaches_stop && h < StepControl::h_min(self.t) {
-                return Err(step_failure(self.t, h, &self.y1, &self.k[12]));
+            if !reaches_stop && h < StepControl::h_min(self.state.t) {
+                return Err(step_failure(self.state.t, h, &self.y1, &self.k[12]));
             }
             if reaches_stop && h == 0.0 {
-                self.stop = None;
+                self.state.stop = None;
                 return Ok(StepOutcome::ReachedStop);
             }
             let err = self.attempt(h)?;
             let (accepted, h_new) = self.control.decide(h, err);
             if !accepted {
-                self.stats.rejected += 1;
-                self.h = h_new;
-                if h_new < StepControl::h_min(self.t) {
-                    return Err(step_failure(self.t, h, &self.y1, &self.k[12]));
+                self.state.stats.rejected += 1;
+                self.state.h = h_new;
+                if h_new < StepControl::h_min(self.state.t) {
+                    return Err(step_failure(self.state.t, h, &self.y1, &self.k[12]));
                 }
                 continue;
             }
@@ -432,13 +407,14 @@ impl<S: OdeSystem> Solver for Dop853<S> {
             } else {
                 self.build_dense(h)?;
             }
-            self.t_old = self.t;
-            self.t = if reaches_stop { self.stop.take().unwrap_or(self.t + h) } else { self.t + h };
-            std::mem::swap(&mut self.y, &mut self.y1);
+            self.state.t_old = self.state.t;
+            self.state.t =
+                if reaches_stop { self.state.stop.take().unwrap_or(self.state.t + h) } else { self.state.t + h };
+            std::mem::swap(&mut self.state.y, &mut self.y1);
             self.k.swap(0, 12);
-            self.stats.steps += 1;
+            self.state.stats.steps += 1;
             // A step shortened to hit the stop time says little about the next one.
-            self.h = if reaches_stop { h_new.max(self.h) } else { h_new };
+            self.state.h = if reaches_stop { h_new.max(self.state.h) } else { h_new };
             return Ok(if reaches_stop { StepOutcome::ReachedStop } else { StepOutcome::Stepped });
         }
     }
@@ -452,40 +428,40 @@ impl<S: OdeSystem> Solver for Dop853<S> {
         // The stages of the last step are still there, with the step's two ends
         // swapped (y ↔ y1, k[0] ↔ k[12]) and t moved on: put them back as
         // `build_dense` expects them (before the swap), build, and swap again.
-        std::mem::swap(&mut self.y, &mut self.y1);
+        std::mem::swap(&mut self.state.y, &mut self.y1);
         self.k.swap(0, 12);
-        let t_end = self.t;
-        self.t = self.t_old;
+        let t_end = self.state.t;
+        self.state.t = self.state.t_old;
         let built = self.build_dense(h);
-        self.t = t_end;
-        std::mem::swap(&mut self.y, &mut self.y1);
+        self.state.t = t_end;
+        std::mem::swap(&mut self.state.y, &mut self.y1);
         self.k.swap(0, 12);
         built
     }
 
     fn set_state(&mut self, y: &[f64]) -> Result<(), SolveError> {
-        check_len(self.y.len(), y.len())?;
+        check_len(self.state.y.len(), y.len())?;
         // The last step's dense output is kept: build it before the state changes.
         self.prepare_dense()?;
-        self.y.copy_from_slice(y);
+        self.state.y.copy_from_slice(y);
         // The first stage of the next step is F(t, y) at the new state.
-        self.stats.rhs_evaluations += 1;
-        let t = self.t;
-        self.system.rhs(t, &self.y, &mut self.k[0]).map_err(|source| SolveError::Rhs { t, source })
+        self.state.stats.rhs_evaluations += 1;
+        let t = self.state.t;
+        self.system.rhs(t, &self.state.y, &mut self.k[0]).map_err(|source| SolveError::Rhs { t, source })
     }
 
     fn interpolate(&self, t: f64, out: &mut [f64]) -> Result<(), SolveError> {
-        check_len(self.y.len(), out.len())?;
-        check_interpolation(t, self.t_old, self.t)?;
+        check_len(self.state.y.len(), out.len())?;
+        check_interpolation(t, self.state.t_old, self.state.t)?;
         if self.dense_pending.is_some() {
             return Err(SolveError::DenseOutputNotPrepared { method: "dop853" });
         }
-        let h = self.t - self.t_old;
+        let h = self.state.t - self.state.t_old;
         if h == 0.0 {
-            out.copy_from_slice(&self.y);
+            out.copy_from_slice(&self.state.y);
             return Ok(());
         }
-        let s = (t - self.t_old) / h;
+        let s = (t - self.state.t_old) / h;
         let s1 = 1.0 - s;
         let c = &self.cont;
         for i in 0..out.len() {

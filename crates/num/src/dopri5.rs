@@ -7,7 +7,7 @@ use crate::adaptive::{first_step, step_failure, StepControl};
 use crate::error::SolveError;
 use crate::method::Method;
 use crate::solver::{
-    check_initial, check_interpolation, check_len, check_stop, Config, Solver, Statistics, StepOutcome,
+    check_initial, check_interpolation, check_len, Config, Solver, SolverState, Statistics, StepOutcome,
 };
 use crate::system::{first_non_finite, OdeSystem};
 
@@ -54,17 +54,13 @@ const D7: f64 = 69997945.0 / 29380423.0;
 pub struct Dopri5<S> {
     system: S,
     control: StepControl,
-    t: f64,
-    t_old: f64,
-    h: f64,
-    stop: Option<f64>,
-    y: Vec<f64>,
+    /// Time, state, step, stop time and counters (what the accessors read).
+    state: SolverState,
     k: [Vec<f64>; 7],
     y1: Vec<f64>,
     y_stage: Vec<f64>,
     /// Dense output coefficients of the last step (Hairer's `rcont1..5`).
     cont: [Vec<f64>; 5],
-    stats: Statistics,
 }
 
 impl<S: OdeSystem> Dopri5<S> {
@@ -82,7 +78,8 @@ impl<S: OdeSystem> Dopri5<S> {
         let h =
             first_step(&mut system, &control, 5, config.h_init, t0, y0, &mut k[0], &mut y1, &mut y_stage, &mut stats)?;
         let cont = std::array::from_fn(|i| if i == 0 { y0.to_vec() } else { vec![0.0; n] });
-        Ok(Dopri5 { system, control, t: t0, t_old: t0, h, stop: None, y: y0.to_vec(), k, y1, y_stage, cont, stats })
+        let state = SolverState::new(t0, y0, h, stats, config);
+        Ok(Dopri5 { system, control, state, k, y1, y_stage, cont })
     }
 
     /// The system, e.g. to read parameters or counters it keeps.
@@ -91,19 +88,19 @@ impl<S: OdeSystem> Dopri5<S> {
     }
 
     fn eval(&mut self, stage: usize, t: f64) -> Result<(), SolveError> {
-        self.stats.rhs_evaluations += 1;
+        self.state.stats.rhs_evaluations += 1;
         let (y_stage, k) = if stage == 6 { (&self.y1, &mut self.k[6]) } else { (&self.y_stage, &mut self.k[stage]) };
         self.system.rhs(t, y_stage, k).map_err(|source| SolveError::Rhs { t, source })
     }
 
     /// One attempt with step `h`; returns the scaled error.
     fn attempt(&mut self, h: f64) -> Result<f64, SolveError> {
-        let n = self.y.len();
-        let t = self.t;
+        let n = self.state.y.len();
+        let t = self.state.t;
         macro_rules! stage {
             ($idx:expr, $c:expr, $( $a:expr => $j:expr ),+) => {{
                 for i in 0..n {
-                    self.y_stage[i] = self.y[i] + h * (0.0 $( + $a * self.k[$j][i] )+);
+                    self.y_stage[i] = self.state.y[i] + h * (0.0 $( + $a * self.k[$j][i] )+);
                 }
                 self.eval($idx, t + $c * h)?;
             }};
@@ -114,7 +111,7 @@ impl<S: OdeSystem> Dopri5<S> {
         stage!(4, C5, A51 => 0, A52 => 1, A53 => 2, A54 => 3);
         stage!(5, 1.0, A61 => 0, A62 => 1, A63 => 2, A64 => 3, A65 => 4);
         for i in 0..n {
-            self.y1[i] = self.y[i]
+            self.y1[i] = self.state.y[i]
                 + h * (A71 * self.k[0][i]
                     + A73 * self.k[2][i]
                     + A74 * self.k[3][i]
@@ -131,7 +128,7 @@ impl<S: OdeSystem> Dopri5<S> {
                     + E5 * self.k[4][i]
                     + E6 * self.k[5][i]
                     + E7 * self.k[6][i]);
-            let sk = self.control.scale(self.y[i], self.y1[i]);
+            let sk = self.control.scale(self.state.y[i], self.y1[i]);
             err += (e / sk).powi(2);
         }
         let err = (err / n as f64).sqrt();
@@ -146,63 +143,47 @@ impl<S: OdeSystem> Solver for Dopri5<S> {
     fn method(&self) -> Method {
         Method::Dopri5
     }
-    fn t(&self) -> f64 {
-        self.t
+    fn solver_state(&self) -> &SolverState {
+        &self.state
     }
-    fn state(&self) -> &[f64] {
-        &self.y
-    }
-    fn step_start(&self) -> f64 {
-        self.t_old
-    }
-    fn step_size(&self) -> f64 {
-        self.h
-    }
-    fn statistics(&self) -> Statistics {
-        self.stats
-    }
-    fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolveError> {
-        check_stop(self.t, t_stop)?;
-        self.stop = Some(t_stop);
-        Ok(())
+    fn solver_state_mut(&mut self) -> &mut SolverState {
+        &mut self.state
     }
 
     fn step(&mut self) -> Result<StepOutcome, SolveError> {
-        if self.stats.steps >= self.control.max_steps {
-            return Err(SolveError::MaxStepsExceeded { t: self.t, max_steps: self.control.max_steps });
-        }
-        let n = self.y.len();
+        self.state.check_max_steps()?;
+        let n = self.state.y.len();
         loop {
-            let mut h = self.h;
+            let mut h = self.state.h;
             let mut reaches_stop = false;
-            if let Some(stop) = self.stop {
-                if self.t + h * (1.0 + 1e-10) >= stop {
-                    h = stop - self.t;
+            if let Some(stop) = self.state.stop {
+                if self.state.t + h * (1.0 + 1e-10) >= stop {
+                    h = stop - self.state.t;
                     reaches_stop = true;
                 }
             }
-            if !reaches_stop && h < StepControl::h_min(self.t) {
-                return Err(step_failure(self.t, h, &self.y1, &self.k[6]));
+            if !reaches_stop && h < StepControl::h_min(self.state.t) {
+                return Err(step_failure(self.state.t, h, &self.y1, &self.k[6]));
             }
             if reaches_stop && h == 0.0 {
-                self.stop = None;
+                self.state.stop = None;
                 return Ok(StepOutcome::ReachedStop);
             }
             let err = self.attempt(h)?;
             let (accepted, h_new) = self.control.decide(h, err);
             if !accepted {
-                self.stats.rejected += 1;
-                self.h = h_new;
-                if h_new < StepControl::h_min(self.t) {
-                    return Err(step_failure(self.t, h, &self.y1, &self.k[6]));
+                self.state.stats.rejected += 1;
+                self.state.h = h_new;
+                if h_new < StepControl::h_min(self.state.t) {
+                    return Err(step_failure(self.state.t, h, &self.y1, &self.k[6]));
                 }
                 continue;
             }
             // Dense output of the accepted step.
             for i in 0..n {
-                let ydiff = self.y1[i] - self.y[i];
+                let ydiff = self.y1[i] - self.state.y[i];
                 let bspl = h * self.k[0][i] - ydiff;
-                self.cont[0][i] = self.y[i];
+                self.cont[0][i] = self.state.y[i];
                 self.cont[1][i] = ydiff;
                 self.cont[2][i] = bspl;
                 self.cont[3][i] = ydiff - h * self.k[6][i] - bspl;
@@ -214,35 +195,36 @@ impl<S: OdeSystem> Solver for Dopri5<S> {
                         + D6 * self.k[5][i]
                         + D7 * self.k[6][i]);
             }
-            self.t_old = self.t;
-            self.t = if reaches_stop { self.stop.take().unwrap_or(self.t + h) } else { self.t + h };
-            std::mem::swap(&mut self.y, &mut self.y1);
+            self.state.t_old = self.state.t;
+            self.state.t =
+                if reaches_stop { self.state.stop.take().unwrap_or(self.state.t + h) } else { self.state.t + h };
+            std::mem::swap(&mut self.state.y, &mut self.y1);
             self.k.swap(0, 6);
-            self.stats.steps += 1;
+            self.state.stats.steps += 1;
             // A step shortened to hit the stop time says little about the next one.
-            self.h = if reaches_stop { h_new.max(self.h) } else { h_new };
+            self.state.h = if reaches_stop { h_new.max(self.state.h) } else { h_new };
             return Ok(if reaches_stop { StepOutcome::ReachedStop } else { StepOutcome::Stepped });
         }
     }
 
     fn set_state(&mut self, y: &[f64]) -> Result<(), SolveError> {
-        check_len(self.y.len(), y.len())?;
-        self.y.copy_from_slice(y);
+        check_len(self.state.y.len(), y.len())?;
+        self.state.y.copy_from_slice(y);
         // The first stage of the next step is F(t, y) at the new state.
-        self.stats.rhs_evaluations += 1;
-        let t = self.t;
-        self.system.rhs(t, &self.y, &mut self.k[0]).map_err(|source| SolveError::Rhs { t, source })
+        self.state.stats.rhs_evaluations += 1;
+        let t = self.state.t;
+        self.system.rhs(t, &self.state.y, &mut self.k[0]).map_err(|source| SolveError::Rhs { t, source })
     }
 
     fn interpolate(&self, t: f64, out: &mut [f64]) -> Result<(), SolveError> {
-        check_len(self.y.len(), out.len())?;
-        check_interpolation(t, self.t_old, self.t)?;
-        let h = self.t - self.t_old;
+        check_len(self.state.y.len(), out.len())?;
+        check_interpolation(t, self.state.t_old, self.state.t)?;
+        let h = self.state.t - self.state.t_old;
         if h == 0.0 {
-            out.copy_from_slice(&self.y);
+            out.copy_from_slice(&self.state.y);
             return Ok(());
         }
-        let theta = (t - self.t_old) / h;
+        let theta = (t - self.state.t_old) / h;
         let theta1 = 1.0 - theta;
         let c = &self.cont;
         for i in 0..out.len() {

@@ -1,6 +1,7 @@
 //! Error types of the crate: what a right-hand side may report ([`RhsError`]), what
-//! a solver run may fail with ([`SolveError`]) and what a linear solve may fail with
-//! ([`LinalgError`]).
+//! a solver run may fail with ([`SolveError`]), what a linear solve may fail with
+//! ([`LinalgError`]), and the errors of quadrature ([`QuadratureError`]) and of
+//! Newton's method ([`NewtonError`]).
 
 /// An error a problem's right-hand side (or Jacobian) reports to the integrator.
 ///
@@ -210,5 +211,82 @@ pub enum SolveError {
         name: String,
         /// The known names, comma separated.
         known: String,
+    },
+}
+
+/// An error of a quadrature ([`crate::tanh_sinh`], [`crate::gauss_legendre_rule`],
+/// [`crate::gauss_kronrod`], …).
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum QuadratureError {
+    /// An end of the interval is not finite.
+    #[error("the interval [{a}, {b}] is not finite")]
+    InvalidInterval {
+        /// The lower end.
+        a: f64,
+        /// The upper end.
+        b: f64,
+    },
+    /// A tolerance is negative or NaN.
+    #[error("the tolerance {value} must be non-negative")]
+    InvalidTolerance {
+        /// The tolerance given.
+        value: f64,
+    },
+    /// No rule of this order is built.
+    #[error("no Gauss–Legendre rule of order {order} (orders 1 to {max})")]
+    InvalidOrder {
+        /// The order asked for.
+        order: usize,
+        /// The largest order built.
+        max: usize,
+    },
+    /// The integrand is NaN or infinite at a node.
+    #[error("the integrand is {value} at x = {x}")]
+    NotFinite {
+        /// The node.
+        x: f64,
+        /// The integrand's value there.
+        value: f64,
+    },
+    /// The sum of finite terms overflowed.
+    #[error("the integral overflows")]
+    Overflow,
+}
+
+/// Why [`crate::newton`] found no root. Each variant carries the point where it
+/// stopped.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum NewtonError {
+    /// The residual or its Jacobian is NaN or infinite at `x`.
+    #[error("the residual or its Jacobian is not finite at {x:?} (iteration {iterations})")]
+    NotFinite {
+        /// Where.
+        x: Vec<f64>,
+        /// Iterations taken before.
+        iterations: usize,
+    },
+    /// The steps shrank to nothing while the residual stayed above its tolerance.
+    #[error("Newton's method stalls at {x:?} with residual {residual}")]
+    Stalled {
+        /// Where.
+        x: Vec<f64>,
+        /// `|F(x)|` there.
+        residual: f64,
+    },
+    /// The iterate left the region `|x − x₀| ≤ max_excursion·(1 + |x₀|)`.
+    #[error("Newton's method runs away (to {x:?})")]
+    RunAway {
+        /// Where it went.
+        x: Vec<f64>,
+    },
+    /// `max_iterations` iterations did not converge.
+    #[error("Newton's method did not converge in {iterations} iterations (residual {residual})")]
+    NoConvergence {
+        /// The last iterate.
+        x: Vec<f64>,
+        /// The iterations taken.
+        iterations: usize,
+        /// `|F(x)|` there.
+        residual: f64,
     },
 }

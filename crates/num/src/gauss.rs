@@ -17,7 +17,8 @@ use crate::error::SolveError;
 use crate::linalg::DenseLu;
 use crate::method::Method;
 use crate::solver::{
-    check_initial, check_interpolation, check_len, compensated_add, Config, FixedClock, Solver, Statistics, StepOutcome,
+    check_initial, check_interpolation, check_len, compensated_add, Config, FixedClock, Solver, SolverState,
+    Statistics, StepOutcome,
 };
 use crate::system::{first_non_finite, OdeSystem};
 
@@ -76,11 +77,10 @@ pub struct Gauss<S> {
     system: S,
     method: Method,
     tab: Tableau,
+    /// Time, state, step, stop time and counters (what the accessors read).
+    state: SolverState,
     clock: FixedClock,
-    t_old: f64,
-    max_steps: usize,
     n: usize,
-    y: Vec<f64>,
     comp: Vec<f64>,
     y_old: Vec<f64>,
     /// Stage increments `Z` (`s·n`) of the last step, the working ones and the stage
@@ -100,7 +100,6 @@ pub struct Gauss<S> {
     jac_fresh: bool,
     jac_valid: bool,
     have_previous: bool,
-    stats: Statistics,
 }
 
 impl<S: OdeSystem> Gauss<S> {
@@ -133,11 +132,9 @@ impl<S: OdeSystem> Gauss<S> {
             system,
             method,
             tab: Tableau::of(stages),
-            clock: FixedClock::new(t0, dt),
-            t_old: t0,
-            max_steps: config.max_steps,
+            clock: FixedClock::new(t0),
+            state: SolverState::new(t0, y0, dt, Statistics::default(), config),
             n,
-            y: y0.to_vec(),
             comp: vec![0.0; n],
             y_old: y0.to_vec(),
             z_old: vec![0.0; sn],
@@ -154,7 +151,6 @@ impl<S: OdeSystem> Gauss<S> {
             jac_fresh: false,
             jac_valid: false,
             have_previous: false,
-            stats: Statistics::default(),
         })
     }
 
@@ -188,7 +184,7 @@ impl<S: OdeSystem> Gauss<S> {
             for i in 0..s {
                 v += weights[i + 1] * self.z_old[i * n + a];
             }
-            v += weights[s + 1] * (self.y[a] - self.y_old[a]);
+            v += weights[s + 1] * (self.state.y[a] - self.y_old[a]);
             out[a] = v;
         }
     }
@@ -198,20 +194,20 @@ impl<S: OdeSystem> Gauss<S> {
         let n = self.n;
         let s = self.tab.s;
         if self.have_previous {
-            let h_old = t - self.t_old;
+            let h_old = t - self.state.t_old;
             for i in 0..s {
                 let theta = 1.0 + self.tab.c[i] * h / h_old;
                 // Borrow dance: evaluate into y_stage, then store.
                 let mut tmp = std::mem::take(&mut self.y_stage);
                 self.polynomial(theta, &mut tmp);
                 for a in 0..n {
-                    self.z[i * n + a] = tmp[a] - self.y[a];
+                    self.z[i * n + a] = tmp[a] - self.state.y[a];
                 }
                 self.y_stage = tmp;
             }
         } else {
-            self.system.rhs(t, &self.y, &mut self.incr).map_err(|source| SolveError::Rhs { t, source })?;
-            self.stats.rhs_evaluations += 1;
+            self.system.rhs(t, &self.state.y, &mut self.incr).map_err(|source| SolveError::Rhs { t, source })?;
+            self.state.stats.rhs_evaluations += 1;
             for i in 0..s {
                 for a in 0..n {
                     self.z[i * n + a] = self.tab.c[i] * h * self.incr[a];
@@ -226,13 +222,13 @@ impl<S: OdeSystem> Gauss<S> {
         let n = self.n;
         for i in 0..self.tab.s {
             for a in 0..n {
-                self.y_stage[a] = self.y[a] + self.z[i * n + a];
+                self.y_stage[a] = self.state.y[a] + self.z[i * n + a];
             }
             let ti = t + self.tab.c[i] * h;
             self.system
                 .rhs(ti, &self.y_stage, &mut self.f[i * n..(i + 1) * n])
                 .map_err(|source| SolveError::Rhs { t: ti, source })?;
-            self.stats.rhs_evaluations += 1;
+            self.state.stats.rhs_evaluations += 1;
         }
         Ok(())
     }
@@ -242,8 +238,8 @@ impl<S: OdeSystem> Gauss<S> {
         let n = self.n;
         let s = self.tab.s;
         if new_jacobian || !self.jac_valid {
-            self.system.jacobian(t, &self.y, &mut self.jac).map_err(|source| SolveError::Rhs { t, source })?;
-            self.stats.jacobian_evaluations += 1;
+            self.system.jacobian(t, &self.state.y, &mut self.jac).map_err(|source| SolveError::Rhs { t, source })?;
+            self.state.stats.jacobian_evaluations += 1;
             self.jac_fresh = true;
             self.jac_valid = true;
         }
@@ -263,7 +259,7 @@ impl<S: OdeSystem> Gauss<S> {
                 }
             }
         }
-        self.stats.lu_decompositions += 1;
+        self.state.stats.lu_decompositions += 1;
         self.lu.factor().map_err(|source| SolveError::Linalg { t, source })?;
         self.lu_h = h;
         Ok(())
@@ -274,11 +270,11 @@ impl<S: OdeSystem> Gauss<S> {
     fn iterate(&mut self, t: f64, h: f64, mode: Iteration) -> Result<(bool, usize), SolveError> {
         let n = self.n;
         let s = self.tab.s;
-        let scale = self.y.iter().fold(0.0_f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
+        let scale = self.state.y.iter().fold(0.0_f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
         let mut prev = f64::INFINITY;
         let mut prev_rate = 1.0;
         for k in 1..=MAX_ITER {
-            self.stats.newton_iterations += 1;
+            self.state.stats.newton_iterations += 1;
             self.eval_stages(t, h)?;
             // Residual r = h A F − Z (the fixed-point correction).
             for i in 0..s {
@@ -332,7 +328,7 @@ impl<S: OdeSystem> Gauss<S> {
             self.jac_fresh = false;
             return Ok(());
         }
-        self.stats.rejected += 1;
+        self.state.stats.rejected += 1;
         // 2. Newton with a fresh Jacobian.
         if !self.jac_fresh {
             self.refresh_matrix(t, h, true)?;
@@ -342,7 +338,7 @@ impl<S: OdeSystem> Gauss<S> {
             if ok {
                 return Ok(());
             }
-            self.stats.rejected += 1;
+            self.state.stats.rejected += 1;
         }
         // 3. Fixed-point iteration.
         self.start_values(t, h)?;
@@ -358,31 +354,17 @@ impl<S: OdeSystem> Solver for Gauss<S> {
     fn method(&self) -> Method {
         self.method
     }
-    fn t(&self) -> f64 {
-        self.clock.t()
+    fn solver_state(&self) -> &SolverState {
+        &self.state
     }
-    fn state(&self) -> &[f64] {
-        &self.y
-    }
-    fn step_start(&self) -> f64 {
-        self.t_old
-    }
-    fn step_size(&self) -> f64 {
-        self.clock.h
-    }
-    fn statistics(&self) -> Statistics {
-        self.stats
-    }
-    fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolveError> {
-        self.clock.set_stop(t_stop)
+    fn solver_state_mut(&mut self) -> &mut SolverState {
+        &mut self.state
     }
 
     fn step(&mut self) -> Result<StepOutcome, SolveError> {
-        let t = self.clock.t();
-        if self.stats.steps >= self.max_steps {
-            return Err(SolveError::MaxStepsExceeded { t, max_steps: self.max_steps });
-        }
-        let (t_next, reached) = self.clock.next();
+        let t = self.state.t;
+        self.state.check_max_steps()?;
+        let (t_next, reached) = self.clock.next(self.state.h, self.state.stop);
         let h = t_next - t;
         self.solve_stages(t, h)?;
         let n = self.n;
@@ -393,33 +375,33 @@ impl<S: OdeSystem> Solver for Gauss<S> {
             }
             self.incr[a] = h * acc;
         }
-        self.y_new.copy_from_slice(&self.y);
+        self.y_new.copy_from_slice(&self.state.y);
         self.comp_new.copy_from_slice(&self.comp);
         compensated_add(&mut self.y_new, &mut self.comp_new, &self.incr);
         if let Some(index) = first_non_finite(&self.y_new) {
             return Err(SolveError::NonFiniteState { t: t_next, index });
         }
-        std::mem::swap(&mut self.y_old, &mut self.y);
-        std::mem::swap(&mut self.y, &mut self.y_new);
+        std::mem::swap(&mut self.y_old, &mut self.state.y);
+        std::mem::swap(&mut self.state.y, &mut self.y_new);
         std::mem::swap(&mut self.comp, &mut self.comp_new);
         std::mem::swap(&mut self.z_old, &mut self.z);
         self.have_previous = true;
-        self.t_old = t;
-        self.clock.advance(reached);
-        self.stats.steps += 1;
+        self.state.t_old = t;
+        self.state.t = self.clock.advance(self.state.h, reached, &mut self.state.stop);
+        self.state.stats.steps += 1;
         Ok(if reached { StepOutcome::ReachedStop } else { StepOutcome::Stepped })
     }
 
     fn interpolate(&self, t: f64, out: &mut [f64]) -> Result<(), SolveError> {
         check_len(self.n, out.len())?;
-        let t1 = self.clock.t();
-        check_interpolation(t, self.t_old, t1)?;
-        let h = t1 - self.t_old;
+        let t1 = self.state.t;
+        check_interpolation(t, self.state.t_old, t1)?;
+        let h = t1 - self.state.t_old;
         if h == 0.0 {
-            out.copy_from_slice(&self.y);
+            out.copy_from_slice(&self.state.y);
             return Ok(());
         }
-        self.polynomial((t - self.t_old) / h, out);
+        self.polynomial((t - self.state.t_old) / h, out);
         Ok(())
     }
 }

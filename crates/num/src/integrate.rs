@@ -353,20 +353,8 @@ pub fn integrate_to<V: Solver + ?Sized>(solver: &mut V, t_end: f64, y_end: &mut 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Config, Method, OdeSystem, RhsError, StepOutcome};
-
-    /// x'' = −x as y = [x, v].
-    struct Oscillator;
-    impl OdeSystem for Oscillator {
-        fn dim(&self) -> usize {
-            2
-        }
-        fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), RhsError> {
-            dy[0] = y[1];
-            dy[1] = -y[0];
-            Ok(())
-        }
-    }
+    use crate::test_models::Oscillator;
+    use crate::{Config, Method, StepOutcome};
 
     /// The driver builds DOP853's interpolant only on the steps it samples in:
     /// the samples are bit for bit those of eager dense output, with fewer

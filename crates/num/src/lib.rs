@@ -1,5 +1,6 @@
 //! Numerics of `lagrange` that know nothing of symbols: ODE integrators over plain
-//! `f64` slices, event location, root finding and small dense linear algebra.
+//! `f64` slices, event location, root finding, Newton's method, quadrature and small
+//! dense linear algebra.
 //!
 //! ```
 //! use num::{integrate, Config, Method, OdeSystem, Output, RhsError};
@@ -35,7 +36,13 @@
 //! - [`Method`] names them for the command line and builds any of them;
 //!   [`select_step`] picks a fixed step from a tolerance.
 //! - [`integrate`] drives a solver with output sampling and [`Event`]s.
-//! - [`LinearSolver`] solves `M x = f` (dense or banded LU); [`brent`] finds roots.
+//! - [`LinearSolver`] solves `M x = f` (dense or banded LU); [`brent`] finds roots
+//!   of a function of one variable, [`newton`] and [`newton_fd`] of small systems.
+//! - Quadrature: the [`midpoint`] rule (Gauss–Chebyshev after `x = cos φ`),
+//!   Gauss–Legendre rules ([`gauss_legendre_rule`], [`gauss_legendre`],
+//!   [`gauss_legendre_doubling`]), [`tanh_sinh`] for endpoint singularities, and
+//!   7/15-point Gauss–Kronrod ([`gauss_kronrod_15`], [`adaptive_gauss_kronrod`],
+//!   [`gauss_kronrod`]) as the 1-D building block of nested cubature.
 
 // Numerical kernels index several arrays with one loop variable; iterator zips over
 // four slices read worse than the formulas they implement.
@@ -50,17 +57,26 @@ mod gauss;
 mod integrate;
 mod linalg;
 mod method;
+mod newton;
+mod quadrature;
 mod radau5;
 mod root;
 mod solver;
 mod stepsize;
 mod system;
 mod taylor;
+#[cfg(test)]
+mod test_models;
+
+// `num::` names this crate inside it as well, so that `test_models.rs` reads the same
+// compiled as a unit-test module and included by the integration tests.
+#[cfg(test)]
+extern crate self as num;
 
 pub use composition::{Composition, Scheme};
 pub use dop853::Dop853;
 pub use dopri5::Dopri5;
-pub use error::{LinalgError, RhsError, SolveError};
+pub use error::{LinalgError, NewtonError, QuadratureError, RhsError, SolveError};
 pub use gauss::Gauss;
 pub use integrate::{
     integrate, integrate_projected, integrate_to, Direction, Event, Observation, ObservationKind, Output, Projection,
@@ -68,9 +84,16 @@ pub use integrate::{
 };
 pub use linalg::{LinearSolver, DEFAULT_PIVOT_RATIO};
 pub use method::Method;
+pub use newton::{newton, newton_fd, NewtonConfig, NewtonSolution, FD_RELATIVE_STEP};
+pub use quadrature::{
+    adaptive_gauss_kronrod, gauss_kronrod, gauss_kronrod_15, gauss_legendre, gauss_legendre_centered,
+    gauss_legendre_doubling, gauss_legendre_rule, midpoint, tanh_sinh, Adaptive, AdaptiveConfig, Doubling,
+    DoublingConfig, Estimate, Integral, Integrand, GAUSS_7_WEIGHTS, KRONROD_15_NODES, KRONROD_15_WEIGHTS,
+    KRONROD_MAX_INTERVALS, KRONROD_ROUND_OFF, MAX_GAUSS_LEGENDRE_ORDER,
+};
 pub use radau5::Radau5;
 pub use root::brent;
-pub use solver::{Config, Controller, Solver, Statistics, StepOutcome};
+pub use solver::{Config, Controller, Solver, SolverState, Statistics, StepOutcome};
 pub use stepsize::{run_fixed, select_step};
 pub use system::{finite_difference_jacobian, OdeSystem, Separable, SeparableSystem};
 pub use taylor::{taylor_advance, taylor_order, taylor_ratio, taylor_step, Taylor};

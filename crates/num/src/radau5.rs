@@ -22,7 +22,7 @@ use crate::error::SolveError;
 use crate::linalg::DenseLu;
 use crate::method::Method;
 use crate::solver::{
-    check_initial, check_interpolation, check_len, check_stop, Config, Solver, Statistics, StepOutcome,
+    check_initial, check_interpolation, check_len, Config, Solver, SolverState, Statistics, StepOutcome,
 };
 use crate::system::{first_non_finite, OdeSystem};
 
@@ -46,19 +46,15 @@ pub struct Radau5<S> {
     rtol: f64,
     atol: f64,
     h_max: f64,
-    max_steps: usize,
+    /// Time, state, step, stop time and counters (what the accessors read).
+    state: SolverState,
     fnewt: f64,
     a: [[f64; 3]; 3],
     c: [f64; 3],
     e: [f64; 3],
     u1: f64,
     n: usize,
-    t: f64,
-    t_old: f64,
-    h: f64,
     h_old: f64,
-    stop: Option<f64>,
-    y: Vec<f64>,
     y_old: Vec<f64>,
     f0: Vec<f64>,
     scal: Vec<f64>,
@@ -80,7 +76,6 @@ pub struct Radau5<S> {
     /// Gustafsson controller memory.
     h_acc: f64,
     err_acc: f64,
-    stats: Statistics,
 }
 
 impl<S: OdeSystem> Radau5<S> {
@@ -119,19 +114,14 @@ impl<S: OdeSystem> Radau5<S> {
             rtol,
             atol,
             h_max,
-            max_steps: config.max_steps,
             fnewt,
             a,
             c,
             e,
             u1,
             n,
-            t: t0,
-            t_old: t0,
-            h,
+            state: SolverState::new(t0, y0, h, Statistics { rhs_evaluations: 1, ..Statistics::default() }, config),
             h_old: h,
-            stop: None,
-            y: y0.to_vec(),
             y_old: y0.to_vec(),
             f0,
             scal: vec![0.0; n],
@@ -152,7 +142,6 @@ impl<S: OdeSystem> Radau5<S> {
             last_rejected: false,
             h_acc: h,
             err_acc: 1e-2,
-            stats: Statistics { rhs_evaluations: 1, ..Statistics::default() },
         })
     }
 
@@ -162,8 +151,10 @@ impl<S: OdeSystem> Radau5<S> {
     }
 
     fn new_jacobian(&mut self) -> Result<(), SolveError> {
-        self.system.jacobian(self.t, &self.y, &mut self.jac).map_err(|source| SolveError::Rhs { t: self.t, source })?;
-        self.stats.jacobian_evaluations += 1;
+        self.system
+            .jacobian(self.state.t, &self.state.y, &mut self.jac)
+            .map_err(|source| SolveError::Rhs { t: self.state.t, source })?;
+        self.state.stats.jacobian_evaluations += 1;
         Ok(())
     }
 
@@ -194,8 +185,8 @@ impl<S: OdeSystem> Radau5<S> {
             }
             me[r * n + r] += fac;
         }
-        self.stats.lu_decompositions += 2;
-        let t = self.t;
+        self.state.stats.lu_decompositions += 2;
+        let t = self.state.t;
         self.lu.factor().map_err(|source| SolveError::Linalg { t, source })?;
         self.lu_err.factor().map_err(|source| SolveError::Linalg { t, source })?;
         Ok(())
@@ -231,7 +222,7 @@ impl<S: OdeSystem> Radau5<S> {
             let theta = 1.0 + self.c[i] * h / self.h_old;
             self.polynomial(theta, &mut tmp);
             for r in 0..n {
-                self.z[i * n + r] = tmp[r] - self.y[r];
+                self.z[i * n + r] = tmp[r] - self.state.y[r];
             }
         }
         self.y_stage = tmp;
@@ -241,13 +232,13 @@ impl<S: OdeSystem> Radau5<S> {
         let n = self.n;
         for i in 0..3 {
             for r in 0..n {
-                self.y_stage[r] = self.y[r] + self.z[i * n + r];
+                self.y_stage[r] = self.state.y[r] + self.z[i * n + r];
             }
-            let ti = self.t + self.c[i] * h;
+            let ti = self.state.t + self.c[i] * h;
             self.system
                 .rhs(ti, &self.y_stage, &mut self.f[i * n..(i + 1) * n])
                 .map_err(|source| SolveError::Rhs { t: ti, source })?;
-            self.stats.rhs_evaluations += 1;
+            self.state.stats.rhs_evaluations += 1;
         }
         Ok(())
     }
@@ -262,7 +253,7 @@ impl<S: OdeSystem> Radau5<S> {
     }
 
     /// Newton iteration; `Ok(Some(newt))` when converged, `Ok(None)` when it must be
-    /// retried with step `self.h` (already reduced).
+    /// retried with step `self.state.h` (already reduced).
     fn newton(&mut self, h: f64) -> Result<Option<usize>, SolveError> {
         let n = self.n;
         self.faccon = self.faccon.max(f64::EPSILON).powf(0.8);
@@ -275,7 +266,7 @@ impl<S: OdeSystem> Radau5<S> {
                 return Ok(None);
             }
             self.eval_stages(h)?;
-            self.stats.newton_iterations += 1;
+            self.state.stats.newton_iterations += 1;
             for i in 0..3 {
                 for r in 0..n {
                     let mut acc = 0.0;
@@ -301,7 +292,7 @@ impl<S: OdeSystem> Radau5<S> {
                         // Convergence too slow for the iterations left: reduce h early.
                         let qnewt = dyth.clamp(1e-4, 20.0);
                         let hhfac = 0.8 * qnewt.powf(-1.0 / (4.0 + (NIT - 1 - newt) as f64));
-                        self.h = h * hhfac;
+                        self.state.h = h * hhfac;
                         return Ok(None);
                     }
                 } else {
@@ -331,12 +322,12 @@ impl<S: OdeSystem> Radau5<S> {
         let mut err = self.norm(&self.cont).max(1e-10);
         if err >= 1.0 && (self.first || self.last_rejected) {
             for r in 0..n {
-                self.y_stage[r] = self.y[r] + self.cont[r];
+                self.y_stage[r] = self.state.y[r] + self.cont[r];
             }
             self.system
-                .rhs(self.t, &self.y_stage, &mut self.delta[..n])
-                .map_err(|source| SolveError::Rhs { t: self.t, source })?;
-            self.stats.rhs_evaluations += 1;
+                .rhs(self.state.t, &self.y_stage, &mut self.delta[..n])
+                .map_err(|source| SolveError::Rhs { t: self.state.t, source })?;
+            self.state.stats.rhs_evaluations += 1;
             for r in 0..n {
                 self.cont[r] = self.delta[r] + self.err_vec[r];
             }
@@ -349,9 +340,9 @@ impl<S: OdeSystem> Radau5<S> {
     fn failure(&self, h: f64) -> SolveError {
         let n = self.n;
         if let Some(index) = first_non_finite(&self.z).or_else(|| first_non_finite(&self.f)) {
-            SolveError::NonFiniteState { t: self.t + h, index: index % n }
+            SolveError::NonFiniteState { t: self.state.t + h, index: index % n }
         } else {
-            SolveError::StepSizeTooSmall { t: self.t, h }
+            SolveError::StepSizeTooSmall { t: self.state.t, h }
         }
     }
 }
@@ -360,56 +351,40 @@ impl<S: OdeSystem> Solver for Radau5<S> {
     fn method(&self) -> Method {
         Method::Radau5
     }
-    fn t(&self) -> f64 {
-        self.t
+    fn solver_state(&self) -> &SolverState {
+        &self.state
     }
-    fn state(&self) -> &[f64] {
-        &self.y
-    }
-    fn step_start(&self) -> f64 {
-        self.t_old
-    }
-    fn step_size(&self) -> f64 {
-        self.h
-    }
-    fn statistics(&self) -> Statistics {
-        self.stats
-    }
-    fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolveError> {
-        check_stop(self.t, t_stop)?;
-        self.stop = Some(t_stop);
-        Ok(())
+    fn solver_state_mut(&mut self) -> &mut SolverState {
+        &mut self.state
     }
 
     fn step(&mut self) -> Result<StepOutcome, SolveError> {
-        if self.stats.steps >= self.max_steps {
-            return Err(SolveError::MaxStepsExceeded { t: self.t, max_steps: self.max_steps });
-        }
+        self.state.check_max_steps()?;
         let n = self.n;
         for r in 0..n {
-            self.scal[r] = self.atol + self.rtol * self.y[r].abs();
+            self.scal[r] = self.atol + self.rtol * self.state.y[r].abs();
         }
         // Jacobian at the step start, unless the last step said it could be kept.
         let mut jac_current = false;
-        if self.first || self.theta > THET || self.stats.jacobian_evaluations == 0 {
+        if self.first || self.theta > THET || self.state.stats.jacobian_evaluations == 0 {
             self.new_jacobian()?;
             jac_current = true;
         }
         let mut factored_h = f64::NAN;
         loop {
-            let mut h = self.h.min(self.h_max);
+            let mut h = self.state.h.min(self.h_max);
             let mut reaches_stop = false;
-            if let Some(stop) = self.stop {
-                if self.t + 1.0001 * h >= stop {
-                    h = stop - self.t;
+            if let Some(stop) = self.state.stop {
+                if self.state.t + 1.0001 * h >= stop {
+                    h = stop - self.state.t;
                     reaches_stop = true;
                 }
             }
             if reaches_stop && h == 0.0 {
-                self.stop = None;
+                self.state.stop = None;
                 return Ok(StepOutcome::ReachedStop);
             }
-            if !reaches_stop && h < StepControl::h_min(self.t) {
+            if !reaches_stop && h < StepControl::h_min(self.state.t) {
                 return Err(self.failure(h));
             }
             if factored_h != h {
@@ -420,12 +395,12 @@ impl<S: OdeSystem> Solver for Radau5<S> {
             let converged = self.newton(h)?;
             let Some(newt) = converged else {
                 // Newton failed: smaller step (if not already reduced), fresh Jacobian.
-                self.stats.rejected += 1;
-                if self.h >= h {
-                    self.h = 0.5 * h;
+                self.state.stats.rejected += 1;
+                if self.state.h >= h {
+                    self.state.h = 0.5 * h;
                 }
                 self.last_rejected = true;
-                if self.h < StepControl::h_min(self.t) {
+                if self.state.h < StepControl::h_min(self.state.t) {
                     return Err(self.failure(h));
                 }
                 if !jac_current {
@@ -450,38 +425,39 @@ impl<S: OdeSystem> Solver for Radau5<S> {
                     h_new = h_new.min(h);
                 }
                 // Commit.
-                std::mem::swap(&mut self.y_old, &mut self.y);
+                std::mem::swap(&mut self.y_old, &mut self.state.y);
                 for r in 0..n {
-                    self.y[r] = self.y_old[r] + self.z[2 * n + r];
+                    self.state.y[r] = self.y_old[r] + self.z[2 * n + r];
                 }
-                if let Some(index) = first_non_finite(&self.y) {
-                    std::mem::swap(&mut self.y_old, &mut self.y);
-                    return Err(SolveError::NonFiniteState { t: self.t + h, index });
+                if let Some(index) = first_non_finite(&self.state.y) {
+                    std::mem::swap(&mut self.y_old, &mut self.state.y);
+                    return Err(SolveError::NonFiniteState { t: self.state.t + h, index });
                 }
                 std::mem::swap(&mut self.z_old, &mut self.z);
-                self.t_old = self.t;
-                self.t = if reaches_stop { self.stop.take().unwrap_or(self.t + h) } else { self.t + h };
+                self.state.t_old = self.state.t;
+                self.state.t =
+                    if reaches_stop { self.state.stop.take().unwrap_or(self.state.t + h) } else { self.state.t + h };
                 self.h_old = h;
                 self.have_previous = true;
                 self.first = false;
                 self.last_rejected = false;
-                self.stats.steps += 1;
-                let t = self.t;
-                self.system.rhs(t, &self.y, &mut self.f0).map_err(|source| SolveError::Rhs { t, source })?;
-                self.stats.rhs_evaluations += 1;
+                self.state.stats.steps += 1;
+                let t = self.state.t;
+                self.system.rhs(t, &self.state.y, &mut self.f0).map_err(|source| SolveError::Rhs { t, source })?;
+                self.state.stats.rhs_evaluations += 1;
                 // Keep h (and the LU) if the change would be small and Newton was fast.
                 let qt = h_new / h;
-                self.h = if self.theta <= THET && (QUOT1..=QUOT2).contains(&qt) { h } else { h_new };
+                self.state.h = if self.theta <= THET && (QUOT1..=QUOT2).contains(&qt) { h } else { h_new };
                 if reaches_stop {
-                    self.h = self.h.max(h_new);
+                    self.state.h = self.state.h.max(h_new);
                 }
                 return Ok(if reaches_stop { StepOutcome::ReachedStop } else { StepOutcome::Stepped });
             }
             // Rejected.
-            self.stats.rejected += 1;
+            self.state.stats.rejected += 1;
             self.last_rejected = true;
-            self.h = if self.first { 0.1 * h } else { h / quot };
-            if self.h < StepControl::h_min(self.t) {
+            self.state.h = if self.first { 0.1 * h } else { h / quot };
+            if self.state.h < StepControl::h_min(self.state.t) {
                 return Err(self.failure(h));
             }
             if !jac_current {
@@ -493,13 +469,13 @@ impl<S: OdeSystem> Solver for Radau5<S> {
 
     fn interpolate(&self, t: f64, out: &mut [f64]) -> Result<(), SolveError> {
         check_len(self.n, out.len())?;
-        check_interpolation(t, self.t_old, self.t)?;
-        let h = self.t - self.t_old;
+        check_interpolation(t, self.state.t_old, self.state.t)?;
+        let h = self.state.t - self.state.t_old;
         if h == 0.0 {
-            out.copy_from_slice(&self.y);
+            out.copy_from_slice(&self.state.y);
             return Ok(());
         }
-        self.polynomial((t - self.t_old) / h, out);
+        self.polynomial((t - self.state.t_old) / h, out);
         Ok(())
     }
 }

@@ -2,9 +2,15 @@
 //! dense output. It keeps a bracket, so it always converges, and takes inverse
 //! quadratic or secant steps where they are safe, so it usually converges fast.
 
+/// Most evaluations of [`brent`]: it converges at least as fast as bisection,
+/// which needs about 110 halvings from the widest finite bracket to round-off, so the
+/// bound only stops a function that changes under the search (noise) from looping.
+const MAX_EVALUATIONS: usize = 200;
+
 /// Finds a root of `f` in `[a, b]` given `fa = f(a)` and `fb = f(b)` of opposite sign
-/// (or one of them zero), to within `tol` (plus `4ε|x|`). Errors of `f` are passed
-/// through. At most 200 evaluations are made; the best point so far is returned then.
+/// (or one of them zero), to within `tol` (plus `4ε|x|`, the round-off of `x`). Errors
+/// of `f` are passed through. At most 200 evaluations (`MAX_EVALUATIONS`) are made; the
+/// best point so far is returned then.
 ///
 /// ```
 /// let root = num::brent(|x| Ok::<_, ()>(x * x - 2.0), 0.0, 2.0, -2.0, 2.0, 1e-15).unwrap();
@@ -29,7 +35,7 @@ pub fn brent<E>(
     let mut d = b - a;
     let mut e = d;
     let mut reset = true;
-    for _ in 0..200 {
+    for _ in 0..MAX_EVALUATIONS {
         if reset {
             c = a;
             fc = fa;

@@ -1,7 +1,8 @@
 //! The stepping interface every integrator implements ([`Solver`], shaped like
-//! diffsol's `OdeSolverMethod`), its [`Config`], [`Statistics`] and the small helpers
-//! the integrators share (validation, error norms, Hermite dense output, the fixed-step
-//! clock).
+//! diffsol's `OdeSolverMethod`), the [`SolverState`] every integrator holds and the
+//! trait's accessors read (like diffsol's `OdeSolverState`), its [`Config`],
+//! [`Statistics`] and the small helpers the integrators share (validation, error
+//! norms, Hermite dense output, the fixed-step clock).
 
 use crate::error::SolveError;
 use crate::method::Method;
@@ -122,6 +123,80 @@ impl Config {
     }
 }
 
+/// What every solver keeps of its run: the time, the state, the last step, the
+/// step to try next, a pending stop time and the work counters. Each integrator
+/// holds one, and [`Solver`]'s accessors read it through
+/// [`Solver::solver_state`], so they are written once here.
+#[derive(Clone, Debug)]
+pub struct SolverState {
+    /// Current time.
+    pub(crate) t: f64,
+    /// Start of the last accepted step.
+    pub(crate) t_old: f64,
+    /// The step the next attempt tries (fixed-step methods: their step).
+    pub(crate) h: f64,
+    /// The stop time set by [`Solver::set_stop_time`], until a step lands on it.
+    pub(crate) stop: Option<f64>,
+    /// Current state.
+    pub(crate) y: Vec<f64>,
+    /// Work counters.
+    pub(crate) stats: Statistics,
+    /// Most accepted steps ([`Config::max_steps`]).
+    pub(crate) max_steps: usize,
+}
+
+impl SolverState {
+    /// The state at `(t0, y0)` before the first step, which will try `h`.
+    pub fn new(t0: f64, y0: &[f64], h: f64, stats: Statistics, config: &Config) -> Self {
+        SolverState { t: t0, t_old: t0, h, stop: None, y: y0.to_vec(), stats, max_steps: config.max_steps }
+    }
+
+    /// Current time.
+    pub fn t(&self) -> f64 {
+        self.t
+    }
+
+    /// Current state.
+    pub fn y(&self) -> &[f64] {
+        &self.y
+    }
+
+    /// Start of the last accepted step.
+    pub fn step_start(&self) -> f64 {
+        self.t_old
+    }
+
+    /// The step the next attempt tries.
+    pub fn step_size(&self) -> f64 {
+        self.h
+    }
+
+    /// Work counters so far.
+    pub fn statistics(&self) -> Statistics {
+        self.stats
+    }
+
+    /// The stop time, if one is pending.
+    pub fn stop_time(&self) -> Option<f64> {
+        self.stop
+    }
+
+    /// Sets the stop time, which must not lie before the current time.
+    pub(crate) fn set_stop(&mut self, t_stop: f64) -> Result<(), SolveError> {
+        check_stop(self.t, t_stop)?;
+        self.stop = Some(t_stop);
+        Ok(())
+    }
+
+    /// Fails when the run has taken its [`Config::max_steps`] steps.
+    pub(crate) fn check_max_steps(&self) -> Result<(), SolveError> {
+        if self.stats.steps >= self.max_steps {
+            return Err(SolveError::MaxStepsExceeded { t: self.t, max_steps: self.max_steps });
+        }
+        Ok(())
+    }
+}
+
 /// A time-stepping integrator: advance with [`step`](Solver::step), read
 /// [`t`](Solver::t) and [`state`](Solver::state), and interpolate within the last step.
 ///
@@ -130,24 +205,40 @@ impl Config {
 pub trait Solver {
     /// The method this solver implements.
     fn method(&self) -> Method;
+    /// The time, state, step and counters the solver keeps.
+    fn solver_state(&self) -> &SolverState;
+    /// The same, to change (for the trait's own [`set_stop_time`](Solver::set_stop_time)).
+    fn solver_state_mut(&mut self) -> &mut SolverState;
     /// Current time.
-    fn t(&self) -> f64;
+    fn t(&self) -> f64 {
+        self.solver_state().t
+    }
     /// Current state.
-    fn state(&self) -> &[f64];
+    fn state(&self) -> &[f64] {
+        &self.solver_state().y
+    }
     /// Start of the last accepted step (equal to [`t`](Solver::t) before the first step).
-    fn step_start(&self) -> f64;
+    fn step_start(&self) -> f64 {
+        self.solver_state().t_old
+    }
     /// The step the next [`step`](Solver::step) will try.
-    fn step_size(&self) -> f64;
+    fn step_size(&self) -> f64 {
+        self.solver_state().h
+    }
     /// Takes one accepted step (adaptive methods retry rejected attempts internally).
     fn step(&mut self) -> Result<StepOutcome, SolveError>;
     /// Writes the dense-output state at `t` into `out`; `t` must lie within the last
     /// step, `[step_start(), t()]`.
     fn interpolate(&self, t: f64, out: &mut [f64]) -> Result<(), SolveError>;
     /// Work counters so far.
-    fn statistics(&self) -> Statistics;
+    fn statistics(&self) -> Statistics {
+        self.solver_state().stats
+    }
     /// Makes the solver land exactly on `t_stop` (the step that would pass it is
     /// shortened). `t_stop` must not lie before [`t`](Solver::t).
-    fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolveError>;
+    fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolveError> {
+        self.solver_state_mut().set_stop(t_stop)
+    }
     /// Replaces the state at the current time, e.g. by its projection onto a
     /// constraint manifold after a step, and continues from it as from an initial
     /// value (one evaluation of the right-hand side for the first-same-as-last
@@ -178,6 +269,12 @@ pub trait Solver {
 impl<S: Solver + ?Sized> Solver for Box<S> {
     fn method(&self) -> Method {
         (**self).method()
+    }
+    fn solver_state(&self) -> &SolverState {
+        (**self).solver_state()
+    }
+    fn solver_state_mut(&mut self) -> &mut SolverState {
+        (**self).solver_state_mut()
     }
     fn t(&self) -> f64 {
         (**self).t()
@@ -271,43 +368,40 @@ pub(crate) fn hermite(theta: f64, h: f64, y0: &[f64], f0: &[f64], y1: &[f64], f1
 }
 
 /// A fixed-step time grid `t = base + k·h`, computed by multiplication so that a
-/// million steps do not accumulate round-off in `t`, and landing exactly on a stop time.
+/// million steps do not accumulate round-off in `t`, and landing exactly on a stop
+/// time. The step and the stop time are the [`SolverState`]'s.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct FixedClock {
     base: f64,
     k: u64,
-    pub(crate) h: f64,
-    stop: Option<f64>,
 }
 
+/// A fixed step that would end within this fraction of `h` before the stop time is
+/// stretched onto it, to avoid a sliver step of round-off size.
+const SLIVER: f64 = 1e-6;
+
 impl FixedClock {
-    pub(crate) fn new(t0: f64, h: f64) -> Self {
-        FixedClock { base: t0, k: 0, h, stop: None }
+    pub(crate) fn new(t0: f64) -> Self {
+        FixedClock { base: t0, k: 0 }
     }
-    pub(crate) fn t(&self) -> f64 {
-        self.base + self.k as f64 * self.h
-    }
-    /// The end of the next step and whether it is the stop time. A step that would end
-    /// within `1e-6·h` before the stop is stretched onto it, to avoid a sliver step.
-    pub(crate) fn next(&self) -> (f64, bool) {
-        let t_next = self.base + (self.k + 1) as f64 * self.h;
-        match self.stop {
-            Some(stop) if t_next >= stop - 1e-6 * self.h => (stop, true),
+    /// The end of the next step of size `h` and whether it is the stop time.
+    pub(crate) fn next(&self, h: f64, stop: Option<f64>) -> (f64, bool) {
+        let t_next = self.base + (self.k + 1) as f64 * h;
+        match stop {
+            Some(stop) if t_next >= stop - SLIVER * h => (stop, true),
             _ => (t_next, false),
         }
     }
-    pub(crate) fn advance(&mut self, reached_stop: bool) {
+    /// Moves to the end of the step [`next`](Self::next) gave (clearing the stop
+    /// time when it was reached) and returns the new time.
+    pub(crate) fn advance(&mut self, h: f64, reached_stop: bool, stop: &mut Option<f64>) -> f64 {
         if reached_stop {
-            self.base = self.stop.take().unwrap_or(self.base);
+            self.base = stop.take().unwrap_or(self.base);
             self.k = 0;
         } else {
             self.k += 1;
         }
-    }
-    pub(crate) fn set_stop(&mut self, t_stop: f64) -> Result<(), SolveError> {
-        check_stop(self.t(), t_stop)?;
-        self.stop = Some(t_stop);
-        Ok(())
+        self.base + self.k as f64 * h
     }
 }
 

@@ -24,8 +24,9 @@
 
 use crate::error::{RhsError, SolveError};
 use crate::method::Method;
-use crate::solver::Statistics;
-use crate::solver::{check_initial, check_interpolation, check_len, check_stop, Config, Solver, StepOutcome};
+use crate::solver::{
+    check_initial, check_interpolation, check_len, Config, Solver, SolverState, Statistics, StepOutcome,
+};
 use crate::system::{first_non_finite, OdeSystem};
 
 /// The Taylor order for a relative tolerance.
@@ -81,15 +82,10 @@ pub struct Taylor<S> {
     rtol: f64,
     atol: f64,
     h_max: f64,
-    max_steps: usize,
-    t: f64,
-    t_old: f64,
-    h: f64,
-    stop: Option<f64>,
-    y: Vec<f64>,
+    /// Time, state, step, stop time and counters (what the accessors read).
+    state: SolverState,
     /// The expansion at the start of the last step, order-major.
     series: Vec<f64>,
-    stats: Statistics,
 }
 
 impl<S: OdeSystem> Taylor<S> {
@@ -113,14 +109,8 @@ impl<S: OdeSystem> Taylor<S> {
             rtol: config.rtol,
             atol: config.atol,
             h_max: config.h_max.unwrap_or(f64::INFINITY),
-            max_steps: config.max_steps,
-            t: t0,
-            t_old: t0,
-            h: 0.0,
-            stop: None,
-            y: y0.to_vec(),
+            state: SolverState::new(t0, y0, 0.0, stats, config),
             series,
-            stats,
         })
     }
 
@@ -151,36 +141,20 @@ impl<S: OdeSystem> Solver for Taylor<S> {
     fn method(&self) -> Method {
         Method::Taylor
     }
-    fn t(&self) -> f64 {
-        self.t
+    fn solver_state(&self) -> &SolverState {
+        &self.state
     }
-    fn state(&self) -> &[f64] {
-        &self.y
-    }
-    fn step_start(&self) -> f64 {
-        self.t_old
-    }
-    fn step_size(&self) -> f64 {
-        self.h
-    }
-    fn statistics(&self) -> Statistics {
-        self.stats
-    }
-    fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolveError> {
-        check_stop(self.t, t_stop)?;
-        self.stop = Some(t_stop);
-        Ok(())
+    fn solver_state_mut(&mut self) -> &mut SolverState {
+        &mut self.state
     }
 
     fn step(&mut self) -> Result<StepOutcome, SolveError> {
-        if self.stats.steps >= self.max_steps {
-            return Err(SolveError::MaxStepsExceeded { t: self.t, max_steps: self.max_steps });
-        }
-        let (n, p, t) = (self.y.len(), self.order, self.t);
-        if self.stats.steps > 0 {
+        self.state.check_max_steps()?;
+        let (n, p, t) = (self.state.y.len(), self.order, self.state.t);
+        if self.state.stats.steps > 0 {
             // The expansion at the start of this step (the first was made by `new`).
-            self.stats.rhs_evaluations += 1;
-            let result = self.system.taylor_series(t, &self.y, p, &mut self.series);
+            self.state.stats.rhs_evaluations += 1;
+            let result = self.system.taylor_series(t, &self.state.y, p, &mut self.series);
             result
                 .unwrap_or(Err(RhsError::Other("no Taylor series".into())))
                 .map_err(|source| SolveError::Rhs { t, source })?;
@@ -191,32 +165,32 @@ impl<S: OdeSystem> Solver for Taylor<S> {
         let floor = self.atol / self.rtol;
         let h = taylor_step(
             p,
-            taylor_ratio(&self.series[(p - 1) * n..p * n], &self.y, floor),
-            taylor_ratio(&self.series[p * n..], &self.y, floor),
+            taylor_ratio(&self.series[(p - 1) * n..p * n], &self.state.y, floor),
+            taylor_ratio(&self.series[p * n..], &self.state.y, floor),
         );
         let (h, reaches_stop) =
-            taylor_advance(h, t, self.h_max, self.stop).map_err(|h| SolveError::StepSizeTooSmall { t, h })?;
-        let mut y_new = std::mem::take(&mut self.y);
+            taylor_advance(h, t, self.h_max, self.state.stop).map_err(|h| SolveError::StepSizeTooSmall { t, h })?;
+        let mut y_new = std::mem::take(&mut self.state.y);
         self.sum(h, &mut y_new);
-        self.y = y_new;
-        if let Some(index) = first_non_finite(&self.y) {
+        self.state.y = y_new;
+        if let Some(index) = first_non_finite(&self.state.y) {
             return Err(SolveError::NonFiniteState { t: t + h, index });
         }
-        self.t_old = t;
-        self.h = h;
-        self.t = if reaches_stop { self.stop.take().unwrap_or(t + h) } else { t + h };
-        self.stats.steps += 1;
+        self.state.t_old = t;
+        self.state.h = h;
+        self.state.t = if reaches_stop { self.state.stop.take().unwrap_or(t + h) } else { t + h };
+        self.state.stats.steps += 1;
         Ok(if reaches_stop { StepOutcome::ReachedStop } else { StepOutcome::Stepped })
     }
 
     fn set_state(&mut self, y: &[f64]) -> Result<(), SolveError> {
-        check_len(self.y.len(), y.len())?;
-        self.y.copy_from_slice(y);
-        if self.stats.steps == 0 {
+        check_len(self.state.y.len(), y.len())?;
+        self.state.y.copy_from_slice(y);
+        if self.state.stats.steps == 0 {
             // `new` expanded at the old state; the first step must use the new one.
-            let t = self.t;
-            self.stats.rhs_evaluations += 1;
-            let result = self.system.taylor_series(t, &self.y, self.order, &mut self.series);
+            let t = self.state.t;
+            self.state.stats.rhs_evaluations += 1;
+            let result = self.system.taylor_series(t, &self.state.y, self.order, &mut self.series);
             result
                 .unwrap_or(Err(RhsError::Other("no Taylor series".into())))
                 .map_err(|source| SolveError::Rhs { t, source })?;
@@ -225,13 +199,13 @@ impl<S: OdeSystem> Solver for Taylor<S> {
     }
 
     fn interpolate(&self, t: f64, out: &mut [f64]) -> Result<(), SolveError> {
-        check_len(self.y.len(), out.len())?;
-        check_interpolation(t, self.t_old, self.t)?;
-        if self.t == self.t_old {
-            out.copy_from_slice(&self.y);
+        check_len(self.state.y.len(), out.len())?;
+        check_interpolation(t, self.state.t_old, self.state.t)?;
+        if self.state.t == self.state.t_old {
+            out.copy_from_slice(&self.state.y);
             return Ok(());
         }
-        self.sum(t - self.t_old, out);
+        self.sum(t - self.state.t_old, out);
         Ok(())
     }
 }
@@ -239,30 +213,7 @@ impl<S: OdeSystem> Solver for Taylor<S> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// x'' = -x with its Taylor series computed by hand: x[k+1] = v[k]/(k+1),
-    /// v[k+1] = -x[k]/(k+1).
-    struct Oscillator;
-
-    impl OdeSystem for Oscillator {
-        fn dim(&self) -> usize {
-            2
-        }
-        fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), RhsError> {
-            dy[0] = y[1];
-            dy[1] = -y[0];
-            Ok(())
-        }
-        fn taylor_series(&mut self, _t: f64, y: &[f64], order: usize, s: &mut [f64]) -> Option<Result<(), RhsError>> {
-            s[..2].copy_from_slice(y);
-            for k in 0..order {
-                let kf = (k + 1) as f64;
-                s[2 * (k + 1)] = s[2 * k + 1] / kf;
-                s[2 * (k + 1) + 1] = -s[2 * k] / kf;
-            }
-            Some(Ok(()))
-        }
-    }
+    use crate::test_models::Oscillator;
 
     #[derive(Debug)]
     struct NoSeries;

@@ -25,7 +25,6 @@
 //! Entry point: [`solve`].
 
 use super::euler::Euler;
-use super::quadrature::tanh_sinh;
 use num::{Config, Direction, Event, Method, ObservationKind, OdeSystem, Output, RhsError};
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::ops::ControlFlow;
@@ -44,6 +43,16 @@ const U0_MAX: f64 = 1e-2;
 const MAX_LENGTH: f64 = 50.0;
 /// Largest accepted miss of a solved extremal, in units of D.
 const MISS_TOL: f64 = 1e-9;
+/// Relative tolerance of J over the series' start piece, by tanh-sinh (its
+/// integrand may be singular at s = 0): a little tighter than [`RTOL`], since the
+/// integration continues from it.
+const SERIES_VALUE_RTOL: f64 = 1e-13;
+/// Absolute tolerance of Brent's method for a departure angle φ0 (radians, within
+/// [−π, π]): a few ulps, since the curvature equation amplifies an error in φ0.
+const ANGLE_ROOT_TOL: f64 = 1e-15;
+/// Tolerance of Brent's method for the family parameter, relative to its size
+/// (at least 1): a few ulps, so that the miss of the extremal is its round-off.
+const PARAMETER_ROOT_RTOL: f64 = 1e-15;
 /// |cos φ| below which y'' is too noisy for the tight tolerance (|y'| > 100).
 const VERTICAL_COS: f64 = 0.01;
 /// How far φ turns (in units of the family parameter c) before the tight integration takes over.
@@ -139,7 +148,7 @@ pub struct Candidate {
     pub parameter: f64,
     /// The initial slope angle φ0 (radians; π/2 is straight up).
     pub initial_angle: f64,
-    /// J[y] on it.
+    /// J\[y\] on it.
     pub value: f64,
     /// Samples (x, y, φ) from the start to the end.
     pub path: Vec<[f64; 3]>,
@@ -240,7 +249,11 @@ impl Family<'_> {
                 // ∫ f·cos φ ds over [0, s0] along the series; the integrand may be
                 // singular at s = 0 (the brachistochrone's 1/sqrt(y)).
                 // Shots only need the miss; the value is integrated on the final trace.
-                let v0 = if self.with_value { tanh_sinh(density, 0.0, s0, 1e-13).0 } else { 0.0 };
+                let v0 = if self.with_value {
+                    num::tanh_sinh(density, 0.0, s0, SERIES_VALUE_RTOL).map_or(f64::NAN, |i| i.value)
+                } else {
+                    0.0
+                };
                 let [x, y, phi] = at(s0);
                 // The variation with a: δφ = u0 and the bend's δ-position.
                 let bend_a = s0 * u0 / (1.0 + lambda);
@@ -444,7 +457,7 @@ fn departures(num: &mut Numeric, start: [f64; 2], d: f64) -> Vec<(f64, f64)> {
         if !(ga.is_finite() && gb.is_finite()) || ga.signum() == gb.signum() {
             continue;
         }
-        let Ok(mut root) = num::brent(|p| Ok::<_, ()>(g(p)), a, b, ga, gb, 1e-15) else { continue };
+        let Ok(mut root) = num::brent(|p| Ok::<_, ()>(g(p)), a, b, ga, gb, ANGLE_ROOT_TOL) else { continue };
         // Near a vertical tangent y'' loses its digits (its formulas cancel terms of
         // order y'^2), so the root is good to about 1e-8 there; a departure that
         // close to vertical is vertical. (An error in φ0 is absorbed by the family
@@ -499,8 +512,8 @@ pub fn solve(num: &mut Numeric, start: [f64; 2], end: [f64; 2], n_points: usize)
                 _ => None,
             };
             let Some((lo, m_lo, hi, m_hi)) = bracket else { continue };
-            let root =
-                num::brent(|a| fam.shoot(a).map(|s| s.miss).ok_or(()), lo, hi, m_lo, m_hi, 1e-15 * lo.abs().max(1.0));
+            let tol = PARAMETER_ROOT_RTOL * lo.abs().max(1.0);
+            let root = num::brent(|a| fam.shoot(a).map(|s| s.miss).ok_or(()), lo, hi, m_lo, m_hi, tol);
             let Ok(root) = root else { continue };
             let Some(shot) = fam.shoot(root) else { continue };
             if shot.miss.abs() <= MISS_TOL * d && !roots.iter().any(|r| (r.0 - root).abs() < 1e-9) {
