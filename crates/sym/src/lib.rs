@@ -33,4 +33,4 @@ pub use jit::{Compiled, JitError};
 pub use number::{Number, Rational};
 pub use parse::{Limits, ParseError, ParseErrorKind, ParseOptions, Span};
 pub use print::{Display, Latex};
-pub use taylor::{Lanes, TaylorTape};
+pub use taylor::{ClosedFormInverse, Lanes, LinearSecondOrder, TaylorTape};

@@ -745,7 +745,7 @@ mod tests {
         check_latex("p_th^2/(2*m*l^2)", "\\frac{p_{\\theta}^{2}}{2 l^{2} m}");
         check_latex("omega*Omega*lam", "\\Omega \\lambda \\omega");
         check_latex("al + be + ga + ph + om", "\\alpha + \\beta + \\gamma + \\omega + \\phi");
-        check_latex("mass*x_A", "\\mathrm{mass} x_{A}");
+        check_latex("size*x_A", "\\mathrm{size} x_{A}");
         check_latex("1/sqrt(x^2 + 1)", "\\frac{1}{\\sqrt{x^{2} + 1}}");
         check_latex("(x + y)/z", "\\frac{x + y}{z}");
         check_latex("x^(1/3)", "\\sqrt[3]{x}");
