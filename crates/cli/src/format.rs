@@ -19,8 +19,8 @@ pub fn text(d: &Derivation) -> String {
 
 /// The derivation as LaTeX (an `align*` environment per section).
 pub fn latex(d: &Derivation) -> String {
-    let mut r =
-        Latex { d, q: d.q.iter().map(|&q| d.pool().latex(q).to_string()).collect(), blocks: Default::default() };
+    let q = d.q.iter().map(|&q| d.pool().latex(q).to_string()).collect();
+    let mut r = Latex { d, q, o: String::new(), blocks: Default::default() };
     layout(d, &mut |item| r.item(item));
     r.finish()
 }
@@ -395,11 +395,19 @@ struct Latex<'a> {
     d: &'a Derivation,
     /// Each coordinate in LaTeX.
     q: Vec<String>,
+    /// The title; the blocks follow it.
+    o: String,
     /// The rows of each block: the row and its comment.
     blocks: [Vec<(String, Option<String>)>; 3],
 }
 
 impl Latex<'_> {
+    /// The blocks: the definitions and equations of motion, the constraints
+    /// and the equations with multipliers, Hamilton's equations.
+    const MAIN: usize = 0;
+    const CONSTRAINTS: usize = 1;
+    const HAMILTON: usize = 2;
+
     fn l(&self, e: ExprId) -> String {
         self.d.pool().latex(e).to_string()
     }
@@ -407,6 +415,10 @@ impl Latex<'_> {
     fn item(&mut self, item: Item<'_>) {
         let d = self.d;
         let (block, row, comment) = match item {
+            Item::Title => {
+                let _ = writeln!(self.o, "% {} (lagrange derive --format latex)", d.model.name);
+                return;
+            }
             Item::Define(what, e) => {
                 let name = match what {
                     Defined::Kinetic => "T",
@@ -414,26 +426,29 @@ impl Latex<'_> {
                     Defined::Lagrangian => "L",
                     Defined::Dissipation => "R",
                 };
-                (0, format!("{name} &= {}", self.l(e)), None)
+                (Self::MAIN, format!("{name} &= {}", self.l(e)), None)
             }
-            Item::Momentum(i, p) => (0, format!("{} &= {}", self.l(d.p[i]), self.l(p)), None),
+            Item::Momentum(i, p) => (Self::MAIN, format!("{} &= {}", self.l(d.p[i]), self.l(p)), None),
             Item::Equation(i, e) => {
-                (0, format!("0 &= {}", self.l(e)), Some(format!("equation of motion for ${}$", self.q[i])))
+                (Self::MAIN, format!("0 &= {}", self.l(e)), Some(format!("equation of motion for ${}$", self.q[i])))
             }
-            Item::Hamiltonian(Some(h)) => (0, format!("H &= {}", self.l(h)), None),
-            Item::Constraint(c) => {
-                (1, format!("0 &= {}", self.l(c.expr)), Some(format!("constraint {} ({})", c.name, c.kind.name())))
-            }
-            Item::MultiplierEquation(i, e) => {
-                (1, format!("0 &= {}", self.l(e)), Some(format!("with multipliers, for ${}$", self.q[i])))
-            }
+            Item::Hamiltonian(Some(h)) => (Self::MAIN, format!("H &= {}", self.l(h)), None),
+            Item::Constraint(c) => (
+                Self::CONSTRAINTS,
+                format!("0 &= {}", self.l(c.expr)),
+                Some(format!("constraint {} ({})", c.name, c.kind.name())),
+            ),
+            Item::MultiplierEquation(i, e) => (
+                Self::CONSTRAINTS,
+                format!("0 &= {}", self.l(e)),
+                Some(format!("with multipliers, for ${}$", self.q[i])),
+            ),
             Item::HamiltonEquation(i, dq, dp) => {
                 let (qd, pd) = (self.l(d.qd[i]), format!("\\dot{{{}}}", self.l(d.p[i])));
-                (2, format!("{} &= {}, & {} &= {}", qd, self.l(dq), pd, self.l(dp)), None)
+                (Self::HAMILTON, format!("{} &= {}, & {} &= {}", qd, self.l(dq), pd, self.l(dp)), None)
             }
-            // The title is a comment of its own; the rest is text only.
-            Item::Title
-            | Item::Force(..)
+            // Text only.
+            Item::Force(..)
             | Item::Body(_)
             | Item::Heading(_)
             | Item::MassMatrixForm
@@ -449,8 +464,7 @@ impl Latex<'_> {
     /// The title, then each block that has rows, every row but a block's last
     /// ending in `\\`.
     fn finish(self) -> String {
-        let mut o = String::new();
-        let _ = writeln!(o, "% {} (lagrange derive --format latex)", self.d.model.name);
+        let mut o = self.o;
         for rows in self.blocks.iter().filter(|rows| !rows.is_empty()) {
             let _ = writeln!(o, "\\begin{{align*}}");
             for (k, (row, comment)) in rows.iter().enumerate() {
