@@ -429,6 +429,7 @@ impl<const L: usize> TaylorTape<L> {
     pub fn compile_second_order(&mut self, system: &LinearSecondOrder<'_>) -> Result<bool, JitError> {
         let LinearSecondOrder { dim: n, entries, inverse } = *system;
         assert!(self.input_slots.len() > 2 * n, "inputs y, y', t come first");
+        assert!(self.variable_inputs[..=2 * n].iter().all(|&v| v), "y, y' and t vary");
         assert_eq!(self.outputs.len(), entries.len() + n, "outputs: the entries of A, then b");
         assert!(entries.iter().all(|&(i, j)| i < n && j < n), "entries of A lie in its n × n");
         match inverse {
@@ -436,7 +437,8 @@ impl<const L: usize> TaylorTape<L> {
                 assert!(entries.iter().all(|&(i, j)| i == j), "ClosedFormInverse::Diagonal: an entry off the diagonal")
             }
             ClosedFormInverse::Adjugate => {
-                assert!(n <= ClosedFormInverse::ADJUGATE_MAX_DIM, "ClosedFormInverse::Adjugate: n = {n} > 3")
+                let max = ClosedFormInverse::ADJUGATE_MAX_DIM;
+                assert!(n <= max, "ClosedFormInverse::Adjugate: n = {n} > {max}")
             }
         }
         let work = self.native_work() + entries.len() * (self.order + 1) * (self.order + 2) / 2 * L;
