@@ -1,106 +1,372 @@
 //! The human formats of `derive`: text that reads like the lecture notes, and
 //! LaTeX. (JSON is the `mech::DeriveReport` serialized as it is.)
+//!
+//! Enter with [`text`] or [`latex`]. One walk over the derivation ([`layout`])
+//! decides what is shown and in which order, as a sequence of [`Item`]s; the
+//! two renderings ([`Text`], [`Latex`]) write each item their way, or not at
+//! all: LaTeX gives the equations, the text also the verdicts and their reasons.
 
-use mech::Derivation;
+use mech::{BodyMotion, Constraint, Derivation};
 use std::fmt::Write;
 use sym::ExprId;
 
 /// The derivation as text, with the notes' names and the reasons behind each verdict.
 pub fn text(d: &Derivation) -> String {
+    let mut r = Text { d, names: d.coordinate_names(), o: String::new() };
+    layout(d, &mut |item| r.item(item));
+    r.o
+}
+
+/// The derivation as LaTeX (an `align*` environment per section).
+pub fn latex(d: &Derivation) -> String {
+    let q = d.q().iter().map(|&q| d.pool().latex(q).to_string()).collect();
+    let mut r = Latex { d, q, o: String::new(), blocks: Default::default() };
+    layout(d, &mut |item| r.item(item));
+    r.finish()
+}
+
+/// One thing the layout puts down.
+enum Item<'a> {
+    /// The model's name, its coordinates (and constraints) and parameters.
+    Title,
+    /// An expression the model defines: T, U, L or R.
+    Define(Defined, ExprId),
+    /// The generalized force on coordinate `i`, when it is not zero.
+    Force(usize, ExprId),
+    /// A rigid body's angular velocity and momentum.
+    Body(&'a BodyMotion),
+    /// The start of a section.
+    Heading(Section),
+    /// The momentum of coordinate `i`.
+    Momentum(usize, ExprId),
+    /// The equation of motion `E_i = 0` of coordinate `i`.
+    Equation(usize, ExprId),
+    /// The equations as `M q'' = f`.
+    MassMatrixForm,
+    /// One constraint.
+    Constraint(&'a Constraint),
+    /// What the constraints imply together.
+    ConstraintNotes,
+    /// The equation with multipliers of coordinate `i`.
+    MultiplierEquation(usize, ExprId),
+    /// How q'' and λ are found, and the constraint forces.
+    ConstraintForces,
+    /// The cyclic coordinates and what they conserve.
+    Cyclic,
+    /// H, or why it has no closed form.
+    Hamiltonian(Option<ExprId>),
+    /// Whether H is the energy and whether it is conserved, with the reasons.
+    Verdicts,
+    /// Hamilton's equations of coordinate `i`: `q' = dq`, `p' = dp`.
+    HamiltonEquation(usize, ExprId, ExprId),
+}
+
+/// The expressions a model defines.
+#[derive(Clone, Copy)]
+enum Defined {
+    Kinetic,
+    Potential,
+    Lagrangian,
+    Dissipation,
+}
+
+/// The sections, in the order the layout gives them.
+#[derive(Clone, Copy)]
+enum Section {
+    Momenta,
+    Equations,
+    Constraints,
+    Multipliers,
+    Hamiltonian,
+    Hamilton,
+}
+
+/// Walks the derivation in order, handing each item to `emit`.
+fn layout<'a>(d: &'a Derivation, emit: &mut impl FnMut(Item<'a>)) {
     let pool = d.pool();
-    let s = |e: ExprId| pool.display(e).to_string();
-    let names = d.coordinate_names();
-    let n = names.len();
-    let mut o = String::new();
-    let _ = writeln!(o, "{}", d.model().name);
-    if d.constraints().is_empty() {
-        let _ = writeln!(o, "{} degree{} of freedom: {}", n, if n == 1 { "" } else { "s" }, names.join(", "));
-    } else {
-        let k = d.constraints().degrees_of_freedom;
-        let _ = writeln!(
-            o,
-            "{} coordinate{}: {}; {} constraint{}: {} degree{} of freedom",
-            n,
-            if n == 1 { "" } else { "s" },
-            names.join(", "),
-            d.constraints().list.len(),
-            if d.constraints().list.len() == 1 { "" } else { "s" },
-            k,
-            if k == 1 { "" } else { "s" }
-        );
-    }
-    if !d.model().parameters.is_empty() {
-        let ps: Vec<String> = d.model().parameters.iter().map(|p| format!("{} = {}", p.name, p.value)).collect();
-        let _ = writeln!(o, "parameters: {}", ps.join(", "));
-    }
-    o.push('\n');
+    emit(Item::Title);
     if let Some(t) = d.kinetic() {
-        let _ = writeln!(o, "kinetic energy      T = {}", s(t));
+        emit(Item::Define(Defined::Kinetic, t));
     }
     if let Some(u) = d.potential() {
-        let _ = writeln!(o, "potential           U = {}", s(u));
+        emit(Item::Define(Defined::Potential, u));
     }
-    let _ = writeln!(o, "Lagrangian          L = {}", s(d.lagrangian()));
+    emit(Item::Define(Defined::Lagrangian, d.lagrangian()));
     if let Some(r) = d.dissipation() {
-        let _ = writeln!(o, "dissipation         R = {}", s(r));
+        emit(Item::Define(Defined::Dissipation, r));
     }
-    for (i, f) in d.forces().iter().enumerate() {
-        if !pool.is_zero(*f) {
-            let _ = writeln!(o, "generalized force   Q_{} = {}", names[i], s(*f));
+    for (i, &f) in d.forces().iter().enumerate() {
+        if !pool.is_zero(f) {
+            emit(Item::Force(i, f));
         }
     }
     for b in d.bodies() {
-        let _ = writeln!(o, "\nrigid body '{}' (body frame, notes A.5)", b.name);
-        for k in 0..3 {
-            let _ = writeln!(o, "  angular velocity  ω{} = {}", k + 1, s(b.omega[k]));
-        }
-        for k in 0..3 {
-            let _ = writeln!(o, "  angular momentum  L{} = {}", k + 1, s(b.angular_momentum[k]));
-        }
+        emit(Item::Body(b));
     }
-
-    let _ = writeln!(o, "\ngeneralized momenta p_q = ∂L/∂q'");
-    for i in 0..n {
-        let _ = writeln!(o, "  p_{} = {}", names[i], s(d.momenta()[i]));
+    emit(Item::Heading(Section::Momenta));
+    for (i, &p) in d.momenta().iter().enumerate() {
+        emit(Item::Momentum(i, p));
     }
-
-    let _ = writeln!(
-        o,
-        "\nEuler–Lagrange equations  d/dt ∂L/∂q' − ∂L/∂q{}{} = 0",
-        if d.dissipation().is_some() { " + ∂R/∂q'" } else { "" },
-        if d.forces().iter().any(|f| !pool.is_zero(*f)) { " − Q" } else { "" }
-    );
-    let label_w = names.iter().map(|n| n.chars().count()).max().unwrap_or(1) + 1;
-    for i in 0..n {
-        let _ = writeln!(o, "  {:<label_w$} {} = 0", format!("{}:", names[i]), s(d.equations()[i]));
+    emit(Item::Heading(Section::Equations));
+    for (i, &e) in d.equations().iter().enumerate() {
+        emit(Item::Equation(i, e));
     }
-
-    let _ = writeln!(o, "\nin the form M(q, t) q'' = f(q, q', t)");
-    let cells: Vec<Vec<String>> = d.mass_matrix().iter().map(|row| row.iter().map(|&e| s(e)).collect()).collect();
-    let widths: Vec<usize> =
-        (0..n).map(|j| cells.iter().map(|row| row[j].chars().count()).max().unwrap_or(1)).collect();
-    let name_w = names.iter().map(|n| n.chars().count()).max().unwrap_or(1);
-    for i in 0..n {
-        let row: Vec<String> = (0..n).map(|j| format!("{:<w$}", cells[i][j], w = widths[j])).collect();
-        let _ = writeln!(
-            o,
-            "  {} [ {} ] {:<name_w$}  =  {}",
-            if i == n / 2 { "M =" } else { "   " },
-            row.join("  "),
-            format!("{}''", names[i]),
-            s(d.forcing()[i]),
-            name_w = name_w + 2
-        );
-    }
-
+    emit(Item::MassMatrixForm);
     if !d.constraints().is_empty() {
-        constraints_text(d, &mut o);
+        emit(Item::Heading(Section::Constraints));
+        for c in &d.constraints().list {
+            emit(Item::Constraint(c));
+        }
+        emit(Item::ConstraintNotes);
+        emit(Item::Heading(Section::Multipliers));
+        for (i, &e) in d.constraints().multiplier_equations.iter().enumerate() {
+            emit(Item::MultiplierEquation(i, e));
+        }
+        emit(Item::ConstraintForces);
+    }
+    emit(Item::Cyclic);
+    emit(Item::Heading(Section::Hamiltonian));
+    emit(Item::Hamiltonian(d.hamiltonian()));
+    emit(Item::Verdicts);
+    if let Some(eqs) = &d.hamilton() {
+        emit(Item::Heading(Section::Hamilton));
+        for (i, &(dq, dp)) in eqs.iter().enumerate() {
+            emit(Item::HamiltonEquation(i, dq, dp));
+        }
+    }
+}
+
+/// "" for one, "s" otherwise.
+fn plural(n: usize) -> &'static str {
+    if n == 1 {
+        ""
+    } else {
+        "s"
+    }
+}
+
+/// The text rendering: every item, one or more lines each.
+struct Text<'a> {
+    d: &'a Derivation,
+    names: Vec<&'a str>,
+    o: String,
+}
+
+impl Text<'_> {
+    fn s(&self, e: ExprId) -> String {
+        self.d.pool().display(e).to_string()
     }
 
-    let _ = writeln!(o, "\ncyclic coordinates");
-    if d.cyclic().is_empty() {
-        let _ = writeln!(o, "  none: L depends on every coordinate");
-    } else {
+    /// The width of the `name:` labels before the equations.
+    fn label_width(&self) -> usize {
+        self.names.iter().map(|n| n.chars().count()).max().unwrap_or(1) + 1
+    }
+
+    fn item(&mut self, item: Item<'_>) {
+        let (d, names) = (self.d, &self.names);
+        let pool = d.pool();
+        let mut o = String::new();
+        match item {
+            Item::Title => {
+                let n = names.len();
+                let _ = writeln!(o, "{}", d.model().name);
+                if d.constraints().is_empty() {
+                    let _ = writeln!(o, "{} degree{} of freedom: {}", n, plural(n), names.join(", "));
+                } else {
+                    let (k, m) = (d.constraints().degrees_of_freedom, d.constraints().list.len());
+                    let _ = writeln!(
+                        o,
+                        "{} coordinate{}: {}; {} constraint{}: {} degree{} of freedom",
+                        n,
+                        plural(n),
+                        names.join(", "),
+                        m,
+                        plural(m),
+                        k,
+                        plural(k)
+                    );
+                }
+                if !d.model().parameters.is_empty() {
+                    let ps: Vec<String> =
+                        d.model().parameters.iter().map(|p| format!("{} = {}", p.name, p.value)).collect();
+                    let _ = writeln!(o, "parameters: {}", ps.join(", "));
+                }
+                o.push('\n');
+            }
+            Item::Define(what, e) => {
+                let label = match what {
+                    Defined::Kinetic => "kinetic energy      T",
+                    Defined::Potential => "potential           U",
+                    Defined::Lagrangian => "Lagrangian          L",
+                    Defined::Dissipation => "dissipation         R",
+                };
+                let _ = writeln!(o, "{label} = {}", self.s(e));
+            }
+            Item::Force(i, f) => {
+                let _ = writeln!(o, "generalized force   Q_{} = {}", names[i], self.s(f));
+            }
+            Item::Body(b) => {
+                let _ = writeln!(o, "\nrigid body '{}' (body frame, notes A.5)", b.name);
+                for k in 0..3 {
+                    let _ = writeln!(o, "  angular velocity  ω{} = {}", k + 1, self.s(b.omega[k]));
+                }
+                for k in 0..3 {
+                    let _ = writeln!(o, "  angular momentum  L{} = {}", k + 1, self.s(b.angular_momentum[k]));
+                }
+            }
+            Item::Heading(section) => self.heading(section, &mut o),
+            Item::Momentum(i, p) => {
+                let _ = writeln!(o, "  p_{} = {}", names[i], self.s(p));
+            }
+            Item::Equation(i, e) | Item::MultiplierEquation(i, e) => {
+                let label_w = self.label_width();
+                let _ = writeln!(o, "  {:<label_w$} {} = 0", format!("{}:", names[i]), self.s(e));
+            }
+            Item::MassMatrixForm => self.mass_matrix_form(&mut o),
+            Item::Constraint(c) => {
+                let tags = [
+                    Some(c.kind.name()),
+                    Some(if c.rheonomic { "rheonomic" } else { "scleronomic" }),
+                    match (c.kind, c.integrable) {
+                        (mech::ConstraintKind::Velocity, Some(true)) => Some("integrable"),
+                        (mech::ConstraintKind::Velocity, _) => Some("not integrable"),
+                        _ => None,
+                    },
+                ];
+                let tags: Vec<&str> = tags.into_iter().flatten().collect();
+                let _ = writeln!(o, "  {}: {} = 0   ({})", c.name, self.s(c.expr), tags.join(", "));
+                let row: Vec<String> = c.jacobian.iter().map(|&e| self.s(e)).collect();
+                let _ = writeln!(
+                    o,
+                    "    A row = [{}]{}",
+                    row.join(", "),
+                    if pool.is_zero(c.time_term) { String::new() } else { format!(",  a_t = {}", self.s(c.time_term)) }
+                );
+                for line in &c.explanation {
+                    let _ = writeln!(o, "    {line}");
+                }
+            }
+            Item::ConstraintNotes => {
+                for line in &d.constraints().explanation {
+                    let _ = writeln!(o, "  {line}");
+                }
+            }
+            Item::ConstraintForces => {
+                let set = &d.constraints();
+                let _ = writeln!(
+                    o,
+                    "  with the constraints differentiated to A q'' = c (index reduction), q'' and λ follow at each instant."
+                );
+                let _ = writeln!(o, "\nconstraint forces  Q = Aᵀλ (generalized)");
+                for (i, &f) in set.generalized_forces.iter().enumerate() {
+                    let _ = writeln!(o, "  Q_{} = {}", names[i], self.s(f));
+                }
+                if let Some(parts) = &set.cartesian_forces {
+                    let _ = writeln!(o, "  Cartesian, on each particle (F with Q = (∂x/∂q)ᵀF):");
+                    for (k, f) in parts.iter().enumerate() {
+                        let comps: Vec<String> = f.iter().map(|&e| self.s(e)).collect();
+                        let _ = writeln!(o, "    particle {}: F = ({})", k + 1, comps.join(", "));
+                    }
+                }
+            }
+            Item::Cyclic => self.cyclic(&mut o),
+            Item::Hamiltonian(Some(h)) => {
+                let _ = writeln!(o, "  H = {}", self.s(h));
+            }
+            Item::Hamiltonian(None) => {
+                let _ = writeln!(o, "  (not in closed form) h(q, q', t) = {}", self.s(d.energy_function()));
+                for line in &d.verdicts().hamiltonian {
+                    let _ = writeln!(o, "    {line}");
+                }
+            }
+            Item::Verdicts => {
+                if let Some(e) = d.energy() {
+                    let _ = writeln!(o, "  energy T + U = {}", self.s(e));
+                }
+                let verdict = match d.hamiltonian_is_energy() {
+                    Some(true) => "H is the energy",
+                    Some(false) => "H is not the energy",
+                    None => "whether H is the energy is not known",
+                };
+                let _ = writeln!(o, "  {verdict}:");
+                for line in &d.verdicts().energy {
+                    let _ = writeln!(o, "    {line}");
+                }
+                let _ = writeln!(o, "  H is {}conserved:", if d.hamiltonian_conserved() { "" } else { "not " });
+                for line in &d.verdicts().conservation {
+                    let _ = writeln!(o, "    {line}");
+                }
+            }
+            Item::HamiltonEquation(i, dq, dp) => {
+                let _ = writeln!(o, "  {}' = {}", names[i], self.s(dq));
+                let _ = writeln!(o, "  p_{}' = {}", names[i], self.s(dp));
+            }
+        }
+        self.o.push_str(&o);
+    }
+
+    fn heading(&self, section: Section, o: &mut String) {
+        let d = self.d;
+        let pool = d.pool();
+        let forced = d.forces().iter().any(|f| !pool.is_zero(*f));
+        let _ = match section {
+            Section::Momenta => writeln!(o, "\ngeneralized momenta p_q = ∂L/∂q'"),
+            Section::Equations => writeln!(
+                o,
+                "\nEuler–Lagrange equations  d/dt ∂L/∂q' − ∂L/∂q{}{} = 0",
+                if d.dissipation().is_some() { " + ∂R/∂q'" } else { "" },
+                if forced { " − Q" } else { "" }
+            ),
+            Section::Constraints => writeln!(
+                o,
+                "\nconstraints (A = ∂f/∂q for f(q, t) = 0; the velocity coefficients for a(q, t)·q' + a_t = 0)"
+            ),
+            Section::Multipliers => {
+                let lambdas: Vec<String> = d.constraints().list.iter().map(|c| self.s(c.multiplier)).collect();
+                writeln!(o, "\nequations with multipliers  M q'' = f + Aᵀλ,  λ = ({})", lambdas.join(", "))
+            }
+            Section::Hamiltonian => writeln!(o, "\nHamiltonian  H = Σ q'·p − L, in (q, p, t)"),
+            Section::Hamilton => writeln!(
+                o,
+                "\nHamilton's equations  q' = ∂H/∂p,  p' = −∂H/∂q{}",
+                if d.dissipation().is_some() || forced { " − ∂R/∂q' + Q" } else { "" }
+            ),
+        };
+    }
+
+    /// `M q'' = f` as a matrix, its columns aligned.
+    fn mass_matrix_form(&self, o: &mut String) {
+        let (d, names) = (self.d, &self.names);
+        let n = names.len();
+        let _ = writeln!(o, "\nin the form M(q, t) q'' = f(q, q', t)");
+        let cells: Vec<Vec<String>> =
+            d.mass_matrix().iter().map(|row| row.iter().map(|&e| self.s(e)).collect()).collect();
+        let widths: Vec<usize> =
+            (0..n).map(|j| cells.iter().map(|row| row[j].chars().count()).max().unwrap_or(1)).collect();
+        let name_w = names.iter().map(|n| n.chars().count()).max().unwrap_or(1);
+        for i in 0..n {
+            let row: Vec<String> = (0..n).map(|j| format!("{:<w$}", cells[i][j], w = widths[j])).collect();
+            let _ = writeln!(
+                o,
+                "  {} [ {} ] {:<name_w$}  =  {}",
+                if i == n / 2 { "M =" } else { "   " },
+                row.join("  "),
+                format!("{}''", names[i]),
+                self.s(d.forcing()[i]),
+                name_w = name_w + 2
+            );
+        }
+    }
+
+    /// The cyclic coordinates, and whether their momenta are conserved.
+    fn cyclic(&self, o: &mut String) {
+        let (d, names) = (self.d, &self.names);
+        let pool = d.pool();
+        let _ = writeln!(o, "\ncyclic coordinates");
+        if d.cyclic().is_empty() {
+            let _ = writeln!(o, "  none: L depends on every coordinate");
+            return;
+        }
         for &i in d.cyclic() {
             let conserved = d.conserved().iter().any(|c| c.name == format!("p_{}", names[i]));
             let _ = writeln!(
@@ -109,7 +375,7 @@ pub fn text(d: &Derivation) -> String {
                 names[i],
                 names[i],
                 names[i],
-                s(d.momenta()[i]),
+                self.s(d.momenta()[i]),
                 if conserved {
                     "is conserved"
                 } else if d.constraints().list.iter().any(|c| !pool.is_zero(c.jacobian[i])) {
@@ -120,165 +386,96 @@ pub fn text(d: &Derivation) -> String {
             );
         }
     }
-
-    let _ = writeln!(o, "\nHamiltonian  H = Σ q'·p − L, in (q, p, t)");
-    match d.hamiltonian() {
-        Some(h) => {
-            let _ = writeln!(o, "  H = {}", s(h));
-        }
-        None => {
-            let _ = writeln!(o, "  (not in closed form) h(q, q', t) = {}", s(d.energy_function()));
-            for line in &d.verdicts().hamiltonian {
-                let _ = writeln!(o, "    {line}");
-            }
-        }
-    }
-    if let Some(e) = d.energy() {
-        let _ = writeln!(o, "  energy T + U = {}", s(e));
-    }
-    let verdict = match d.hamiltonian_is_energy() {
-        Some(true) => "H is the energy",
-        Some(false) => "H is not the energy",
-        None => "whether H is the energy is not known",
-    };
-    let _ = writeln!(o, "  {verdict}:");
-    for line in &d.verdicts().energy {
-        let _ = writeln!(o, "    {line}");
-    }
-    let _ = writeln!(o, "  H is {}conserved:", if d.hamiltonian_conserved() { "" } else { "not " });
-    for line in &d.verdicts().conservation {
-        let _ = writeln!(o, "    {line}");
-    }
-
-    if let Some(eqs) = &d.hamilton() {
-        let _ = writeln!(
-            o,
-            "\nHamilton's equations  q' = ∂H/∂p,  p' = −∂H/∂q{}",
-            if d.dissipation().is_some() || d.forces().iter().any(|f| !pool.is_zero(*f)) {
-                " − ∂R/∂q' + Q"
-            } else {
-                ""
-            }
-        );
-        for (i, &(dq, dp)) in eqs.iter().enumerate() {
-            let _ = writeln!(o, "  {}' = {}", names[i], s(dq));
-            let _ = writeln!(o, "  p_{}' = {}", names[i], s(dp));
-        }
-    }
-    o
 }
 
-/// The constraints section: each constraint with its row of A and its verdicts,
-/// the equations with multipliers, and the constraint forces.
-fn constraints_text(d: &Derivation, o: &mut String) {
-    let pool = d.pool();
-    let s = |e: ExprId| pool.display(e).to_string();
-    let names = d.coordinate_names();
-    let set = &d.constraints();
-    let _ =
-        writeln!(o, "\nconstraints (A = ∂f/∂q for f(q, t) = 0; the velocity coefficients for a(q, t)·q' + a_t = 0)");
-    for c in &set.list {
-        let tags = [
-            Some(c.kind.name()),
-            Some(if c.rheonomic { "rheonomic" } else { "scleronomic" }),
-            match (c.kind, c.integrable) {
-                (mech::ConstraintKind::Velocity, Some(true)) => Some("integrable"),
-                (mech::ConstraintKind::Velocity, _) => Some("not integrable"),
-                _ => None,
-            },
-        ];
-        let tags: Vec<&str> = tags.into_iter().flatten().collect();
-        let _ = writeln!(o, "  {}: {} = 0   ({})", c.name, s(c.expr), tags.join(", "));
-        let row: Vec<String> = c.jacobian.iter().map(|&e| s(e)).collect();
-        let _ = writeln!(
-            o,
-            "    A row = [{}]{}",
-            row.join(", "),
-            if pool.is_zero(c.time_term) { String::new() } else { format!(",  a_t = {}", s(c.time_term)) }
-        );
-        for line in &c.explanation {
-            let _ = writeln!(o, "    {line}");
-        }
-    }
-    for line in &set.explanation {
-        let _ = writeln!(o, "  {line}");
-    }
-    let lambdas: Vec<String> = set.list.iter().map(|c| s(c.multiplier)).collect();
-    let _ = writeln!(o, "\nequations with multipliers  M q'' = f + Aᵀλ,  λ = ({})", lambdas.join(", "));
-    let label_w = names.iter().map(|n| n.chars().count()).max().unwrap_or(1) + 1;
-    for (i, &e) in set.multiplier_equations.iter().enumerate() {
-        let _ = writeln!(o, "  {:<label_w$} {} = 0", format!("{}:", names[i]), s(e));
-    }
-    let _ = writeln!(
-        o,
-        "  with the constraints differentiated to A q'' = c (index reduction), q'' and λ follow at each instant."
-    );
-    let _ = writeln!(o, "\nconstraint forces  Q = Aᵀλ (generalized)");
-    for (i, &f) in set.generalized_forces.iter().enumerate() {
-        let _ = writeln!(o, "  Q_{} = {}", names[i], s(f));
-    }
-    if let Some(parts) = &set.cartesian_forces {
-        let _ = writeln!(o, "  Cartesian, on each particle (F with Q = (∂x/∂q)ᵀF):");
-        for (k, f) in parts.iter().enumerate() {
-            let comps: Vec<String> = f.iter().map(|&e| s(e)).collect();
-            let _ = writeln!(o, "    particle {}: F = ({})", k + 1, comps.join(", "));
-        }
-    }
+/// The LaTeX rendering: the equations as rows of three `align*` blocks (the
+/// definitions and equations of motion, the constraints, Hamilton's
+/// equations), joined by `\\` when the blocks are closed.
+struct Latex<'a> {
+    d: &'a Derivation,
+    /// Each coordinate in LaTeX.
+    q: Vec<String>,
+    /// The title; the blocks follow it.
+    o: String,
+    /// The rows of each block: the row and its comment.
+    blocks: [Vec<(String, Option<String>)>; 3],
 }
 
-/// The derivation as LaTeX (an `align*` environment per section).
-pub fn latex(d: &Derivation) -> String {
-    let pool = d.pool();
-    let l = |e: ExprId| pool.latex(e).to_string();
-    let names = d.coordinate_names();
-    let qtex: Vec<String> = d.q().iter().map(|&q| l(q)).collect();
-    let n = names.len();
-    let mut o = String::new();
-    let _ = writeln!(o, "% {} (lagrange derive --format latex)", d.model().name);
-    let _ = writeln!(o, "\\begin{{align*}}");
-    if let Some(t) = d.kinetic() {
-        let _ = writeln!(o, "T &= {} \\\\", l(t));
+impl Latex<'_> {
+    /// The blocks: the definitions and equations of motion, the constraints
+    /// and the equations with multipliers, Hamilton's equations.
+    const MAIN: usize = 0;
+    const CONSTRAINTS: usize = 1;
+    const HAMILTON: usize = 2;
+
+    fn l(&self, e: ExprId) -> String {
+        self.d.pool().latex(e).to_string()
     }
-    if let Some(u) = d.potential() {
-        let _ = writeln!(o, "U &= {} \\\\", l(u));
+
+    fn item(&mut self, item: Item<'_>) {
+        let d = self.d;
+        let (block, row, comment) = match item {
+            Item::Title => {
+                let _ = writeln!(self.o, "% {} (lagrange derive --format latex)", d.model().name);
+                return;
+            }
+            Item::Define(what, e) => {
+                let name = match what {
+                    Defined::Kinetic => "T",
+                    Defined::Potential => "U",
+                    Defined::Lagrangian => "L",
+                    Defined::Dissipation => "R",
+                };
+                (Self::MAIN, format!("{name} &= {}", self.l(e)), None)
+            }
+            Item::Momentum(i, p) => (Self::MAIN, format!("{} &= {}", self.l(d.p()[i]), self.l(p)), None),
+            Item::Equation(i, e) => {
+                (Self::MAIN, format!("0 &= {}", self.l(e)), Some(format!("equation of motion for ${}$", self.q[i])))
+            }
+            Item::Hamiltonian(Some(h)) => (Self::MAIN, format!("H &= {}", self.l(h)), None),
+            Item::Constraint(c) => (
+                Self::CONSTRAINTS,
+                format!("0 &= {}", self.l(c.expr)),
+                Some(format!("constraint {} ({})", c.name, c.kind.name())),
+            ),
+            Item::MultiplierEquation(i, e) => (
+                Self::CONSTRAINTS,
+                format!("0 &= {}", self.l(e)),
+                Some(format!("with multipliers, for ${}$", self.q[i])),
+            ),
+            Item::HamiltonEquation(i, dq, dp) => {
+                let (qd, pd) = (self.l(d.qd()[i]), format!("\\dot{{{}}}", self.l(d.p()[i])));
+                (Self::HAMILTON, format!("{} &= {}, & {} &= {}", qd, self.l(dq), pd, self.l(dp)), None)
+            }
+            // Text only.
+            Item::Force(..)
+            | Item::Body(_)
+            | Item::Heading(_)
+            | Item::MassMatrixForm
+            | Item::ConstraintNotes
+            | Item::ConstraintForces
+            | Item::Cyclic
+            | Item::Hamiltonian(None)
+            | Item::Verdicts => return,
+        };
+        self.blocks[block].push((row, comment));
     }
-    let _ = writeln!(o, "L &= {} \\\\", l(d.lagrangian()));
-    if let Some(r) = d.dissipation() {
-        let _ = writeln!(o, "R &= {} \\\\", l(r));
-    }
-    for i in 0..n {
-        let _ = writeln!(o, "{} &= {} \\\\", l(d.p()[i]), l(d.momenta()[i]));
-    }
-    for i in 0..n {
-        let sep = if i + 1 < n || d.hamiltonian().is_some() { " \\\\" } else { "" };
-        let _ = writeln!(o, "0 &= {}{}  % equation of motion for ${}$", l(d.equations()[i]), sep, qtex[i]);
-    }
-    if let Some(h) = d.hamiltonian() {
-        let _ = writeln!(o, "H &= {}", l(h));
-    }
-    let _ = writeln!(o, "\\end{{align*}}");
-    if !d.constraints().is_empty() {
-        // The constraints and the equations with multipliers.
-        let _ = writeln!(o, "\\begin{{align*}}");
-        for c in &d.constraints().list {
-            let _ = writeln!(o, "0 &= {} \\\\  % constraint {} ({})", l(c.expr), c.name, c.kind.name());
+
+    /// The title, then each block that has rows, every row but a block's last
+    /// ending in `\\`.
+    fn finish(self) -> String {
+        let mut o = self.o;
+        for rows in self.blocks.iter().filter(|rows| !rows.is_empty()) {
+            let _ = writeln!(o, "\\begin{{align*}}");
+            for (k, (row, comment)) in rows.iter().enumerate() {
+                let end = if k + 1 < rows.len() { " \\\\" } else { "" };
+                let _ = match comment {
+                    Some(c) => writeln!(o, "{row}{end}  % {c}"),
+                    None => writeln!(o, "{row}{end}"),
+                };
+            }
+            let _ = writeln!(o, "\\end{{align*}}");
         }
-        let eqs = &d.constraints().multiplier_equations;
-        for (i, &e) in eqs.iter().enumerate() {
-            let sep = if i + 1 < eqs.len() { " \\\\" } else { "" };
-            let _ = writeln!(o, "0 &= {}{}  % with multipliers, for ${}$", l(e), sep, qtex[i]);
-        }
-        let _ = writeln!(o, "\\end{{align*}}");
+        o
     }
-    if let Some(eqs) = &d.hamilton() {
-        let _ = writeln!(o, "\\begin{{align*}}");
-        for (i, &(dq, dp)) in eqs.iter().enumerate() {
-            let qd = l(d.qd()[i]);
-            let pd = format!("\\dot{{{}}}", l(d.p()[i]));
-            let end = if i + 1 < n { " \\\\" } else { "" };
-            let _ = writeln!(o, "{} &= {}, & {} &= {}{}", qd, l(dq), pd, l(dp), end);
-        }
-        let _ = writeln!(o, "\\end{{align*}}");
-    }
-    o
 }

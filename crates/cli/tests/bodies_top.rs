@@ -13,22 +13,10 @@
 
 mod common;
 
-use common::{repo_root, run as lagrange};
+use common::{is_close, json, repo_root, run as lagrange, scratch};
 use serde_json::Value;
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
-
-fn json(args: &[&str]) -> Value {
-    let r = lagrange(args);
-    assert_eq!(r.code, Some(0), "lagrange {args:?}: {}", r.stderr);
-    serde_json::from_str(&r.stdout).unwrap()
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("lagrange-bodies-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
+use std::path::Path;
 
 /// The CSV as columns by name (event rows included, with their event text dropped).
 fn read_csv(path: &Path) -> (HashMap<String, Vec<f64>>, Vec<bool>) {
@@ -105,7 +93,7 @@ fn derive_reproduces_the_notes_a5_equations() {
 
 #[test]
 fn euler_equations_hold_along_a_free_asymmetric_body() {
-    let csv = tmp("asym.csv");
+    let csv = scratch("bodies", "asym.csv");
     let r = lagrange(&[
         "simulate",
         "examples/tops/free_asymmetric_body.toml",
@@ -147,7 +135,7 @@ fn euler_equations_hold_along_a_free_asymmetric_body() {
 #[test]
 fn the_gimbal_singularity_is_reported() {
     // Started at β = 1e-12: bad input, located at the initial value.
-    let start = tmp("start.toml");
+    let start = scratch("bodies", "start.toml");
     let text = std::fs::read_to_string(repo_root().join("examples/tops/heavy_top.toml")).unwrap();
     std::fs::write(&start, text.replace("be = 0.6", "be = 1e-12")).unwrap();
     let r = lagrange(&["simulate", start.to_str().unwrap(), "--until", "1"]);
@@ -156,13 +144,13 @@ fn the_gimbal_singularity_is_reported() {
 
     // Driven through β = 0 (a spherical body turning about a horizontal axis):
     // exit 1, the time, the explanation, and the rows up to there kept.
-    let through = tmp("through.toml");
+    let through = scratch("bodies", "through.toml");
     std::fs::write(
         &through,
         "coordinates = [\"al\", \"be\", \"ga\"]\n[[bodies]]\nmass = 1\ninertia = [1, 1, 1]\nangles = [\"al\", \"be\", \"ga\"]\n[initial]\nal = 0\n\"al'\" = 0\nbe = 0.5\n\"be'\" = -1\nga = 0\n\"ga'\" = 0\n",
     )
     .unwrap();
-    let csv = tmp("through.csv");
+    let csv = scratch("bodies", "through.csv");
     let r = lagrange(&["simulate", through.to_str().unwrap(), "--until", "2", "--out", csv.to_str().unwrap()]);
     assert_eq!(r.code, Some(1), "{}", r.stderr);
     assert!(r.stderr.contains("gimbal singularity") && r.stderr.contains("at t = 0.49"), "{}", r.stderr);
@@ -185,7 +173,7 @@ fn heavy_top_nutation_agrees_with_simulate() {
     }
     // With precession (al' > 0 at the start): loops or a monotonic wave.
     for kind in ["loops", "monotonic"] {
-        let file = tmp(&format!("heavy_{kind}.toml"));
+        let file = scratch("bodies", &format!("heavy_{kind}.toml"));
         let text = std::fs::read_to_string(repo_root().join("examples/tops/heavy_top.toml")).unwrap();
         let al = if kind == "loops" { "-0.5" } else { "0.9" };
         std::fs::write(&file, text.replace("\"al'\" = 0.0", &format!("\"al'\" = {al}"))).unwrap();
@@ -201,7 +189,7 @@ fn nutation_with_an_initial_beta_rate_and_a_hanging_top() {
     // centre of mass below the pivot (U_eff's cubic has a negative leading term).
     let text = std::fs::read_to_string(repo_root().join("examples/tops/heavy_top.toml")).unwrap();
     for (s, name) in [("0.5", "rate"), ("-0.5", "hanging")] {
-        let file = tmp(&format!("heavy_{name}.toml"));
+        let file = scratch("bodies", &format!("heavy_{name}.toml"));
         let t = text.replace("\"be'\" = 0.0", "\"be'\" = 0.7").replace("S = 0.5 ", &format!("S = {s} "));
         std::fs::write(&file, t).unwrap();
         let top = json(&["top", file.to_str().unwrap(), "--format", "json"]);
@@ -216,7 +204,7 @@ fn check_nutation(top: &Value, set: &[&str], file: &[&str]) {
     let (b1, b2) = (top["nutation"]["beta_min"].as_f64().unwrap(), top["nutation"]["beta_max"].as_f64().unwrap());
     let period = top["nutation"]["period"].as_f64().unwrap();
     let mean = top["mean_precession_rate"].as_f64().unwrap();
-    let csv = tmp(&format!("heavy_{}.csv", b2.to_bits()));
+    let csv = scratch("bodies", &format!("heavy_{}.csv", b2.to_bits()));
     let until = format!("{}", 6.2 * period);
     let model = file.first().copied().unwrap_or("examples/tops/heavy_top.toml");
     let mut args = vec![
@@ -276,7 +264,7 @@ fn free_top_precesses_about_l_at_a_over_sin_beta0() {
     let rate = top["space_precession_rate"].as_f64().unwrap();
     assert!((rate - a / b0.sin()).abs() < 1e-12, "α̇ = A/sin β₀");
 
-    let csv = tmp("free.csv");
+    let csv = scratch("bodies", "free.csv");
     let r = lagrange(&[
         "simulate",
         "examples/tops/free_symmetric_top.toml",
@@ -303,7 +291,7 @@ fn moving_reference_point_conserves_the_right_things() {
     let j = json(&["derive", "examples/tops/physical_pendulum.toml", "--format", "json"]);
     let names: Vec<&str> = j["conserved"].as_array().unwrap().iter().map(|c| c["name"].as_str().unwrap()).collect();
     assert!(names.contains(&"p_x") && names.contains(&"H"), "{names:?}");
-    let csv = tmp("pend.csv");
+    let csv = scratch("bodies", "pend.csv");
     let r =
         lagrange(&["simulate", "examples/tops/physical_pendulum.toml", "--until", "5", "--out", csv.to_str().unwrap()]);
     assert_eq!(r.code, Some(0), "{}", r.stderr);
@@ -348,7 +336,7 @@ fn bad_bodies_exit_2_with_a_location() {
         ("angles = [\"al\", \"be\", \"ga\"]", "angles = [\"al\", \"be\", \"th\"]", "not a coordinate"),
         ("mass = \"M\"", "mass = \"-M\"", "positive"),
     ] {
-        let file = tmp("bad.toml");
+        let file = scratch("bodies", "bad.toml");
         std::fs::write(&file, text.replace(from, to)).unwrap();
         let r = lagrange(&["derive", file.to_str().unwrap()]);
         assert_eq!(r.code, Some(2), "{to}: {}", r.stderr);
@@ -361,7 +349,7 @@ fn bad_bodies_exit_2_with_a_location() {
 #[test]
 fn top_plot_is_an_svg_with_both_panels() {
     for model in ["examples/tops/heavy_top.toml", "examples/tops/free_symmetric_top.toml"] {
-        let svg = tmp(&format!("{}.svg", model.len()));
+        let svg = scratch("bodies", &format!("{}.svg", model.len()));
         let r = lagrange(&["top", model, "--plot", svg.to_str().unwrap()]);
         assert_eq!(r.code, Some(0), "{}", r.stderr);
         let text = std::fs::read_to_string(&svg).unwrap();
@@ -376,7 +364,7 @@ fn top_plot_is_an_svg_with_both_panels() {
 fn euler_equations_with_the_gravity_torque_along_a_heavy_top() {
     // N = r_cm × F in body components: S e₃ × (−Mg D e_z) = MgS sin β (cos γ, −sin γ, 0),
     // the notes' N₁, N₂ with U = MgS cos β (N₃ = −∂U/∂γ = 0).
-    let csv = tmp("heavy_euler.csv");
+    let csv = scratch("bodies", "heavy_euler.csv");
     let r = lagrange(&[
         "simulate",
         "examples/tops/heavy_top.toml",
@@ -420,7 +408,7 @@ fn a_body_file_gives_mass_centre_and_inertia() {
     let mut pool = sym::Pool::default();
     let env: HashMap<&str, f64> = [("be", 0.7), ("g", g)].into_iter().collect();
     let mm = &d["mass_matrix"];
-    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1.0);
+    let close = |a: f64, b: f64| is_close(a, b, 1e-12, 1.0);
     assert!(close(eval(&mut pool, mm[1][1].as_str().unwrap(), &env), i1));
     assert!(close(eval(&mut pool, mm[2][2].as_str().unwrap(), &env), i3));
     // M_αα = I sin²β + I3 cos²β, U = M g S cos β.
@@ -443,7 +431,7 @@ fn a_body_file_gives_mass_centre_and_inertia() {
     assert!(run.stderr.contains("mass is 2 here but 1 in its body file"), "{}", run.stderr);
     assert!(run.stderr.contains(":13:"), "{}", run.stderr);
     let missing = text.replace("cone_top_body.toml", "no_such_body.toml");
-    let path = tmp("missing-body.toml");
+    let path = scratch("bodies", "missing-body.toml");
     std::fs::write(&path, missing).unwrap();
     let run = lagrange(&["derive", path.to_str().unwrap()]);
     assert_eq!(run.code, Some(2), "{}", run.stderr);

@@ -18,38 +18,8 @@
 
 mod common;
 
-use common::{run as lagrange, Run, TempFile};
+use common::{json, ok, run as lagrange, Csv, TempFile};
 use serde_json::Value;
-
-#[track_caller]
-fn ok(args: &[&str]) -> Run {
-    let r = lagrange(args);
-    assert_eq!(r.code, Some(0), "lagrange {args:?}\n{}\n{}", r.stdout, r.stderr);
-    r
-}
-
-/// The CSV of a run: header and numeric rows.
-struct Csv {
-    header: Vec<String>,
-    rows: Vec<Vec<f64>>,
-}
-
-impl Csv {
-    fn read(path: &str) -> Csv {
-        let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("cannot read {path}: {e}"));
-        let mut lines = text.lines();
-        let header: Vec<String> = lines.next().expect("a header").split(',').map(str::to_string).collect();
-        let rows = lines.map(|l| l.split(',').map(|v| v.parse::<f64>().expect("a number")).collect()).collect();
-        Csv { header, rows }
-    }
-    fn col(&self, name: &str) -> usize {
-        self.header.iter().position(|h| h == name).unwrap_or_else(|| panic!("no column {name} in {:?}", self.header))
-    }
-}
-
-fn json(text: &str) -> Value {
-    serde_json::from_str(text).unwrap_or_else(|e| panic!("not JSON ({e}):\n{text}"))
-}
 
 fn num(v: &Value) -> f64 {
     v.as_f64().unwrap_or_else(|| panic!("not a number: {v}"))
@@ -74,7 +44,7 @@ fn the_cartesian_pendulum_feels_the_tension_of_its_rod() {
         "--summary",
         "json",
     ]);
-    let s = json(&r.stdout);
+    let s = r.json();
     let c = Csv::read(csv.path());
     assert_eq!(c.header, ["t", "x", "y", "x'", "y'", "H", "lambda_rod", "force_rod", "residual_rod", "residual_rod'"]);
     let (m, l, g) = (1.0, 1.0, 9.81);
@@ -125,7 +95,7 @@ fn the_wire_pushes_the_bead_with_the_coriolis_force() {
         "--summary",
         "json",
     ]);
-    let s = json(&r.stdout);
+    let s = r.json();
     let c = Csv::read(csv.path());
     let (m, om) = (0.5, 2.0);
     let (ir, ivr, ilam, iforce, ires) =
@@ -156,14 +126,14 @@ fn the_wire_pushes_the_bead_with_the_coriolis_force() {
     for row in &c.rows {
         assert!((row[ih] - row[iw] - 1.0).abs() < 1e-9 * row[ih], "H - W at t = {}", row[0]);
     }
-    let d = json(&ok(&["derive", "examples/constraints/rotating_wire.toml", "--format", "json"]).stdout);
+    let d = json(&["derive", "examples/constraints/rotating_wire.toml", "--format", "json"]);
     assert_eq!(d["constraints"][0]["rheonomic"], true);
     assert_eq!(d["hamiltonian_conserved"], false);
 }
 
 #[test]
 fn the_rolling_disk_is_nonholonomic_and_rolls_without_slipping() {
-    let d = json(&ok(&["derive", "examples/constraints/rolling_disk.toml", "--format", "json"]).stdout);
+    let d = json(&["derive", "examples/constraints/rolling_disk.toml", "--format", "json"]);
     let cs = d["constraints"].as_array().expect("constraints");
     assert_eq!(cs.len(), 2);
     for c in cs {
@@ -193,7 +163,7 @@ fn the_rolling_disk_is_nonholonomic_and_rolls_without_slipping() {
         "--summary",
         "json",
     ]);
-    let s = json(&r.stdout);
+    let s = r.json();
     for name in ["roll_x", "roll_y"] {
         let a = &s["constraints"][name];
         assert!(num(&a["max_abs_residual"]) <= 1e-12, "{name}: {a}");
@@ -220,14 +190,14 @@ fn the_rolling_disk_is_nonholonomic_and_rolls_without_slipping() {
 
 #[test]
 fn integrable_velocity_constraints_are_holonomic_in_disguise() {
-    let d = json(&ok(&["derive", "examples/constraints/hyperbola.toml", "--format", "json"]).stdout);
+    let d = json(&["derive", "examples/constraints/hyperbola.toml", "--format", "json"]);
     assert_eq!(d["constraints"][0]["integrable"], true);
     assert_eq!(d["constraints"][0]["integral"], "x*y");
     let model = TempFile::with_text(
         "diff",
         "coordinates = [\"x\", \"y\"]\nkinetic = \"x'^2/2 + y'^2/2\"\n[[constraints]]\nname = \"same\"\nvelocity = \"x' - y'\"\n",
     );
-    let d = json(&ok(&["derive", model.path(), "--format", "json"]).stdout);
+    let d = json(&["derive", model.path(), "--format", "json"]);
     assert_eq!(d["constraints"][0]["integrable"], true);
     assert_eq!(d["constraints"][0]["integral"], "x - y");
     let text = ok(&["derive", model.path()]).stdout;

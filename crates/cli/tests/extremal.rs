@@ -9,16 +9,15 @@ use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{close, lagrange, repo_root};
+use common::{close, json, repo_root, run, scratch, Run};
 
+/// `lagrange extremal ARGS --format json`, which must succeed.
 #[track_caller]
-fn json(args: &[&str]) -> Value {
+fn extremal(args: &[&str]) -> Value {
     let mut all = vec!["extremal"];
     all.extend_from_slice(args);
     all.extend(["--format", "json"]);
-    let (code, stdout, stderr) = lagrange(&all);
-    assert_eq!(code, 0, "lagrange {all:?}\n{stdout}\n{stderr}");
-    serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("not JSON ({e}):\n{stdout}"))
+    json(&all)
 }
 
 fn path(v: &Value) -> Vec<[f64; 2]> {
@@ -31,9 +30,7 @@ fn path(v: &Value) -> Vec<[f64; 2]> {
 }
 
 fn temp(name: &str, text: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("lagrange-extremal-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("a temporary directory");
-    let file = dir.join(name);
+    let file = scratch("extremal", name);
     std::fs::write(&file, text).expect("write the problem");
     file
 }
@@ -54,7 +51,7 @@ fn bisect(f: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64) -> f64 {
 
 #[test]
 fn shortest_path_is_the_straight_line() {
-    let v = json(&["examples/extremal/shortest_path.toml"]);
+    let v = extremal(&["examples/extremal/shortest_path.toml"]);
     assert_eq!(v["format"], "lagrange.extremal/1");
     for key in ["euler_equation", "first_integral", "value", "straight_line_value", "path"] {
         assert!(v.get(key).is_some(), "missing {key}");
@@ -82,7 +79,7 @@ fn cycloid(x1: f64, y1: f64) -> (f64, f64) {
 
 #[track_caller]
 fn check_brachistochrone(file: &Path, x1: f64, y1: f64, g: f64) {
-    let v = json(&[file.to_str().unwrap(), "--check-minimum"]);
+    let v = extremal(&[file.to_str().unwrap(), "--check-minimum"]);
     let (a, theta1) = cycloid(x1, y1);
     let time = (a / g).sqrt() * theta1;
     close(v["value"].as_f64().unwrap(), time, 1e-8);
@@ -128,7 +125,7 @@ fn brachistochrone_ending_on_the_singular_line_is_solved_from_the_end() {
     let text = "independent = \"x\"\nunknown = \"y\"\nintegrand = \"sqrt((1 + y'^2)/(2*g*y))\"\n\
                 [parameters]\ng = 9.81\n[boundary]\nstart = [0, 0.8]\nend = [1, 0]\n";
     let file = temp("mirror.toml", text);
-    let v = json(&[file.to_str().unwrap(), "--check-minimum", "--points", "51"]);
+    let v = extremal(&[file.to_str().unwrap(), "--check-minimum", "--points", "51"]);
     let (a, theta1) = cycloid(1.0, 0.8);
     close(v["value"].as_f64().unwrap(), (a / 9.81).sqrt() * theta1, 1e-8);
     assert_eq!(v["endpoints"], "singular_end");
@@ -144,7 +141,7 @@ fn brachistochrone_ending_on_the_singular_line_is_solved_from_the_end() {
 
 #[test]
 fn catenary_two_extremals_and_the_lower_one() {
-    let v = json(&["examples/extremal/catenary.toml", "--check-minimum"]);
+    let v = extremal(&["examples/extremal/catenary.toml", "--check-minimum"]);
     // a·cosh(h/a) = R with R = 1, h = 0.5: the shallow and the deep catenary.
     let (r, h) = (1.0, 0.5);
     let shallow = bisect(|a: f64| a * (h / a).cosh() - r, 0.5516, 1.0);
@@ -173,8 +170,8 @@ fn catenary_two_extremals_and_the_lower_one() {
 
 #[test]
 fn goldschmidt_rings_too_far_apart_have_no_extremal() {
-    let (code, stdout, stderr) = lagrange(&["extremal", "examples/extremal/catenary.toml", "--set", "h=0.7"]);
-    assert_eq!(code, 1, "{stdout}{stderr}");
+    let Run { code, stdout, stderr, .. } = run(&["extremal", "examples/extremal/catenary.toml", "--set", "h=0.7"]);
+    assert_eq!(code, Some(1), "{stdout}{stderr}");
     assert!(stderr.contains("no extremal"), "{stderr}");
     assert!(stderr.contains("Goldschmidt"), "{stderr}");
 }
@@ -186,7 +183,8 @@ fn oscillator_action_stops_being_a_minimum_after_half_a_period() {
     let omega: f64 = (k / m).sqrt();
     for t_end in [1.0, 1.5, 2.0, 3.0] {
         let set = format!("T={t_end}");
-        let v = json(&["examples/extremal/oscillator_action.toml", "--check-minimum", "--set", "k=4", "--set", &set]);
+        let v =
+            extremal(&["examples/extremal/oscillator_action.toml", "--check-minimum", "--set", "k=4", "--set", &set]);
         // q = sin(ωt)/sin(ωT): S = (mω/2)·cot(ωT).
         close(v["value"].as_f64().unwrap(), 0.5 * m * omega / (omega * t_end).tan(), 1e-9);
         let before = t_end < PI / omega;
@@ -203,9 +201,9 @@ fn oscillator_action_stops_being_a_minimum_after_half_a_period() {
 #[test]
 fn text_teaches_and_the_figure_is_drawn() {
     let svg = std::env::temp_dir().join(format!("lagrange-extremal-{}.svg", std::process::id()));
-    let (code, stdout, stderr) =
-        lagrange(&["extremal", "examples/extremal/catenary.toml", "--check-minimum", "--plot", svg.to_str().unwrap()]);
-    assert_eq!(code, 0, "{stderr}");
+    let Run { code, stdout, stderr, .. } =
+        run(&["extremal", "examples/extremal/catenary.toml", "--check-minimum", "--plot", svg.to_str().unwrap()]);
+    assert_eq!(code, Some(0), "{stderr}");
     for needle in ["Euler equation", "Beltrami", "straight line", "Legendre", "Jacobi", "conjugate", "minimum"] {
         assert!(stdout.contains(needle), "missing {needle}:\n{stdout}");
     }
@@ -217,8 +215,8 @@ fn text_teaches_and_the_figure_is_drawn() {
 #[track_caller]
 fn check_bad(name: &str, text: &str, location: &str, needle: &str) {
     let file = temp(name, text);
-    let (code, stdout, stderr) = lagrange(&["extremal", file.to_str().unwrap()]);
-    assert_eq!(code, 2, "{stdout}{stderr}");
+    let Run { code, stdout, stderr, .. } = run(&["extremal", file.to_str().unwrap()]);
+    assert_eq!(code, Some(2), "{stdout}{stderr}");
     assert!(stderr.contains(&format!("{name}:{location}")), "expected {name}:{location} in\n{stderr}");
     assert!(stderr.contains(needle), "expected '{needle}' in\n{stderr}");
 }

@@ -7,23 +7,20 @@
 use serde_json::Value;
 
 mod common;
-use common::{close, lagrange, repo_root};
+use common::{close, is_close, json, repo_root, run, scratch, Run};
 
+/// `lagrange inertia ARGS --format json`, which must succeed.
 #[track_caller]
-fn json(args: &[&str]) -> Value {
+fn inertia(args: &[&str]) -> Value {
     let mut all = vec!["inertia"];
     all.extend_from_slice(args);
     all.extend_from_slice(&["--format", "json"]);
-    let (code, stdout, stderr) = lagrange(&all);
-    assert_eq!(code, 0, "lagrange {all:?}\n{stdout}\n{stderr}");
-    serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("not JSON ({e}):\n{stdout}"))
+    json(&all)
 }
 
 /// A body file in a temporary directory.
 fn body(name: &str, text: &str) -> String {
-    let dir = std::env::temp_dir().join(format!("lagrange-inertia-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("a temporary directory");
-    let path = dir.join(name);
+    let path = scratch("inertia", name);
     std::fs::write(&path, text).expect("the body file is written");
     path.display().to_string()
 }
@@ -50,7 +47,7 @@ fn close_matrix(got: &[[f64; 3]; 3], want: &[[f64; 3]; 3], rel: f64) {
     for j in 0..3 {
         for k in 0..3 {
             assert!(
-                (got[j][k] - want[j][k]).abs() <= rel * scale,
+                is_close(got[j][k], want[j][k], rel, scale),
                 "entry {j}{k}: got {}, want {}\n{got:?}",
                 got[j][k],
                 want[j][k]
@@ -66,7 +63,7 @@ fn diag(d: [f64; 3]) -> [[f64; 3]; 3] {
 #[test]
 fn notes_cube_about_its_centre_and_a_corner() {
     // M = 3, a = 2: M a² = 12.
-    let v = json(&["examples/bodies/cube.toml", "--set", "M=3", "--set", "a=2"]);
+    let v = inertia(&["examples/bodies/cube.toml", "--set", "M=3", "--set", "a=2"]);
     assert_eq!(v["format"], "lagrange.inertia/1");
     for key in ["mass", "center_of_mass", "about", "tensor", "tensor_exact", "principal_moments", "principal_axes"] {
         assert!(v.get(key).is_some(), "missing {key}");
@@ -80,7 +77,7 @@ fn notes_cube_about_its_centre_and_a_corner() {
     assert_eq!(e[2][2], "M*a^2/6");
     close_matrix(&matrix(&v["tensor"]), &diag([2.0; 3]), 1e-15);
 
-    let v = json(&["examples/bodies/cube.toml", "--set", "M=3", "--set", "a=2", "--about", "0,0,0"]);
+    let v = inertia(&["examples/bodies/cube.toml", "--set", "M=3", "--set", "a=2", "--about", "0,0,0"]);
     let e = strings(&v["tensor_exact"]);
     for j in 0..3 {
         for k in 0..3 {
@@ -110,12 +107,12 @@ fn notes_cube_about_its_centre_and_a_corner() {
 
 #[test]
 fn the_text_names_the_steps_and_the_symmetry() {
-    let (code, text, _) = lagrange(&["inertia", "examples/bodies/cube.toml", "--about", "0,0,0"]);
-    assert_eq!(code, 0);
+    let Run { code, stdout: text, .. } = run(&["inertia", "examples/bodies/cube.toml", "--about", "0,0,0"]);
+    assert_eq!(code, Some(0));
     for needle in ["cube: solid box", "M*a^2/6", "2*M*a^2/3", "-M*a^2/4", "Parallel-axis", "symmetric top", "I1 = "] {
         assert!(text.contains(needle), "missing {needle:?} in\n{text}");
     }
-    let (_, text, _) = lagrange(&["inertia", "examples/bodies/cube.toml"]);
+    let Run { stdout: text, .. } = run(&["inertia", "examples/bodies/cube.toml"]);
     assert!(text.contains("spherical top"), "{text}");
     assert!(!text.contains("Parallel-axis"), "{text}");
 }
@@ -125,7 +122,7 @@ fn one_part(shape: &str, size: &str) -> Value {
     let text = format!(
         "[parameters]\nM = 2.0\nR = 0.7\nh = 1.3\nL = 1.9\n[[parts]]\nshape = \"{shape}\"\nmass = \"M\"\n{size}center = [0.5, -1, 2]\n"
     );
-    json(&[&body(&format!("{shape}.toml"), &text)])
+    inertia(&[&body(&format!("{shape}.toml"), &text)])
 }
 
 #[test]
@@ -168,14 +165,14 @@ fn every_shape_has_its_standard_moments() {
 #[test]
 fn cone_centre_is_h_over_4_above_the_base() {
     // Base in z = 0, apex at z = h = 2, R = 1, M = 1.
-    let v = json(&["examples/bodies/cone.toml"]);
+    let v = inertia(&["examples/bodies/cone.toml"]);
     assert_eq!(vector(&v["center_of_mass"]), [0.0, 0.0, 0.5]);
     // About the apex: I_x = 3/20 M R² + 3/5 M h² (a textbook result independent of the CM).
-    let v = json(&["examples/bodies/cone.toml", "--about", "0,0,h"]);
+    let v = inertia(&["examples/bodies/cone.toml", "--about", "0,0,h"]);
     close_matrix(&matrix(&v["tensor"]), &diag([0.15 + 2.4, 0.15 + 2.4, 0.3]), 1e-14);
     assert_eq!(strings(&v["tensor_exact"])[0][0], "3*M*(R^2 + 4*h^2)/20");
     // About the centre of the base: I_x = M (3R²/20 + h²/10).
-    let v = json(&["examples/bodies/cone.toml", "--about", "0,0,0"]);
+    let v = inertia(&["examples/bodies/cone.toml", "--about", "0,0,0"]);
     close(matrix(&v["tensor"])[0][0], 0.15 + 0.4, 1e-14);
 }
 
@@ -186,7 +183,7 @@ fn parallel_axis_theorem_for_an_offset_sphere() {
     let path = body("offset_sphere.toml", text);
     let own = 0.4 * 2.0 * 0.25;
     for (about, p) in [("0,0,0", [0.0, 0.0, 0.0]), ("1,0,-1", [1.0, 0.0, -1.0])] {
-        let v = json(&[&path, "--about", about]);
+        let v = inertia(&[&path, "--about", about]);
         let r = [1.0 - p[0], 2.0 - p[1], 3.0 - p[2]];
         let r2: f64 = r.iter().map(|x| x * x).sum();
         let want: [[f64; 3]; 3] = std::array::from_fn(|j| {
@@ -197,7 +194,7 @@ fn parallel_axis_theorem_for_an_offset_sphere() {
     }
     // Two parts: the combined CM and the Steiner terms of each.
     let text = "[[parts]]\nshape = \"point\"\nmass = 1\ncenter = [0, 0, 0]\n[[parts]]\nshape = \"point\"\nmass = 3\ncenter = [4, 0, 0]\n";
-    let v = json(&[&body("two_points.toml", text)]);
+    let v = inertia(&[&body("two_points.toml", text)]);
     assert_eq!(vector(&v["center_of_mass"]), [3.0, 0.0, 0.0]);
     // Reduced mass 3/4 times the distance² 16 = 12 about any axis ⊥ x through the CM.
     close_matrix(&matrix(&v["tensor"]), &diag([0.0, 12.0, 12.0]), 1e-15);
@@ -224,7 +221,7 @@ fn a_turned_box_is_r_i_rt_with_the_same_principal_moments() {
     let text = format!(
         "[[parts]]\nshape = \"box\"\nmass = 12\nsize = [1, 2, 3]\ncenter = [1, 1, 1]\norientation = [{al}, {be}, {ga}]\n"
     );
-    let v = json(&[&body("turned_box.toml", &text)]);
+    let v = inertia(&[&body("turned_box.toml", &text)]);
     let own = [13.0, 10.0, 5.0];
     let d = rotation(al, be, ga);
     // R = Dᵀ: I = Dᵀ diag(own) D.
@@ -250,7 +247,7 @@ fn linear_density_is_integrated_exactly() {
     // ∫ρx² = 7/12 rho a³ b c = 7, ∫ρy² = 3/2 rho a c b³/3 = 24, ∫ρz² = 3/2 rho a b c³/3 = 54,
     // so about the CM: I_xx = 24 + 54 − M(1 + 2.25) = 19.5,
     // I_yy = 7 + 54 − M(25/81 + 2.25) = 61 − 18·(25/81) − 40.5, I_zz = 7 + 24 − 18·(25/81) − 18.
-    let v = json(&["examples/bodies/wedge_density.toml"]);
+    let v = inertia(&["examples/bodies/wedge_density.toml"]);
     assert_eq!(v["mass_exact"], "3*a*b*c*rho/2");
     assert_eq!(v["center_of_mass_exact"][0], "5*a/9");
     close(v["mass"].as_f64().unwrap(), 18.0, 1e-15);
@@ -258,7 +255,7 @@ fn linear_density_is_integrated_exactly() {
     close_matrix(&matrix(&v["tensor"]), &diag([19.5, 61.0 - x2 - 40.5, 31.0 - x2 - 18.0]), 1e-14);
     assert_eq!(v["cubature"], Value::Null);
     // About the origin, an off-diagonal product: −∫ρxy = −(5/6 rho a² b c)(b/2) = −10.
-    let v = json(&["examples/bodies/wedge_density.toml", "--about", "0,0,0"]);
+    let v = inertia(&["examples/bodies/wedge_density.toml", "--about", "0,0,0"]);
     close(matrix(&v["tensor"])[0][1], -10.0, 1e-14);
 }
 
@@ -278,7 +275,7 @@ fn gaussian_density_by_cubature_matches_the_closed_form() {
     let (w, s) = (0.7f64, 1.0f64);
     let g0 = std::f64::consts::PI.sqrt() * w * erf(s / w);
     let g2 = w * w / 2.0 * (g0 - 2.0 * s * (-(s * s) / (w * w)).exp());
-    let v = json(&["examples/bodies/gaussian_density.toml"]);
+    let v = inertia(&["examples/bodies/gaussian_density.toml"]);
     close(v["mass"].as_f64().unwrap(), g0.powi(3), 1e-8);
     close_matrix(&matrix(&v["tensor"]), &diag([2.0 * g0 * g0 * g2; 3]), 1e-8);
     assert_eq!(v["tensor_exact"], Value::Null);
@@ -293,7 +290,7 @@ fn gaussian_density_by_cubature_matches_the_closed_form() {
 fn exponential_density_by_cubature_with_an_offset_centre() {
     // ρ = exp(x) on [0,1]³: M = e − 1, ∫xρ = 1, ∫x²ρ = e − 2, ∫y²ρ = (e − 1)/3, ∫xyρ = 1/2.
     let text = "[[parts]]\nshape = \"density\"\ndensity = \"exp(x)\"\nregion = [[0, 1], [0, 1], [0, 1]]\n";
-    let v = json(&[&body("exp.toml", text), "--about", "0,0,0"]);
+    let v = inertia(&[&body("exp.toml", text), "--about", "0,0,0"]);
     let e = std::f64::consts::E;
     let m = e - 1.0;
     close(v["mass"].as_f64().unwrap(), m, 1e-10);
@@ -310,8 +307,8 @@ fn exponential_density_by_cubature_with_an_offset_centre() {
 #[track_caller]
 fn check_bad(name: &str, text: &str, line_col: &str, message: &str) {
     let path = body(name, text);
-    let (code, stdout, stderr) = lagrange(&["inertia", &path]);
-    assert_eq!(code, 2, "{stdout}\n{stderr}");
+    let Run { code, stdout, stderr, .. } = run(&["inertia", &path]);
+    assert_eq!(code, Some(2), "{stdout}\n{stderr}");
     assert!(stderr.contains(&format!("{path}:{line_col}: ")), "expected {path}:{line_col} in\n{stderr}");
     assert!(stderr.contains(message), "expected {message:?} in\n{stderr}");
 }
@@ -373,11 +370,11 @@ fn bad_bodies_exit_2_with_file_line_and_column() {
 
 #[test]
 fn a_bad_reference_point_exits_2() {
-    let (code, _, stderr) = lagrange(&["inertia", "examples/bodies/cube.toml", "--about", "0,b,0"]);
-    assert_eq!(code, 2);
+    let Run { code, stderr, .. } = run(&["inertia", "examples/bodies/cube.toml", "--about", "0,b,0"]);
+    assert_eq!(code, Some(2));
     assert!(stderr.contains("--about:1:3"), "{stderr}");
-    let (code, _, stderr) = lagrange(&["inertia", "examples/bodies/cube.toml", "--about", "1,2"]);
-    assert_eq!(code, 2);
+    let Run { code, stderr, .. } = run(&["inertia", "examples/bodies/cube.toml", "--about", "1,2"]);
+    assert_eq!(code, Some(2));
     assert!(stderr.contains("expected `com` or a point x,y,z"), "{stderr}");
 }
 
@@ -392,7 +389,7 @@ fn every_body_example_runs_and_follows_the_contract() {
     files.sort();
     assert!(files.len() >= 5, "{files:?}");
     for file in files {
-        let v = json(&[&format!("examples/bodies/{file}")]);
+        let v = inertia(&[&format!("examples/bodies/{file}")]);
         assert_eq!(v["format"], "lagrange.inertia/1", "{file}");
         assert!(v["mass"].as_f64().unwrap() > 0.0, "{file}");
         let t = matrix(&v["tensor"]);

@@ -6,26 +6,12 @@
 
 use serde_json::Value;
 use std::f64::consts::PI;
-use std::path::PathBuf;
 
 mod common;
-use common::{close, lagrange};
-
-#[track_caller]
-fn json(args: &[&str]) -> Value {
-    let (code, stdout, stderr) = lagrange(args);
-    assert_eq!(code, 0, "lagrange {args:?}\n{stdout}\n{stderr}");
-    serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("not JSON ({e}):\n{stdout}"))
-}
+use common::{close, json, run, scratch, Run};
 
 fn floats(v: &Value) -> Vec<f64> {
     v.as_array().expect("an array").iter().map(|x| x.as_f64().expect("a number")).collect()
-}
-
-fn temp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("lagrange-modes-orbit-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("a temporary directory");
-    dir.join(name)
 }
 
 #[test]
@@ -55,7 +41,7 @@ fn triatomic_molecule_frequencies_and_free_translation() {
     assert_eq!(v["kinds"][0], "free");
     let exact: Vec<&str> = v["exact_frequencies"].as_array().unwrap().iter().map(|x| x.as_str().unwrap()).collect();
     assert_eq!(exact[1], "sqrt(k/m)");
-    let (_, text, _) = lagrange(&["modes", "examples/triatomic.toml"]);
+    let Run { stdout: text, .. } = run(&["modes", "examples/triatomic.toml"]);
     assert!(text.contains("free motion"), "{text}");
 }
 
@@ -72,8 +58,8 @@ fn chain_of_fifty_masses_has_the_textbook_frequencies() {
 
 #[test]
 fn double_pendulum_upside_down_is_rejected_and_its_lowest_position_is_not() {
-    let (code, _, stderr) = lagrange(&["modes", "examples/double_pendulum.toml"]);
-    assert_eq!(code, 2);
+    let Run { code, stderr, .. } = run(&["modes", "examples/double_pendulum.toml"]);
+    assert_eq!(code, Some(2));
     assert!(stderr.contains("unstable") && stderr.contains("--at"), "{stderr}");
 
     let v = json(&["modes", "examples/double_pendulum.toml", "--at", "a=0", "b=0", "--format", "json"]);
@@ -89,19 +75,19 @@ fn double_pendulum_upside_down_is_rejected_and_its_lowest_position_is_not() {
 
 #[test]
 fn modes_bad_input_exits_2() {
-    let (code, _, stderr) = lagrange(&["modes", "examples/kepler.toml"]);
-    assert_eq!(code, 2, "{stderr}");
+    let Run { code, stderr, .. } = run(&["modes", "examples/kepler.toml"]);
+    assert_eq!(code, Some(2), "{stderr}");
     assert!(stderr.contains("no equilibrium"), "{stderr}");
-    let (code, _, stderr) = lagrange(&["modes", "examples/coupled_oscillators.toml", "--at", "zz=1"]);
-    assert_eq!(code, 2);
+    let Run { code, stderr, .. } = run(&["modes", "examples/coupled_oscillators.toml", "--at", "zz=1"]);
+    assert_eq!(code, Some(2));
     assert!(stderr.contains("no coordinate 'zz'"), "{stderr}");
 }
 
 #[test]
 fn modes_animation_is_an_svg() {
-    let path = temp("triatomic.svg");
-    let (code, _, stderr) = lagrange(&["modes", "examples/triatomic.toml", "--animate", path.to_str().unwrap()]);
-    assert_eq!(code, 0, "{stderr}");
+    let path = scratch("modes-orbit", "triatomic.svg");
+    let Run { code, stderr, .. } = run(&["modes", "examples/triatomic.toml", "--animate", path.to_str().unwrap()]);
+    assert_eq!(code, Some(0), "{stderr}");
     let svg = std::fs::read_to_string(&path).unwrap();
     assert!(svg.starts_with("<svg") && svg.contains("<animate") && svg.trim_end().ends_with("</svg>"));
 }
@@ -153,7 +139,7 @@ fn two_bodies_orbit_with_the_reduced_mass() {
 
 #[test]
 fn screened_potential_precesses_and_plots() {
-    let path = temp("central.svg");
+    let path = scratch("modes-orbit", "central.svg");
     let v = json(&["orbit", "examples/central_force.toml", "--format", "json", "--plot", path.to_str().unwrap()]);
     assert_eq!(v["kind"], "bounded");
     assert!(v["eccentricity"].is_null());
@@ -168,18 +154,10 @@ fn screened_potential_precesses_and_plots() {
 fn runge_lenz_vector_is_conserved_in_simulation() {
     let v = json(&["orbit", "examples/kepler.toml", "--format", "json"]);
     let a0 = floats(&v["runge_lenz"]);
-    let csv = temp("kepler.csv");
-    let (code, _, stderr) = lagrange(&[
-        "simulate",
-        "examples/kepler.toml",
-        "--until",
-        "45",
-        "--rtol",
-        "1e-11",
-        "--out",
-        csv.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{stderr}");
+    let csv = scratch("modes-orbit", "kepler.csv");
+    let Run { code, stderr, .. } =
+        run(&["simulate", "examples/kepler.toml", "--until", "45", "--rtol", "1e-11", "--out", csv.to_str().unwrap()]);
+    assert_eq!(code, Some(0), "{stderr}");
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
@@ -199,10 +177,10 @@ fn runge_lenz_vector_is_conserved_in_simulation() {
 
 #[test]
 fn orbit_rejects_other_models() {
-    let (code, _, stderr) = lagrange(&["orbit", "examples/coupled_oscillators.toml"]);
-    assert_eq!(code, 2);
+    let Run { code, stderr, .. } = run(&["orbit", "examples/coupled_oscillators.toml"]);
+    assert_eq!(code, Some(2));
     assert!(stderr.contains("not a central-force model"), "{stderr}");
-    let (code, _, stderr) = lagrange(&["orbit", "examples/chain50.toml"]);
-    assert_eq!(code, 2);
+    let Run { code, stderr, .. } = run(&["orbit", "examples/chain50.toml"]);
+    assert_eq!(code, Some(2));
     assert!(stderr.contains("exactly two"), "{stderr}");
 }

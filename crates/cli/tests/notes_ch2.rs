@@ -17,13 +17,12 @@
 //! (never panic) and name the file, with `line:col` where the error has a place.
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
-use std::io::Read;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::thread;
-use std::time::{Duration, Instant};
+use std::path::Path;
 
 use serde_json::Value;
+
+mod common;
+use common::{is_close, json, repo_root, run, Run};
 
 /// Random sample points per comparison (coordinates, velocities, accelerations,
 /// momenta, `t`, and the parameters scaled by a random factor in [0.6, 1.4]).
@@ -32,67 +31,14 @@ const SAMPLES: usize = 8;
 const RTOL: f64 = 1e-9;
 /// Relative tolerance of a comparison with a finite-difference derivative.
 const FD_RTOL: f64 = 1e-6;
-/// A derivation of any example takes well under a second; this only stops a hang.
-const TIMEOUT: Duration = Duration::from_secs(120);
+/// The tolerances are relative to the value expected, or to this where it is smaller.
+const FLOOR: f64 = 1.0;
 
 // ------------------------------------------------------------------ running the binary
 
-fn repo_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-struct Run {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-}
-
-/// Runs `lagrange ARGS` in the repository root, reading both pipes while it runs.
-fn run_lagrange(args: &[&str]) -> Run {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_lagrange"))
-        .args(args)
-        .current_dir(repo_root())
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap_or_else(|err| panic!("cannot start lagrange {args:?}: {err}"));
-    let mut out_pipe = child.stdout.take().expect("stdout is piped");
-    let mut err_pipe = child.stderr.take().expect("stderr is piped");
-    let out_reader = thread::spawn(move || {
-        let mut buf = Vec::new();
-        let _ = out_pipe.read_to_end(&mut buf);
-        buf
-    });
-    let err_reader = thread::spawn(move || {
-        let mut buf = Vec::new();
-        let _ = err_pipe.read_to_end(&mut buf);
-        buf
-    });
-    let start = Instant::now();
-    let status = loop {
-        match child.try_wait().expect("wait for lagrange") {
-            Some(status) => break Some(status),
-            None if start.elapsed() > TIMEOUT => {
-                let _ = child.kill();
-                let _ = child.wait();
-                break None;
-            }
-            None => thread::sleep(Duration::from_millis(5)),
-        }
-    };
-    let stdout = String::from_utf8_lossy(&out_reader.join().expect("stdout reader")).into_owned();
-    let stderr = String::from_utf8_lossy(&err_reader.join().expect("stderr reader")).into_owned();
-    let status = status.unwrap_or_else(|| panic!("lagrange {args:?} ran past {TIMEOUT:?}\nstderr:\n{stderr}"));
-    Run { code: status.code(), stdout, stderr }
-}
-
 /// `lagrange derive PATH --format json`, which must succeed; the parsed output.
 fn derive_json(path: &str) -> Value {
-    let run = run_lagrange(&["derive", path, "--format", "json"]);
-    assert_eq!(run.code, Some(0), "lagrange derive {path} --format json failed\nstderr:\n{}", run.stderr);
-    let json: Value = serde_json::from_str(&run.stdout)
-        .unwrap_or_else(|err| panic!("{path}: stdout is not JSON: {err}\nstdout:\n{}", run.stdout));
+    let json = json(&["derive", path, "--format", "json"]);
     assert_eq!(json["format"], "lagrange.derive/1", "{path}: format");
     json
 }
@@ -111,10 +57,6 @@ impl Rng {
     fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
         lo + (hi - lo) * self.next_f64()
     }
-}
-
-fn close(actual: f64, expected: f64, rtol: f64) -> bool {
-    (actual - expected).abs() <= rtol * (1.0 + actual.abs().max(expected.abs()))
 }
 
 /// Which names an expression may use: each space is the previous one's names plus more.
@@ -169,7 +111,10 @@ fn check_expr_eq(what: &str, actual: &str, expected: &str, vars: &[(&str, f64, f
         let a = eval(&mut pool, what, actual, &env);
         let e = eval(&mut pool, what, expected, &env);
         assert!(e.is_finite(), "{what}: expected {expected:?} is not finite at {env:?}");
-        assert!(close(a, e, RTOL), "{what}: got {actual:?} = {a}, the notes give {expected:?} = {e} at {env:?}");
+        assert!(
+            is_close(a, e, RTOL, FLOOR),
+            "{what}: got {actual:?} = {a}, the notes give {expected:?} = {e} at {env:?}"
+        );
     }
 }
 
@@ -257,7 +202,7 @@ impl Case {
             let e = self.value(&what, expected, s, space);
             assert!(e.is_finite(), "{what}: expected {expected:?} is not finite at sample {s}");
             assert!(
-                close(a, e, RTOL),
+                is_close(a, e, RTOL, FLOOR),
                 "{what}: got {actual:?} = {a}, the notes give {expected:?} = {e} at {:?}",
                 self.samples[s].env(space)
             );
@@ -331,7 +276,7 @@ impl Case {
                 }
                 let want = self.value(&what, e, s, Space::Acceleration);
                 assert!(
-                    close(row, want, RTOL),
+                    is_close(row, want, RTOL, FLOOR),
                     "{what}: M*q'' - f = {row}, the notes' E_{q} = {e:?} = {want} at {:?}",
                     self.samples[s].acceleration
                 );
@@ -395,7 +340,7 @@ impl Case {
                 phase.insert(format!("p_{q}"), p_value);
             }
             let h = eval(&mut self.pool, &what, &hamiltonian, &phase);
-            assert!(close(h, sum, RTOL), "{what}: H = {h}, sum p q' - L = {sum} at {phase:?}");
+            assert!(is_close(h, sum, RTOL, FLOOR), "{what}: H = {h}, sum p q' - L = {sum} at {phase:?}");
         }
     }
 
@@ -432,11 +377,11 @@ impl Case {
                     want_dp += eval(&mut self.pool, &what, e, &point);
                 }
                 assert!(
-                    close(dq_value, dh_dp, FD_RTOL),
+                    is_close(dq_value, dh_dp, FD_RTOL, FLOOR),
                     "{what}: dq = {dq:?} = {dq_value}, dH/dp = {dh_dp} at {point:?}"
                 );
                 assert!(
-                    close(dp_value, want_dp, FD_RTOL),
+                    is_close(dp_value, want_dp, FD_RTOL, FLOOR),
                     "{what}: dp = {dp:?} = {dp_value}, -dH/dq (+ extra) = {want_dp} at {point:?}"
                 );
             }
@@ -539,7 +484,7 @@ impl Case {
                         Ok(e) => self.pool.eval(e, &|name: &str| env.get(name).copied()).ok(),
                         Err(_) => None,
                     };
-                    if !got.is_some_and(|v| close(v, want, RTOL)) {
+                    if !got.is_some_and(|v| is_close(v, want, RTOL, FLOOR)) {
                         equal = false;
                         break;
                     }
@@ -972,7 +917,7 @@ fn every_example_prints_text_and_latex() {
     for file in example_files() {
         for format in ["text", "latex"] {
             let path = format!("examples/{file}");
-            let run = run_lagrange(&["derive", &path, "--format", format]);
+            let run = run(&["derive", &path, "--format", format]);
             assert_eq!(run.code, Some(0), "derive {path} --format {format}\nstderr:\n{}", run.stderr);
             assert!(!run.stdout.trim().is_empty(), "derive {path} --format {format}: empty output");
         }
@@ -985,7 +930,7 @@ fn every_example_prints_text_and_latex() {
 #[track_caller]
 fn derive_bad(file: &str) -> Run {
     let path = format!("crates/cli/tests/bad/{file}");
-    let run = run_lagrange(&["derive", &path, "--format", "json"]);
+    let run = run(&["derive", &path, "--format", "json"]);
     assert!(!run.stderr.contains("panicked"), "{file}: lagrange panicked\nstderr:\n{}", run.stderr);
     assert_eq!(
         run.code,

@@ -20,7 +20,7 @@
 
 mod common;
 
-use common::{repo_root, run as lagrange, Run, TempFile};
+use common::{ok, repo_root, run as lagrange, Csv, Run, TempFile};
 use serde_json::Value;
 use std::f64::consts::PI;
 
@@ -44,50 +44,14 @@ fn example_variant(file: &str, replacements: &[(&str, &str)]) -> TempFile {
     tmp
 }
 
-/// The CSV of a run: header and numeric rows.
-struct Csv {
-    header: Vec<String>,
-    rows: Vec<Vec<f64>>,
-}
-
-impl Csv {
-    fn read(path: &str) -> Csv {
-        let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("cannot read the CSV {path}: {e}"));
-        let mut lines = text.lines();
-        let header: Vec<String> = lines.next().expect("a header row").split(',').map(str::to_string).collect();
-        let rows: Vec<Vec<f64>> = lines
-            .map(|l| {
-                let row: Vec<f64> = l
-                    .split(',')
-                    .map(|v| v.parse::<f64>().unwrap_or_else(|e| panic!("CSV value `{v}` in row `{l}`: {e}")))
-                    .collect();
-                assert_eq!(row.len(), header.len(), "row `{l}` has {} values for {} columns", row.len(), header.len());
-                row
-            })
-            .collect();
-        Csv { header, rows }
-    }
-
-    fn col(&self, name: &str) -> usize {
-        self.header.iter().position(|h| h == name).unwrap_or_else(|| panic!("no column `{name}` in {:?}", self.header))
-    }
-
-    fn column(&self, name: &str) -> Vec<f64> {
-        let k = self.col(name);
-        self.rows.iter().map(|r| r[k]).collect()
-    }
-}
-
 /// Runs `lagrange simulate MODEL ARGS --summary json --out TMP` and expects success.
 fn simulate(model: &str, args: &[&str]) -> (Value, Csv) {
     let csv = TempFile::new("run", "csv");
     let mut all = vec!["simulate", model];
     all.extend_from_slice(args);
     all.extend_from_slice(&["--summary", "json", "--out", csv.path()]);
-    let run = lagrange(&all);
-    assert_eq!(run.code, Some(0), "the run failed\n{}", run.describe());
-    let summary: Value = serde_json::from_str(&run.stdout)
-        .unwrap_or_else(|e| panic!("the summary is not JSON: {e}\n{}", run.describe()));
+    let run = ok(&all);
+    let summary = run.json();
     assert_eq!(summary["format"], "lagrange.simulate/1", "{}", run.describe());
     (summary, Csv::read(csv.path()))
 }

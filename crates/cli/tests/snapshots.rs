@@ -13,12 +13,10 @@
 //! A new example or bad model gets its snapshot the same way; a snapshot whose model
 //! is gone fails `no_orphan_snapshots`.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn repo_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().expect("the repository root exists")
-}
+use common::{repo_root, run};
+use std::path::Path;
 
 /// The `.toml` files of a folder (relative to the repository root), sorted by name.
 fn models(dir: &str) -> Vec<String> {
@@ -32,19 +30,15 @@ fn models(dir: &str) -> Vec<String> {
 }
 
 /// Runs `lagrange ARGS` in the repository root; exit code, stdout and stderr as one text.
-fn run(args: &[&str]) -> String {
-    let root = repo_root();
-    let out = Command::new(env!("CARGO_BIN_EXE_lagrange"))
-        .args(args)
-        .current_dir(&root)
-        .output()
-        .unwrap_or_else(|e| panic!("cannot start lagrange {args:?}: {e}"));
-    let code = out.status.code().map_or_else(|| "killed by a signal".to_string(), |c| c.to_string());
-    let normalize = |bytes: &[u8]| String::from_utf8_lossy(bytes).replace(&root.display().to_string(), "[ROOT]");
+fn snapshot(args: &[&str]) -> String {
+    let root = repo_root().display().to_string();
+    let r = run(args);
+    let code = r.code.map_or_else(|| "killed by a signal".to_string(), |c| c.to_string());
+    let normalize = |text: &str| text.replace(&root, "[ROOT]");
     format!(
         "exit code: {code}\n----- stdout -----\n{}----- stderr -----\n{}",
-        normalize(&out.stdout),
-        normalize(&out.stderr)
+        normalize(&r.stdout),
+        normalize(&r.stderr)
     )
 }
 
@@ -57,7 +51,7 @@ fn check_all(dir: &str, prefix: &str, extra_args: &[&str]) {
         let path = format!("{dir}/{file}");
         let mut args = vec!["derive", path.as_str()];
         args.extend_from_slice(extra_args);
-        let output = run(&args);
+        let output = snapshot(&args);
         let name = format!("{prefix}{}", file.trim_end_matches(".toml"));
         let result = std::panic::catch_unwind(|| {
             insta::with_settings!({ description => format!("lagrange {}", args.join(" ")), omit_expression => true }, {

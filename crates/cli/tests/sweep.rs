@@ -2,22 +2,10 @@
 //! (rows, shards merged back to the unsharded output, the heat map) and bad
 //! grids (exit 2).
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn lagrange(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lagrange")).args(args).output().expect("the binary runs")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("lagrange-sweep-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
+use common::{ok, repo_root, run as lagrange, scratch};
+use std::path::Path;
 
 fn text(path: &Path) -> String {
     std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
@@ -32,7 +20,7 @@ const GRID: &str = "a=-3:3:4,b=-3:3:4";
 /// bit, however the runs' lengths differ.
 #[test]
 fn lanes_that_take_the_next_run_give_the_rows_of_lanes_that_do_not() {
-    let model = repo().join("examples/double_pendulum.toml");
+    let model = repo_root().join("examples/double_pendulum.toml");
     let model = model.to_str().unwrap();
     let grid = "a=-3:3:6,b=-3:3:8";
     for lyapunov in [true, false] {
@@ -45,22 +33,20 @@ fn lanes_that_take_the_next_run_give_the_rows_of_lanes_that_do_not() {
             if !lyapunov {
                 args.push("--no-lyapunov");
             }
-            let out = lagrange(&args);
-            assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+            ok(&args);
         };
-        let whole = scratch(&format!("refill-whole-{lyapunov}.csv"));
+        let whole = scratch("sweep-test", &format!("refill-whole-{lyapunov}.csv"));
         run(&whole, None);
         let mut parts = Vec::new();
         for i in 0..6 {
-            let part = scratch(&format!("refill-part{i}-{lyapunov}.csv"));
+            let part = scratch("sweep-test", &format!("refill-part{i}-{lyapunov}.csv"));
             run(&part, Some(&format!("{i}/6")));
             parts.push(part.to_str().unwrap().to_string());
         }
-        let merged = scratch(&format!("refill-merged-{lyapunov}.csv"));
+        let merged = scratch("sweep-test", &format!("refill-merged-{lyapunov}.csv"));
         let mut args = vec!["sweep", "--merge", merged.to_str().unwrap()];
         args.extend(parts.iter().map(String::as_str));
-        let out = lagrange(&args);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        ok(&args);
         let (whole, merged) = (text(&whole), text(&merged));
         assert_eq!(whole.lines().count(), 2 + 48);
         assert_eq!(merged, whole, "lyapunov: {lyapunov}");
@@ -69,11 +55,11 @@ fn lanes_that_take_the_next_run_give_the_rows_of_lanes_that_do_not() {
 
 #[test]
 fn shards_merge_to_the_whole_sweep_and_the_heat_map_is_drawn() {
-    let model = repo().join("examples/double_pendulum.toml");
+    let model = repo_root().join("examples/double_pendulum.toml");
     let model = model.to_str().unwrap();
-    let whole = scratch("whole.csv");
-    let svg = scratch("map.svg");
-    let out = lagrange(&[
+    let whole = scratch("sweep-test", "whole.csv");
+    let svg = scratch("sweep-test", "map.svg");
+    ok(&[
         "sweep",
         model,
         "--until",
@@ -85,7 +71,6 @@ fn shards_merge_to_the_whole_sweep_and_the_heat_map_is_drawn() {
         "--heatmap",
         svg.to_str().unwrap(),
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let csv = text(&whole);
     let lines: Vec<&str> = csv.lines().collect();
     assert!(
@@ -106,9 +91,9 @@ fn shards_merge_to_the_whole_sweep_and_the_heat_map_is_drawn() {
 
     let mut parts = Vec::new();
     for i in 0..3 {
-        let part = scratch(&format!("part{i}.csv"));
+        let part = scratch("sweep-test", &format!("part{i}.csv"));
         let shard = format!("{i}/3");
-        let out = lagrange(&[
+        ok(&[
             "sweep",
             model,
             "--until",
@@ -122,26 +107,24 @@ fn shards_merge_to_the_whole_sweep_and_the_heat_map_is_drawn() {
             "--out",
             part.to_str().unwrap(),
         ]);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
         parts.push(part.to_str().unwrap().to_string());
     }
-    let merged = scratch("merged.csv");
+    let merged = scratch("sweep-test", "merged.csv");
     let mut args = vec!["sweep", "--merge", merged.to_str().unwrap()];
     args.extend(parts.iter().rev().map(String::as_str));
-    let out = lagrange(&args);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    ok(&args);
     assert_eq!(text(&merged), csv);
 
     // Two of three shards: the merge names what is missing.
     let out = lagrange(&["sweep", "--merge", merged.to_str().unwrap(), &parts[0], &parts[2]]);
-    assert_eq!(out.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.code, Some(2));
+    let err = &out.stderr;
     assert!(err.contains("5 of 16 runs are missing (first: [1, 4, 7, 10, 13]); missing shards: 1/3"), "{err}");
 }
 
 #[test]
 fn bad_grids_and_requests_exit_2() {
-    let model = repo().join("examples/double_pendulum.toml");
+    let model = repo_root().join("examples/double_pendulum.toml");
     let model = model.to_str().unwrap();
     let cases: &[(&[&str], &str)] = &[
         (&["--grid", "a=0:1"], "'a=0:1' is not NAME=START:STOP:COUNT"),
@@ -158,8 +141,8 @@ fn bad_grids_and_requests_exit_2() {
         let mut args = vec!["sweep", model, "--until", "1"];
         args.extend_from_slice(extra);
         let out = lagrange(&args);
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(2), "{extra:?}: {err}");
+        let err = &out.stderr;
+        assert_eq!(out.code, Some(2), "{extra:?}: {err}");
         assert!(err.contains(expect), "{extra:?}: {err}");
     }
 }

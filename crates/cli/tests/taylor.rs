@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::lagrange;
+use common::{json, run, Run};
 use serde_json::Value;
 use std::f64::consts::PI;
 
@@ -16,9 +16,7 @@ fn summary(args: &[&str]) -> Value {
     if !args.contains(&"--every-step") {
         all.extend(["--samples", "2"]);
     }
-    let (code, out, err) = lagrange(&all);
-    assert_eq!(code, 0, "lagrange {all:?}: {err}");
-    serde_json::from_str(&out).expect("JSON summary")
+    json(&all)
 }
 
 fn final_value(s: &Value, name: &str) -> f64 {
@@ -45,7 +43,7 @@ fn kepler_orbit_closes_after_three_periods() {
 fn the_oscillator_follows_the_cosine_at_every_sample() {
     // examples/oscillator.toml: m = om = 1, x(0) = 1, x'(0) = 0, so x = cos t.
     let csv = std::env::temp_dir().join(format!("lagrange-taylor-osc-{}.csv", std::process::id()));
-    let (code, _, err) = lagrange(&[
+    let Run { code, stderr: err, .. } = run(&[
         "simulate",
         "examples/oscillator.toml",
         "--method",
@@ -59,7 +57,7 @@ fn the_oscillator_follows_the_cosine_at_every_sample() {
         "--out",
         csv.to_str().unwrap(),
     ]);
-    assert_eq!(code, 0, "{err}");
+    assert_eq!(code, Some(0), "{err}");
     let text = std::fs::read_to_string(&csv).unwrap();
     std::fs::remove_file(&csv).ok();
     let mut lines = text.lines().filter(|l| !l.starts_with('#'));
@@ -96,7 +94,7 @@ fn a_sweep_in_lock_step_gives_the_single_runs_results() {
     // 3 x 4 = 12 runs: one full batch of 8 and one partial (lanes left idle).
     // One time unit is one Lyapunov segment, so the batch takes the steps a
     // single run takes.
-    let (code, _, err) = lagrange(&[
+    let Run { code, stderr: err, .. } = run(&[
         "sweep",
         "examples/double_pendulum.toml",
         "--until",
@@ -110,7 +108,7 @@ fn a_sweep_in_lock_step_gives_the_single_runs_results() {
         "--threads",
         "1",
     ]);
-    assert_eq!(code, 0, "{err}");
+    assert_eq!(code, Some(0), "{err}");
     let table = std::fs::read_to_string(&out).unwrap();
     let mut lines = table.lines().filter(|l| !l.starts_with('#'));
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
@@ -151,12 +149,12 @@ fn a_sweep_in_lock_step_gives_the_single_runs_results() {
 
 #[test]
 fn taylor_is_listed_and_refused_where_it_cannot_run() {
-    let (code, out, _) = lagrange(&["simulate", "--list-methods"]);
-    assert_eq!(code, 0);
+    let Run { code, stdout: out, .. } = run(&["simulate", "--list-methods"]);
+    assert_eq!(code, Some(0));
     assert!(out.contains("taylor"), "{out}");
-    let (code, _, err) =
-        lagrange(&["simulate", "examples/constraints/pendulum_cartesian.toml", "--method", "taylor", "--until", "1"]);
-    assert_eq!(code, 2, "{err}");
+    let Run { code, stderr: err, .. } =
+        run(&["simulate", "examples/constraints/pendulum_cartesian.toml", "--method", "taylor", "--until", "1"]);
+    assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("taylor"), "{err}");
 }
 
@@ -170,7 +168,7 @@ fn a_rigid_body_sweeps_run_by_run_and_agree_with_dop853() {
     let mut finals = Vec::new();
     for method in ["taylor", "dop853"] {
         let out = dir.join(format!("{method}.csv"));
-        let (code, _, err) = lagrange(&[
+        let Run { code, stderr: err, .. } = run(&[
             "sweep",
             "examples/tops/heavy_top.toml",
             "--until",
@@ -182,7 +180,7 @@ fn a_rigid_body_sweeps_run_by_run_and_agree_with_dop853() {
             "--out",
             out.to_str().unwrap(),
         ]);
-        assert_eq!(code, 0, "{err}");
+        assert_eq!(code, Some(0), "{err}");
         let text = std::fs::read_to_string(&out).unwrap();
         let rows: Vec<Vec<f64>> = text
             .lines()

@@ -4,14 +4,13 @@
 //! that says what the file is for and where to enter it (see `STYLE.md`, "Files
 //! and modules"). Test files and test helpers are no exception.
 
+mod common;
+
+use common::repo_root;
 use std::path::{Path, PathBuf};
 
 /// The folders of each crate whose Rust files are checked.
 const CHECKED_DIRS: &[&str] = &["src", "tests", "benches"];
-
-fn repo_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
 
 /// Every `.rs` file under `dir`, recursively, in a stable order.
 fn rust_files(dir: &Path, files: &mut Vec<PathBuf>) {

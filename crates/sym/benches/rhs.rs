@@ -1,8 +1,8 @@
-//! One right-hand side of the planar double pendulum (`examples/double_pendulum.toml`,
-//! mA = mB = lA = lB = 1, g = 9.81): the state `(a, b, a', b')` to
-//! `(a', b', a'', b'')`, three ways.
+//! One right-hand side of a linearly implicit second-order system `A y'' = b`, the
+//! planar double pendulum's (mA = mB = lA = lB = 1, g = 9.81): the state `(a, b, a', b')`
+//! to `(a', b', a'', b'')`, three ways.
 //!
-//! - `tape_eval`: [`Tape::eval`] of `M` (2×2) and `f` (2) as `lagrange derive` prints them,
+//! - `tape_eval`: [`Tape::eval`] of `A` (2×2) and `b` (2) as `lagrange derive` prints them,
 //!   from `(a, b, a', b', t, mA, mB, lA, lB, g)`, then a 2×2 solve;
 //! - `jit`: the same tape compiled by [`Compiled::new`];
 //! - `hand`: the same equations written by hand in Rust with the parameters inlined, the floor
@@ -14,8 +14,8 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
 use sym::{Compiled, ExprId, Pool, Tape};
 
-/// `M` row by row, then `f`, as `lagrange derive examples/double_pendulum.toml` prints them
-/// (`crates/cli/tests/snapshots/snapshots__derive__double_pendulum.snap`).
+/// `A` row by row, then `b`, as `lagrange derive` prints them for the double pendulum
+/// (the `derive` snapshot of the CLI's tests).
 const EQUATIONS: [&str; 6] = [
     "lA^2*(mA + mB)",
     "lA*lB*mB*cos(a - b)",
@@ -34,7 +34,7 @@ const PARAMS: [f64; 5] = [1.0, 1.0, 1.0, 1.0, 9.81];
 /// A state away from every symmetry.
 const STATE: [f64; 4] = [2.0, 2.5, 0.3, -0.7];
 
-/// Accelerations from `M` (row-major 2×2) and `f` by Cramer's rule.
+/// `y''` from `A` (row-major 2×2) and `b` by Cramer's rule.
 #[inline]
 fn solve(m: &[f64; 6]) -> [f64; 2] {
     let det = m[0] * m[3] - m[1] * m[2];

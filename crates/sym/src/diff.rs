@@ -3,7 +3,7 @@
 //!
 //! Entry points: [`Pool::diff`], [`Pool::time_derivative`], [`Pool::substitute`].
 //! Derivatives are memoized per (expression, variable) in the pool, so deriving
-//! many equations from one Lagrangian shares the work the way the DAG shares
+//! many expressions from one shares the work the way the DAG shares
 //! subexpressions; subexpressions whose symbol filter rules the variable out
 //! are skipped (their derivative is zero, their substitution themselves).
 

@@ -138,7 +138,7 @@ pub enum Node {
     Num(Number),
     /// The constant π.
     Pi,
-    /// A symbol (coordinate, velocity, parameter, time, momentum).
+    /// A symbol: a name and how many times it is differentiated in time.
     Sym(Symbol),
     /// A sum of at least two terms, sorted, at most one numeric term (last).
     Add(Box<[ExprId]>),
@@ -445,8 +445,8 @@ impl Pool {
 
     /// Sets where symbols of this name sort in products and sums (lower first;
     /// default 1). Call it before building expressions that use the name: it
-    /// decides the canonical order, e.g. parameters (rank 0) before coordinates
-    /// (rank 2) so that `m*l^2*q''` reads as the notes write it.
+    /// decides the canonical order, e.g. constants (rank 0) before variables
+    /// (rank 2) so that `m*l^2*q''` reads as people write it.
     pub fn set_rank(&mut self, name: &str, rank: u8) {
         let id = self.name(name);
         self.name_rank[id.0 as usize] = rank;
@@ -463,7 +463,7 @@ impl Pool {
         self.var(name, 0)
     }
 
-    /// The velocity `name'`.
+    /// The first time derivative `name'`.
     pub fn velocity(&mut self, name: &str) -> ExprId {
         self.var(name, 1)
     }

@@ -32,5 +32,5 @@ pub use expr::{ExprId, Func, NameId, Node, Pool, Symbol};
 pub use jit::{Compiled, JitError};
 pub use number::{Number, Rational};
 pub use parse::{Limits, ParseError, ParseErrorKind, ParseOptions, Span};
-pub use print::{Display, Latex};
-pub use taylor::{Lanes, TaylorTape};
+pub use print::{PrintMode, PrintOptions, Printed};
+pub use taylor::{ClosedFormInverse, Lanes, LinearSecondOrder, TaylorTape};

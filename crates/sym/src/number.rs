@@ -3,7 +3,7 @@
 //! Exact arithmetic uses `i128` numerators and denominators with checked
 //! operations: when a result would overflow, the operation reports `None` and the
 //! caller falls back to floating point (never to a silently wrong exact value).
-//! Mechanics rarely needs more than a few digits of exactness (½, ⅓, 2/3, …), so
+//! Hand-written expressions rarely need more than a few digits of exactness (½, ⅓, 2/3, …), so
 //! a big-integer crate would cost build time for nothing.
 
 use std::cmp::Ordering;

@@ -154,17 +154,17 @@ pub enum ParseErrorKind {
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub struct Limits {
     /// Longest accepted text in bytes. Default 100 000: a hundred times the
-    /// longest Lagrangian of the notes.
+    /// longest expression of the lecture notes lagrange follows.
     pub max_len: usize,
     /// Deepest nesting of parentheses, function calls, unary signs and
-    /// exponents. Default 64: hand-written physics rarely nests past 10, and 64
+    /// exponents. Default 64: hand-written expressions rarely nest past 10, and 64
     /// levels of recursion fit easily on any thread's stack.
     pub max_depth: usize,
     /// Most nodes one parse may add to the pool. Default 1 000 000, a guard
     /// against canonicalization blow-ups rather than a limit users should meet.
     pub max_nodes: usize,
     /// Largest magnitude of a numeric exponent. Default 1000: the steepest
-    /// potentials of physics (Lennard-Jones r^-12, r^-18 softening) are far
+    /// power laws in use (r^-12, r^-18) are far
     /// below it, while x^1000000000 would only produce meaningless numbers
     /// (and 2^1000000000 an unbounded exact integer). `u64::MAX` means no
     /// limit at all, so that any exponent the pool holds (`x^1e300`) reads back.

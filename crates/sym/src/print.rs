@@ -1,73 +1,105 @@
-//! Printers: the expression language (text that parses back to the same id) and LaTeX.
+//! The printer: one walk over an expression, written in the expression
+//! language (text that parses back to the same id) or in LaTeX.
 //!
-//! Enter with [`Pool::display`] or [`Pool::latex`]; both return a value that
-//! implements [`std::fmt::Display`], so `pool.display(e).to_string()` or
+//! Enter with [`Pool::print`] and a preset of [`PrintOptions`]
+//! ([`PrintOptions::text`], [`PrintOptions::latex`]), or the shorthands
+//! [`Pool::display`] and [`Pool::latex`]; each returns a value that implements
+//! [`std::fmt::Display`], so `pool.display(e).to_string()` or
 //! `format!("{}", pool.latex(e))`.
 //!
-//! Both printers read the canonical form the same way: a product is a sign, a
-//! numeric coefficient `p/q`, the factors above the fraction bar and the
-//! factors below it (powers with a negative exponent), so `m*l^2*q'^2/2`,
-//! `-g*sin(q)/l` and `x/(2*y)` come out as people write them. Each printer
-//! builds the text of a node bottom-up together with the precedence of its
-//! outermost operator, and the parent adds the parentheses that precedence
-//! requires, and no more.
+//! The printer reads the canonical form once for both notations: a product is
+//! a sign, a numeric coefficient `p/q`, the factors above the fraction bar and
+//! the factors below it (powers with a negative exponent), so `m*l^2*q'^2/2`,
+//! `-g*sin(q)/l` and `x/(2*y)` come out as people write them. It builds the
+//! text of a node bottom-up together with the precedence of its outermost
+//! operator, and the parent adds the parentheses that precedence requires, and
+//! no more. The notation decides only the tokens (names, numbers, functions,
+//! parentheses, how factors join, how a fraction and an exponent are written)
+//! and the forms only LaTeX has (`\sqrt[3]{x}`, `\sin^{2}{\left(q \right)}`,
+//! no parentheses inside `\frac`).
 //!
-//! The text printer is checked by a property test: parsing its output gives
-//! back the same [`ExprId`]. Symbols whose names are not names of the language
-//! (a symbol called `pi` or `sin`, or `"x y"`, built directly through
-//! [`Pool::symbol`]) print as they are and cannot round-trip.
+//! The text is checked by a property test: parsing it gives back the same
+//! [`ExprId`]. Symbols whose names are not names of the language (a symbol
+//! called `pi` or `sin`, or `"x y"`, built directly through [`Pool::symbol`])
+//! print as they are and cannot round-trip.
 
 use crate::expr::{ExprId, Func, Node, Pool, Symbol};
 use crate::number::{Number, Rational};
 use std::fmt;
 
-/// An expression printed in the expression language; see [`Pool::display`].
-#[derive(Clone, Copy)]
-pub struct Display<'a> {
-    pool: &'a Pool,
-    id: ExprId,
+/// How [`Pool::print`] writes an expression; start from a preset.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PrintOptions {
+    mode: PrintMode,
 }
 
-/// An expression printed as LaTeX math; see [`Pool::latex`].
+/// The notation a printer writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PrintMode {
+    /// The expression language, with minimal parentheses: the text parses back.
+    Text,
+    /// LaTeX math (no surrounding `$`): `\frac`, `\sqrt`, `\dot{\theta}` for a
+    /// first derivative, Greek letters for Greek names.
+    Latex,
+}
+
+impl PrintOptions {
+    /// Text in the expression language, which parses back to the same expression.
+    pub fn text() -> PrintOptions {
+        PrintOptions { mode: PrintMode::Text }
+    }
+
+    /// LaTeX math.
+    pub fn latex() -> PrintOptions {
+        PrintOptions { mode: PrintMode::Latex }
+    }
+
+    /// The notation written.
+    pub fn mode(&self) -> PrintMode {
+        self.mode
+    }
+}
+
+impl Default for PrintOptions {
+    /// [`PrintOptions::text`].
+    fn default() -> PrintOptions {
+        PrintOptions::text()
+    }
+}
+
+/// An expression to print with its options; see [`Pool::print`].
 #[derive(Clone, Copy)]
-pub struct Latex<'a> {
+pub struct Printed<'a> {
     pool: &'a Pool,
     id: ExprId,
+    options: PrintOptions,
 }
 
 impl Pool {
-    /// The expression in the expression language, with minimal parentheses.
-    /// Parsing the text gives back `id`.
-    pub fn display(&self, id: ExprId) -> Display<'_> {
-        Display { pool: self, id }
+    /// The expression `id` written as `options` say.
+    pub fn print(&self, id: ExprId, options: PrintOptions) -> Printed<'_> {
+        Printed { pool: self, id, options }
     }
 
-    /// The expression as LaTeX math (no surrounding `$`): `\frac`, `\sqrt`,
-    /// `\dot{\theta}` for velocities, Greek letters for Greek names.
-    pub fn latex(&self, id: ExprId) -> Latex<'_> {
-        Latex { pool: self, id }
+    /// The expression in the expression language, with minimal parentheses
+    /// ([`PrintOptions::text`]). Parsing the text gives back `id`.
+    pub fn display(&self, id: ExprId) -> Printed<'_> {
+        self.print(id, PrintOptions::text())
+    }
+
+    /// The expression as LaTeX math ([`PrintOptions::latex`]).
+    pub fn latex(&self, id: ExprId) -> Printed<'_> {
+        self.print(id, PrintOptions::latex())
     }
 }
 
-impl fmt::Display for Display<'_> {
+impl fmt::Display for Printed<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&Text { pool: self.pool }.expr(self.id).text)
+        f.write_str(&Printer { pool: self.pool, mode: self.options.mode }.expr(self.id).text)
     }
 }
 
-impl fmt::Debug for Display<'_> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        fmt::Display::fmt(self, f)
-    }
-}
-
-impl fmt::Display for Latex<'_> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&Tex { pool: self.pool }.expr(self.id).text)
-    }
-}
-
-impl fmt::Debug for Latex<'_> {
+impl fmt::Debug for Printed<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         fmt::Display::fmt(self, f)
     }
@@ -234,197 +266,29 @@ fn fraction<'a>(pool: &'a Pool, coeff: Number, factors: &'a [ExprId]) -> Fractio
     Fraction { float, p, q, above, below }
 }
 
-fn paren(p: Piece, min: Prec) -> String {
-    if p.prec < min {
-        format!("({})", p.text)
-    } else {
-        p.text
-    }
-}
+// ---- the walk -------------------------------------------------------------------
 
-// ---- the expression language -------------------------------------------------
-
-struct Text<'a> {
+struct Printer<'a> {
     pool: &'a Pool,
+    mode: PrintMode,
 }
 
-impl<'a> Text<'a> {
+impl Printer<'_> {
     fn expr(&self, id: ExprId) -> Piece {
         let pool = self.pool;
         match pool.node(id) {
             Node::Num(n) => self.num(*n),
-            Node::Pi => Piece::new("pi", Prec::Atom),
-            Node::Sym(s) => Piece::new(pool.symbol_text(*s), Prec::Atom),
-            Node::Func(f, a) => Piece::new(format!("{}({})", f.name(), self.expr(*a).text), Prec::Atom),
-            Node::Atan2(y, x) => {
-                Piece::new(format!("atan2({}, {})", self.expr(*y).text, self.expr(*x).text), Prec::Atom)
-            }
-            Node::Add(ts) => self.sum(ts),
-            Node::Mul(fs) => {
-                let (c, skip) = coeff_factors(pool, fs);
-                self.product(c.is_negative(), abs(c), &fs[skip..])
-            }
-            Node::Pow(b, e) => match below_bar(pool, id) {
-                Some(_) => self.product(false, Number::ONE, &[id]),
-                None => self.power(*b, Exp::Id(*e)),
-            },
-        }
-    }
-
-    fn num(&self, n: Number) -> Piece {
-        let a = self.num_abs(abs(n));
-        if n.is_negative() {
-            Piece::new(format!("-{}", a.text), Prec::Neg)
-        } else {
-            a
-        }
-    }
-
-    /// A number that is not negative.
-    fn num_abs(&self, n: Number) -> Piece {
-        match n {
-            Number::Rational(r) if r.is_integer() => Piece::new(r.to_string(), Prec::Atom),
-            Number::Rational(r) => Piece::new(r.to_string(), Prec::Product),
-            Number::Float(_) => Piece::new(n.to_string(), Prec::Atom),
-        }
-    }
-
-    fn sum(&self, ts: &[ExprId]) -> Piece {
-        let mut out = String::new();
-        for (i, &t) in ts.iter().enumerate() {
-            let neg = negated(self.pool, t);
-            let sep = match (i, neg.is_some()) {
-                (0, false) => "",
-                (0, true) => "-",
-                (_, false) => " + ",
-                (_, true) => " - ",
-            };
-            out.push_str(sep);
-            if let Some((c, fs)) = neg {
-                out.push_str(&paren(self.product(false, c, fs), Prec::Product));
-            } else {
-                out.push_str(&paren(self.expr(t), Prec::Neg));
-            }
-        }
-        Piece::new(out, Prec::Sum)
-    }
-
-    /// `±coeff * factors`, with the factors that have negative exponents below a bar.
-    fn product(&self, negative: bool, coeff: Number, factors: &[ExprId]) -> Piece {
-        if negative {
-            let p = self.product(false, coeff, factors);
-            return Piece::new(format!("-{}", paren(p, Prec::Product)), Prec::Neg);
-        }
-        if factors.is_empty() {
-            return self.num_abs(coeff);
-        }
-        if coeff.is_one() && factors.len() == 1 && below_bar(self.pool, factors[0]).is_none() {
-            return self.expr(factors[0]);
-        }
-        let fr = fraction(self.pool, coeff, factors);
-        let mut above: Vec<String> = Vec::new();
-        if let Some(x) = fr.float {
-            above.push(Number::float(x).to_string());
-        } else if fr.p != 1 {
-            above.push(fr.p.to_string());
-        }
-        for &f in &fr.above {
-            above.push(paren(self.expr(f), Prec::Power));
-        }
-        let mut below: Vec<String> = Vec::new();
-        if fr.q != 1 {
-            below.push(fr.q.to_string());
-        }
-        for &(b, e) in &fr.below {
-            below.push(paren(self.power(b, e), Prec::Power));
-        }
-        let mut out = if above.is_empty() { "1".to_string() } else { above.join("*") };
-        // `2*(x - 1)` would parse as `2*x - 2` (a number times one sum
-        // distributes), so a lone sum below the bar keeps its number apart.
-        let lone_sum = fr.q != 1
-            && matches!(fr.below[..], [(b, e)] if is_rational(exp_number(self.pool, e), 1, 1)
-            && matches!(self.pool.node(b), Node::Add(_)));
-        match below.len() {
-            0 => {}
-            1 => {
-                out.push('/');
-                out.push_str(&below[0]);
-            }
-            _ if lone_sum => {
-                out.push('/');
-                out.push_str(&below[1]);
-                out.push('/');
-                out.push_str(&below[0]);
-            }
-            _ => {
-                out.push_str("/(");
-                out.push_str(&below.join("*"));
-                out.push(')');
-            }
-        }
-        Piece::new(out, Prec::Product)
-    }
-
-    /// `base ^ exp` for an exponent that prints without a leading minus
-    /// (or a negative one on a numeric base, as `2^(-300)`).
-    fn power(&self, base: ExprId, exp: Exp<'_>) -> Piece {
-        let n = exp_number(self.pool, exp);
-        if is_rational(n, 1, 1) {
-            return self.expr(base);
-        }
-        if is_rational(n, 1, 2) {
-            return Piece::new(format!("sqrt({})", self.expr(base).text), Prec::Atom);
-        }
-        let b = paren(self.expr(base), Prec::Atom);
-        let e = match exp {
-            Exp::Id(e) => self.expr(e),
-            Exp::Num(n) => self.num(n),
-            Exp::Mul(c, fs) => self.product(false, c, fs),
-        };
-        Piece::new(format!("{b}^{}", paren(e, Prec::Power)), Prec::Power)
-    }
-}
-
-// ---- LaTeX ----------------------------------------------------------------------
-
-struct Tex<'a> {
-    pool: &'a Pool,
-}
-
-fn tex_paren(p: Piece, min: Prec) -> String {
-    if p.prec < min {
-        format!("\\left({}\\right)", p.text)
-    } else {
-        p.text
-    }
-}
-
-/// Joins factors by juxtaposition, with `\cdot` before a factor that starts
-/// with a digit (so `2 \cdot 3^{x}` does not read as `23^x`).
-fn juxtapose(parts: &[String]) -> String {
-    let mut out = String::new();
-    for (i, part) in parts.iter().enumerate() {
-        if i > 0 {
-            let digit = part.starts_with(|c: char| c.is_ascii_digit());
-            out.push_str(if digit { " \\cdot " } else { " " });
-        }
-        out.push_str(part);
-    }
-    out
-}
-
-impl<'a> Tex<'a> {
-    fn expr(&self, id: ExprId) -> Piece {
-        let pool = self.pool;
-        match pool.node(id) {
-            Node::Num(n) => self.num(*n),
-            Node::Pi => Piece::new("\\pi", Prec::Atom),
+            Node::Pi => Piece::new(self.pick("pi", "\\pi"), Prec::Atom),
             Node::Sym(s) => Piece::new(self.symbol(*s), Prec::Atom),
             Node::Func(f, a) => self.func(*f, *a, None),
-            Node::Atan2(y, x) => Piece::new(
-                format!("\\operatorname{{atan2}}{{\\left({}, {} \\right)}}", self.expr(*y).text, self.expr(*x).text),
-                Prec::Atom,
-            ),
+            Node::Atan2(y, x) => {
+                let (y, x) = (self.expr(*y).text, self.expr(*x).text);
+                let text = match self.mode {
+                    PrintMode::Text => format!("atan2({y}, {x})"),
+                    PrintMode::Latex => format!("\\operatorname{{atan2}}{{\\left({y}, {x} \\right)}}"),
+                };
+                Piece::new(text, Prec::Atom)
+            }
             Node::Add(ts) => self.sum(ts),
             Node::Mul(fs) => {
                 let (c, skip) = coeff_factors(pool, fs);
@@ -435,25 +299,44 @@ impl<'a> Tex<'a> {
                 None => self.power(*b, Exp::Id(*e)),
             },
         }
+    }
+
+    /// The token of this notation: `text` in the expression language, `latex` in LaTeX.
+    fn pick(&self, text: &'static str, latex: &'static str) -> &'static str {
+        match self.mode {
+            PrintMode::Text => text,
+            PrintMode::Latex => latex,
+        }
+    }
+
+    /// `p` in parentheses when it binds more loosely than `min`.
+    fn paren(&self, p: Piece, min: Prec) -> String {
+        if p.prec < min {
+            format!("{}{}{}", self.pick("(", "\\left("), p.text, self.pick(")", "\\right)"))
+        } else {
+            p.text
+        }
+    }
+
+    /// Whether a fraction bar groups its parts, so that a lone numerator or
+    /// denominator needs no parentheses (LaTeX's `\frac`, not the text's `/`).
+    fn bar_groups(&self) -> bool {
+        self.mode == PrintMode::Latex
     }
 
     fn symbol(&self, s: Symbol) -> String {
-        let (base, sub) = tex_name(self.pool.name_str(s.name));
-        let base = match s.order {
-            0 => base,
-            1 => format!("\\dot{{{base}}}"),
-            2 => format!("\\ddot{{{base}}}"),
-            n => format!("{base}^{{({n})}}"),
-        };
-        match sub {
-            Some(sub) => format!("{base}_{{{sub}}}"),
-            None => base,
+        match self.mode {
+            PrintMode::Text => self.pool.symbol_text(s),
+            PrintMode::Latex => tex_symbol(self.pool, s),
         }
     }
 
-    /// `f(a)`, or `f^{n}(a)` when `power` is given (`\sin^{2}{\left(q \right)}`).
+    /// `f(a)`, or in LaTeX `f^{n}(a)` when `power` is given (`\sin^{2}{\left(q \right)}`).
     fn func(&self, f: Func, a: ExprId, power: Option<&str>) -> Piece {
         let arg = self.expr(a).text;
+        if self.mode == PrintMode::Text {
+            return Piece::new(format!("{}({arg})", f.name()), Prec::Atom);
+        }
         let name = match f {
             Func::Exp => return Piece::new(format!("e^{{{arg}}}"), Prec::Power),
             Func::Abs => return Piece::new(format!("\\left|{arg}\\right|"), Prec::Atom),
@@ -481,13 +364,16 @@ impl<'a> Tex<'a> {
         }
     }
 
+    /// A number that is not negative.
     fn num_abs(&self, n: Number) -> Piece {
-        match n {
-            Number::Rational(r) if r.is_integer() => Piece::new(r.to_string(), Prec::Atom),
-            Number::Rational(r) => {
+        match (n, self.mode) {
+            (Number::Rational(r), _) if r.is_integer() => Piece::new(r.to_string(), Prec::Atom),
+            (Number::Rational(r), PrintMode::Text) => Piece::new(r.to_string(), Prec::Product),
+            (Number::Rational(r), PrintMode::Latex) => {
                 Piece::new(format!("\\frac{{{}}}{{{}}}", r.numer().unsigned_abs(), r.denom()), Prec::Product)
             }
-            Number::Float(_) => tex_float(&n.to_string()),
+            (Number::Float(_), PrintMode::Text) => Piece::new(n.to_string(), Prec::Atom),
+            (Number::Float(_), PrintMode::Latex) => tex_float(&n.to_string()),
         }
     }
 
@@ -497,23 +383,24 @@ impl<'a> Tex<'a> {
             let neg = negated(self.pool, t);
             out.push_str(match (i, neg.is_some()) {
                 (0, false) => "",
-                (0, true) => "- ",
+                (0, true) => self.pick("-", "- "),
                 (_, false) => " + ",
                 (_, true) => " - ",
             });
             if let Some((c, fs)) = neg {
-                out.push_str(&tex_paren(self.product(false, c, fs), Prec::Product));
+                out.push_str(&self.paren(self.product(false, c, fs), Prec::Product));
             } else {
-                out.push_str(&tex_paren(self.expr(t), Prec::Neg));
+                out.push_str(&self.paren(self.expr(t), Prec::Neg));
             }
         }
         Piece::new(out, Prec::Sum)
     }
 
+    /// `±coeff * factors`, with the factors that have negative exponents below a bar.
     fn product(&self, negative: bool, coeff: Number, factors: &[ExprId]) -> Piece {
         if negative {
             let p = self.product(false, coeff, factors);
-            return Piece::new(format!("- {}", tex_paren(p, Prec::Product)), Prec::Neg);
+            return Piece::new(format!("{}{}", self.pick("-", "- "), self.paren(p, Prec::Product)), Prec::Neg);
         }
         if factors.is_empty() {
             return self.num_abs(coeff);
@@ -524,45 +411,83 @@ impl<'a> Tex<'a> {
         let fr = fraction(self.pool, coeff, factors);
         let mut above: Vec<String> = Vec::new();
         if let Some(x) = fr.float {
-            above.push(tex_float(&Number::float(x).to_string()).text);
+            above.push(self.num_abs(Number::float(x)).text);
         } else if fr.p != 1 {
             above.push(fr.p.to_string());
         }
-        let lone = above.is_empty() && fr.above.len() == 1 && !fr.below.is_empty();
+        let lone_above = self.bar_groups() && above.is_empty() && fr.above.len() == 1 && !fr.below.is_empty();
         for &f in &fr.above {
-            // A lone numerator needs no parentheses inside \frac.
             let p = self.expr(f);
-            above.push(if lone { p.text } else { tex_paren(p, Prec::Power) });
+            above.push(if lone_above { p.text } else { self.paren(p, Prec::Power) });
         }
         let mut below: Vec<String> = Vec::new();
         if fr.q != 1 {
             below.push(fr.q.to_string());
         }
+        let lone_below = self.bar_groups() && fr.below.len() == 1 && fr.q == 1;
         for &(b, e) in &fr.below {
             let p = self.power(b, e);
-            // A lone denominator needs no parentheses inside \frac.
-            below.push(if fr.below.len() == 1 && fr.q == 1 { p.text } else { tex_paren(p, Prec::Power) });
+            below.push(if lone_below { p.text } else { self.paren(p, Prec::Power) });
         }
-        let above = if above.is_empty() { "1".to_string() } else { juxtapose(&above) };
+        let above = if above.is_empty() { "1".to_string() } else { self.join_factors(&above) };
         if below.is_empty() {
             return Piece::new(above, Prec::Product);
         }
-        let below = match below.len() {
-            1 => below.swap_remove(0),
-            _ => juxtapose(&below),
+        let text = match self.mode {
+            PrintMode::Text => {
+                // `2*(x - 1)` would parse as `2*x - 2` (a number times one sum
+                // distributes), so a lone sum below the bar keeps its number apart.
+                let lone_sum = fr.q != 1
+                    && matches!(fr.below[..], [(b, e)] if is_rational(exp_number(self.pool, e), 1, 1)
+                    && matches!(self.pool.node(b), Node::Add(_)));
+                match below.len() {
+                    1 => format!("{above}/{}", below[0]),
+                    _ if lone_sum => format!("{above}/{}/{}", below[1], below[0]),
+                    _ => format!("{above}/({})", below.join("*")),
+                }
+            }
+            PrintMode::Latex => {
+                let below = match below.len() {
+                    1 => below.swap_remove(0),
+                    _ => self.join_factors(&below),
+                };
+                format!("\\frac{{{above}}}{{{below}}}")
+            }
         };
-        Piece::new(format!("\\frac{{{above}}}{{{below}}}"), Prec::Product)
+        Piece::new(text, Prec::Product)
     }
 
+    /// Factors side by side: `a*b` in text; juxtaposed in LaTeX, with `\cdot`
+    /// before a factor that starts with a digit (so `2 \cdot 3^{x}` does not
+    /// read as `23^x`).
+    fn join_factors(&self, parts: &[String]) -> String {
+        if self.mode == PrintMode::Text {
+            return parts.join("*");
+        }
+        let mut out = String::new();
+        for (i, part) in parts.iter().enumerate() {
+            if i > 0 {
+                let digit = part.starts_with(|c: char| c.is_ascii_digit());
+                out.push_str(if digit { " \\cdot " } else { " " });
+            }
+            out.push_str(part);
+        }
+        out
+    }
+
+    /// `base ^ exp` for an exponent that prints without a leading minus
+    /// (or a negative one on a numeric base, as `2^(-300)`).
     fn power(&self, base: ExprId, exp: Exp<'_>) -> Piece {
+        let latex = self.mode == PrintMode::Latex;
         let n = exp_number(self.pool, exp);
         if is_rational(n, 1, 1) {
             return self.expr(base);
         }
         if is_rational(n, 1, 2) {
-            return Piece::new(format!("\\sqrt{{{}}}", self.expr(base).text), Prec::Atom);
+            let b = self.expr(base).text;
+            return Piece::new(if latex { format!("\\sqrt{{{b}}}") } else { format!("sqrt({b})") }, Prec::Atom);
         }
-        if let Some(k) = root_index(n) {
+        if let (true, Some(k)) = (latex, root_index(n)) {
             return Piece::new(format!("\\sqrt[{k}]{{{}}}", self.expr(base).text), Prec::Atom);
         }
         let e = match exp {
@@ -570,19 +495,32 @@ impl<'a> Tex<'a> {
             Exp::Num(n) => self.num(n),
             Exp::Mul(c, fs) => self.product(false, c, fs),
         };
-        // sin(q)^2 reads as \sin^{2}(q) when the exponent is a positive integer.
-        if let (Node::Func(f, a), Some(Number::Rational(r))) = (self.pool.node(base), n) {
+        // In LaTeX sin(q)^2 reads as \sin^{2}(q) when the exponent is a positive integer.
+        if let (true, Node::Func(f, a), Some(Number::Rational(r))) = (latex, self.pool.node(base), n) {
             if r.is_integer() && !r.is_negative() && !matches!(f, Func::Exp | Func::Abs) {
                 return self.func(*f, *a, Some(&e.text));
             }
         }
-        let b = self.expr(base);
-        let b = match self.pool.node(base) {
-            Node::Pow(..) if b.prec == Prec::Atom => b.text,
-            Node::Pow(..) => format!("\\left({}\\right)", b.text),
-            _ => tex_paren(b, Prec::Atom),
-        };
-        Piece::new(format!("{b}^{{{}}}", e.text), Prec::Power)
+        let b = self.paren(self.expr(base), Prec::Atom);
+        let e = if latex { format!("{{{}}}", e.text) } else { self.paren(e, Prec::Power) };
+        Piece::new(format!("{b}^{e}"), Prec::Power)
+    }
+}
+
+// ---- LaTeX names and numbers -----------------------------------------------------
+
+/// A symbol in LaTeX: `\dot{\theta}_{1}` for `th1'`.
+fn tex_symbol(pool: &Pool, s: Symbol) -> String {
+    let (base, sub) = tex_name(pool.name_str(s.name));
+    let base = match s.order {
+        0 => base,
+        1 => format!("\\dot{{{base}}}"),
+        2 => format!("\\ddot{{{base}}}"),
+        n => format!("{base}^{{({n})}}"),
+    };
+    match sub {
+        Some(sub) => format!("{base}_{{{sub}}}"),
+        None => base,
     }
 }
 
@@ -675,8 +613,9 @@ mod tests {
     fn check(input: &str, expect: &str) {
         let mut pool = Pool::default();
         let e = pool.parse(input).unwrap_or_else(|err| panic!("{input:?}: {err}"));
-        let text = pool.display(e).to_string();
+        let text = pool.print(e, PrintOptions::text()).to_string();
         assert_eq!(text, expect, "{input:?}");
+        assert_eq!(pool.display(e).to_string(), text);
         assert_eq!(pool.parse(&text), Ok(e), "{input:?} printed as {text:?} does not parse back");
     }
 
@@ -685,6 +624,7 @@ mod tests {
     fn check_latex(input: &str, expect: &str) {
         let mut pool = Pool::default();
         let e = pool.parse(input).unwrap_or_else(|err| panic!("{input:?}: {err}"));
+        assert_eq!(pool.print(e, PrintOptions::latex()).to_string(), expect, "{input:?}");
         assert_eq!(pool.latex(e).to_string(), expect, "{input:?}");
     }
 
@@ -745,7 +685,7 @@ mod tests {
         check_latex("p_th^2/(2*m*l^2)", "\\frac{p_{\\theta}^{2}}{2 l^{2} m}");
         check_latex("omega*Omega*lam", "\\Omega \\lambda \\omega");
         check_latex("al + be + ga + ph + om", "\\alpha + \\beta + \\gamma + \\omega + \\phi");
-        check_latex("mass*x_A", "\\mathrm{mass} x_{A}");
+        check_latex("size*x_A", "\\mathrm{size} x_{A}");
         check_latex("1/sqrt(x^2 + 1)", "\\frac{1}{\\sqrt{x^{2} + 1}}");
         check_latex("(x + y)/z", "\\frac{x + y}{z}");
         check_latex("x^(1/3)", "\\sqrt[3]{x}");

@@ -16,8 +16,13 @@
 //! of a convolution. Integer powers become chains of products (no division by
 //! a base that may vanish), and `u^v` becomes `exp(v·ln u)`.
 //!
-//! Every coefficient is an array of `L` lanes: `L` independent trajectories of
-//! one ensemble run in lock step, and the loops over lanes vectorize.
+//! A linearly implicit second-order system `A(y, y', t) y'' = b(y, y', t)`
+//! whose `A` and `b` are the tape's outputs ([`LinearSecondOrder`]) expands
+//! whole in native code: [`TaylorTape::compile_second_order`], then
+//! [`TaylorTape::expand_second_order`] per expansion point.
+//!
+//! Every coefficient is an array of `L` lanes: `L` independent trajectories
+//! run in lock step, and the loops over lanes vectorize.
 
 use crate::eval::{Op, Tape};
 use crate::expr::Func;
@@ -127,9 +132,41 @@ pub struct TaylorTape<const L: usize> {
     constant: Vec<bool>,
     /// The orders as native code, shared by clones ([`TaylorTape::compile_native`]).
     native: Option<Arc<NativeTaylor>>,
-    /// The whole expansion of a second-order system as native code
-    /// ([`TaylorTape::compile_second_order`]).
+    /// The whole expansion of a linearly implicit second-order system as
+    /// native code ([`TaylorTape::compile_second_order`]).
     second_order: Option<(SecondOrderLayout, Arc<NativeTaylor>)>,
+}
+
+/// A linearly implicit second-order system of ODEs,
+/// `A(y, y', t) y'' = b(y, y', t)` with `y ∈ ℝⁿ`, as a tape computes it: the
+/// tape's inputs start with `y` (n), `y'` (n) and `t` (any further inputs are
+/// constant), and its outputs are the entries of `A` at `entries`, then `b`
+/// (n). [`TaylorTape::compile_second_order`] compiles its Taylor expansion.
+#[derive(Clone, Copy, Debug)]
+pub struct LinearSecondOrder<'a> {
+    /// `n`, the dimension of `y`.
+    pub dim: usize,
+    /// `(row, column)` of the entries of `A` the tape outputs, in their order;
+    /// the entries not named are zero.
+    pub entries: &'a [(usize, usize)],
+    /// How `A` at the expansion point is inverted.
+    pub inverse: ClosedFormInverse,
+}
+
+/// How a Taylor expansion of `A y'' = b` inverts `A[0]`, the matrix at the
+/// expansion point, once per expansion ([`LinearSecondOrder::inverse`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ClosedFormInverse {
+    /// Reciprocals of the diagonal: every entry of `A` is on the diagonal.
+    Diagonal,
+    /// The adjugate over the determinant, for `n` up to
+    /// [`ClosedFormInverse::ADJUGATE_MAX_DIM`].
+    Adjugate,
+}
+
+impl ClosedFormInverse {
+    /// The largest `n` whose adjugate is written out.
+    pub const ADJUGATE_MAX_DIM: usize = 3;
 }
 
 struct Builder {
@@ -373,38 +410,57 @@ impl<const L: usize> TaylorTape<L> {
         }
     }
 
-    /// Compiles the whole Taylor expansion of the second-order system
-    /// `M(q, q', t) q'' = f(q, q', t)` into one native function, run by
-    /// [`expand_second_order`](Self::expand_second_order). The tape's inputs
-    /// must start with `q` (n), `q'` (n) and `t`; its outputs are M's stored
-    /// entries at `entries` (row, column), then `f` (n).
+    /// Compiles the whole Taylor expansion of the linearly implicit
+    /// second-order system `system` ([`LinearSecondOrder`]: `A y'' = b` read off
+    /// this tape) into native code, run by
+    /// [`expand_second_order`](Self::expand_second_order).
     ///
-    /// M[0] is inverted in closed form once per expansion, so this serves a
-    /// diagonal M of any size and a dense one of at most 3 coordinates; it
-    /// returns `Ok(false)` (nothing compiled) otherwise, or when the code
-    /// would be too large.
-    pub fn compile_second_order(&mut self, n: usize, entries: &[(usize, usize)]) -> Result<bool, JitError> {
-        let diagonal = entries.iter().all(|&(i, j)| i == j);
+    /// The Cauchy product gives `A[0] y''[k] = b[k] − Σ_{j=1..k} A[j] y''[k−j]`
+    /// at each order `k`, and `y[k+1] = y'[k]/(k+1)`, `y'[k+1] = y''[k]/(k+1)`;
+    /// `A[0]` is inverted once per expansion as `system.inverse` says, and each
+    /// order's function includes the coupling, so that the functions run in turn
+    /// make the whole expansion. Returns `Ok(false)` (nothing compiled) when the
+    /// code would be too large to pay for its compilation.
+    ///
+    /// # Panics
+    ///
+    /// When the tape's inputs and outputs are not those `system` describes, or
+    /// `system.inverse` does not apply to it (see [`ClosedFormInverse`]).
+    pub fn compile_second_order(&mut self, system: &LinearSecondOrder<'_>) -> Result<bool, JitError> {
+        let LinearSecondOrder { dim: n, entries, inverse } = *system;
+        assert!(self.input_slots.len() > 2 * n, "inputs y, y', t come first");
+        assert!(self.variable_inputs[..=2 * n].iter().all(|&v| v), "y, y' and t vary");
+        assert_eq!(self.outputs.len(), entries.len() + n, "outputs: the entries of A, then b");
+        assert!(entries.iter().all(|&(i, j)| i < n && j < n), "entries of A lie in its n × n");
+        match inverse {
+            ClosedFormInverse::Diagonal => {
+                assert!(entries.iter().all(|&(i, j)| i == j), "ClosedFormInverse::Diagonal: an entry off the diagonal")
+            }
+            ClosedFormInverse::Adjugate => {
+                let max = ClosedFormInverse::ADJUGATE_MAX_DIM;
+                assert!(n <= max, "ClosedFormInverse::Adjugate: n = {n} > {max}")
+            }
+        }
         let work = self.native_work() + entries.len() * (self.order + 1) * (self.order + 2) / 2 * L;
-        if (!diagonal && n > 3) || work > NATIVE_MAX_WORK || self.outputs.len() != entries.len() + n {
+        if work > NATIVE_MAX_WORK {
             return Ok(false);
         }
-        assert!(self.input_slots.len() > 2 * n, "inputs q, q', t come first");
+        let diagonal = inverse == ClosedFormInverse::Diagonal;
         let stride = self.order + 1;
         let first = self.coef.len() / stride;
         let extra = n + if diagonal { n } else { n * n };
         let slots: Vec<u32> = (first..first + extra).map(|s| s as u32).collect();
-        let (accel, inverse) = slots.split_at(n);
+        let (second, inverse_slots) = slots.split_at(n);
         let layout = SecondOrderLayout {
             n,
             entries: entries.to_vec(),
-            q: self.input_slots[..n].to_vec(),
-            v: self.input_slots[n..2 * n].to_vec(),
-            mass: self.outputs[..entries.len()].to_vec(),
-            force: self.outputs[entries.len()..].to_vec(),
+            y: self.input_slots[..n].to_vec(),
+            dy: self.input_slots[n..2 * n].to_vec(),
+            matrix: self.outputs[..entries.len()].to_vec(),
+            rhs: self.outputs[entries.len()..].to_vec(),
             varying: (0..entries.len()).map(|e| !self.output_is_constant(e)).collect(),
-            accel: accel.to_vec(),
-            inverse: inverse.to_vec(),
+            second: second.to_vec(),
+            inverse: inverse_slots.to_vec(),
             diagonal,
         };
         let len = (first + extra) * stride * L;
@@ -419,10 +475,10 @@ impl<const L: usize> TaylorTape<L> {
         self.second_order.is_some()
     }
 
-    /// The whole expansion of the second-order system: from order 0 of `q`, `q'`
+    /// The whole expansion of the second-order system: from order 0 of `y`, `y'`
     /// and orders 0 and 1 of `t` in the inputs' coefficients, writes orders
-    /// `1..=order` of `q` and `q'` there and into `series` (order-major:
-    /// `series[k·2n + i]` is order k of `[q, q'][i]`; the caller's order 0 is
+    /// `1..=order` of `y` and `y'` there and into `series` (order-major:
+    /// `series[k·2n + i]` is order k of `[y, y'][i]`; the caller's order 0 is
     /// left as it is).
     ///
     /// # Panics
@@ -914,7 +970,7 @@ fn remap(op: Op, map: &[u32]) -> Op {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::expr::Pool;
+    use crate::expr::{ExprId, Pool};
 
     /// Checks the Taylor coefficients of `text` along x(t) = x0 + t, y(t) = y0 - t
     /// (and the constant parameter a) against repeated symbolic derivatives.
@@ -1027,6 +1083,91 @@ mod tests {
         t.set_constant_input(2, [3.0]);
         t.refresh_constants();
         assert_eq!((t.output(0, 0), t.output(0, 3)), ([6.0], [0.0]));
+    }
+
+    /// Expands `A(y, y', t) y'' = b` with `b = −A y` (A given by its entries'
+    /// text in `y1, y2, …`, their primes and `t`), whose solutions solve
+    /// `y'' = −y` whatever A is, on two lanes, and checks the series against
+    /// `y = y₀ cos τ + y₀' sin τ` (coefficients at most 1, so the tolerance
+    /// is absolute).
+    #[track_caller]
+    fn check_second_order(n: usize, entries: &[((usize, usize), &str)], inverse: ClosedFormInverse) {
+        let order = 10;
+        let mut p = Pool::default();
+        let names: Vec<String> = (1..=n).map(|i| format!("y{i}")).collect();
+        let mut inputs: Vec<ExprId> = names.iter().map(|y| p.symbol(y)).collect();
+        inputs.extend(names.iter().map(|y| p.velocity(y)));
+        inputs.push(p.symbol("t"));
+        let mut outputs: Vec<ExprId> = entries.iter().map(|(_, a)| p.parse(a).unwrap()).collect();
+        for i in 0..n {
+            let terms: Vec<String> = entries
+                .iter()
+                .filter(|((r, _), _)| *r == i)
+                .map(|((_, c), a)| format!("({a})*{}", names[*c]))
+                .collect();
+            let b = p.parse(&format!("-({})", terms.join(" + "))).unwrap();
+            outputs.push(b);
+        }
+        let tape = Tape::compile(&p, &outputs, &inputs).unwrap();
+        let mut taylor = TaylorTape::<2>::new(&tape, order, &vec![true; 2 * n + 1]);
+        let places: Vec<(usize, usize)> = entries.iter().map(|&(at, _)| at).collect();
+        let system = LinearSecondOrder { dim: n, entries: &places, inverse };
+        assert_eq!(taylor.compile_second_order(&system), Ok(true));
+        assert!(taylor.is_second_order());
+        taylor.refresh_constants();
+        let start: Vec<Lanes<2>> = (0..2 * n).map(|i| [0.3 + 0.2 * i as f64, -0.4 + 0.1 * i as f64]).collect();
+        let t0 = [0.5, -0.25];
+        for (i, y) in start.iter().enumerate() {
+            let at = taylor.input_index(i);
+            taylor.coefficients_mut()[at] = *y;
+        }
+        let at = taylor.input_index(2 * n);
+        taylor.coefficients_mut()[at] = t0;
+        taylor.coefficients_mut()[at + 1] = [1.0; 2];
+        let mut series = vec![[0.0; 2]; (order + 1) * 2 * n];
+        series[..2 * n].copy_from_slice(&start);
+        taylor.expand_second_order(&mut series);
+        // The k-th coefficients of cos τ and sin τ.
+        let mut factorial = 1.0;
+        for k in 0..=order {
+            if k > 0 {
+                factorial *= k as f64;
+            }
+            let sign = if (k / 2) % 2 == 0 { 1.0 } else { -1.0 };
+            let (cos, sin) = if k % 2 == 0 { (sign / factorial, 0.0) } else { (0.0, sign / factorial) };
+            // y[k] = y₀ cos[k] + y₀' sin[k]; y'[k] = y₀' cos[k] − y₀ sin[k].
+            for i in 0..n {
+                for l in 0..2 {
+                    let (y0, v0) = (start[i][l], start[n + i][l]);
+                    let want = [y0 * cos + v0 * sin, v0 * cos - y0 * sin];
+                    for (part, want) in want.into_iter().enumerate() {
+                        let got = series[k * 2 * n + part * n + i][l];
+                        let close = (got - want).abs() <= 1e-14;
+                        assert!(close, "order {k}, component {i}/{part}, lane {l}: {got} vs {want}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_linearly_implicit_second_order_system_expands_whole() {
+        use ClosedFormInverse::{Adjugate, Diagonal};
+        check_second_order(1, &[((0, 0), "2 + y1^2")], Diagonal);
+        check_second_order(1, &[((0, 0), "2 + y1'*t")], Adjugate);
+        check_second_order(3, &[((0, 0), "2"), ((1, 1), "3 + cos(y1)"), ((2, 2), "1 + t^2")], Diagonal);
+        check_second_order(2, &[((0, 0), "2 + y1'^2"), ((0, 1), "y2"), ((1, 0), "sin(t)"), ((1, 1), "3")], Adjugate);
+        let dense3 = [
+            ((0, 0), "4 + y3^2"),
+            ((0, 1), "y1"),
+            ((0, 2), "1"),
+            ((1, 0), "t"),
+            ((1, 1), "5"),
+            ((2, 0), "1"),
+            ((2, 1), "y2'"),
+            ((2, 2), "6 + cos(y1)"),
+        ];
+        check_second_order(3, &dense3, Adjugate);
     }
 
     #[test]

@@ -9,9 +9,10 @@
 //! is off and its register allocator is the single-pass one
 //! ([`Codegen::Quick`]): the code is straight-line arithmetic on loaded
 //! values, which neither can improve, and they would triple the compile time,
-//! which a short run pays in full. For a second-order system `M q'' = f`
-//! ([`NativeTaylor::second_order`]) each order's function includes the
-//! coupling, so the functions run in turn make the whole expansion. The
+//! which a short run pays in full. For a linearly implicit second-order
+//! system `A y'' = b` ([`NativeTaylor::second_order`]) each order's function
+//! includes the coupling, so the functions run in turn make the whole
+//! expansion. The
 //! functions are compiled on two threads ([`compile_shared`]). The
 //! interpreter in `taylor.rs` stays the reference and the fallback; both
 //! agree to rounding (the same operations, summed in the same order).
@@ -44,7 +45,7 @@ pub(crate) struct NativeTaylor {
     /// The length of the coefficient buffer the functions address.
     len: usize,
     /// The length of the series a second-order expansion writes (orders
-    /// `1..=p` of `[q, q']`, order-major); 0 for the tape's orders alone.
+    /// `1..=p` of `[y, y']`, order-major); 0 for the tape's orders alone.
     series_len: usize,
 }
 
@@ -123,7 +124,7 @@ impl<const L: usize> Emitter<'_, '_, L> {
         Ok(self.b.ins().load(ty, MemFlagsData::trusted(), self.base, at))
     }
 
-    /// Stores `v` as component `at` (of `[q, q']` for all orders, order-major)
+    /// Stores `v` as component `at` (of `[y, y']` for all orders, order-major)
     /// of the caller's series, at `lane`.
     fn st_series(&mut self, at: usize, lane: usize, v: Value) -> Result<(), JitError> {
         let at = offset(at * L + lane)?;
@@ -553,36 +554,38 @@ impl<const L: usize> Emitter<'_, '_, L> {
     }
 }
 
-/// The extra slots of a second-order system `M a = f` (see
-/// [`TaylorTape::compile_second_order`]): where its parts sit.
+/// Where the parts of a linearly implicit second-order system `A y'' = b`
+/// sit among the slots (see [`TaylorTape::compile_second_order`]).
 #[derive(Clone, Debug)]
 pub(crate) struct SecondOrderLayout {
     pub(crate) n: usize,
-    /// `(row, column)` of M's stored entries, the tape's first outputs.
+    /// `(row, column)` of the entries of A the tape outputs first.
     pub(crate) entries: Vec<(usize, usize)>,
-    /// Slots of q, q' (inputs 0..2n) and t (input 2n).
-    pub(crate) q: Vec<u32>,
-    pub(crate) v: Vec<u32>,
-    /// Slots of M's stored entries and of f (outputs).
-    pub(crate) mass: Vec<u32>,
-    pub(crate) force: Vec<u32>,
-    /// Which stored entries vary along a trajectory.
+    /// Slots of y and y' (inputs 0..2n; t, input 2n, is the caller's).
+    pub(crate) y: Vec<u32>,
+    pub(crate) dy: Vec<u32>,
+    /// Slots of A's entries and of b (outputs).
+    pub(crate) matrix: Vec<u32>,
+    pub(crate) rhs: Vec<u32>,
+    /// Which entries of A vary along a trajectory.
     pub(crate) varying: Vec<bool>,
-    /// Extra slots: the accelerations (n) and M[0]⁻¹ (n for a diagonal M, n² otherwise).
-    pub(crate) accel: Vec<u32>,
+    /// Extra slots: y'' (n) and A[0]⁻¹ (n for a diagonal A, n² otherwise).
+    pub(crate) second: Vec<u32>,
     pub(crate) inverse: Vec<u32>,
+    /// A[0]⁻¹ by reciprocals ([`crate::ClosedFormInverse::Diagonal`]), not
+    /// by the adjugate.
     pub(crate) diagonal: bool,
 }
 
 impl<const L: usize> Emitter<'_, '_, L> {
-    /// M[0]⁻¹ on every lane, by the adjugate (n ≤ 3) or reciprocals (diagonal).
+    /// A[0]⁻¹ on every lane, by the adjugate (n ≤ 3) or reciprocals (diagonal).
     fn invert(&mut self, s: &SecondOrderLayout) -> Result<(), JitError> {
         self.width = 1;
         let n = s.n;
         for lane in 0..L {
             if s.diagonal {
                 for (e, &(i, _)) in s.entries.iter().enumerate() {
-                    let (one, m) = (self.c(1.0), self.ld(s.mass[e], 0, lane)?);
+                    let (one, m) = (self.c(1.0), self.ld(s.matrix[e], 0, lane)?);
                     let r = self.b.ins().fdiv(one, m);
                     self.st(s.inverse[i], 0, lane, r)?;
                 }
@@ -590,12 +593,12 @@ impl<const L: usize> Emitter<'_, '_, L> {
             }
             let mut m = vec![None; n * n];
             for (e, &(i, j)) in s.entries.iter().enumerate() {
-                m[i * n + j] = Some(self.ld(s.mass[e], 0, lane)?);
+                m[i * n + j] = Some(self.ld(s.matrix[e], 0, lane)?);
             }
             let zero = self.c(0.0);
             let m: Vec<Value> = m.into_iter().map(|x| x.unwrap_or(zero)).collect();
             let at = |i: usize, j: usize| m[i * n + j];
-            // Cofactors C_ij; M⁻¹_ij = C_ji / det.
+            // Cofactors C_ij; A⁻¹_ij = C_ji / det.
             let mut cof = vec![zero; n * n];
             if n == 1 {
                 cof[0] = self.c(1.0);
@@ -633,16 +636,16 @@ impl<const L: usize> Emitter<'_, '_, L> {
         Ok(())
     }
 
-    /// The accelerations of order `k` and the state's order `k + 1`:
-    /// `a[k] = M[0]⁻¹ (f[k] − Σ_{j=1..k} M[j] a[k−j])`, `q[k+1] = q'[k]/(k+1)`,
-    /// `q'[k+1] = a[k]/(k+1)`.
+    /// Order `k` of y'' and order `k + 1` of y and y':
+    /// `y''[k] = A[0]⁻¹ (b[k] − Σ_{j=1..k} A[j] y''[k−j])`, `y[k+1] = y'[k]/(k+1)`,
+    /// `y'[k+1] = y''[k]/(k+1)`.
     fn couple(&mut self, s: &SecondOrderLayout, k: usize) -> Result<(), JitError> {
         self.width = vector_width(L);
         let n = s.n;
         for lane in self.groups().collect::<Vec<_>>() {
             let mut rhs = Vec::with_capacity(n);
             for i in 0..n {
-                rhs.push(self.ld(s.force[i], k, lane)?);
+                rhs.push(self.ld(s.rhs[i], k, lane)?);
             }
             for (e, &(row, col)) in s.entries.iter().enumerate() {
                 if !s.varying[e] {
@@ -653,8 +656,8 @@ impl<const L: usize> Emitter<'_, '_, L> {
                 }
                 let mut acc = self.c(0.0);
                 for j in 1..=k {
-                    let (mj, a) = (self.ld(s.mass[e], j, lane)?, self.ld(s.accel[col], k - j, lane)?);
-                    acc = self.mul_add(mj, a, acc);
+                    let (aj, y2) = (self.ld(s.matrix[e], j, lane)?, self.ld(s.second[col], k - j, lane)?);
+                    acc = self.mul_add(aj, y2, acc);
                 }
                 rhs[row] = self.b.ins().fsub(rhs[row], acc);
             }
@@ -672,13 +675,13 @@ impl<const L: usize> Emitter<'_, '_, L> {
                     }
                     acc
                 };
-                self.st(s.accel[i], k, lane, a)?;
+                self.st(s.second[i], k, lane, a)?;
                 let next_v = self.b.ins().fmul(a, scale);
-                self.st(s.v[i], k + 1, lane, next_v)?;
-                let v = self.ld(s.v[i], k, lane)?;
+                self.st(s.dy[i], k + 1, lane, next_v)?;
+                let v = self.ld(s.dy[i], k, lane)?;
                 let next_q = self.b.ins().fmul(v, scale);
-                self.st(s.q[i], k + 1, lane, next_q)?;
-                // And into the caller's series, order-major: `[q, q']` of order k + 1.
+                self.st(s.y[i], k + 1, lane, next_q)?;
+                // And into the caller's series, order-major: `[y, y']` of order k + 1.
                 let row = (k + 1) * 2 * n;
                 self.st_series(row + i, lane, next_q)?;
                 self.st_series(row + n + i, lane, next_v)?;
@@ -689,7 +692,8 @@ impl<const L: usize> Emitter<'_, '_, L> {
 }
 
 impl NativeTaylor {
-    /// Compiles the whole expansion of a second-order system (run it with
+    /// Compiles the whole expansion of a linearly implicit second-order
+    /// system `A y'' = b` (run it with
     /// [`run_all`](Self::run_all)): orders `0..p` of the tape, each followed by
     /// the coupling that yields the state's next order, one function per
     /// order, compiled on two threads ([`compile_shared`]: compiling costs
@@ -781,7 +785,7 @@ impl NativeTaylor {
 
     /// Runs every function of a second-order expansion in turn
     /// ([`second_order`](Self::second_order)), writing orders `1..=p` of
-    /// `[q, q']` into `series` (order-major, `L` lanes each; order 0 is the
+    /// `[y, y']` into `series` (order-major, `L` lanes each; order 0 is the
     /// caller's).
     ///
     /// # Panics

@@ -18,7 +18,7 @@
 
 use num::{LinearSolver, RhsError};
 use std::sync::Arc;
-use sym::{Lanes, Tape, TaylorTape};
+use sym::{ClosedFormInverse, Lanes, LinearSecondOrder, Tape, TaylorTape};
 
 /// Up to this many coordinates M[0]⁻¹ is formed explicitly.
 const EXPLICIT_INVERSE_MAX: usize = 6;
@@ -76,9 +76,22 @@ impl<const L: usize> LagrangeSeries<L> {
         let variable: Vec<bool> = (0..tape.n_inputs()).map(|k| k <= 2 * n).collect();
         let mut tape = TaylorTape::new(tape, order, &variable);
         // Native code where the host has a code generator: the whole expansion in
-        // one function when M can be inverted in closed form, the tape's orders
-        // otherwise; the interpreter where there is no code generator.
-        if native && !matches!(tape.compile_second_order(n, &entries), Ok(true)) {
+        // one function when M can be inverted in closed form (diagonal, or at most
+        // 3 coordinates), the tape's orders otherwise; the interpreter where there
+        // is no code generator.
+        let closed_form = if diagonal {
+            Some(ClosedFormInverse::Diagonal)
+        } else if n <= ClosedFormInverse::ADJUGATE_MAX_DIM {
+            Some(ClosedFormInverse::Adjugate)
+        } else {
+            None
+        };
+        let whole = native
+            && closed_form.is_some_and(|inverse| {
+                let system = LinearSecondOrder { dim: n, entries: &entries, inverse };
+                matches!(tape.compile_second_order(&system), Ok(true))
+            });
+        if native && !whole {
             let _ = tape.compile_native();
         }
         let varying = (0..entries.len()).filter(|&e| !tape.output_is_constant(e)).collect();
