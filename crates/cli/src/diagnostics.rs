@@ -25,7 +25,10 @@ impl Failure {
     pub fn model(path: &Path, source: &str, e: mech::ModelError) -> Failure {
         Failure::Input {
             file: path.display().to_string(),
-            message: with_flag(e.setting.as_ref(), e.message),
+            message: match &e.within {
+                Some(w) => nested_message(w),
+                None => with_flag(e.setting.as_ref(), e.message),
+            },
             located: e.span.map(|s| (source.to_string(), clamp(s, source))),
             help: e.help,
         }
@@ -140,6 +143,19 @@ pub fn line_col(source: &str, offset: usize) -> (usize, usize) {
     let line = before.matches('\n').count() + 1;
     let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
     (line, col)
+}
+
+/// The message of an error inside a file the model names, with its line and
+/// column there: "in the body file NAME:LINE:COL: ...".
+fn nested_message(w: &mech::Within) -> String {
+    let place = match &w.error.span {
+        Some(s) => {
+            let (line, col) = line_col(&w.text, s.start);
+            format!("{}:{line}:{col}", w.name)
+        }
+        None => w.name.clone(),
+    };
+    format!("in the {} {place}: {}", w.what, w.error.message)
 }
 
 /// The message of an error about a setting, prefixed with the flag that gives

@@ -437,3 +437,26 @@ fn a_body_file_gives_mass_centre_and_inertia() {
     assert_eq!(run.code, Some(2), "{}", run.stderr);
     assert!(run.stderr.contains("cannot read the body file 'no_such_body.toml'"), "{}", run.stderr);
 }
+
+/// An error inside a body file is reported at its line and column in that file,
+/// and the model's `inertia` value is underlined.
+#[test]
+fn an_error_in_a_body_file_names_its_line_and_column() {
+    let body = scratch("bodyfile", "broken_body.toml");
+    std::fs::write(
+        &body,
+        "name = \"broken\"\n[[parts]]\nshape = \"sphere\"\nmass = \"1\"\nsize = [\"R\"]\ncenter = [0, 0, 0]\n",
+    )
+    .unwrap();
+    let model = body.with_file_name("top.toml");
+    std::fs::write(
+        &model,
+        "coordinates = [\"al\", \"be\", \"ga\"]\n[[bodies]]\ninertia = \"broken_body.toml\"\nangles = [\"al\", \"be\", \"ga\"]\n",
+    )
+    .unwrap();
+    let r = lagrange(&["derive", model.to_str().unwrap()]);
+    assert_eq!(r.code, Some(2), "{}", r.describe());
+    let first = r.stderr.lines().next().unwrap_or_default();
+    assert!(first.contains(":3:11: in the body file broken_body.toml:5:"), "{}", r.describe());
+    assert!(first.contains("unknown name 'R'"), "{}", r.describe());
+}

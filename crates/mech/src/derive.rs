@@ -324,7 +324,13 @@ impl Derivation {
             let message =
                 "the mass matrix ∂²L/∂q'∂q' is singular: the equations of motion do not determine every acceleration";
             let help = "each coordinate needs its own kinetic energy; a coordinate whose velocity never appears, or two that only appear as one combination, leave the motion undetermined";
-            return Err(ModelError { message: message.into(), span, help: Some(help.into()), setting: None });
+            return Err(ModelError {
+                message: message.into(),
+                span,
+                help: Some(help.into()),
+                setting: None,
+                within: None,
+            });
         }
 
         // Cyclic coordinates and conserved momenta.

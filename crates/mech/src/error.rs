@@ -18,6 +18,23 @@ pub struct ModelError {
     /// The caller's setting the error is about, when it is not a place in a
     /// file (a front end names it in its own terms, e.g. a command-line flag).
     pub setting: Option<Setting>,
+    /// When the error is inside another file the model names (a body file):
+    /// that file and the error there, for a front end to locate.
+    pub within: Option<Box<Within>>,
+}
+
+/// An error inside a file named by the model file (`message` of the outer error
+/// says "in the body file NAME: ..."; a front end may add the line and column).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Within {
+    /// What the file is (`body file`).
+    pub what: String,
+    /// Its name as the model gives it.
+    pub name: String,
+    /// Its text, which `error`'s span points into.
+    pub text: String,
+    /// The error in it.
+    pub error: ModelError,
 }
 
 /// A value the caller set beside the files: the library names it by what it
@@ -39,17 +56,17 @@ pub enum Setting {
 impl ModelError {
     /// An error at a span.
     pub fn at(span: Range<usize>, message: impl Into<String>) -> ModelError {
-        ModelError { message: message.into(), span: Some(span), help: None, setting: None }
+        ModelError { message: message.into(), span: Some(span), help: None, setting: None, within: None }
     }
 
     /// An error about the file as a whole.
     pub fn whole(message: impl Into<String>) -> ModelError {
-        ModelError { message: message.into(), span: None, help: None, setting: None }
+        ModelError { message: message.into(), span: None, help: None, setting: None, within: None }
     }
 
     /// An error about a setting of the caller's.
     pub fn setting(setting: Setting, message: impl Into<String>) -> ModelError {
-        ModelError { message: message.into(), span: None, help: None, setting: Some(setting) }
+        ModelError { message: message.into(), span: None, help: None, setting: Some(setting), within: None }
     }
 
     /// Adds a hint.

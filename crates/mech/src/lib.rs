@@ -79,7 +79,7 @@ pub use derive::{
     ConservationReason, Conserved, ConservedReason, Derivation, EnergyReason, HamiltonianReason, Layout, RateTerm,
     Verdicts,
 };
-pub use error::{ModelError, Setting};
+pub use error::{ModelError, Setting, Within};
 pub use extremal::{
     extremal, Candidate, Euler, EulerError, ExtremalConfig, ExtremalError, ExtremalReport, ExtremalSummary, Problem,
     SecondVariation, Start, EXTREMAL_FORMAT,

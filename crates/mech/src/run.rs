@@ -366,6 +366,7 @@ pub fn simulate(
             span,
             help: Some(g.advice()),
             setting: None,
+            within: None,
         };
         return Err(RunError::Input(e));
     }

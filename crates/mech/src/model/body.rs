@@ -234,17 +234,14 @@ fn load_body_file(r: &mut Reader<'_>, name: &str, span: Range<usize>) -> Result<
     let text = (r.files)(name)
         .map_err(|e| ModelError::at(span.clone(), format!("cannot read the body file '{name}': {e}")))?;
     let nested = |e: ModelError| {
-        let place = match &e.span {
-            Some(s) => {
-                let before = &text[..s.start.min(text.len())];
-                let line = before.matches('\n').count() + 1;
-                let col = before.chars().rev().take_while(|&c| c != '\n').count() + 1;
-                format!("{name}:{line}:{col}")
-            }
-            None => name.to_string(),
-        };
-        let mut err = ModelError::at(span.clone(), format!("in the body file {place}: {}", e.message));
-        err.help = e.help;
+        let mut err = ModelError::at(span.clone(), format!("in the body file {name}: {}", e.message));
+        err.help.clone_from(&e.help);
+        err.within = Some(Box::new(crate::error::Within {
+            what: "body file".into(),
+            name: name.into(),
+            text: text.clone(),
+            error: e,
+        }));
         err
     };
     let body = crate::inertia::BodyFile::parse(&text, &[]).map_err(nested)?;
