@@ -101,345 +101,117 @@ pub struct Derivation {
     pub(crate) layout: Layout,
 }
 
-/// Symbols and the "is a variable" predicate used for collecting.
-struct Vars {
-    names: Vec<NameId>,
-    t: NameId,
-    momenta: Vec<NameId>,
+/// The symbols of a derivation and the "is a variable" predicate used for collecting.
+struct Symbols {
+    names: Vec<String>,
+    q: Vec<ExprId>,
+    qd: Vec<ExprId>,
+    qdd: Vec<ExprId>,
+    p: Vec<ExprId>,
+    t: ExprId,
+    var_names: Vec<NameId>,
+    t_name: NameId,
+    momentum_names: Vec<NameId>,
 }
 
-impl Vars {
+impl Symbols {
+    fn new(pool: &mut Pool, model: &Model) -> Symbols {
+        let names: Vec<String> = model.coordinates.iter().map(|c| c.name.clone()).collect();
+        let symbols = Symbols {
+            q: names.iter().map(|c| pool.var(c, 0)).collect(),
+            qd: names.iter().map(|c| pool.var(c, 1)).collect(),
+            qdd: names.iter().map(|c| pool.var(c, 2)).collect(),
+            p: names.iter().map(|c| pool.symbol(&format!("p_{c}"))).collect(),
+            t: pool.symbol("t"),
+            var_names: names.iter().map(|c| pool.name(c)).collect(),
+            t_name: pool.name("t"),
+            momentum_names: names.iter().map(|c| pool.name(&format!("p_{c}"))).collect(),
+            names,
+        };
+        debug_assert!(symbols.names.iter().all(|c| pool.find_name(c).is_some()));
+        symbols
+    }
+
     fn is_var(&self, s: Symbol) -> bool {
-        s.name == self.t || self.names.contains(&s.name) || self.momenta.contains(&s.name)
+        s.name == self.t_name || self.var_names.contains(&s.name) || self.momentum_names.contains(&s.name)
+    }
+
+    fn n(&self) -> usize {
+        self.q.len()
     }
 }
 
+/// T, U and L of a model; L also as (M, b, L₀) when it is quadratic in the velocities.
+struct Energies {
+    kinetic: Option<ExprId>,
+    potential: Option<ExprId>,
+    lagrangian: ExprId,
+    form: Option<Quadratic>,
+    sparsity: Option<Sparsity>,
+    bodies: Vec<BodyMotion>,
+}
+
+/// R and Q: what acts on the system besides L.
+struct External {
+    dissipation: Option<ExprId>,
+    forces: Vec<ExprId>,
+}
+
+/// The equations of motion: p, `M q'' = f`, E = M q'' − f, and ∂L/∂q.
+struct Motion {
+    momenta: Vec<ExprId>,
+    mass_matrix: Vec<Vec<ExprId>>,
+    forcing: Vec<ExprId>,
+    equations: Vec<ExprId>,
+    dl_dq: Vec<ExprId>,
+}
+
+/// The energy function and the verdicts on H.
+struct Judged {
+    energy_function: ExprId,
+    energy: Option<ExprId>,
+    hamiltonian_is_energy: Option<bool>,
+    hamiltonian_conserved: bool,
+    explicit_time: bool,
+    verdicts: Verdicts,
+}
+
 impl Derivation {
-    /// Derives everything from a model. Fails on a singular mass matrix.
+    /// Derives everything from a model, in the order of the notes: L, the
+    /// equations of motion, what is conserved and why, H and Hamilton's
+    /// equations, then the constraints. Fails on a singular mass matrix.
     pub fn new(mut model: Model) -> Result<Derivation, ModelError> {
         let started = std::time::Instant::now();
-        let n = model.n_coords();
         // The pool is taken out of the model while the model's other parts are read.
         let mut pool_owned = std::mem::take(&mut model.pool);
         let pool = &mut pool_owned;
-        let names: Vec<String> = model.coordinates.iter().map(|c| c.name.clone()).collect();
-        let q: Vec<ExprId> = names.iter().map(|c| pool.var(c, 0)).collect();
-        let qd: Vec<ExprId> = names.iter().map(|c| pool.var(c, 1)).collect();
-        let qdd: Vec<ExprId> = names.iter().map(|c| pool.var(c, 2)).collect();
-        let p: Vec<ExprId> = names.iter().map(|c| pool.symbol(&format!("p_{c}"))).collect();
-        let t = pool.symbol("t");
-        let vars = Vars {
-            names: names.iter().map(|c| pool.name(c)).collect(),
-            t: pool.name("t"),
-            momenta: names.iter().map(|c| pool.name(&format!("p_{c}"))).collect(),
-        };
-        debug_assert!(names.iter().all(|c| pool.find_name(c).is_some()));
-        let is_var = |s: Symbol| vars.is_var(s);
+        let s = Symbols::new(pool, &model);
+        let is_var = |x: Symbol| s.is_var(x);
 
-        let vars_q = QVars { q: &q, qd: &qd, t, is_var: &is_var };
-
-        // T and U from particles, bodies, kinetic and potential; or L itself. When L is
-        // quadratic in the velocities (almost always) it is also held as
-        // (M, b, L₀), from which the rest is built without expanding L whole.
-        let simplify_forces = |pool: &mut Pool| -> (Option<ExprId>, Vec<ExprId>) {
-            let dissipation = model.dissipation.as_ref().map(|r| pool.simplify_in(r.expr, &is_var));
-            let forces = model
-                .forces
-                .iter()
-                .map(|f| match f {
-                    Some(f) => pool.simplify_in(f.expr, &is_var),
-                    None => pool.zero(),
-                })
-                .collect();
-            (dissipation, forces)
-        };
-        let mut bodies = Vec::new();
-        let (kinetic, potential, lagrangian, form) = if let Some(l) = &model.lagrangian {
-            let l = pool.simplify_in(l.expr, &is_var);
-            let form = Quadratic::split(pool, l, &vars_q);
-            (None, None, l, form)
-        } else {
-            let mut u_terms = Vec::new();
-            for part in &model.particles {
-                if let Some(g) = &model.gravity {
-                    let height = part.position[part.position.len() - 1];
-                    u_terms.push(pool.mul(&[part.mass, g.expr, height]));
-                }
-                if let Some(u) = part.potential {
-                    u_terms.push(u);
-                }
-            }
-            // Rigid bodies' T is small and quadratic in the rates: it joins `kinetic`.
-            let mut k_terms = Vec::new();
-            for body in &model.bodies {
-                let g = model.gravity.as_ref().map(|g| g.expr);
-                let terms = body::terms(pool, body, &q, &qd, t, g);
-                k_terms.push(terms.kinetic);
-                u_terms.extend(terms.potential);
-                bodies.push(body::motion(pool, body, &terms, &is_var));
-            }
-            if let Some(k) = &model.kinetic {
-                k_terms.push(k.expr);
-            }
-            if let Some(u) = &model.potential {
-                u_terms.push(u.expr);
-            }
-            let uu = pool.add(&u_terms);
-            let uu = pool.simplify_in(uu, &is_var);
-            let k = if k_terms.is_empty() {
-                None
-            } else {
-                let k = pool.add(&k_terms);
-                Some(pool.simplify_in(k, &is_var))
-            };
-            if model.particles.is_empty() {
-                let tt = k.unwrap_or_else(|| pool.zero());
-                let l = pool.sub(tt, uu);
-                let l = pool.simplify_in(l, &is_var);
-                let form = Quadratic::split(pool, l, &vars_q);
-                (Some(tt), Some(uu), l, form)
-            } else {
-                let masses: Vec<(ExprId, Vec<ExprId>)> =
-                    model.particles.iter().map(|p| (p.mass, p.position.clone())).collect();
-                let particle_form = quadratic::particles(pool, &masses, &vars_q);
-                let t_particles = particle_form.lagrangian(pool, &qd);
-                let tt = match k {
-                    Some(k) => pool.add2(t_particles, k),
-                    None => t_particles,
-                };
-                // The rest of L (T from `kinetic`, minus U) is small: split it.
-                let k0 = k.unwrap_or_else(|| pool.zero());
-                let rest = pool.sub(k0, uu);
-                let form = Quadratic::split(pool, rest, &vars_q).map(|rest_form| {
-                    let mut f = particle_form;
-                    f.add(pool, &rest_form, &is_var);
-                    f
-                });
-                let l = match &form {
-                    Some(f) => f.lagrangian(pool, &qd),
-                    None => {
-                        let l = pool.sub(tt, uu);
-                        pool.simplify_in(l, &is_var)
-                    }
-                };
-                (Some(tt), Some(uu), l, form)
-            }
-        };
-        let (dissipation, forces) = simplify_forces(pool);
-        let sparsity = form.as_ref().map(|f| f.sparsity(pool, &q));
-
-        // Momenta and Euler–Lagrange equations.
-        let mut mass_matrix = vec![vec![pool.zero(); n]; n];
-        let mut forcing = Vec::with_capacity(n);
-        let mut equations = Vec::with_capacity(n);
-        let mut dl_dq: Vec<ExprId> = Vec::with_capacity(n);
-        let momenta: Vec<ExprId>;
-        if let (Some(form), Some(sp)) = (&form, &sparsity) {
-            momenta = form.momenta(pool, &qd).into_iter().map(|p| polish(pool, p, &is_var)).collect();
-            mass_matrix.clone_from(&form.m);
-            let rows = form.forcing(pool, &vars_q, sp);
-            dl_dq = form.coordinate_gradient(pool, &q, &qd, sp);
-            for (i, row) in rows.into_iter().enumerate() {
-                // Dissipation and generalized forces: −∂R/∂q_i' + Q_i.
-                let mut extra = vec![forces[i]];
-                if let Some(r) = dissipation {
-                    let d = pool.diff(r, qd[i]);
-                    extra.push(pool.neg(d));
-                }
-                let extra = pool.add(&extra);
-                let f = if pool.is_zero(extra) {
-                    row
-                } else {
-                    let extra = pool.simplify_in(extra, &is_var);
-                    pool.add2(row, extra)
-                };
-                forcing.push(f);
-            }
-        } else {
-            momenta = (0..n)
-                .map(|i| {
-                    let d = pool.diff(lagrangian, qd[i]);
-                    pool.simplify_in(d, &is_var)
-                })
-                .collect();
-            // M_ij = ∂p_i/∂q_j' and f_i = −(E_i at q'' = 0), each simplified while
-            // small.
-            for i in 0..n {
-                for j in 0..n {
-                    mass_matrix[i][j] = if j < i {
-                        mass_matrix[j][i]
-                    } else {
-                        let m = pool.diff(momenta[i], qd[j]);
-                        pool.simplify_in(m, &is_var)
-                    };
-                }
-                // d/dt p_i without its q'' terms: Σ ∂p_i/∂q_k q_k' + ∂p_i/∂t.
-                let mut terms: Vec<ExprId> = Vec::with_capacity(n + 4);
-                for k in 0..n {
-                    let d = pool.diff(momenta[i], q[k]);
-                    if !pool.is_zero(d) {
-                        terms.push(pool.mul2(d, qd[k]));
-                    }
-                }
-                terms.push(pool.diff(momenta[i], t));
-                let dl = pool.diff(lagrangian, q[i]);
-                dl_dq.push(dl);
-                terms.push(pool.neg(dl));
-                if let Some(r) = dissipation {
-                    terms.push(pool.diff(r, qd[i]));
-                }
-                terms.push(pool.neg(forces[i]));
-                let rest = pool.add(&terms);
-                let f = pool.neg(rest);
-                forcing.push(simplify_bounded(pool, f, &is_var));
-            }
-        }
-        // E_i = Σ M_ij q_j'' − f_i is assembled from M and f, so the long
-        // equations are never expanded as a whole.
-        for i in 0..n {
-            let mut e_terms: Vec<ExprId> = Vec::with_capacity(n + 1);
-            for j in 0..n {
-                if !pool.is_zero(mass_matrix[i][j]) {
-                    e_terms.push(pool.mul2(mass_matrix[i][j], qdd[j]));
-                }
-            }
-            e_terms.push(pool.neg(forcing[i]));
-            equations.push(pool.add(&e_terms));
-        }
+        let energies = energies(pool, &model, &s, &is_var);
+        let ext = external(pool, &model, &is_var);
+        let motion = equations_of_motion(pool, &s, &energies, &ext, &is_var);
         let equations_seconds = started.elapsed().as_secs_f64();
-        // M is singular when one of its blocks is (a chain of masses has a
-        // thousand 1×1 blocks, not one 1000×1000 matrix to factor).
-        let singular = blocks(pool, &mass_matrix).iter().any(|idx| {
-            let block: Vec<Vec<ExprId>> =
-                idx.iter().map(|&i| idx.iter().map(|&j| mass_matrix[i][j]).collect()).collect();
-            probe::is_singular(pool, &block)
-        });
-        if singular {
-            let span = model
-                .lagrangian
-                .as_ref()
-                .or(model.kinetic.as_ref())
-                .map(|l| l.span.clone())
-                .or_else(|| model.particles.first().map(|p| p.span.clone()));
-            let message =
-                "the mass matrix ∂²L/∂q'∂q' is singular: the equations of motion do not determine every acceleration";
-            let help = "each coordinate needs its own kinetic energy; a coordinate whose velocity never appears, or two that only appear as one combination, leave the motion undetermined";
-            return Err(ModelError {
-                message: message.into(),
-                span,
-                help: Some(help.into()),
-                setting: None,
-                within: None,
-            });
-        }
-
-        // Cyclic coordinates and conserved momenta.
-        let mut cyclic = Vec::new();
-        let mut conserved = Vec::new();
-        for i in 0..n {
-            if !probe::is_zero(pool, dl_dq[i]) {
-                continue;
-            }
-            cyclic.push(i);
-            let damped = dissipation.is_some_and(|r| {
-                let d = pool.diff(r, qd[i]);
-                !probe::is_zero(pool, d)
-            });
-            let forced = !probe::is_zero(pool, forces[i]);
-            if !damped && !forced {
-                conserved.push(Conserved {
-                    name: format!("p_{}", names[i]),
-                    expr: momenta[i],
-                    reason: ConservedReason::Cyclic { coordinate: names[i].clone() },
-                });
-            }
-        }
-
-        // Energy function and the verdicts on H.
-        let energy_function = match &form {
-            Some(form) => form.energy_function(pool, &qd),
-            None => {
-                let mut h_terms: Vec<ExprId> = (0..n).map(|i| pool.mul2(qd[i], momenta[i])).collect();
-                h_terms.push(pool.neg(lagrangian));
-                let h_sum = pool.add(&h_terms);
-                pool.simplify_in(h_sum, &is_var)
-            }
-        };
-        let dl_dt = pool.diff(lagrangian, t);
-        let explicit_time = !probe::is_zero(pool, dl_dt);
-        let dissipative = dissipation.is_some_and(|r| !probe::is_zero(pool, r));
-        let forced: Vec<usize> = (0..n).filter(|&i| !probe::is_zero(pool, forces[i])).collect();
-        let hamiltonian_conserved = !explicit_time && !dissipative && forced.is_empty();
-        let mut verdicts = Verdicts::default();
-        // dH/dt = −∂L/∂t − Σ q'·∂R/∂q' + Σ Q·q': name each term that is there.
-        let mut rate = Vec::new();
-        if explicit_time {
-            verdicts.conservation.push(ConservationReason::ExplicitTime);
-            rate.push(RateTerm::ExplicitTime);
-        }
-        if dissipative {
-            verdicts.conservation.push(ConservationReason::Dissipation);
-            rate.push(RateTerm::Dissipation);
-        }
-        if !forced.is_empty() {
-            let coordinates = forced.iter().map(|&i| names[i].clone()).collect();
-            verdicts.conservation.push(ConservationReason::GeneralizedForces { coordinates });
-            rate.push(RateTerm::GeneralizedForces);
-        }
-        if !rate.is_empty() {
-            verdicts.conservation.push(ConservationReason::Rate { terms: rate });
-        }
-        if hamiltonian_conserved {
-            verdicts.conservation.push(ConservationReason::Conserved);
-        }
-        let (energy, hamiltonian_is_energy) = match (kinetic, potential) {
-            (Some(tt), Some(uu)) => {
-                let zero_vel: Subst = qd.iter().map(|&v| (v, pool.zero())).collect();
-                let u0 = pool.substitute(uu, &zero_vel);
-                let e = pool.add2(tt, u0);
-                let e = if model.particles.is_empty() { pool.simplify_in(e, &is_var) } else { e };
-                let same = probe::are_equal(pool, energy_function, e);
-                explain_energy(pool, &mut verdicts, same, tt, uu, u0, &qd);
-                (Some(e), Some(same))
-            }
-            _ => {
-                verdicts.energy.push(EnergyReason::OnlyLagrangian);
-                (None, None)
-            }
-        };
-        if hamiltonian_conserved {
+        check_regular(pool, &model, &motion.mass_matrix)?;
+        let (cyclic, mut conserved) = cyclic_coordinates(pool, &s, &motion, &ext);
+        let mut judged = judge(pool, &model, &s, &energies, &motion, &ext, &is_var);
+        if judged.hamiltonian_conserved {
             conserved.push(Conserved {
                 name: "H".into(),
-                expr: energy_function,
-                reason: if hamiltonian_is_energy == Some(true) {
+                expr: judged.energy_function,
+                reason: if judged.hamiltonian_is_energy == Some(true) {
                     ConservedReason::EnergyConserved
                 } else {
                     ConservedReason::HamiltonianConserved
                 },
             });
         }
+        let (hamiltonian, velocities, hamilton) =
+            hamiltonian(pool, &s, &energies, &motion, &ext, &mut judged.verdicts, &is_var);
 
-        // The Hamiltonian, by the Legendre transform for L quadratic in q'.
-        let (hamiltonian, velocities, hamilton) = match form.as_ref().zip(sparsity.as_ref()) {
-            None => {
-                verdicts.hamiltonian.push(HamiltonianReason::NotQuadratic);
-                (None, None, None)
-            }
-            Some((form, sparsity)) => {
-                let sys = System { q: &q, qd: &qd, p: &p, form, sparsity, dissipation, forces: &forces };
-                match legendre(pool, &sys, &is_var) {
-                    Some((h, v, eqs)) => (Some(h), Some(v), Some(eqs)),
-                    None => {
-                        let coupled = largest_block(pool, &mass_matrix);
-                        verdicts.hamiltonian.push(HamiltonianReason::TooLong { coupled });
-                        (None, None, None)
-                    }
-                }
-            }
-        };
-
-        let layout = Layout::new(pool, &q, &qd, t, &model.parameters);
+        let layout = Layout::new(pool, &s.q, &s.qd, s.t, &model.parameters);
         model.pool = pool_owned;
+        let Symbols { q, qd, qdd, p, t, .. } = s;
         let mut derivation = Derivation {
             model,
             q,
@@ -447,31 +219,32 @@ impl Derivation {
             qdd,
             p,
             t,
-            kinetic,
-            potential,
-            lagrangian,
-            dissipation,
-            forces,
-            momenta,
-            equations,
-            mass_matrix,
-            forcing,
+            kinetic: energies.kinetic,
+            potential: energies.potential,
+            lagrangian: energies.lagrangian,
+            dissipation: ext.dissipation,
+            forces: ext.forces,
+            momenta: motion.momenta,
+            equations: motion.equations,
+            mass_matrix: motion.mass_matrix,
+            forcing: motion.forcing,
             cyclic,
             conserved,
-            energy_function,
+            energy_function: judged.energy_function,
             hamiltonian,
             velocities,
-            energy,
-            hamiltonian_is_energy,
-            hamiltonian_conserved,
+            energy: judged.energy,
+            hamiltonian_is_energy: judged.hamiltonian_is_energy,
+            hamiltonian_conserved: judged.hamiltonian_conserved,
             hamilton,
-            explicit_time,
-            verdicts,
-            bodies,
+            explicit_time: judged.explicit_time,
+            verdicts: judged.verdicts,
+            bodies: energies.bodies,
             equations_seconds,
             constraints: Default::default(),
             layout,
         };
+        // The constraints amend the equations and the verdicts of the system without them.
         constraint::attach(&mut derivation)?;
         Ok(derivation)
     }
@@ -641,6 +414,337 @@ impl Derivation {
     pub fn mass_matrix_is_diagonal(&self) -> bool {
         let n = self.q.len();
         (0..n).all(|i| (0..n).all(|j| i == j || self.model.pool.is_zero(self.mass_matrix[i][j])))
+    }
+}
+
+/// T and U from particles, bodies, `kinetic` and `potential`, or L itself. When L
+/// is quadratic in the velocities (almost always) it is also held as (M, b, L₀),
+/// from which the rest is built without expanding L whole.
+fn energies(pool: &mut Pool, model: &Model, s: &Symbols, is_var: &dyn Fn(Symbol) -> bool) -> Energies {
+    let (q, qd, t) = (&s.q, &s.qd, s.t);
+    let vars_q = QVars { q, qd, t, is_var };
+    let mut bodies = Vec::new();
+    let (kinetic, potential, lagrangian, form) = if let Some(l) = &model.lagrangian {
+        let l = pool.simplify_in(l.expr, is_var);
+        let form = Quadratic::split(pool, l, &vars_q);
+        (None, None, l, form)
+    } else {
+        let mut u_terms = Vec::new();
+        for part in &model.particles {
+            if let Some(g) = &model.gravity {
+                let height = part.position[part.position.len() - 1];
+                u_terms.push(pool.mul(&[part.mass, g.expr, height]));
+            }
+            if let Some(u) = part.potential {
+                u_terms.push(u);
+            }
+        }
+        // Rigid bodies' T is small and quadratic in the rates: it joins `kinetic`.
+        let mut k_terms = Vec::new();
+        for body in &model.bodies {
+            let g = model.gravity.as_ref().map(|g| g.expr);
+            let terms = body::terms(pool, body, q, qd, t, g);
+            k_terms.push(terms.kinetic);
+            u_terms.extend(terms.potential);
+            bodies.push(body::motion(pool, body, &terms, is_var));
+        }
+        if let Some(k) = &model.kinetic {
+            k_terms.push(k.expr);
+        }
+        if let Some(u) = &model.potential {
+            u_terms.push(u.expr);
+        }
+        let uu = pool.add(&u_terms);
+        let uu = pool.simplify_in(uu, is_var);
+        let k = if k_terms.is_empty() {
+            None
+        } else {
+            let k = pool.add(&k_terms);
+            Some(pool.simplify_in(k, is_var))
+        };
+        if model.particles.is_empty() {
+            let tt = k.unwrap_or_else(|| pool.zero());
+            let l = pool.sub(tt, uu);
+            let l = pool.simplify_in(l, is_var);
+            let form = Quadratic::split(pool, l, &vars_q);
+            (Some(tt), Some(uu), l, form)
+        } else {
+            let masses: Vec<(ExprId, Vec<ExprId>)> =
+                model.particles.iter().map(|p| (p.mass, p.position.clone())).collect();
+            let particle_form = quadratic::particles(pool, &masses, &vars_q);
+            let t_particles = particle_form.lagrangian(pool, qd);
+            let tt = match k {
+                Some(k) => pool.add2(t_particles, k),
+                None => t_particles,
+            };
+            // The rest of L (T from `kinetic`, minus U) is small: split it.
+            let k0 = k.unwrap_or_else(|| pool.zero());
+            let rest = pool.sub(k0, uu);
+            let form = Quadratic::split(pool, rest, &vars_q).map(|rest_form| {
+                let mut f = particle_form;
+                f.add(pool, &rest_form, is_var);
+                f
+            });
+            let l = match &form {
+                Some(f) => f.lagrangian(pool, qd),
+                None => {
+                    let l = pool.sub(tt, uu);
+                    pool.simplify_in(l, is_var)
+                }
+            };
+            (Some(tt), Some(uu), l, form)
+        }
+    };
+    let sparsity = form.as_ref().map(|f| f.sparsity(pool, q));
+    Energies { kinetic, potential, lagrangian, form, sparsity, bodies }
+}
+
+/// Rayleigh's R and the generalized forces Q (zero where none is given), simplified.
+fn external(pool: &mut Pool, model: &Model, is_var: &dyn Fn(Symbol) -> bool) -> External {
+    let dissipation = model.dissipation.as_ref().map(|r| pool.simplify_in(r.expr, is_var));
+    let forces = model
+        .forces
+        .iter()
+        .map(|f| match f {
+            Some(f) => pool.simplify_in(f.expr, is_var),
+            None => pool.zero(),
+        })
+        .collect();
+    External { dissipation, forces }
+}
+
+/// The momenta and the Euler–Lagrange equations in the form `M q'' = f`.
+fn equations_of_motion(
+    pool: &mut Pool,
+    s: &Symbols,
+    e: &Energies,
+    ext: &External,
+    is_var: &dyn Fn(Symbol) -> bool,
+) -> Motion {
+    let (n, q, qd, t) = (s.n(), &s.q, &s.qd, s.t);
+    let (dissipation, forces) = (ext.dissipation, &ext.forces);
+    let mut mass_matrix = vec![vec![pool.zero(); n]; n];
+    let mut forcing = Vec::with_capacity(n);
+    let mut dl_dq: Vec<ExprId> = Vec::with_capacity(n);
+    let momenta: Vec<ExprId>;
+    if let (Some(form), Some(sp)) = (&e.form, &e.sparsity) {
+        let vars_q = QVars { q, qd, t, is_var };
+        momenta = form.momenta(pool, qd).into_iter().map(|p| polish(pool, p, is_var)).collect();
+        mass_matrix.clone_from(&form.m);
+        let rows = form.forcing(pool, &vars_q, sp);
+        dl_dq = form.coordinate_gradient(pool, q, qd, sp);
+        for (i, row) in rows.into_iter().enumerate() {
+            // Dissipation and generalized forces: −∂R/∂q_i' + Q_i.
+            let mut extra = vec![forces[i]];
+            if let Some(r) = dissipation {
+                let d = pool.diff(r, qd[i]);
+                extra.push(pool.neg(d));
+            }
+            let extra = pool.add(&extra);
+            let f = if pool.is_zero(extra) {
+                row
+            } else {
+                let extra = pool.simplify_in(extra, is_var);
+                pool.add2(row, extra)
+            };
+            forcing.push(f);
+        }
+    } else {
+        momenta = (0..n)
+            .map(|i| {
+                let d = pool.diff(e.lagrangian, qd[i]);
+                pool.simplify_in(d, is_var)
+            })
+            .collect();
+        // M_ij = ∂p_i/∂q_j' and f_i = −(E_i at q'' = 0), each simplified while
+        // small.
+        for i in 0..n {
+            for j in 0..n {
+                mass_matrix[i][j] = if j < i {
+                    mass_matrix[j][i]
+                } else {
+                    let m = pool.diff(momenta[i], qd[j]);
+                    pool.simplify_in(m, is_var)
+                };
+            }
+            // d/dt p_i without its q'' terms: Σ ∂p_i/∂q_k q_k' + ∂p_i/∂t.
+            let mut terms: Vec<ExprId> = Vec::with_capacity(n + 4);
+            for k in 0..n {
+                let d = pool.diff(momenta[i], q[k]);
+                if !pool.is_zero(d) {
+                    terms.push(pool.mul2(d, qd[k]));
+                }
+            }
+            terms.push(pool.diff(momenta[i], t));
+            let dl = pool.diff(e.lagrangian, q[i]);
+            dl_dq.push(dl);
+            terms.push(pool.neg(dl));
+            if let Some(r) = dissipation {
+                terms.push(pool.diff(r, qd[i]));
+            }
+            terms.push(pool.neg(forces[i]));
+            let rest = pool.add(&terms);
+            let f = pool.neg(rest);
+            forcing.push(simplify_bounded(pool, f, is_var));
+        }
+    }
+    // E_i = Σ M_ij q_j'' − f_i is assembled from M and f, so the long
+    // equations are never expanded as a whole.
+    let equations = (0..n)
+        .map(|i| {
+            let mut e_terms: Vec<ExprId> = Vec::with_capacity(n + 1);
+            for j in 0..n {
+                if !pool.is_zero(mass_matrix[i][j]) {
+                    e_terms.push(pool.mul2(mass_matrix[i][j], s.qdd[j]));
+                }
+            }
+            e_terms.push(pool.neg(forcing[i]));
+            pool.add(&e_terms)
+        })
+        .collect();
+    Motion { momenta, mass_matrix, forcing, equations, dl_dq }
+}
+
+/// An error, located at L or T, when M is singular: then the equations of
+/// motion do not determine every acceleration. M is singular when one of its
+/// blocks is (a chain of masses has a thousand 1×1 blocks, not one 1000×1000
+/// matrix to factor).
+fn check_regular(pool: &mut Pool, model: &Model, mass_matrix: &[Vec<ExprId>]) -> Result<(), ModelError> {
+    let singular = blocks(pool, mass_matrix).iter().any(|idx| {
+        let block: Vec<Vec<ExprId>> = idx.iter().map(|&i| idx.iter().map(|&j| mass_matrix[i][j]).collect()).collect();
+        probe::is_singular(pool, &block)
+    });
+    if !singular {
+        return Ok(());
+    }
+    let span = model
+        .lagrangian
+        .as_ref()
+        .or(model.kinetic.as_ref())
+        .map(|l| l.span.clone())
+        .or_else(|| model.particles.first().map(|p| p.span.clone()));
+    let message = "the mass matrix ∂²L/∂q'∂q' is singular: the equations of motion do not determine every acceleration";
+    let help = "each coordinate needs its own kinetic energy; a coordinate whose velocity never appears, or two that only appear as one combination, leave the motion undetermined";
+    Err(ModelError { message: message.into(), span, help: Some(help.into()), setting: None, within: None })
+}
+
+/// Cyclic coordinates (∂L/∂q = 0) and the momenta that are conserved: those on
+/// which neither dissipation nor a generalized force acts.
+fn cyclic_coordinates(pool: &mut Pool, s: &Symbols, m: &Motion, ext: &External) -> (Vec<usize>, Vec<Conserved>) {
+    let mut cyclic = Vec::new();
+    let mut conserved = Vec::new();
+    for i in 0..s.n() {
+        if !probe::is_zero(pool, m.dl_dq[i]) {
+            continue;
+        }
+        cyclic.push(i);
+        let damped = ext.dissipation.is_some_and(|r| {
+            let d = pool.diff(r, s.qd[i]);
+            !probe::is_zero(pool, d)
+        });
+        let forced = !probe::is_zero(pool, ext.forces[i]);
+        if !damped && !forced {
+            conserved.push(Conserved {
+                name: format!("p_{}", s.names[i]),
+                expr: m.momenta[i],
+                reason: ConservedReason::Cyclic { coordinate: s.names[i].clone() },
+            });
+        }
+    }
+    (cyclic, conserved)
+}
+
+/// The energy function h = Σ q' ∂L/∂q' − L and the verdicts on it: whether H is
+/// conserved (dH/dt = −∂L/∂t − Σ q'·∂R/∂q' + Σ Q·q', each term named that is
+/// there) and whether it is the energy T + U₀.
+fn judge(
+    pool: &mut Pool,
+    model: &Model,
+    s: &Symbols,
+    e: &Energies,
+    m: &Motion,
+    ext: &External,
+    is_var: &dyn Fn(Symbol) -> bool,
+) -> Judged {
+    let (n, qd) = (s.n(), &s.qd);
+    let energy_function = match &e.form {
+        Some(form) => form.energy_function(pool, qd),
+        None => {
+            let mut h_terms: Vec<ExprId> = (0..n).map(|i| pool.mul2(qd[i], m.momenta[i])).collect();
+            h_terms.push(pool.neg(e.lagrangian));
+            let h_sum = pool.add(&h_terms);
+            pool.simplify_in(h_sum, is_var)
+        }
+    };
+    let dl_dt = pool.diff(e.lagrangian, s.t);
+    let explicit_time = !probe::is_zero(pool, dl_dt);
+    let dissipative = ext.dissipation.is_some_and(|r| !probe::is_zero(pool, r));
+    let forced: Vec<usize> = (0..n).filter(|&i| !probe::is_zero(pool, ext.forces[i])).collect();
+    let hamiltonian_conserved = !explicit_time && !dissipative && forced.is_empty();
+    let mut verdicts = Verdicts::default();
+    let mut rate = Vec::new();
+    if explicit_time {
+        verdicts.conservation.push(ConservationReason::ExplicitTime);
+        rate.push(RateTerm::ExplicitTime);
+    }
+    if dissipative {
+        verdicts.conservation.push(ConservationReason::Dissipation);
+        rate.push(RateTerm::Dissipation);
+    }
+    if !forced.is_empty() {
+        let coordinates = forced.iter().map(|&i| s.names[i].clone()).collect();
+        verdicts.conservation.push(ConservationReason::GeneralizedForces { coordinates });
+        rate.push(RateTerm::GeneralizedForces);
+    }
+    if !rate.is_empty() {
+        verdicts.conservation.push(ConservationReason::Rate { terms: rate });
+    }
+    if hamiltonian_conserved {
+        verdicts.conservation.push(ConservationReason::Conserved);
+    }
+    let (energy, hamiltonian_is_energy) = match (e.kinetic, e.potential) {
+        (Some(tt), Some(uu)) => {
+            let zero_vel: Subst = qd.iter().map(|&v| (v, pool.zero())).collect();
+            let u0 = pool.substitute(uu, &zero_vel);
+            let en = pool.add2(tt, u0);
+            let en = if model.particles.is_empty() { pool.simplify_in(en, is_var) } else { en };
+            let same = probe::are_equal(pool, energy_function, en);
+            explain_energy(pool, &mut verdicts, same, tt, uu, u0, qd);
+            (Some(en), Some(same))
+        }
+        _ => {
+            verdicts.energy.push(EnergyReason::OnlyLagrangian);
+            (None, None)
+        }
+    };
+    Judged { energy_function, energy, hamiltonian_is_energy, hamiltonian_conserved, explicit_time, verdicts }
+}
+
+/// H(q, p, t), q'(q, p, t) and Hamilton's equations by the Legendre transform,
+/// for L quadratic in q'; otherwise none, with the reason in the verdicts.
+type Hamiltonian = (Option<ExprId>, Option<Vec<ExprId>>, Option<Vec<(ExprId, ExprId)>>);
+
+fn hamiltonian(
+    pool: &mut Pool,
+    s: &Symbols,
+    e: &Energies,
+    m: &Motion,
+    ext: &External,
+    verdicts: &mut Verdicts,
+    is_var: &dyn Fn(Symbol) -> bool,
+) -> Hamiltonian {
+    let Some((form, sparsity)) = e.form.as_ref().zip(e.sparsity.as_ref()) else {
+        verdicts.hamiltonian.push(HamiltonianReason::NotQuadratic);
+        return (None, None, None);
+    };
+    let sys = System { q: &s.q, qd: &s.qd, p: &s.p, form, sparsity, dissipation: ext.dissipation, forces: &ext.forces };
+    match legendre(pool, &sys, is_var) {
+        Some((h, v, eqs)) => (Some(h), Some(v), Some(eqs)),
+        None => {
+            let coupled = largest_block(pool, &m.mass_matrix);
+            verdicts.hamiltonian.push(HamiltonianReason::TooLong { coupled });
+            (None, None, None)
+        }
     }
 }
 
