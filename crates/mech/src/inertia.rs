@@ -35,9 +35,8 @@ mod polynomial;
 mod shapes;
 
 pub use body_file::{BodyFile, Part, PartKind, DENSITY_VARIABLES};
-pub use cubature::{moments as cubature_moments, Estimate, Moments, NotFinite, N_MOMENTS};
-pub use polynomial::{as_polynomial, integrate_monomials, Monomial};
-pub use shapes::Shape;
+pub(crate) use cubature::N_MOMENTS;
+pub(crate) use polynomial::{as_polynomial, integrate_monomials};
 
 use crate::error::ModelError;
 use nalgebra::{Matrix3, SymmetricEigen};

@@ -53,7 +53,7 @@
 // Errors.
 mod error;
 // Leaves: the numeric probe of symbolic facts, Euler angles, TOML files.
-pub mod euler;
+mod euler;
 mod probe;
 mod source;
 // Siblings of the pipeline: body files and inertia tensors, variational problems.

@@ -77,7 +77,7 @@ pub const LYAPUNOV_D0: f64 = 1e-8;
 /// Time between renormalizations of the twin (also the segment length of every run).
 pub const LYAPUNOV_INTERVAL: f64 = 1.0;
 /// Default relative tolerance: the integration error per segment stays far below
-/// [`LYAPUNOV_D0`], which the exponent's estimate needs.
+/// `LYAPUNOV_D0` (the twin's initial separation), which the exponent's estimate needs.
 pub const DEFAULT_RTOL: f64 = 1e-10;
 /// The most runs one sweep may have (a typo like `count = 1e9` is refused, not run).
 pub const MAX_RUNS: usize = 100_000_000;

@@ -59,7 +59,7 @@ pub enum PartKind {
         shape: Shape,
         /// Its mass.
         mass: ExprId,
-        /// Its dimensions, as [`Shape::size_names`] lists them.
+        /// Its dimensions, as the shape's kind lists them (`lagrange inertia` documents each).
         size: Vec<ExprId>,
         /// Its centre of mass in the body's axes.
         center: [ExprId; 3],

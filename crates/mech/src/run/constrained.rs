@@ -52,7 +52,7 @@ pub struct ConstraintAudit {
     pub max_force: f64,
 }
 
-/// The CSV columns a constrained run adds, in the order of [`Row::constraints`]:
+/// The CSV columns a constrained run adds, in the order of [`Row::constraints`](crate::Row::constraints):
 /// per constraint `lambda_NAME`, `force_NAME` (|Aᵀλ|), `residual_NAME` (f for a
 /// holonomic constraint, A q' + a_t for a velocity one) and, for a holonomic
 /// constraint, `residual_NAME'` (its time derivative A q' + a_t); then, when the
