@@ -66,3 +66,21 @@ fn an_end_time_that_is_not_positive_is_a_typed_error() {
         assert!(matches!(e, Err(RunError::Until { .. })), "{until}");
     }
 }
+
+/// The example program of `examples/pendulum.rs`, run on the pendulum of `common`.
+#[allow(dead_code)] // its `main` is the example's, not the test's
+#[path = "../examples/pendulum.rs"]
+mod example;
+
+#[test]
+fn the_example_program_derives_runs_and_audits() {
+    let text = example::report(PENDULUM, period()).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines[0], "ph:  l^2*m*ph'' + g*l*m*sin(ph) = 0");
+    assert_eq!(lines[2], "t  ph");
+    assert_eq!(lines[3], "0.00  0.010000");
+    // Half a period later the pendulum is at the other end, one period later back.
+    assert_eq!(lines[8], format!("{:.2}  -0.010000", period() / 2.0));
+    assert_eq!(lines[13], format!("{:.2}  0.010000", period()));
+    assert!(lines.iter().any(|l| l.starts_with("H (conserved): drifted by")), "{text}");
+}
