@@ -8,7 +8,7 @@
 //! The computation is `mech::extremal`; this module renders it.
 
 use crate::diagnostics::Failure;
-use crate::modes::{num, Format};
+use crate::output::{human, ReportFormat};
 use mech::{ExtremalConfig, ExtremalError, ExtremalReport, Problem};
 use plotters::prelude::*;
 use std::error::Error;
@@ -21,8 +21,8 @@ pub struct Args {
     /// The problem file (TOML): independent, unknown, integrand, [parameters], [boundary].
     pub problem: PathBuf,
     /// Output format.
-    #[arg(long, value_enum, default_value_t = Format::Text)]
-    pub format: Format,
+    #[arg(long, value_enum, default_value_t = ReportFormat::Text)]
+    pub format: ReportFormat,
     /// Draw the extremal and the straight line to this SVG file.
     #[arg(long, value_name = "FILE.svg")]
     pub plot: Option<PathBuf>,
@@ -49,13 +49,13 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         std::fs::write(svg, text).map_err(|e| Failure::input(svg, format!("cannot write the plot: {e}")))?;
     }
     let out = match args.format {
-        Format::Json => {
+        ReportFormat::Json => {
             let mut s =
                 serde_json::to_string_pretty(&report).map_err(|e| Failure::run(format!("cannot write JSON: {e}")))?;
             s.push('\n');
             s
         }
-        Format::Text => text(&report),
+        ReportFormat::Text => text(&report),
     };
     crate::write_stdout(&out)
 }
@@ -76,7 +76,7 @@ fn text(r: &ExtremalReport) -> String {
     let _ = writeln!(s, "{} — extremal of a functional (notes, Sec. 2.1)\n", r.name);
     let _ = writeln!(s, "J[{y}] = ∫ f({y}, {y}', {x}) d{x},   f = {}", r.integrand);
     if !r.parameters.is_empty() {
-        let ps: Vec<String> = r.parameters.iter().map(|(n, v)| format!("{n} = {}", num(*v))).collect();
+        let ps: Vec<String> = r.parameters.iter().map(|(n, v)| format!("{n} = {}", human(*v))).collect();
         let _ = writeln!(s, "parameters: {}", ps.join(", "));
     }
     let [x0, y0] = r.boundary["start"];
@@ -84,10 +84,10 @@ fn text(r: &ExtremalReport) -> String {
     let _ = writeln!(
         s,
         "boundary: {y}({}) = {}, {y}({}) = {}  (both ends fixed: the variation η vanishes there)\n",
-        num(x0),
-        num(y0),
-        num(x1),
-        num(y1)
+        human(x0),
+        human(y0),
+        human(x1),
+        human(y1)
     );
     let _ = writeln!(s, "Euler equation  ∂f/∂{y} − d/d{x} ∂f/∂{y}' = 0:");
     let _ = writeln!(s, "  {} = 0", r.euler_equation);
@@ -97,7 +97,7 @@ fn text(r: &ExtremalReport) -> String {
             let _ = writeln!(
                 s,
                 "f does not depend on {x}, so Beltrami's first integral holds: {y}'·∂f/∂{y}' − f = const,\n  {h} = {}",
-                num(c)
+                human(c)
             );
             if let Some(drift) = r.first_integral_drift {
                 let _ = writeln!(s, "  (it stays constant along the computed path to {drift:.1e})");
@@ -114,17 +114,17 @@ fn text(r: &ExtremalReport) -> String {
             s,
             "The {which} is a singular point (f or {y}'' is infinite there): the extremal leaves it at the angle {}° \
              with φ − φ0 ∝ s^{lambda:.4} (local series), and the path is followed by arc length",
-            num(phi0.to_degrees())
+            human(phi0.to_degrees())
         );
     }
     let on = if r.departure.is_some() { "the coefficient of the series" } else { "the initial angle" };
     let _ =
         writeln!(s, "Extremals through both ends (shooting on {on}, {} trial paths): {}", r.shots, r.extremals.len());
     for (k, e) in r.extremals.iter().enumerate() {
-        let slope = e.start_slope.map_or("vertical".to_string(), |m| format!("{y}'({}) = {}", num(x0), num(m)));
+        let slope = e.start_slope.map_or("vertical".to_string(), |m| format!("{y}'({}) = {}", human(x0), human(m)));
         let mark = if k == 0 { "  ← lowest, reported" } else { "" };
-        let conj = e.conjugate_point.map_or(String::new(), |c| format!(" (conjugate point at {x} = {})", num(c)));
-        let _ = writeln!(s, "  J = {}   start: {slope}{conj}{mark}", num(e.value));
+        let conj = e.conjugate_point.map_or(String::new(), |c| format!(" (conjugate point at {x} = {})", human(c)));
+        let _ = writeln!(s, "  J = {}   start: {slope}{conj}{mark}", human(e.value));
     }
     if r.extremals.len() > 1 {
         let _ = writeln!(s, "  (the Euler equation only makes J stationary; of several extremals the lowest is kept)");
@@ -138,21 +138,21 @@ fn text(r: &ExtremalReport) -> String {
     for i in [0, n / 4, n / 2, 3 * n / 4, n - 1] {
         let [px, py] = pick(i);
         let (px, py) = (tidy(px, scale), tidy(py, scale));
-        let _ = writeln!(s, "  {x} = {:<14} {y} = {}", num(px), num(py));
+        let _ = writeln!(s, "  {x} = {:<14} {y} = {}", human(px), human(py));
     }
     let ymin = r.path.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);
     let ymax = r.path.iter().map(|p| p[1]).fold(f64::NEG_INFINITY, f64::max);
-    let _ = writeln!(s, "  range of {y}: [{}, {}]", num(ymin), num(ymax));
+    let _ = writeln!(s, "  range of {y}: [{}, {}]", human(ymin), human(ymax));
     let _ = writeln!(s, "  end point reached to {:.1e}", r.end_residual);
-    let _ = writeln!(s, "\nValue on the extremal       J = {}", num(r.value));
-    let _ = writeln!(s, "Value on the straight line  J = {}", num(r.straight_line_value));
+    let _ = writeln!(s, "\nValue on the extremal       J = {}", human(r.value));
+    let _ = writeln!(s, "Value on the straight line  J = {}", human(r.straight_line_value));
     let diff = r.straight_line_value - r.value;
     let verdict = if diff.abs() <= 1e-9 * r.value.abs().max(1e-300) {
         "the same: the straight line is the extremal".to_string()
     } else if diff > 0.0 {
-        format!("the extremal is lower by {}", num(diff))
+        format!("the extremal is lower by {}", human(diff))
     } else {
-        format!("the straight line is lower by {}: the extremal is not a minimum", num(-diff))
+        format!("the straight line is lower by {}: the extremal is not a minimum", human(-diff))
     };
     let _ = writeln!(s, "  {verdict}");
     if let Some(sv) = &r.second_variation {
@@ -168,8 +168,8 @@ fn text(r: &ExtremalReport) -> String {
         let _ = writeln!(
             s,
             "  Legendre: P ranges over [{}, {}] along the path: {}",
-            num(sv.legendre_min),
-            num(sv.legendre_max),
+            human(sv.legendre_min),
+            human(sv.legendre_max),
             if sv.legendre { "P > 0 holds" } else { "P > 0 fails, so this is not a minimum" }
         );
         let from = if sv.from_end { "end" } else { "start" };
@@ -184,7 +184,7 @@ fn text(r: &ExtremalReport) -> String {
                     s,
                     "  h vanishes again at {x} = {}: a conjugate point inside the interval, so a neighbouring path\n  \
                      lowers J: NOT a minimum",
-                    num(c)
+                    human(c)
                 );
             }
             None => {
@@ -230,15 +230,15 @@ fn figure(r: &ExtremalReport) -> Result<String, Box<dyn Error>> {
         c.configure_mesh().x_desc(x).y_desc(y).light_line_style(WHITE).draw()?;
         let path: Vec<(f64, f64)> = r.path.iter().map(|p| (p[0], p[1])).collect();
         c.draw_series(LineSeries::new(path, BLUE.stroke_width(3)))?
-            .label(format!("extremal, J = {}", num(r.value)))
+            .label(format!("extremal, J = {}", human(r.value)))
             .legend(|(px, py)| PathElement::new(vec![(px, py), (px + 20, py)], BLUE.stroke_width(3)));
         c.draw_series(LineSeries::new(vec![(x0, y0), (x1, y1)], RGBColor(0x99, 0x99, 0x99).stroke_width(2)))?
-            .label(format!("straight line, J = {}", num(r.straight_line_value)))
+            .label(format!("straight line, J = {}", human(r.straight_line_value)))
             .legend(|(px, py)| PathElement::new(vec![(px, py), (px + 20, py)], RGBColor(0x99, 0x99, 0x99)));
         if let Some(Some(cx)) = r.conjugate_point {
             let i = r.path.iter().position(|p| p[0] >= cx).unwrap_or(r.path.len() - 1);
             c.draw_series(std::iter::once(Circle::new((cx, r.path[i][1]), 6, RED.filled())))?
-                .label(format!("conjugate point {x} = {}", num(cx)))
+                .label(format!("conjugate point {x} = {}", human(cx)))
                 .legend(|(px, py)| Circle::new((px + 10, py), 5, RED.filled()));
         }
         c.draw_series([(x0, y0), (x1, y1)].map(|p| Circle::new(p, 5, BLACK.filled())))?;

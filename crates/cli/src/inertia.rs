@@ -7,7 +7,7 @@
 //! The computation is `mech::inertia`; this module renders it.
 
 use crate::diagnostics::Failure;
-use crate::modes::{num, Format};
+use crate::output::{human, ReportFormat};
 use mech::inertia::{BodyFile, InertiaReport, MassProperties, PartKind, Symmetry};
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -22,8 +22,8 @@ pub struct Args {
     #[arg(long, default_value = "com", allow_hyphen_values = true, value_name = "com|x,y,z")]
     pub about: String,
     /// Output format.
-    #[arg(long, value_enum, default_value_t = Format::Text)]
-    pub format: Format,
+    #[arg(long, value_enum, default_value_t = ReportFormat::Text)]
+    pub format: ReportFormat,
     /// Override a parameter: --set a=2 (repeatable).
     #[arg(long = "set", value_name = "NAME=VALUE", value_parser = crate::parse_set)]
     pub set: Vec<(String, f64)>,
@@ -38,20 +38,20 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let point = props.parse_about(&args.about).map_err(|e| Failure::expression("--about", &args.about, e, 0))?;
     let report = props.report(point);
     let out = match args.format {
-        Format::Json => {
+        ReportFormat::Json => {
             let mut s =
                 serde_json::to_string_pretty(&report).map_err(|e| Failure::run(format!("cannot write JSON: {e}")))?;
             s.push('\n');
             s
         }
-        Format::Text => text(&body, &props, point, &report),
+        ReportFormat::Text => text(&body, &props, point, &report),
     };
     crate::write_stdout(&out)
 }
 
 /// A vector of numbers, `(x, y, z)`.
 fn vector(v: &[f64; 3]) -> String {
-    format!("({}, {}, {})", num(v[0]), num(v[1]), num(v[2]))
+    format!("({}, {}, {})", human(v[0]), human(v[1]), human(v[2]))
 }
 
 /// A vector of expressions, `(x, y, z)`.
@@ -90,7 +90,7 @@ fn exact_and_numeric(s: &mut String, exact: Option<&[[String; 3]; 3]>, values: &
 }
 
 fn numbers(m: &[[f64; 3]; 3]) -> [[String; 3]; 3] {
-    m.map(|row| row.map(num))
+    m.map(|row| row.map(human))
 }
 
 /// The report with numbers below the cubature's estimated error set to 0
@@ -155,7 +155,7 @@ fn text(body: &BodyFile, p: &MassProperties, point: [ExprId; 3], r: &InertiaRepo
         let _ = writeln!(
             s,
             "    m = {},  c = {}",
-            both(m_exact.as_deref(), &num(rp.mass)),
+            both(m_exact.as_deref(), &human(rp.mass)),
             both(c_exact.as_deref(), &vector(&rp.center_of_mass))
         );
         match &rp.tensor_exact {
@@ -170,7 +170,7 @@ fn text(body: &BodyFile, p: &MassProperties, point: [ExprId; 3], r: &InertiaRepo
     }
 
     let _ = writeln!(s);
-    let _ = writeln!(s, "total mass       M = Σ m = {}", both(r.mass_exact.as_deref(), &num(r.mass)));
+    let _ = writeln!(s, "total mass       M = Σ m = {}", both(r.mass_exact.as_deref(), &human(r.mass)));
     let c_exact = r.center_of_mass_exact.as_ref().map(|c| format!("({})", c.join(", ")));
     let _ = writeln!(s, "centre of mass   R = Σ m c / M = {}", both(c_exact.as_deref(), &vector(&r.center_of_mass)));
 
@@ -192,9 +192,9 @@ fn text(body: &BodyFile, p: &MassProperties, point: [ExprId; 3], r: &InertiaRepo
             s,
             "\nAdaptive cubature (nested Gauss–Kronrod 7/15, tolerance {:e} relative): estimated error of the tensor entries ≤ {} ({} relative), of the mass ≤ {}; {} density evaluations; numbers below the estimated error are shown as 0",
             mech::inertia::CUBATURE_RTOL,
-            num(c.tensor_error),
-            num(if scale > 0.0 { c.tensor_error / scale } else { c.tensor_error }),
-            num(c.mass_error),
+            human(c.tensor_error),
+            human(if scale > 0.0 { c.tensor_error / scale } else { c.tensor_error }),
+            human(c.mass_error),
             c.evaluations
         );
         if !c.converged {
@@ -209,7 +209,8 @@ fn text(body: &BodyFile, p: &MassProperties, point: [ExprId; 3], r: &InertiaRepo
     let where_ = if at_com { "the centre of mass" } else { "P" };
     let _ = writeln!(s, "\nPrincipal moments (eigenvalues of the tensor about {where_}, ascending) and unit axes:");
     for k in 0..3 {
-        let _ = writeln!(s, "  I{} = {:<14} axis {}", k + 1, num(r.principal_moments[k]), vector(&r.principal_axes[k]));
+        let _ =
+            writeln!(s, "  I{} = {:<14} axis {}", k + 1, human(r.principal_moments[k]), vector(&r.principal_axes[k]));
     }
     let m = &r.principal_moments;
     let note = match r.symmetry {

@@ -12,6 +12,7 @@ mod format;
 mod inertia;
 mod modes;
 mod orbit;
+mod output;
 mod plot;
 mod simulate;
 mod sweep;

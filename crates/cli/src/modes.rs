@@ -7,6 +7,7 @@
 //! equilibrium is bad input (exit 2) unless `--allow-unstable` asks to see it.
 
 use crate::diagnostics::Failure;
+use crate::output::{human, ReportFormat};
 use mech::{Derivation, ModeKind, Modes, ModesConfig};
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -20,8 +21,8 @@ pub struct Args {
     #[arg(long = "at", value_name = "COORD=VALUE", num_args = 1.., value_parser = crate::parse_set)]
     pub at: Vec<(String, f64)>,
     /// Output format.
-    #[arg(long, value_enum, default_value_t = Format::Text)]
-    pub format: Format,
+    #[arg(long, value_enum, default_value_t = ReportFormat::Text)]
+    pub format: ReportFormat,
     /// Draw every mode's shape, animated, to this SVG file.
     #[arg(long, value_name = "FILE.svg")]
     pub animate: Option<PathBuf>,
@@ -31,15 +32,6 @@ pub struct Args {
     /// Override a parameter: --set k=2 (repeatable).
     #[arg(long = "set", value_name = "NAME=VALUE", value_parser = crate::parse_set)]
     pub set: Vec<(String, f64)>,
-}
-
-/// Output formats of `modes` and `orbit`.
-#[derive(Clone, Copy, clap::ValueEnum, PartialEq)]
-pub enum Format {
-    /// Text that reads like the lecture notes.
-    Text,
-    /// JSON (`lagrange.modes/1`, `lagrange.orbit/1`).
-    Json,
 }
 
 /// Most modes drawn by `--animate`.
@@ -59,7 +51,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
             .modes
             .iter()
             .filter(|m| m.kind == ModeKind::Unstable)
-            .map(|m| format!("Ω² = {} along {}", num(m.omega_squared), vector(&modes.coordinates, &m.shape)))
+            .map(|m| format!("Ω² = {} along {}", human(m.omega_squared), vector(&modes.coordinates, &m.shape)))
             .collect();
         return Err(Failure::Input {
             file: path.display().to_string(),
@@ -80,44 +72,25 @@ pub fn run(args: &Args) -> Result<(), Failure> {
             .map_err(|e| Failure::input(svg, format!("cannot write the animation: {e}")))?;
     }
     let text = match args.format {
-        Format::Json => {
+        ReportFormat::Json => {
             let report = mech::ModesReport::new(&d, &modes);
             let mut s =
                 serde_json::to_string_pretty(&report).map_err(|e| Failure::run(format!("cannot write JSON: {e}")))?;
             s.push('\n');
             s
         }
-        Format::Text => text(&d, &modes, args.at.is_empty()),
+        ReportFormat::Text => text(&d, &modes, args.at.is_empty()),
     };
     crate::write_stdout(&text)
 }
 
-/// A number for people: up to 10 significant digits, no trailing zeros.
-pub(crate) fn num(v: f64) -> String {
-    if v == 0.0 {
-        return "0".into();
-    }
-    if v.abs() >= 1e-4 && v.abs() < 1e9 {
-        let digits = (9 - v.abs().log10().floor() as i32).clamp(0, 15) as usize;
-        let s = format!("{v:.digits$}");
-        let s = if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s };
-        if s == "-0" {
-            "0".into()
-        } else {
-            s
-        }
-    } else {
-        format!("{v:.9e}")
-    }
-}
-
 fn vector(names: &[String], values: &[f64]) -> String {
-    let parts: Vec<String> = names.iter().zip(values).map(|(n, v)| format!("{n} = {}", num(*v))).collect();
+    let parts: Vec<String> = names.iter().zip(values).map(|(n, v)| format!("{n} = {}", human(*v))).collect();
     format!("({})", parts.join(", "))
 }
 
 fn matrix_lines(m: &[Vec<f64>]) -> Vec<String> {
-    let cells: Vec<Vec<String>> = m.iter().map(|row| row.iter().map(|v| num(*v)).collect()).collect();
+    let cells: Vec<Vec<String>> = m.iter().map(|row| row.iter().map(|v| human(*v)).collect()).collect();
     let width = cells.iter().flatten().map(|c| c.chars().count()).max().unwrap_or(1);
     cells
         .iter()
@@ -135,20 +108,20 @@ fn text(d: &Derivation, m: &Modes, from_initial: bool) -> String {
         if from_initial { "[initial]" } else { "--at" },
         m.newton_iterations,
         if m.newton_iterations == 1 { "" } else { "s" },
-        num(m.gradient_norm)
+        human(m.gradient_norm)
     );
     let width = m.coordinates.iter().map(|c| c.chars().count()).max().unwrap_or(1);
     if n > MAX_PRINTED_SHAPE && m.equilibrium.iter().all(|&v| v == 0.0) {
         let _ = writeln!(s, "  every coordinate = 0");
     } else {
         for (c, v) in m.coordinates.iter().zip(&m.equilibrium).take(MAX_PRINTED_SHAPE) {
-            let _ = writeln!(s, "  {c:<width$} = {}", num(*v));
+            let _ = writeln!(s, "  {c:<width$} = {}", human(*v));
         }
         if n > MAX_PRINTED_SHAPE {
             let _ = writeln!(s, "  … ({} more; see --format json)", n - MAX_PRINTED_SHAPE);
         }
     }
-    let _ = writeln!(s, "  U(q₀) = {}\n", num(m.potential));
+    let _ = writeln!(s, "  U(q₀) = {}\n", human(m.potential));
     let _ = writeln!(s, "L ≈ ½ q'ᵀ T q' − ½ (q − q₀)ᵀ U (q − q₀), with T = M(q₀) and U = ∂²U/∂q∂q at q₀:");
     if n <= MAX_PRINTED_SHAPE {
         let (tl, ul) = (matrix_lines(&m.t_matrix), matrix_lines(&m.u_matrix));
@@ -181,13 +154,13 @@ fn text(d: &Derivation, m: &Modes, from_initial: bool) -> String {
     for (j, mode) in m.modes.iter().enumerate() {
         let label = format!("Ω{}", j + 1);
         let value = match mode.kind {
-            ModeKind::Oscillation => num(mode.frequency.unwrap_or(0.0)),
+            ModeKind::Oscillation => human(mode.frequency.unwrap_or(0.0)),
             ModeKind::Free => "0   (free motion: U is constant along this mode)".into(),
             ModeKind::Unstable => {
                 format!(
                     "imaginary: Ω² = {}, growth rate {}",
-                    num(mode.omega_squared),
-                    num((-mode.omega_squared).sqrt())
+                    human(mode.omega_squared),
+                    human((-mode.omega_squared).sqrt())
                 )
             }
         };
@@ -253,9 +226,9 @@ fn animation(d: &Derivation, m: &Modes) -> String {
         let big = mode.shape.iter().fold(0.0f64, |a, v| a.max(v.abs())).max(f64::MIN_POSITIVE);
         let amp = 0.4 * row_h / big;
         let label = match mode.kind {
-            ModeKind::Oscillation => format!("Ω{} = {}", j + 1, num(mode.frequency.unwrap_or(0.0))),
+            ModeKind::Oscillation => format!("Ω{} = {}", j + 1, human(mode.frequency.unwrap_or(0.0))),
             ModeKind::Free => format!("Ω{} = 0 (free)", j + 1),
-            ModeKind::Unstable => format!("Ω{}² = {} (unstable)", j + 1, num(mode.omega_squared)),
+            ModeKind::Unstable => format!("Ω{}² = {} (unstable)", j + 1, human(mode.omega_squared)),
         };
         let _ = writeln!(s, r##"<text x="20" y="{:.1}" font-size="15">{}</text>"##, y0 + 5.0, escape(&label));
         let _ = writeln!(s, r##"<line x1="{left}" y1="{y0:.1}" x2="{:.1}" y2="{y0:.1}" stroke="#ccc"/>"##, left + span);

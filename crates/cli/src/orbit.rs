@@ -7,7 +7,7 @@
 //! The computation is `mech::Orbit`; this module renders it.
 
 use crate::diagnostics::Failure;
-use crate::modes::{num, Format};
+use crate::output::{human, ReportFormat};
 use mech::{Derivation, Orbit, OrbitKind};
 use plotters::prelude::*;
 use std::error::Error;
@@ -21,8 +21,8 @@ pub struct Args {
     /// The model file (TOML): coordinates r and an angle, L = μ/2·(r'² + r²θ'²) − U(r).
     pub model: PathBuf,
     /// Output format.
-    #[arg(long, value_enum, default_value_t = Format::Text)]
-    pub format: Format,
+    #[arg(long, value_enum, default_value_t = ReportFormat::Text)]
+    pub format: ReportFormat,
     /// Draw U_eff with the energy and the turning points, and the orbit, to this SVG file.
     #[arg(long, value_name = "FILE.svg")]
     pub plot: Option<PathBuf>,
@@ -42,13 +42,13 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         std::fs::write(svg, text).map_err(|e| Failure::input(svg, format!("cannot write the plot: {e}")))?;
     }
     let out = match args.format {
-        Format::Json => {
+        ReportFormat::Json => {
             let mut s = serde_json::to_string_pretty(&orbit.report(&d))
                 .map_err(|e| Failure::run(format!("cannot write JSON: {e}")))?;
             s.push('\n');
             s
         }
-        Format::Text => text(&d, &orbit),
+        ReportFormat::Text => text(&d, &orbit),
     };
     crate::write_stdout(&out)
 }
@@ -59,14 +59,14 @@ fn text(d: &Derivation, o: &Orbit) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "{} — central-force orbit (notes, Sec. 3.1)\n", d.model().name);
     let _ = writeln!(s, "L = μ/2·({rn}'^2 + {rn}^2*{an}'^2) − U({rn}), read from the derivation:");
-    let _ = writeln!(s, "  reduced mass      μ = {} = {}", pool.display(o.mu_expr), num(o.mu));
+    let _ = writeln!(s, "  reduced mass      μ = {} = {}", pool.display(o.mu_expr), human(o.mu));
     let _ = writeln!(s, "  potential         U({rn}) = {}", pool.display(o.potential_expr));
     let _ = writeln!(
         s,
         "  angular momentum  l = p_{an} = μ {rn}^2 {an}' = {}  ({an} is cyclic: l is conserved, the motion stays in a plane)",
-        num(o.angular_momentum)
+        human(o.angular_momentum)
     );
-    let _ = writeln!(s, "  energy            E = μ/2·{rn}'^2 + U_eff({rn}) = {}", num(o.energy));
+    let _ = writeln!(s, "  energy            E = μ/2·{rn}'^2 + U_eff({rn}) = {}", human(o.energy));
     let _ = writeln!(
         s,
         "  effective potential U_eff({rn}) = l^2/(2μ{rn}^2) + U({rn}); the radial motion needs E ≥ U_eff\n"
@@ -74,60 +74,60 @@ fn text(d: &Derivation, o: &Orbit) -> String {
     match o.apoapsis {
         Some(r2) if (r2 - o.periapsis).abs() <= 1e-12 * r2 => {
             let _ =
-                writeln!(s, "Turning points: none; E = U_eff at its minimum: a circular orbit of radius {}", num(r2));
+                writeln!(s, "Turning points: none; E = U_eff at its minimum: a circular orbit of radius {}", human(r2));
         }
         Some(r2) => {
             let _ = writeln!(
                 s,
                 "Turning points (E = U_eff): periapsis {rn} = {}, apoapsis {rn} = {}",
-                num(o.periapsis),
-                num(r2)
+                human(o.periapsis),
+                human(r2)
             );
         }
         None => {
             let _ = writeln!(
                 s,
                 "Turning point (E = U_eff): periapsis {rn} = {}; E > U_eff beyond it, so {rn} grows without bound",
-                num(o.periapsis)
+                human(o.periapsis)
             );
         }
     }
     let _ = writeln!(s, "Kind: {}", o.kind.name());
     if let Some(k) = &o.kepler {
-        let _ = writeln!(s, "\nKepler problem U = −k/{rn} with k = {} = {}:", pool.display(k.k_expr), num(k.k));
-        let _ = writeln!(s, "  α = l^2/(μk) = {}   (1/{rn} = (1 + ε cos({an} − {an}₀))/α)", num(k.alpha));
-        let _ = writeln!(s, "  ε = sqrt(1 + 2El^2/(μk^2)) = {}", num(k.eccentricity));
-        let _ = writeln!(s, "  periapsis α/(1 + ε) = {}", num(o.periapsis));
+        let _ = writeln!(s, "\nKepler problem U = −k/{rn} with k = {} = {}:", pool.display(k.k_expr), human(k.k));
+        let _ = writeln!(s, "  α = l^2/(μk) = {}   (1/{rn} = (1 + ε cos({an} − {an}₀))/α)", human(k.alpha));
+        let _ = writeln!(s, "  ε = sqrt(1 + 2El^2/(μk^2)) = {}", human(k.eccentricity));
+        let _ = writeln!(s, "  periapsis α/(1 + ε) = {}", human(o.periapsis));
         if let (Some(r2), Some(t)) = (o.apoapsis, o.period) {
             let a = k.alpha / (1.0 - k.eccentricity * k.eccentricity);
-            let _ = writeln!(s, "  apoapsis α/(1 − ε) = {}", num(r2));
-            let _ = writeln!(s, "  semi-major axis a = α/(1 − ε^2) = {}", num(a));
-            let _ = writeln!(s, "  period (Kepler's third law) T = 2π·sqrt(μa^3/k) = {}", num(t));
+            let _ = writeln!(s, "  apoapsis α/(1 − ε) = {}", human(r2));
+            let _ = writeln!(s, "  semi-major axis a = α/(1 − ε^2) = {}", human(a));
+            let _ = writeln!(s, "  period (Kepler's third law) T = 2π·sqrt(μa^3/k) = {}", human(t));
             let _ = writeln!(s, "  apsidal angle π: the orbit closes on itself, no precession");
         }
         let [ax, ay] = k.runge_lenz;
         let _ = writeln!(
             s,
             "  Laplace–Runge–Lenz vector A = p × l − μk r/r = ({}, {}), |A| = μkε = {}, pointing at periapsis ({an} = {})",
-            num(ax),
-            num(ay),
-            num(ax.hypot(ay)),
-            num(o.periapsis_angle)
+            human(ax),
+            human(ay),
+            human(ax.hypot(ay)),
+            human(o.periapsis_angle)
         );
     } else if let (Some(t), Some(dth)) = (o.period, o.apsidal_angle) {
         let _ = writeln!(s, "\nBy quadrature (r = (r1 + r2)/2 + (r2 − r1)/2·sin φ, Gauss–Legendre):");
-        let _ = writeln!(s, "  radial period (periapsis to periapsis) T_r = 2∫ dr/sqrt(2(E − U_eff)/μ) = {}", num(t));
+        let _ = writeln!(s, "  radial period (periapsis to periapsis) T_r = 2∫ dr/sqrt(2(E − U_eff)/μ) = {}", human(t));
         let _ = writeln!(
             s,
             "  apsidal angle (periapsis to apoapsis) Δ{an} = ∫ l/(μr^2) dr/sqrt(2(E − U_eff)/μ) = {} = {}°",
-            num(dth),
-            num(dth.to_degrees())
+            human(dth),
+            human(dth.to_degrees())
         );
         let prec = 2.0 * dth - 2.0 * PI;
         let _ = writeln!(
             s,
             "  precession per radial period 2Δ{an} − 2π = {} ({}); the orbit {}",
-            num(prec),
+            human(prec),
             if prec > 0.0 { "the periapsis advances" } else { "the periapsis regresses" },
             if (dth / PI * 2.0 - (dth / PI * 2.0).round()).abs() < 1e-9 {
                 "closes (Δθ is a rational multiple of π)"
@@ -183,7 +183,13 @@ fn figure(d: &Derivation, o: &mut Orbit) -> Result<String, Box<dyn Error>> {
         root.fill(&WHITE)?;
         let (header, body) = root.split_vertically(50);
         header.draw(&Text::new(
-            format!("{} — E = {}, l = {}, {}", d.model().name, num(o.energy), num(o.angular_momentum), o.kind.name()),
+            format!(
+                "{} — E = {}, l = {}, {}",
+                d.model().name,
+                human(o.energy),
+                human(o.angular_momentum),
+                o.kind.name()
+            ),
             (20, 15),
             ("sans-serif", 22).into_font(),
         ))?;
@@ -201,7 +207,7 @@ fn figure(d: &Derivation, o: &mut Orbit) -> Result<String, Box<dyn Error>> {
         }
         c.draw_series(LineSeries::new(vec![(lo, o.energy), (hi, o.energy)], RED.stroke_width(1)))?;
         c.draw_series(std::iter::once(Text::new(
-            format!("E = {}", num(o.energy)),
+            format!("E = {}", human(o.energy)),
             (lo + 0.02 * (hi - lo), o.energy + 0.05 * spread),
             ("sans-serif", 14).into_font(),
         )))?;

@@ -7,7 +7,7 @@
 //! The computation is `mech::Top`; this module renders it.
 
 use crate::diagnostics::Failure;
-use crate::modes::{num, Format};
+use crate::output::{human, ReportFormat};
 use mech::{Derivation, NutationKind, RunConfig, Top};
 use plotters::prelude::*;
 use std::error::Error;
@@ -22,8 +22,8 @@ pub struct Args {
     /// The model file (TOML): one [[bodies]] table with inertia = ["I", "I", "I3"].
     pub model: PathBuf,
     /// Output format.
-    #[arg(long, value_enum, default_value_t = Format::Text)]
-    pub format: Format,
+    #[arg(long, value_enum, default_value_t = ReportFormat::Text)]
+    pub format: ReportFormat,
     /// Draw U_eff(β) with E' and the turning angles, and the path of the symmetry axis, to this SVG file.
     #[arg(long, value_name = "FILE.svg")]
     pub plot: Option<PathBuf>,
@@ -42,13 +42,13 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         std::fs::write(svg, text).map_err(|e| Failure::input(svg, format!("cannot write the plot: {e}")))?;
     }
     let out = match args.format {
-        Format::Json => {
+        ReportFormat::Json => {
             let mut s = serde_json::to_string_pretty(&top.report())
                 .map_err(|e| Failure::run(format!("cannot write JSON: {e}")))?;
             s.push('\n');
             s
         }
-        Format::Text => text(&d, &top),
+        ReportFormat::Text => text(&d, &top),
     };
     crate::write_stdout(&out)
 }
@@ -57,66 +57,66 @@ fn text(d: &Derivation, t: &Top) -> String {
     let [a, b, g] = &t.angle_names;
     let mut s = String::new();
     let _ = writeln!(s, "{} — {} symmetric top '{}' (notes, Sec. 3.2.7)\n", d.model().name, t.kind.name(), t.body);
-    let _ = writeln!(s, "  I = I1 = I2 = {}, I3 = {}", num(t.i), num(t.i3));
+    let _ = writeln!(s, "  I = I1 = I2 = {}, I3 = {}", human(t.i), human(t.i3));
     let _ = writeln!(
         s,
         "  initial state: {a} = {}, {b} = {}, {g} = {}; {a}' = {}, {b}' = {}, {g}' = {}",
-        num(t.angles[0]),
-        num(t.angles[1]),
-        num(t.angles[2]),
-        num(t.rates[0]),
-        num(t.rates[1]),
-        num(t.rates[2])
+        human(t.angles[0]),
+        human(t.angles[1]),
+        human(t.angles[2]),
+        human(t.rates[0]),
+        human(t.rates[1]),
+        human(t.rates[2])
     );
     let _ = writeln!(
         s,
         "  body-frame ω = ({}, {}, {})   (ω3 = {a}' cos {b} + {g}')",
-        num(t.omega[0]),
-        num(t.omega[1]),
-        num(t.omega[2])
+        human(t.omega[0]),
+        human(t.omega[1]),
+        human(t.omega[2])
     );
-    let _ = writeln!(s, "  p_{a} = I {a}' sin²{b} + p_{g} cos {b} = {}   (conserved: {a} is cyclic)", num(t.p_alpha));
-    let _ = writeln!(s, "  p_{g} = I3 ω3 = {}   (conserved: {g} is cyclic, so ω3 is constant)", num(t.p_gamma));
-    let _ = writeln!(s, "  energy E = {}\n", num(t.energy));
+    let _ = writeln!(s, "  p_{a} = I {a}' sin²{b} + p_{g} cos {b} = {}   (conserved: {a} is cyclic)", human(t.p_alpha));
+    let _ = writeln!(s, "  p_{g} = I3 ω3 = {}   (conserved: {g} is cyclic, so ω3 is constant)", human(t.p_gamma));
+    let _ = writeln!(s, "  energy E = {}\n", human(t.energy));
     if let Some(f) = &t.free {
         let _ = writeln!(s, "Free top ({}): Euler's equations give ω3 = const and ω1 + iω2 turning at", f.shape);
-        let _ = writeln!(s, "  Ω = (I3 − I)/I·ω3 = {}   (body precession rate)", num(f.body_precession_rate));
+        let _ = writeln!(s, "  Ω = (I3 − I)/I·ω3 = {}   (body precession rate)", human(f.body_precession_rate));
         let _ = writeln!(
             s,
             "  A = sqrt(ω1² + ω2²) = {}, |ω| = const, |L| = {}",
-            num(f.transverse_omega),
-            num(f.angular_momentum)
+            human(f.transverse_omega),
+            human(f.angular_momentum)
         );
         let _ = writeln!(
             s,
             "  inclination β0 = atan(I·A/(I3·ω3)) = {} rad = {}°   (the angle between L and the symmetry axis)",
-            num(f.inclination),
-            num(f.inclination.to_degrees())
+            human(f.inclination),
+            human(f.inclination.to_degrees())
         );
         let _ = writeln!(
             s,
             "  space precession rate {a}' = A/sin β0 = |L|/I = {}   (with the fixed z axis along L)",
-            num(f.space_precession_rate)
+            human(f.space_precession_rate)
         );
         let _ = writeln!(
             s,
             "  body cone half-angle (ω about the symmetry axis) {} rad, space cone half-angle (ω about L) {} rad",
-            num(f.body_cone_angle),
-            num(f.space_cone_angle)
+            human(f.body_cone_angle),
+            human(f.space_cone_angle)
         );
     }
     if let Some(h) = &t.heavy {
-        let _ = writeln!(s, "Heavy top on a fixed pivot, M g S = {}:", num(h.mgs));
-        let _ = writeln!(s, "  E' = E − p_{g}²/(2 I3) = {} = ½ I {b}'² + U_eff({b})", num(h.energy_prime));
+        let _ = writeln!(s, "Heavy top on a fixed pivot, M g S = {}:", human(h.mgs));
+        let _ = writeln!(s, "  E' = E − p_{g}²/(2 I3) = {} = ½ I {b}'² + U_eff({b})", human(h.energy_prime));
         let _ = writeln!(s, "  U_eff({b}) = (p_{a} − p_{g} cos {b})²/(2 I sin²{b}) + M g S cos {b}");
         let _ = writeln!(s, "  nutation between the turning angles (E' = U_eff, roots of the cubic in u = cos {b}):");
         let _ = writeln!(
             s,
             "    {b}1 = {} rad ({}°), {b}2 = {} rad ({}°)",
-            num(h.beta_min),
-            num(h.beta_min.to_degrees()),
-            num(h.beta_max),
-            num(h.beta_max.to_degrees())
+            human(h.beta_min),
+            human(h.beta_min.to_degrees()),
+            human(h.beta_max),
+            human(h.beta_max.to_degrees())
         );
         let kind = match h.kind {
             NutationKind::Steady => {
@@ -127,7 +127,7 @@ fn text(d: &Derivation, t: &Top) -> String {
             }
             NutationKind::Loops => format!(
                 "{a}' changes sign at {b} = {} inside [{b}1, {b}2]: the axis draws loops",
-                h.alpha_dot_zero.map_or("?".into(), num)
+                h.alpha_dot_zero.map_or("?".into(), human)
             ),
             NutationKind::Cusps => {
                 format!("{a}' vanishes at a turning angle: the axis draws cusps (released without precession)")
@@ -137,24 +137,24 @@ fn text(d: &Derivation, t: &Top) -> String {
         let _ = writeln!(
             s,
             "    nutation period {}, mean precession rate {a}' = {}",
-            num(h.nutation_period),
-            num(h.mean_precession_rate)
+            human(h.nutation_period),
+            human(h.mean_precession_rate)
         );
         match h.steady_precession {
             Some([slow, fast]) => {
                 let _ = writeln!(
                     s,
                     "  steady precession at {b} = {} (I cos {b} {a}'² − p_{g} {a}' + M g S = 0): slow {a}' = {}, fast {a}' = {}",
-                    num(t.angles[1]),
-                    slow.map_or("none".into(), num),
-                    fast.map_or("none (cos β = 0)".into(), num)
+                    human(t.angles[1]),
+                    slow.map_or("none".into(), human),
+                    fast.map_or("none (cos β = 0)".into(), human)
                 );
             }
             None => {
                 let _ = writeln!(
                     s,
                     "  steady precession at {b} = {}: none at this spin (p_{g}² < 4 I M g S cos {b})",
-                    num(t.angles[1])
+                    human(t.angles[1])
                 );
             }
         }
@@ -163,7 +163,7 @@ fn text(d: &Derivation, t: &Top) -> String {
             "  sleeping top (spinning upright): {} (p_{g}² {} 4 I M g S; stable for |ω3| > {})",
             if h.sleeping_stable { "stable" } else { "unstable" },
             if h.sleeping_stable { ">" } else { "≤" },
-            num(h.sleeping_omega3_min)
+            human(h.sleeping_omega3_min)
         );
     }
     s
@@ -219,7 +219,13 @@ fn figure(d: &mut Derivation, t: &Top) -> Result<String, Box<dyn Error>> {
         root.fill(&WHITE)?;
         let (header, body) = root.split_vertically(50);
         header.draw(&Text::new(
-            format!("{} — {} top, p_α = {}, p_γ = {}", d.model().name, t.kind.name(), num(t.p_alpha), num(t.p_gamma)),
+            format!(
+                "{} — {} top, p_α = {}, p_γ = {}",
+                d.model().name,
+                t.kind.name(),
+                human(t.p_alpha),
+                human(t.p_gamma)
+            ),
             (20, 15),
             ("sans-serif", 22).into_font(),
         ))?;
