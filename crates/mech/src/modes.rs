@@ -32,6 +32,28 @@ const MAX_NEWTON: usize = 200;
 const ZERO_MODE: f64 = 1e-9;
 /// Largest system whose secular equation is built symbolically.
 const MAX_SYMBOLIC: usize = 3;
+/// Equilibrium coordinates below this fraction of the largest (or of 1) are
+/// rounding noise about an exact zero, and printed as 0 (a few ulps of the
+/// Newton iteration's last step).
+const EQUILIBRIUM_ROUND_OFF: f64 = 1e-14;
+/// Mode-shape components below this fraction of the largest are zero: the
+/// eigenvectors carry a few hundred ulps of noise from the solver.
+const SHAPE_ROUND_OFF: f64 = 1e-13;
+/// Components within this fraction of the largest count as tied for the sign
+/// convention (the first of them is made positive), so the sign does not
+/// follow rounding noise.
+const SHAPE_TIE: f64 = 1e-9;
+/// A zero mode is a free motion when U changes along it by less than this
+/// fraction of the energy and curvature scales: U is then flat there, not quartic.
+const FLAT_ALONG_MODE: f64 = 1e-9;
+/// An equilibrium coordinate within this relative distance of an integer is
+/// taken as that integer for the closed form (T and U evaluated exactly there).
+const EXACT_EQUILIBRIUM: f64 = 1e-9;
+/// Largest integer equilibrium coordinate the closed form substitutes.
+const MAX_EXACT_EQUILIBRIUM: f64 = 1e6;
+/// A closed-form Ω² must agree with the numeric one to this fraction of the
+/// largest Ω², or the closed form is withheld.
+const ROOTS_AGREE: f64 = 1e-8;
 
 /// Options of [`normal_modes`].
 #[derive(Debug, Clone, Default)]
@@ -306,7 +328,7 @@ pub fn normal_modes(d: &Derivation, config: &ModesConfig) -> Result<Modes, Modes
     let (mut q0, iterations, gnorm) = newton(&mut pot, &start, &names)?;
     // Rounding noise about an exact zero is zero (q = -1e-16 reads as a result).
     let q_big = q0.iter().fold(1.0f64, |m, v| m.max(v.abs()));
-    q0.iter_mut().filter(|v| v.abs() <= 1e-14 * q_big).for_each(|v| *v = 0.0);
+    q0.iter_mut().filter(|v| v.abs() <= EQUILIBRIUM_ROUND_OFF * q_big).for_each(|v| *v = 0.0);
     let (u0, _, hmat) = pot.eval(&q0);
 
     // T = M(q₀).
@@ -349,8 +371,8 @@ pub fn normal_modes(d: &Derivation, config: &ModesConfig) -> Result<Modes, Modes
         let mut shape: Vec<f64> = a.iter().copied().collect();
         // The largest component positive (ties: the first); rounding noise is zero.
         let big = shape.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        shape.iter_mut().filter(|v| v.abs() <= 1e-13 * big).for_each(|v| *v = 0.0);
-        if let Some(first) = shape.iter().find(|v| v.abs() > big * (1.0 - 1e-9)) {
+        shape.iter_mut().filter(|v| v.abs() <= SHAPE_ROUND_OFF * big).for_each(|v| *v = 0.0);
+        if let Some(first) = shape.iter().find(|v| v.abs() > big * (1.0 - SHAPE_TIE)) {
             if *first < 0.0 {
                 shape.iter_mut().for_each(|v| *v = -*v);
             }
@@ -364,7 +386,7 @@ pub fn normal_modes(d: &Derivation, config: &ModesConfig) -> Result<Modes, Modes
                 let q: Vec<f64> = q0.iter().zip(&shape).map(|(q, a)| q + sgn * step * a).collect();
                 let du = pot.value(&q) - u0;
                 let curv_scale = 0.5 * lam_scale * (sgn * step).powi(2);
-                if du.is_nan() || du.abs() > 1e-9 * (energy_scale + curv_scale) {
+                if du.is_nan() || du.abs() > FLAT_ALONG_MODE * (energy_scale + curv_scale) {
                     flat = false;
                 }
             }
@@ -517,7 +539,7 @@ fn symbolic_modes(
     if !constant {
         for (i, &v) in q0.iter().enumerate() {
             let r = v.round();
-            if (v - r).abs() > 1e-9 * (1.0 + v.abs()) || r.abs() > 1e6 {
+            if (v - r).abs() > EXACT_EQUILIBRIUM * (1.0 + v.abs()) || r.abs() > MAX_EXACT_EQUILIBRIUM {
                 return Err(format!(
                     "T and U depend on the coordinates, and the equilibrium {} = {} is not an exact integer",
                     d.model.coordinates[i].name,
@@ -629,7 +651,7 @@ fn match_roots(
     valued.sort_by(|a, b| a.0.total_cmp(&b.0));
     let scale = modes.iter().fold(0.0f64, |m, x| m.max(x.omega_squared.abs())).max(f64::MIN_POSITIVE);
     if valued.len() != modes.len()
-        || valued.iter().zip(modes).any(|((v, _), m)| (v - m.omega_squared).abs() > 1e-8 * scale)
+        || valued.iter().zip(modes).any(|((v, _), m)| (v - m.omega_squared).abs() > ROOTS_AGREE * scale)
     {
         return (None, None);
     }
