@@ -291,6 +291,7 @@ fn summary_json(r: &RunReport, names: &[String], timing: Timing) -> String {
         "t_final": r.t_final,
         "stopped_by": r.stopped_by,
         "failure": r.failure,
+        "failure_reason": r.failure_reason,
         "pilot_rhs_evaluations": r.pilot_rhs_evaluations,
         "final": fin,
         "invariants": inv,

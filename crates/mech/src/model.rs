@@ -456,7 +456,7 @@ impl Model {
             initial.push(InitialValue { coord, order, value });
         }
 
-        // Constraints (read by `constraint.rs`).
+        // Constraints (read by `model/constraint.rs`).
         let mut constraints = Vec::new();
         for (k, c) in raw.constraints.iter().enumerate() {
             let spec = constraint::read_spec(c, k, &constraints, &mut |text, scope_state, what| {

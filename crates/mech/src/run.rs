@@ -2,7 +2,12 @@
 //! from the model's initial state, hand every output row to the caller, and
 //! audit the invariants along the way.
 //!
-//! Entry point: [`simulate`]. The caller (the CLI) does the IO — CSV, plots,
+//! Entry point: [`simulate`], the one driver of plain and constrained runs: it
+//! checks the settings, builds the events (stop conditions, crossings, gimbal
+//! guards) and the rows, audits them and writes the report, around a
+//! [`Stepping`] that says what differs (`plain.rs`: the method and form the
+//! derivation calls for; `constrained.rs`: the projection onto the constraints
+//! and their columns). The caller (the CLI) does the IO — CSV, plots,
 //! progress — in the `on_row` callback; this module only computes.
 //!
 //! The default method follows the derivation (issue #4): H conserved and
@@ -212,12 +217,73 @@ pub struct RunReport {
     pub warnings: Vec<String>,
     /// Why the run failed midway, if it did.
     pub failure: Option<String>,
+    /// The same as data: what failed, when and where.
+    pub failure_reason: Option<RunFailure>,
     /// Right-hand-side evaluations of the pilot runs that chose a fixed step.
     pub pilot_rhs_evaluations: usize,
     /// Wall-clock seconds of the integration (compilation included).
     pub wall_seconds: f64,
     /// With constraints: the audit of each constraint (empty otherwise).
     pub constraints: Vec<constrained::ConstraintAudit>,
+}
+
+/// Why a run failed midway, as data beside the message: what happened, at
+/// which time, to which component (`x`, `x'` or `p_x`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[serde(tag = "code", rename_all = "snake_case")]
+pub enum RunFailure {
+    /// A rigid body reached the gimbal singularity of its Euler angles.
+    Gimbal {
+        /// The body.
+        body: String,
+        /// When.
+        t: f64,
+    },
+    /// A component of the state grew without bound or stopped being finite.
+    BlowUp {
+        /// When.
+        t: f64,
+        /// Which component.
+        component: String,
+    },
+    /// The equations gave a non-finite rate of change.
+    NonFiniteRate {
+        /// When.
+        t: f64,
+        /// Of which component.
+        component: String,
+    },
+    /// The mass matrix (with constraints: the system with the multipliers)
+    /// became singular: the accelerations are undetermined.
+    Singular {
+        /// When.
+        t: f64,
+    },
+    /// The integrator could not take a step (too small, or implicit stages that
+    /// do not converge) for no reason that could be told.
+    Step {
+        /// The last time reached.
+        t: f64,
+    },
+    /// A row could not be evaluated (an invariant, a constraint column).
+    Row {
+        /// When.
+        t: f64,
+    },
+}
+
+impl RunFailure {
+    /// The failure's stable name.
+    pub fn code(&self) -> &'static str {
+        match self {
+            RunFailure::Gimbal { .. } => "gimbal",
+            RunFailure::BlowUp { .. } => "blow_up",
+            RunFailure::NonFiniteRate { .. } => "non_finite_rate",
+            RunFailure::Singular { .. } => "singular",
+            RunFailure::Step { .. } => "step",
+            RunFailure::Row { .. } => "row",
+        }
+    }
 }
 
 /// Why a run did not complete.
@@ -249,20 +315,26 @@ pub(crate) fn conclude(
     mut report: RunReport,
     stop: StopReason,
     conditions: &[(&StopCondition, bool)],
-    row_error: Option<String>,
+    row_error: Option<(RunFailure, String)>,
 ) -> Result<RunReport, RunError> {
     report.stopped_by = match stop {
         StopReason::Event { index } => Some(conditions[index].0.text.clone()),
-        StopReason::Observer => row_error.clone().or(Some("stopped by the caller".into())),
+        StopReason::Observer => {
+            Some(row_error.as_ref().map_or_else(|| "stopped by the caller".into(), |(_, m)| m.clone()))
+        }
         StopReason::Finished => None,
     };
     match row_error {
-        Some(message) => {
-            report.failure = Some(message.clone());
-            Err(RunError::Failed { message, report: Box::new(report) })
-        }
+        Some((reason, message)) => Err(failed(report, reason, message)),
         None => Ok(report),
     }
+}
+
+/// The error of a run that failed midway, its report saying why in words and as data.
+fn failed(mut report: RunReport, reason: RunFailure, message: String) -> RunError {
+    report.failure = Some(message.clone());
+    report.failure_reason = Some(reason);
+    RunError::Failed { message, report: Box::new(report) }
 }
 
 /// The default method and the form it integrates, or the form a requested method needs.
@@ -340,7 +412,7 @@ pub(crate) trait Stepping {
     /// Adds the stepping's own warnings at the end of the run.
     fn warnings(&self, _warnings: &mut Vec<String>) {}
     /// A solver failure in the user's terms, from the initial state and the last good one.
-    fn describe(&mut self, e: &SolveError, y0: &[f64], at: (f64, Vec<f64>)) -> String;
+    fn describe(&mut self, e: &SolveError, y0: &[f64], at: (f64, Vec<f64>)) -> (RunFailure, String);
 }
 
 /// Runs a simulation, with or without constraints. `on_row` receives every
@@ -433,11 +505,11 @@ fn drive(
     };
     let projection = stepping.projection();
     let mut last = (0.0, initial.0, initial.1);
-    let mut row_error: Option<String> = None;
+    let mut row_error: Option<(RunFailure, String)> = None;
     let observer = |obs: &num::Observation<'_>| {
         row.is_event = matches!(obs.kind, ObservationKind::Event { .. });
         if let Err(e) = stepping.row(obs.t, obs.y, &mut row) {
-            row_error = Some(format!("at t = {}: {e}", obs.t));
+            row_error = Some((RunFailure::Row { t: obs.t }, format!("at t = {}: {e}", obs.t)));
             return ControlFlow::Break(());
         }
         invariant_audit.observe(&row.invariants, row.is_event);
@@ -458,7 +530,7 @@ fn drive(
         });
         // The row is kept; past a gimbal guard the run ends as a failure.
         if let Some(g) = guards.iter().find(|g| g.violated(&row.q)) {
-            row_error = Some(g.message(obs.t));
+            row_error = Some((g.failure(obs.t), g.message(obs.t)));
             return ControlFlow::Break(());
         }
         flow
@@ -497,6 +569,7 @@ fn drive(
         stopped_by: None,
         warnings,
         failure: None,
+        failure_reason: None,
         pilot_rhs_evaluations,
         wall_seconds: started.elapsed().as_secs_f64(),
         constraints: constraint_audits,
@@ -506,9 +579,8 @@ fn drive(
             report.t_final = summary.t;
             if let StopReason::Event { index } = summary.stop {
                 if index >= first_guard {
-                    let message = guards[(index - first_guard) / 2].message(summary.t);
-                    report.failure = Some(message.clone());
-                    return Err(RunError::Failed { message, report: Box::new(report) });
+                    let g = &guards[(index - first_guard) / 2];
+                    return Err(failed(report, g.failure(summary.t), g.message(summary.t)));
                 }
             }
             conclude(report, summary.stop, &conditions, row_error)
@@ -517,13 +589,11 @@ fn drive(
             let at = (solver.t(), solver.state().to_vec());
             // A body near its gimbal singularity: say so rather than only "singular".
             let near = guards.iter().min_by(|a, b| at.1[a.beta].sin().abs().total_cmp(&at.1[b.beta].sin().abs()));
-            let gimbal = near.filter(|g| at.1[g.beta].sin().abs() < 0.1).map(|g| g.message(at.0));
-            let message = match gimbal {
-                Some(m) => format!("{m} ({e})"),
+            let (reason, message) = match near.filter(|g| at.1[g.beta].sin().abs() < 0.1) {
+                Some(g) => (g.failure(at.0), format!("{} ({e})", g.message(at.0))),
                 None => stepping.describe(&e, &y0, at),
             };
-            report.failure = Some(message.clone());
-            Err(RunError::Failed { message, report: Box::new(report) })
+            Err(failed(report, reason, message))
         }
     }
 }

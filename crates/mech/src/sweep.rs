@@ -605,7 +605,7 @@ pub fn sweep(
     let plan = Plan { method, form, config, guards: &guards };
 
     // The Taylor method on smooth Lagrange-form models runs batches of
-    // trajectories in lock step (`ensemble.rs`); its code is compiled once here.
+    // trajectories in lock step (`run/ensemble.rs`); its code is compiled once here.
     let batched = (method == Method::Taylor && form == Form::Lagrange && guards.is_empty())
         .then(|| dynamics.lagrange_series::<LANES>(num::taylor_order(config.rtol)));
 

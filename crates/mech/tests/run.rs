@@ -4,7 +4,8 @@
 
 mod common;
 
-use common::{derive, run, CONSTRAINED_PENDULUM, PENDULUM};
+use common::{derive, run, BLOW_UP, CONSTRAINED_PENDULUM, PENDULUM};
+use mech::RunFailure;
 use mech::{RunConfig, RunError, StopCondition};
 use std::f64::consts::PI;
 
@@ -55,6 +56,29 @@ fn the_same_driver_runs_a_constrained_model_and_reports_the_rod_tension() {
     let rod = &report.constraints[0];
     assert!(rod.max_abs_residual < 1e-10 && rod.max_abs_velocity_residual < 1e-10, "{rod:?}");
     assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+}
+
+#[test]
+fn a_run_that_blows_up_fails_with_its_reason_as_data() {
+    let d = derive(BLOW_UP);
+    let config = RunConfig { until: 5.0, method: Some(mech::Method::Dop853), ..RunConfig::default() };
+    let Err(RunError::Failed { message, report }) =
+        mech::simulate(&d, &config, |_| std::ops::ControlFlow::Continue(()))
+    else {
+        panic!("the run must fail")
+    };
+    let reason = report.failure_reason.clone().expect("a failed run says why as data");
+    assert_eq!(report.failure.as_deref(), Some(message.as_str()));
+    let t = match &reason {
+        RunFailure::BlowUp { t, component } | RunFailure::NonFiniteRate { t, component } => {
+            assert_eq!(component, "x'", "{message}");
+            *t
+        }
+        other => panic!("{other:?}: {message}"),
+    };
+    // At the analytic blow-up, t = 1.3110287771, to the step size.
+    assert!((t - 1.3110287771).abs() < 0.02, "{t}");
+    assert!(matches!(reason.code(), "blow_up" | "non_finite_rate"));
 }
 
 #[test]

@@ -11,9 +11,9 @@
 //! involutive), decided exactly where the forms are closed and otherwise at
 //! random points ([`crate::probe`]).
 //!
-//! Entry points: [`read_spec`] (called by the model reader) and [`attach`]
-//! (called at the end of [`crate::Derivation::new`]); the numbers of a run are in
-//! `constrained.rs`.
+//! Entry point: [`attach`], the last step of [`crate::Derivation::new`]; the
+//! tables are read by `model/constraint.rs`, and the numbers of a run are in
+//! `run/constrained.rs`.
 
 use crate::derive::{ConservationReason, Derivation};
 use crate::error::ModelError;

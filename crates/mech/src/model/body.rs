@@ -21,8 +21,9 @@
 //! body components.
 //!
 //! The Euler angles are singular where sin β = 0 (α and γ turn about the same
-//! axis; the angles' mass matrix loses rank): [`gimbal_guards`] gives the runs
-//! a condition to stop on before the integrator produces garbage there.
+//! axis; the angles' mass matrix loses rank): `run/body.rs` gives the runs a
+//! condition to stop on before the integrator produces garbage there. This file
+//! reads the tables; `derive/body.rs` turns a body into T, U, ω and L.
 
 use crate::error::ModelError;
 use crate::model::{Located, NumOrText, Reader, Scope};

@@ -63,6 +63,11 @@ impl GimbalGuard {
         )
     }
 
+    /// What happened at time t, as data.
+    pub fn failure(&self, t: f64) -> crate::run::RunFailure {
+        crate::run::RunFailure::Gimbal { body: self.body.clone(), t }
+    }
+
     /// What to do about it.
     pub fn advice(&self) -> String {
         format!(

@@ -26,7 +26,7 @@ use crate::derive::Derivation;
 use crate::error::ModelError;
 use crate::model::ConstraintKind;
 use crate::run::dynamics::{Dynamics, Form, Kernel};
-use crate::run::{Audit, ProjectionMap, RowBuffer, RunConfig, RunError, Start, Stepping, VelocityMap};
+use crate::run::{Audit, ProjectionMap, RowBuffer, RunConfig, RunError, RunFailure, Start, Stepping, VelocityMap};
 use num::{Config, LinearSolver, Method, OdeSystem, RhsError, SolveError};
 use sym::{ExprId, Tape};
 
@@ -571,12 +571,12 @@ impl Stepping for Constrained {
         }
     }
 
-    fn describe(&mut self, e: &SolveError, _y0: &[f64], _at: (f64, Vec<f64>)) -> String {
+    fn describe(&mut self, e: &SolveError, _y0: &[f64], (t_last, _): (f64, Vec<f64>)) -> (RunFailure, String) {
         match e {
-            SolveError::Rhs { t, source: RhsError::Singular { detail } } => format!(
+            SolveError::Rhs { t, source: RhsError::Singular { detail } } => (RunFailure::Singular { t: *t }, format!(
                 "the constrained equations became singular at t = {t} ({detail}): the constraints are no longer independent there"
-            ),
-            other => other.to_string(),
+            )),
+            other => (RunFailure::Step { t: t_last }, other.to_string()),
         }
     }
 }

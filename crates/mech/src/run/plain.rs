@@ -4,7 +4,7 @@
 //! fixed-step method from the tolerance, and failures told in the user's terms.
 
 use super::dynamics::{Dynamics, Form, System};
-use super::{choose_method, RowBuffer, RunConfig, RunError, Start, Stepping};
+use super::{choose_method, RowBuffer, RunConfig, RunError, RunFailure, Start, Stepping};
 use crate::derive::Derivation;
 use crate::error::ModelError;
 use crate::probe;
@@ -100,7 +100,7 @@ impl Stepping for Plain {
         self.system.invariants_at(t, y, &mut row.qd, &mut row.invariants)
     }
 
-    fn describe(&mut self, e: &SolveError, y0: &[f64], at: (f64, Vec<f64>)) -> String {
+    fn describe(&mut self, e: &SolveError, y0: &[f64], at: (f64, Vec<f64>)) -> (RunFailure, String) {
         describe_failure(e, &self.names, self.form, &mut self.system, y0, at)
     }
 }
@@ -108,7 +108,14 @@ impl Stepping for Plain {
 /// Why the integrator could not go on, judged from the last good state: a mass
 /// matrix that has become singular (measured against its size at the start, so
 /// that a 1×1 M → 0 counts), or the component that grows without bound.
-fn diagnose(system: &mut System, names: &[String], form: Form, y0: &[f64], t: f64, y: &[f64]) -> Option<String> {
+fn diagnose(
+    system: &mut System,
+    names: &[String],
+    form: Form,
+    y0: &[f64],
+    t: f64,
+    y: &[f64],
+) -> Option<(RunFailure, String)> {
     let n = names.len();
     let m0 = system.mass_matrix_at(0.0, y0);
     let m = system.mass_matrix_at(t, y);
@@ -117,9 +124,9 @@ fn diagnose(system: &mut System, names: &[String], form: Form, y0: &[f64], t: f6
     // that fails may still be a little before the singular point.
     if let (Some(p0), Some(p)) = (probe::smallest_pivot(&m0, n), probe::smallest_pivot(&m, n)) {
         if p < 0.05 * p0 {
-            return Some(format!(
+            return Some((RunFailure::Singular { t }, format!(
                 "the mass matrix becomes singular at t ≈ {t} (its smallest pivot fell from {p0:.3e} at the start to {p:.3e}): the accelerations are undetermined there"
-            ));
+            )));
         }
     }
     // The fastest-growing component relative to where it started.
@@ -129,8 +136,24 @@ fn diagnose(system: &mut System, names: &[String], form: Form, y0: &[f64], t: f6
         .map(|(v, v0)| v.abs() / v0.abs().max(1.0))
         .enumerate()
         .fold((0, 0.0f64), |best, (k, r)| if r > best.1 { (k, r) } else { best });
-    (size > 1e3)
-        .then(|| format!("the motion blew up at t = {t}: {} has grown to {:.3e}", component_name(k, names, form), y[k]))
+    (size > 1e3).then(|| {
+        let failure = RunFailure::BlowUp { t, component: component_symbol(k, names, form) };
+        (
+            failure,
+            format!("the motion blew up at t = {t}: {} has grown to {:.3e}", component_name(k, names, form), y[k]),
+        )
+    })
+}
+
+/// A component of the state as the expression language names it: `x`, `x'` or `p_x`.
+fn component_symbol(index: usize, names: &[String], form: Form) -> String {
+    let n = names.len();
+    match (index.checked_sub(n), form) {
+        (None, _) => names[index].clone(),
+        (Some(k), Form::Lagrange) if k < n => format!("{}'", names[k]),
+        (Some(k), _) if k < n => format!("p_{}", names[k]),
+        _ => format!("y{index}"),
+    }
 }
 
 fn component_name(index: usize, names: &[String], form: Form) -> String {
@@ -180,23 +203,27 @@ fn describe_failure(
     system: &mut System,
     y0: &[f64],
     (t_last, y_last): (f64, Vec<f64>),
-) -> String {
+) -> (RunFailure, String) {
     let component = |index: usize| component_name(index, names, form);
+    let symbol = |index: usize| component_symbol(index, names, form);
     match e {
-        SolveError::NonFiniteState { t, index } => {
-            format!("the motion blew up at t = {t}: {} is no longer finite", component(*index))
-        }
-        SolveError::Rhs { t, source: num::RhsError::NonFinite { index } } => {
-            format!("the equations of motion gave a non-finite rate of change of {} at t = {t}", component(*index))
-        }
-        SolveError::Rhs { t, source: num::RhsError::Singular { detail } } => {
-            format!("the mass matrix became singular at t = {t} ({detail}): the accelerations are undetermined there")
-        }
+        SolveError::NonFiniteState { t, index } => (
+            RunFailure::BlowUp { t: *t, component: symbol(*index) },
+            format!("the motion blew up at t = {t}: {} is no longer finite", component(*index)),
+        ),
+        SolveError::Rhs { t, source: num::RhsError::NonFinite { index } } => (
+            RunFailure::NonFiniteRate { t: *t, component: symbol(*index) },
+            format!("the equations of motion gave a non-finite rate of change of {} at t = {t}", component(*index)),
+        ),
+        SolveError::Rhs { t, source: num::RhsError::Singular { detail } } => (
+            RunFailure::Singular { t: *t },
+            format!("the mass matrix became singular at t = {t} ({detail}): the accelerations are undetermined there"),
+        ),
         // A step that cannot be taken (too small, or implicit stages that do not
         // converge): say why from the last good state when it can be told.
         other => match diagnose(system, names, form, y0, t_last, &y_last) {
-            Some(why) => format!("{why} ({other})"),
-            None => other.to_string(),
+            Some((failure, why)) => (failure, format!("{why} ({other})")),
+            None => (RunFailure::Step { t: t_last }, other.to_string()),
         },
     }
 }

@@ -88,6 +88,16 @@ y = -1.0
 "y'" = 0.0
 "#;
 
+/// x'' = x³ from x = x' = 1: x reaches infinity at t = 1.3110287771 (a run must fail there).
+pub const BLOW_UP: &str = r#"
+coordinates = ["x"]
+kinetic = "x'^2/2"
+potential = "-x^4/4"
+[initial]
+x = 1.0
+"x'" = 1.0
+"#;
+
 /// The derivation of a model text, which must be valid.
 #[track_caller]
 pub fn derive(text: &str) -> mech::Derivation {
