@@ -73,6 +73,13 @@ mod sweep;
 mod top;
 // Analyses built on other analyses.
 mod orbit;
+// Test models shared by the unit tests and `tests/` (which includes the file).
+#[cfg(test)]
+mod test_models;
+
+// The test models name the crate `mech`, as the integration tests do.
+#[cfg(test)]
+extern crate self as mech;
 
 pub use derive::{BodyMotion, Constraint, Constraints};
 pub use derive::{

@@ -10,11 +10,11 @@ use mech::{ConservationReason, ConservedReason, EnergyReason, RateTerm};
 #[test]
 fn the_pendulum_has_its_momentum_mass_matrix_and_hamiltonian() {
     let d = derive(PENDULUM);
-    assert_eq!(d.coordinate_names(), ["ph"]);
-    assert_eq!(show(&d, d.momenta()[0]), "l^2*m*ph'");
+    assert_eq!(d.coordinate_names(), ["th"]);
+    assert_eq!(show(&d, d.momenta()[0]), "l^2*m*th'");
     assert_eq!(show(&d, d.mass_matrix()[0][0]), "l^2*m");
-    assert_eq!(show(&d, d.forcing()[0]), "-g*l*m*sin(ph)");
-    assert_eq!(show(&d, d.hamiltonian().expect("L is quadratic")), "p_ph^2/(2*l^2*m) - g*l*m*cos(ph)");
+    assert_eq!(show(&d, d.forcing()[0]), "-g*l*m*sin(th)");
+    assert_eq!(show(&d, d.hamiltonian().expect("L is quadratic")), "p_th^2/(2*l^2*m) - g*l*m*cos(th)");
     assert!(d.cyclic().is_empty());
     assert_eq!(d.hamiltonian_is_energy(), Some(true));
     assert_eq!(d.verdicts().energy, [EnergyReason::KineticHomogeneous, EnergyReason::IsEnergy]);
@@ -74,7 +74,7 @@ fn the_layout_names_where_q_q_dot_t_and_the_parameters_sit() {
     assert_eq!(layout.symbols().len(), layout.len());
     assert_eq!(layout.values(), [0.0, 0.0, 0.0, 2.0, 1.5, 9.81]);
     let names: Vec<String> = layout.symbols().iter().map(|&s| show(&d, s)).collect();
-    assert_eq!(names, ["ph", "ph'", "t", "m", "l", "g"]);
+    assert_eq!(names, ["th", "th'", "t", "m", "l", "g"]);
 }
 
 #[test]

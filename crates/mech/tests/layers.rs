@@ -66,10 +66,16 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
     }
 }
 
-/// The top-level modules a source text names through `crate::`, comments left out.
+/// The top-level modules a source text names through `crate::`, comments and
+/// the unit tests at the end of a file (`#[cfg(test)] mod tests`, which may run
+/// the whole pipeline) left out.
 fn uses(text: &str, reexports: &HashMap<String, String>) -> Vec<String> {
+    let code = match text.find("#[cfg(test)]\nmod tests") {
+        Some(at) => &text[..at],
+        None => text,
+    };
     let mut found = Vec::new();
-    for line in text.lines().filter(|l| !l.trim_start().starts_with("//")) {
+    for line in code.lines().filter(|l| !l.trim_start().starts_with("//")) {
         let mut rest = line;
         while let Some(at) = rest.find("crate::") {
             rest = &rest[at + "crate::".len()..];

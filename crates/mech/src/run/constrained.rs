@@ -586,23 +586,9 @@ mod tests {
     use super::*;
     use crate::Model;
 
-    const PENDULUM: &str = r#"
-coordinates = ["x", "y"]
-gravity = "g"
-[parameters]
-m = 2.0
-l = 1.5
-g = 9.81
-[[particles]]
-mass = "m"
-position = ["x", "y"]
-[[constraints]]
-holonomic = "x^2 + y^2 - l^2"
-"#;
-
     #[test]
     fn the_saddle_point_solve_gives_the_tension() {
-        let d = Derivation::new(Model::parse(PENDULUM, &[]).unwrap()).unwrap();
+        let d = Derivation::new(Model::parse(crate::test_models::CONSTRAINED_PENDULUM, &[]).unwrap()).unwrap();
         let dynamics = Dynamics::new(&d);
         let mut sys = ConstrainedSystem::new(&d, dynamics);
         let (m, l, g) = (2.0, 1.5, 9.81);

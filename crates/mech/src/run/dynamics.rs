@@ -602,18 +602,6 @@ mod tests {
     use super::*;
     use crate::Model;
 
-    const PENDULUM: &str = r#"
-coordinates = ["th"]
-gravity = "g"
-[parameters]
-m = 2.0
-l = 1.5
-g = 9.81
-[[particles]]
-mass = "m"
-position = ["l*sin(th)", "-l*cos(th)"]
-"#;
-
     fn dynamics(text: &str) -> Dynamics {
         let d = Derivation::new(Model::parse(text, &[]).unwrap()).unwrap();
         Dynamics::new(&d)
@@ -621,7 +609,7 @@ position = ["l*sin(th)", "-l*cos(th)"]
 
     #[test]
     fn every_form_gives_the_pendulum_equation() {
-        let dy = dynamics(PENDULUM);
+        let dy = dynamics(crate::test_models::PENDULUM);
         assert!(dy.is_separable(), "M = m l^2 is constant and f depends on th alone");
         let (th, om): (f64, f64) = (0.7, -0.3);
         let expect = -9.81 / 1.5 * th.sin();
