@@ -35,10 +35,10 @@ pub struct Args {
 /// Runs the command.
 pub fn run(args: &Args) -> Result<(), Failure> {
     let path = &args.model;
-    let (source, mut d) = crate::derive_file(path, &args.set)?;
+    let (source, d) = crate::derive_file(path, &args.set)?;
     let top = Top::new(&d).map_err(|e| Failure::analysis(path, &source, e))?;
     if let Some(svg) = &args.plot {
-        let text = figure(&mut d, &top).map_err(|e| Failure::input(svg, format!("cannot draw the plot: {e}")))?;
+        let text = figure(&d, &top).map_err(|e| Failure::input(svg, format!("cannot draw the plot: {e}")))?;
         std::fs::write(svg, text).map_err(|e| Failure::input(svg, format!("cannot write the plot: {e}")))?;
     }
     let out = match args.format {
@@ -171,7 +171,7 @@ fn text(d: &Derivation, t: &Top) -> String {
 
 /// The symmetry axis in space, Dᵀe₃ = (sin β sin α, −sin β cos α, cos β), along
 /// a short simulation of the model.
-fn axis_path(d: &mut Derivation, t: &Top) -> Vec<[f64; 3]> {
+fn axis_path(d: &Derivation, t: &Top) -> Vec<[f64; 3]> {
     let idx: Vec<usize> =
         t.angle_names.iter().map(|n| d.model().coordinates.iter().position(|c| &c.name == n).unwrap_or(0)).collect();
     let until = match (&t.heavy, &t.free) {
@@ -195,7 +195,7 @@ fn axis_path(d: &mut Derivation, t: &Top) -> Vec<[f64; 3]> {
     pts
 }
 
-fn figure(d: &mut Derivation, t: &Top) -> Result<String, Box<dyn Error>> {
+fn figure(d: &Derivation, t: &Top) -> Result<String, Box<dyn Error>> {
     let path = axis_path(d, t);
     let b = t.angle_names[1].clone();
     // β around the allowed band (the whole range for a free top).

@@ -1160,11 +1160,12 @@ mass = "m1"
 position = ["x", "x^2/2"]
 "#;
         let model = Model::parse(triple, &[]).unwrap();
-        let mut d = Derivation::new(model).unwrap();
+        let d = Derivation::new(model).unwrap();
         let h = d.hamiltonian.expect("H");
         let eqs = d.hamilton.clone().expect("Hamilton's equations");
         let velocities = d.velocities.clone().unwrap();
-        let pool = &mut d.model.pool;
+        let mut scratch = d.pool().clone();
+        let pool = &mut scratch;
         let subst: Subst = d.qd.iter().copied().zip(velocities).collect();
         for (k, (dq, dp)) in eqs.into_iter().enumerate() {
             let want_dq = pool.diff(h, d.p[k]);
