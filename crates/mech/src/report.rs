@@ -158,6 +158,9 @@ pub struct ConstraintReport {
     pub time_term: String,
     /// Whether it depends explicitly on t.
     pub rheonomic: bool,
+    /// Whether its force does work (a_t ≠ 0), the fact behind its `explanation`'s
+    /// "its force does work" (extra field).
+    pub does_work: bool,
     /// Whether it is integrable on its own (true for holonomic ones).
     pub integrable: Option<bool>,
     /// F with the constraint equivalent to F = const, when found.
@@ -252,6 +255,7 @@ impl DeriveReport {
                     jacobian: c.jacobian.iter().map(|&e| s(e)).collect(),
                     time_term: s(c.time_term),
                     rheonomic: c.rheonomic,
+                    does_work: c.does_work,
                     integrable: c.integrable,
                     integral: c.integral.map(s),
                     multiplier: s(c.multiplier),

@@ -91,3 +91,25 @@ fn an_unknown_parameter_to_set_names_the_setting_not_a_flag() {
     assert_eq!(e.setting, Some(mech::Setting::Parameter { name: "zz".into() }));
     assert!(!e.message.contains("--"), "{}", e.message);
 }
+
+#[test]
+fn a_rheonomic_constraint_makes_h_not_conserved_and_says_which() {
+    let text = "coordinates = [\"x\", \"y\"]\nkinetic = \"m*(x'^2 + y'^2)/2\"\n[parameters]\nm = 1.0\nom = 2.0\n\
+                [[constraints]]\nname = \"wire\"\nholonomic = \"y*cos(om*t) - x*sin(om*t)\"\n";
+    let d = derive(text);
+    assert!(!d.hamiltonian_conserved());
+    assert_eq!(
+        d.verdicts().conservation,
+        [ConservationReason::ConstraintWork { constraints: vec!["wire".into()] }, ConservationReason::WorkBalance]
+    );
+    let json = serde_json::to_value(mech::DeriveReport::new(&d)).unwrap();
+    assert_eq!(json["constraints"][0]["does_work"], true);
+    assert_eq!(json["reasons"]["conservation"][0]["constraints"][0], "wire");
+
+    // The rod of a pendulum is scleronomic: its force does no work, H stays conserved.
+    let d = derive(common::CONSTRAINED_PENDULUM);
+    assert!(d.hamiltonian_conserved());
+    assert!(d.verdicts().conservation.contains(&ConservationReason::ConstraintsDoNoWork));
+    let json = serde_json::to_value(mech::DeriveReport::new(&d)).unwrap();
+    assert_eq!(json["constraints"][0]["does_work"], false);
+}
