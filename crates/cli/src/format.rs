@@ -416,7 +416,7 @@ impl Latex<'_> {
         let d = self.d;
         let (block, row, comment) = match item {
             Item::Title => {
-                let _ = writeln!(self.o, "% {} (lagrange derive --format latex)", d.model().name);
+                let _ = writeln!(self.o, "% {} (lagrange derive --format latex)", comment_text(&d.model().name));
                 return;
             }
             Item::Define(what, e) => {
@@ -470,7 +470,7 @@ impl Latex<'_> {
             for (k, (row, comment)) in rows.iter().enumerate() {
                 let end = if k + 1 < rows.len() { " \\\\" } else { "" };
                 let _ = match comment {
-                    Some(c) => writeln!(o, "{row}{end}  % {c}"),
+                    Some(c) => writeln!(o, "{row}{end}  % {}", comment_text(c)),
                     None => writeln!(o, "{row}{end}"),
                 };
             }
@@ -478,4 +478,11 @@ impl Latex<'_> {
         }
         o
     }
+}
+
+/// User text inside a LaTeX comment: a line break would end the comment and
+/// turn the rest into live LaTeX (`\input{...}`), so every control character
+/// becomes a space.
+fn comment_text(text: &str) -> String {
+    text.chars().map(|c| if c.is_control() { ' ' } else { c }).collect()
 }

@@ -10,6 +10,7 @@ mod diagnostics;
 mod extremal;
 mod format;
 mod inertia;
+mod input;
 mod modes;
 mod orbit;
 mod output;
@@ -200,14 +201,7 @@ fn main() -> ExitCode {
 
 /// Reads a model file, or explains why it cannot.
 pub(crate) fn read_source(path: &Path) -> Result<String, Failure> {
-    let bytes = std::fs::read(path).map_err(|e| Failure::input(path, format!("cannot read the file: {e}")))?;
-    if bytes.len() > mech::MAX_FILE_BYTES {
-        return Err(Failure::input(
-            path,
-            format!("the file is {} bytes; a model file may have at most {}", bytes.len(), mech::MAX_FILE_BYTES),
-        ));
-    }
-    String::from_utf8(bytes).map_err(|e| Failure::input(path, format!("the file is not UTF-8 text: {e}")))
+    input::read_text(path, mech::MAX_FILE_BYTES as u64).map_err(|e| Failure::input(path, e.to_string()))
 }
 
 /// Parses a model file's text; the files it names (body files of `[[bodies]]`)
@@ -216,11 +210,7 @@ pub(crate) fn parse_model(path: &Path, source: &str, set: &[(String, f64)]) -> R
     let folder = path.parent().unwrap_or(Path::new("."));
     let files = |name: &str| -> Result<String, String> {
         let file = folder.join(name);
-        let bytes = std::fs::read(&file).map_err(|e| format!("{}: {e}", file.display()))?;
-        if bytes.len() > mech::MAX_FILE_BYTES {
-            return Err(format!("{} is {} bytes; the limit is {}", file.display(), bytes.len(), mech::MAX_FILE_BYTES));
-        }
-        String::from_utf8(bytes).map_err(|e| format!("{} is not UTF-8 text: {e}", file.display()))
+        input::read_text(&file, mech::MAX_FILE_BYTES as u64).map_err(|e| format!("{}: {e}", file.display()))
     };
     mech::Model::parse_with(source, set, &files).map_err(|e| Failure::model(path, source, e))
 }

@@ -49,6 +49,8 @@ pub fn list_methods() -> String {
 }
 
 pub fn run(opts: &Options) -> Result<(), Failure> {
+    crate::input::refuse_overwrite(&[&opts.model], &[opts.out.as_deref(), opts.plot.as_deref()])
+        .map_err(Failure::usage)?;
     // Setup is timed from here (reading the model file) to the first row, which
     // the integration hands over before its first step: parse, derive, compile
     // and, for fixed-step methods, the pilot runs that choose the step.

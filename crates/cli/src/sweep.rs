@@ -68,6 +68,8 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     if let Some(out) = &args.merge {
         return merge(args, out);
     }
+    let inputs: Vec<&Path> = args.files.iter().map(PathBuf::as_path).collect();
+    crate::input::refuse_overwrite(&inputs, &[args.out.as_deref(), args.heatmap.as_deref()]).map_err(Failure::usage)?;
     let [path] = args.files.as_slice() else {
         return Err(Failure::usage(format!(
             "sweep takes one model file, not {} files (to join shards: sweep --merge OUT.csv SHARD.csv...)",
@@ -163,9 +165,12 @@ fn usage(e: SweepError) -> Failure {
 
 /// `sweep --merge OUT.csv SHARD.csv...`.
 fn merge(args: &Args, out: &Path) -> Result<(), Failure> {
+    let shards: Vec<&Path> = args.files.iter().map(PathBuf::as_path).collect();
+    crate::input::refuse_overwrite(&shards, &[Some(out), args.heatmap.as_deref()]).map_err(Failure::usage)?;
     let mut shards = Vec::with_capacity(args.files.len());
     for path in &args.files {
-        let text = std::fs::read_to_string(path).map_err(|e| Failure::input(path, format!("cannot read: {e}")))?;
+        let text = crate::input::read_text(path, crate::input::MAX_CSV_BYTES)
+            .map_err(|e| Failure::input(path, e.to_string()))?;
         let name = path.display().to_string();
         let table = SweepTable::parse(&text, &name).map_err(|e| Failure::input(path, e.to_string()))?;
         shards.push((name, table));

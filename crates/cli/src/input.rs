@@ -1,0 +1,109 @@
+//! Reading the files a command is given, bounded: only regular files (a FIFO or
+//! a device such as /dev/zero would block or never end), and never more than a
+//! limit, checked while reading rather than after.
+
+use std::fs::File;
+use std::io::Read;
+use std::path::Path;
+
+/// Largest sweep CSV that `sweep --merge` reads, in bytes: far above any shard
+/// of the largest allowed sweep at a few hundred bytes a row that fits in memory
+/// comfortably, far below what exhausts it.
+pub const MAX_CSV_BYTES: u64 = 1 << 30;
+
+/// Why a file could not be read.
+#[derive(Debug)]
+pub enum ReadError {
+    /// The operating system's error.
+    Io(std::io::Error),
+    /// Not a regular file.
+    NotRegular,
+    /// Longer than the limit.
+    TooLarge {
+        /// The limit, in bytes.
+        limit: u64,
+    },
+    /// Not UTF-8 text.
+    NotText(std::string::FromUtf8Error),
+}
+
+impl std::fmt::Display for ReadError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ReadError::Io(e) => write!(f, "cannot read the file: {e}"),
+            ReadError::NotRegular => f.write_str("not a regular file (a pipe, device or folder cannot be read as one)"),
+            ReadError::TooLarge { limit } => {
+                write!(f, "the file is larger than {limit} bytes, the limit for this kind of file")
+            }
+            ReadError::NotText(e) => write!(f, "the file is not UTF-8 text: {e}"),
+        }
+    }
+}
+
+/// The text of the regular file at `path`, if it has at most `limit` bytes.
+pub fn read_text(path: &Path, limit: u64) -> Result<String, ReadError> {
+    // Opening a FIFO for reading blocks until a writer comes: its type is
+    // checked before opening, and again on the open file (it may have changed).
+    if !std::fs::metadata(path).map_err(ReadError::Io)?.is_file() {
+        return Err(ReadError::NotRegular);
+    }
+    let file = File::open(path).map_err(ReadError::Io)?;
+    let meta = file.metadata().map_err(ReadError::Io)?;
+    if !meta.is_file() {
+        return Err(ReadError::NotRegular);
+    }
+    let mut bytes = Vec::with_capacity(meta.len().min(limit) as usize);
+    file.take(limit + 1).read_to_end(&mut bytes).map_err(ReadError::Io)?;
+    if bytes.len() as u64 > limit {
+        return Err(ReadError::TooLarge { limit });
+    }
+    String::from_utf8(bytes).map_err(ReadError::NotText)
+}
+
+/// An error when an output path names one of the inputs (the model file, a shard
+/// to merge): writing it would destroy what the run reads.
+pub fn refuse_overwrite(inputs: &[&Path], outputs: &[Option<&Path>]) -> Result<(), String> {
+    // Only an output that exists can be an input; both sides as the file system
+    // resolves them (links, `./`, `..`).
+    let inputs: Vec<_> = inputs.iter().filter_map(|p| p.canonicalize().ok()).collect();
+    for out in outputs.iter().flatten() {
+        if let Ok(resolved) = out.canonicalize() {
+            if inputs.contains(&resolved) {
+                return Err(format!(
+                    "{} is an input of this command; it would be overwritten by an output",
+                    out.display()
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_device_is_refused_before_anything_is_read() {
+        assert!(matches!(read_text(Path::new("/dev/zero"), 1 << 20), Err(ReadError::NotRegular)));
+    }
+
+    #[test]
+    fn an_output_that_is_an_input_is_refused() {
+        let path = std::env::temp_dir().join(format!("lagrange-overwrite-{}.toml", std::process::id()));
+        std::fs::write(&path, "x").unwrap();
+        let other = path.with_extension("csv");
+        assert!(refuse_overwrite(&[&path], &[Some(&path)]).is_err());
+        assert!(refuse_overwrite(&[&path], &[None, Some(&other)]).is_ok());
+        let _ = std::fs::remove_file(&path);
+    }
+
+    #[test]
+    fn a_file_over_the_limit_is_refused() {
+        let path = std::env::temp_dir().join(format!("lagrange-input-{}.txt", std::process::id()));
+        std::fs::write(&path, "x".repeat(101)).unwrap();
+        assert!(matches!(read_text(&path, 100), Err(ReadError::TooLarge { limit: 100 })));
+        assert_eq!(read_text(&path, 101).unwrap().len(), 101);
+        let _ = std::fs::remove_file(&path);
+    }
+}

@@ -1,0 +1,79 @@
+//! Hostile input that once gave wrong or unbounded results (issue #15), each a
+//! regression test: files that are not regular or too large, outputs that would
+//! overwrite an input, and user text that must not become live LaTeX.
+
+mod common;
+
+use common::{repo_root, run, scratch};
+
+/// Runs the binary and expects bad input: exit 2 with `needle` in the message.
+#[track_caller]
+fn refused(args: &[&str], needle: &str) {
+    let r = run(args);
+    assert_eq!(r.code, Some(2), "{}", r.describe());
+    assert!(r.stderr.contains(needle), "wanted '{needle}' in:\n{}", r.describe());
+}
+
+#[test]
+fn a_device_or_a_fifo_is_not_read_as_a_model() {
+    refused(&["derive", "/dev/zero"], "not a regular file");
+    refused(
+        &["sweep", "--merge", &scratch("hostile", "merged.csv").to_string_lossy(), "/dev/zero"],
+        "not a regular file",
+    );
+    // A FIFO without a writer would block an open for reading forever.
+    let fifo = scratch("hostile", "fifo.toml");
+    let _ = std::fs::remove_file(&fifo);
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status().is_ok_and(|s| s.success());
+    assert!(made, "mkfifo {}", fifo.display());
+    refused(&["derive", &fifo.to_string_lossy()], "not a regular file");
+}
+
+#[test]
+fn a_body_file_that_is_a_device_is_refused() {
+    let model = scratch("hostile-body", "top.toml");
+    let link = model.with_file_name("zero_body.toml");
+    let _ = std::fs::remove_file(&link);
+    std::os::unix::fs::symlink("/dev/zero", &link).unwrap();
+    std::fs::write(
+        &model,
+        "coordinates = [\"al\", \"be\", \"ga\"]\n[[bodies]]\ninertia = \"zero_body.toml\"\nangles = [\"al\", \"be\", \"ga\"]\n",
+    )
+    .unwrap();
+    refused(&["derive", &model.to_string_lossy()], "not a regular file");
+}
+
+#[test]
+fn a_model_over_the_size_limit_is_refused_without_reading_it_all() {
+    let big = scratch("hostile", "big.toml");
+    std::fs::write(&big, "#".repeat(3 << 20)).unwrap();
+    refused(&["derive", &big.to_string_lossy()], "larger than 1048576 bytes");
+}
+
+#[test]
+fn an_output_never_overwrites_the_model() {
+    let model = scratch("hostile-out", "pendulum.toml");
+    let text = std::fs::read_to_string(repo_root().join("examples/pendulum.toml")).unwrap();
+    std::fs::write(&model, &text).unwrap();
+    let m = model.to_string_lossy();
+    refused(&["simulate", &m, "--until", "1", "--out", &m], "is an input of this command");
+    refused(&["simulate", &m, "--until", "1", "--plot", &m], "is an input of this command");
+    refused(&["orbit", &m, "--plot", &m], "is an input of this command");
+    // Another spelling of the same file is the same file.
+    let dotted = model.parent().unwrap().join(".").join("pendulum.toml");
+    refused(&["simulate", &m, "--until", "1", "--out", &dotted.to_string_lossy()], "is an input");
+    assert_eq!(std::fs::read_to_string(&model).unwrap(), text, "the model is untouched");
+}
+
+#[test]
+fn a_model_name_cannot_inject_latex() {
+    let model = scratch("hostile-latex", "evil.toml");
+    let text = std::fs::read_to_string(repo_root().join("examples/pendulum.toml")).unwrap();
+    let text = text.replace("name = \"planar pendulum\"", "name = \"a\\n\\\\input{evil}\"");
+    std::fs::write(&model, text).unwrap();
+    let r = run(&["derive", &model.to_string_lossy(), "--format", "latex"]);
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    // Every line is a comment or LaTeX of our own: none starts with the user's text.
+    assert!(r.stdout.lines().all(|l| !l.starts_with("\\input")), "{}", r.stdout);
+    assert!(r.stdout.starts_with("% a \\input{evil} (lagrange derive --format latex)"), "{}", r.stdout);
+}
