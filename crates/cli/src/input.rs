@@ -30,12 +30,23 @@ pub enum ReadError {
 impl std::fmt::Display for ReadError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            ReadError::Io(e) => write!(f, "cannot read the file: {e}"),
+            ReadError::Io(e) => write!(f, "{e}"),
             ReadError::NotRegular => f.write_str("not a regular file (a pipe, device or folder cannot be read as one)"),
             ReadError::TooLarge { limit } => {
                 write!(f, "the file is larger than {limit} bytes, the limit for this kind of file")
             }
             ReadError::NotText(e) => write!(f, "the file is not UTF-8 text: {e}"),
+        }
+    }
+}
+
+impl ReadError {
+    /// The message, with `io_prefix` ("cannot read the file") before an error of
+    /// the operating system's.
+    pub fn message(&self, io_prefix: &str) -> String {
+        match self {
+            ReadError::Io(e) => format!("{io_prefix}: {e}"),
+            other => other.to_string(),
         }
     }
 }

@@ -201,7 +201,8 @@ fn main() -> ExitCode {
 
 /// Reads a model file, or explains why it cannot.
 pub(crate) fn read_source(path: &Path) -> Result<String, Failure> {
-    input::read_text(path, mech::MAX_FILE_BYTES as u64).map_err(|e| Failure::input(path, e.to_string()))
+    input::read_text(path, mech::MAX_FILE_BYTES as u64)
+        .map_err(|e| Failure::input(path, e.message("cannot read the file")))
 }
 
 /// Parses a model file's text; the files it names (body files of `[[bodies]]`)
