@@ -77,3 +77,22 @@ fn a_model_name_cannot_inject_latex() {
     assert!(r.stdout.lines().all(|l| !l.starts_with("\\input")), "{}", r.stdout);
     assert!(r.stdout.starts_with("% a \\input{evil} (lagrange derive --format latex)"), "{}", r.stdout);
 }
+
+#[test]
+fn a_name_lagrange_makes_itself_is_refused_where_it_is_written() {
+    let cases = [
+        ("coordinates = [\"x\", \"p_x\"]\nkinetic = \"x'^2/2 + p_x'^2/2\"\n", "coordinate 'p_x'", "1:21"),
+        ("coordinates = [\"H\"]\nkinetic = \"H'^2/2\"\n", "coordinate 'H'", "1:16"),
+        ("coordinates = [\"x\", \"lambda_rod\"]\nkinetic = \"x'^2/2\"\n", "coordinate 'lambda_rod'", "1:21"),
+        ("coordinates = [\"force_rod\"]\nkinetic = \"force_rod'^2/2\"\n", "coordinate 'force_rod'", "1:16"),
+        ("coordinates = [\"x\"]\nkinetic = \"x'^2/2\"\n[parameters]\np_y = 1.0\n", "parameter 'p_y'", "4:1"),
+    ];
+    for (k, (text, what, place)) in cases.into_iter().enumerate() {
+        let model = scratch("hostile-names", &format!("names{k}.toml"));
+        std::fs::write(&model, text).unwrap();
+        let r = run(&["derive", &model.to_string_lossy()]);
+        assert_eq!(r.code, Some(2), "{}", r.describe());
+        let first = r.stderr.lines().next().unwrap_or_default();
+        assert!(first.contains(&format!(":{place}: {what} has a name that lagrange makes itself")), "{}", r.describe());
+    }
+}

@@ -8,7 +8,8 @@
 
 use crate::error::ModelError;
 use crate::source::{
-    check_identifier, content_offset, number_expr, read_toml, RANK_COORDINATE, RANK_MOMENTUM, RANK_PARAMETER, RANK_TIME,
+    check_identifier, check_not_generated, content_offset, number_expr, read_toml, RANK_COORDINATE, RANK_MOMENTUM,
+    RANK_PARAMETER, RANK_TIME,
 };
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -292,6 +293,7 @@ impl Model {
         }
         for c in coords.get_ref() {
             check_identifier(c, "coordinate")?;
+            check_not_generated(c, "coordinate", true)?;
             if let Some(prev) = r.coordinates.iter().find(|p| &p.name == c.get_ref()) {
                 let _ = prev;
                 return Err(ModelError::at(c.span(), format!("coordinate '{}' is listed twice", c.get_ref())));
@@ -304,6 +306,7 @@ impl Model {
         params.sort_by_key(|(k, _)| k.span().start);
         for (k, v) in params {
             check_identifier(k, "parameter")?;
+            check_not_generated(k, "parameter", false)?;
             if r.is_coordinate(k.get_ref()) {
                 return Err(ModelError::at(
                     k.span(),

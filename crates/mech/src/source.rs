@@ -104,6 +104,40 @@ pub(crate) fn check_identifier(name: &Spanned<String>, what: &str) -> Result<(),
     Ok(())
 }
 
+/// Name prefixes lagrange makes symbols with: `p_q` the momentum of q,
+/// `lambda_c` the multiplier of constraint c. No model name may use them.
+const GENERATED_PREFIXES: &[&str] = &["p_", "lambda_"];
+
+/// CSV column names `simulate` makes besides `t` and the coordinates: the
+/// invariants, the event column and the constraints' work, exactly; the
+/// constraints' forces and residuals by prefix; a body's ω and L by suffix.
+const COLUMN_NAMES: &[&str] = &["H", "E", "event", "W_constraints", "omega1", "omega2", "omega3", "L1", "L2", "L3"];
+const COLUMN_PREFIXES: &[&str] = &["force_", "residual_"];
+const COLUMN_SUFFIXES: &[&str] = &["_omega1", "_omega2", "_omega3", "_L1", "_L2", "_L3"];
+
+/// A model name that would collide with a name lagrange makes: a symbol
+/// (`p_x`, `lambda_rod`) for any name, and for a coordinate also an output
+/// column (`H`, `force_rod`, `omega1`, ...), so that no output holds two
+/// things under one name.
+pub(crate) fn check_not_generated(name: &Spanned<String>, what: &str, is_coordinate: bool) -> Result<(), ModelError> {
+    let n = name.get_ref();
+    let symbol = GENERATED_PREFIXES.iter().find(|p| n.starts_with(*p));
+    let column = is_coordinate
+        && (COLUMN_NAMES.contains(&n.as_str())
+            || COLUMN_PREFIXES.iter().any(|p| n.starts_with(p))
+            || COLUMN_SUFFIXES.iter().any(|s| n.ends_with(s)));
+    if symbol.is_none() && !column {
+        return Ok(());
+    }
+    let made = match symbol {
+        Some(&"p_") => "p_NAME is the momentum of the coordinate NAME",
+        Some(_) => "lambda_NAME is the multiplier of the constraint NAME",
+        None => "simulate's CSV has columns H, E, event, W_constraints, force_NAME, residual_NAME and a body's omega1..3 and L1..3",
+    };
+    Err(ModelError::at(name.span(), format!("{what} '{n}' has a name that lagrange makes itself: {made}"))
+        .with_help("rename it so that the outputs cannot mix it up with the generated one"))
+}
+
 /// A parameter with its numeric value.
 #[derive(Debug, Clone)]
 pub struct Parameter {
