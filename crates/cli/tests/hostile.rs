@@ -96,3 +96,12 @@ fn a_name_lagrange_makes_itself_is_refused_where_it_is_written() {
         assert!(first.contains(&format!(":{place}: {what} has a name that lagrange makes itself")), "{}", r.describe());
     }
 }
+
+#[test]
+fn a_merged_row_with_extra_columns_is_refused() {
+    let shard = scratch("hostile-merge", "shard.csv");
+    std::fs::write(&shard, "# lagrange sweep runs=1\nrun,x,failure\n0,1,,extra,cols\n").unwrap();
+    let out = shard.with_file_name("merged.csv");
+    refused(&["sweep", "--merge", &out.to_string_lossy(), &shard.to_string_lossy()], "line 3: 3 columns expected");
+    assert!(!out.exists(), "nothing is written");
+}

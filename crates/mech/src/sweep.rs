@@ -544,7 +544,16 @@ impl SweepTable {
                     .map_err(|_| err(line_no, format!("'{field}' in column '{}' is not a number", columns[c + 1])))?;
                 values.push(v);
             }
-            let failure = unquote(fields.next().unwrap_or_default());
+            let last = fields.next().ok_or_else(|| err(line_no, format!("{} columns expected", columns.len())))?;
+            let failure = failure_field(last).ok_or_else(|| {
+                err(
+                    line_no,
+                    format!(
+                        "{} columns expected: the last, 'failure', is empty, text without commas or quotes, or quoted; found '{last}'",
+                        columns.len()
+                    ),
+                )
+            })?;
             rows.push(TableRow { run, values, failure });
         }
         Ok(SweepTable { meta, columns, rows })
@@ -562,10 +571,16 @@ fn csv_field(text: &str) -> String {
     }
 }
 
-fn unquote(field: &str) -> String {
-    match field.strip_prefix('"').and_then(|f| f.strip_suffix('"')) {
-        Some(inner) => inner.replace("\"\"", "\""),
-        None => field.to_string(),
+/// The text of the last field of a row as [`csv_field`] writes it: plain text
+/// without commas or quotes, or one quoted field whose quotes inside are doubled.
+/// None for anything else (extra columns, a stray quote).
+fn failure_field(field: &str) -> Option<String> {
+    match field.strip_prefix('"') {
+        None => (!field.contains([',', '"'])).then(|| field.to_string()),
+        Some(rest) => {
+            let inner = rest.strip_suffix('"')?;
+            (!inner.replace("\"\"", "").contains('"')).then(|| inner.replace("\"\"", "\""))
+        }
     }
 }
 
@@ -1452,6 +1467,20 @@ mod tests {
         // NaN is not equal to itself: compare through the text.
         let csv = t.to_csv();
         assert_eq!(SweepTable::parse(&csv, "f.csv").unwrap().to_csv(), csv);
+    }
+
+    /// Every row has the header's width: a row with extra columns is not read as
+    /// a failure message holding them, and a stray quote is an error too.
+    #[test]
+    fn a_row_of_the_wrong_width_is_refused() {
+        let head = format!("{CSV_MAGIC} runs=2\nrun,x,failure\n");
+        let read = |rows: &str| SweepTable::parse(&format!("{head}{rows}"), "f.csv");
+        let t = read("0,1.5,\n1,2.5,\"diverged, at t = 1\"\n").unwrap();
+        assert_eq!(t.rows[1].failure, "diverged, at t = 1");
+        for bad in ["0,1.5,,extra,cols\n", "0,1.5,\"unclosed\n", "0,1.5\n", "0,1.5,a\"b\n", "0,x,\n"] {
+            let e = read(bad).unwrap_err().to_string();
+            assert!(e.starts_with("f.csv, line 3:"), "{bad:?}: {e}");
+        }
     }
 
     #[test]
