@@ -105,3 +105,10 @@ fn a_merged_row_with_extra_columns_is_refused() {
     refused(&["sweep", "--merge", &out.to_string_lossy(), &shard.to_string_lossy()], "line 3: 3 columns expected");
     assert!(!out.exists(), "nothing is written");
 }
+
+#[test]
+fn nested_powers_cannot_bypass_the_exponent_limit() {
+    let model = scratch("hostile-power", "nested.toml");
+    std::fs::write(&model, "coordinates = [\"x\"]\nkinetic = \"x'^2/2\"\npotential = \"(((x^999)^999)^999)\"\n").unwrap();
+    refused(&["derive", &model.to_string_lossy()], ":3:16: in the potential: exponent 998001 is larger than 1000");
+}

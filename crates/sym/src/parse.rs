@@ -23,7 +23,7 @@
 //! because the constructors fold it. Implicit multiplication (`2x`) is an error.
 //! On error the pool may keep nodes built before the error; they are harmless.
 
-use crate::expr::{ExprId, Func, Pool};
+use crate::expr::{ExprId, Func, Node, Pool};
 use crate::number::{Number, Rational};
 
 /// A byte range `start..end` in the parsed text.
@@ -358,7 +358,33 @@ impl Parser<'_, '_, '_> {
         if self.pool.len().saturating_sub(self.start_len) > limit {
             return Err(self.error(ParseErrorKind::TooManyNodes { limit }, span));
         }
+        // Folding can make an exponent the text never wrote: (x^999)^999 is
+        // x^998001, x^999*x^999 is x^1998. The limit holds for those too, so
+        // that every expression read prints as text that reads back.
+        if let Some(value) = self.folded_exponent_over_limit(e) {
+            let limit = self.opts.limits.max_exponent;
+            return Err(self.error(ParseErrorKind::ExponentTooLarge { value, limit }, span));
+        }
         Ok(e)
+    }
+
+    /// The exponent of `e` (a power, or a power among the factors of a product)
+    /// that is a number beyond [`Limits::max_exponent`], if any.
+    fn folded_exponent_over_limit(&self, e: ExprId) -> Option<String> {
+        let limit = self.opts.limits.max_exponent;
+        if limit == u64::MAX {
+            return None;
+        }
+        let over = |id: ExprId| match self.pool.node(id) {
+            Node::Pow(_, ex) => {
+                self.pool.as_number(*ex).filter(|n| n.to_f64().abs() > limit as f64).map(|n| n.to_string())
+            }
+            _ => None,
+        };
+        match self.pool.node(e) {
+            Node::Mul(fs) => fs.iter().find_map(|&f| over(f)),
+            _ => over(e),
+        }
     }
 
     // ---- lexer ------------------------------------------------------------------
@@ -843,5 +869,15 @@ mod tests {
         check_err("x^-2000", "exponent -2000 is larger than 1000 in magnitude", "-2000");
         check_err("1e300*1e300", "the constant overflows a 64-bit float", "1e300*1e300");
         check("r^-12", "1/r^12");
+    }
+
+    /// Exponents that folding makes are held to the same limit as written ones,
+    /// so that whatever is read prints as text that reads back.
+    #[test]
+    fn folded_exponents_are_held_to_the_limit() {
+        check_err("(((x^999)^999)^999)", "exponent 998001 is larger than 1000 in magnitude", "(x^999)^999");
+        check_err("x^999*x^999", "exponent 1998 is larger than 1000 in magnitude", "x^999*x^999");
+        check_err("(x*y^2)^600", "exponent 1200 is larger than 1000 in magnitude", "(x*y^2)^600");
+        check("(x^10)^100", "x^1000");
     }
 }
