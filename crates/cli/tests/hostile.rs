@@ -109,6 +109,27 @@ fn a_merged_row_with_extra_columns_is_refused() {
 #[test]
 fn nested_powers_cannot_bypass_the_exponent_limit() {
     let model = scratch("hostile-power", "nested.toml");
-    std::fs::write(&model, "coordinates = [\"x\"]\nkinetic = \"x'^2/2\"\npotential = \"(((x^999)^999)^999)\"\n").unwrap();
+    std::fs::write(&model, "coordinates = [\"x\"]\nkinetic = \"x'^2/2\"\npotential = \"(((x^999)^999)^999)\"\n")
+        .unwrap();
     refused(&["derive", &model.to_string_lossy()], ":3:16: in the potential: exponent 998001 is larger than 1000");
+}
+
+/// Undefined constants are errors pointing at them, not terms that a product
+/// with zero or a cancellation silently removes.
+#[test]
+fn undefined_constants_do_not_vanish() {
+    let cases = [
+        ("0*log(0)", "log(0) has no finite value"),
+        ("(0/0)*x^2", "division by zero"),
+        ("0*(1/0)", "division by zero"),
+        ("0*sqrt(-1)", "sqrt(-1) has no finite value"),
+        ("x^2*(x-x)/(x-x)", "division by zero"),
+    ];
+    for (k, (potential, message)) in cases.into_iter().enumerate() {
+        let model = scratch("hostile-undefined", &format!("u{k}.toml"));
+        std::fs::write(&model, format!("coordinates = [\"x\"]\nkinetic = \"x'^2/2\"\npotential = \"{potential}\"\n"))
+            .unwrap();
+        refused(&["derive", &model.to_string_lossy()], message);
+        refused(&["simulate", &model.to_string_lossy(), "--until", "1"], message);
+    }
 }

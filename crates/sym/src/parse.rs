@@ -141,6 +141,18 @@ pub enum ParseErrorKind {
     /// A floating-point constant (or a product of them) that is not finite.
     #[error("the constant overflows a 64-bit float")]
     NonFiniteConstant,
+    /// A division by an expression that is exactly zero (`1/0`, `x/(x - x)`).
+    #[error("division by zero")]
+    DivisionByZero,
+    /// A constant that has no value (`log(0)`, `sqrt(-1)`, `asin(2)`): it is an
+    /// error where it is written, so that no simplification can drop it (`0*log(0)`).
+    #[error("{text} has no finite value (it evaluates to {value})")]
+    Undefined {
+        /// The constant as written.
+        text: String,
+        /// What it evaluates to (`NaN`, `-inf`).
+        value: String,
+    },
     /// The parse would add more than [`Limits::max_nodes`] nodes to the pool.
     #[error("expression has more than {limit} nodes")]
     TooManyNodes {
@@ -358,6 +370,13 @@ impl Parser<'_, '_, '_> {
         if self.pool.len().saturating_sub(self.start_len) > limit {
             return Err(self.error(ParseErrorKind::TooManyNodes { limit }, span));
         }
+        // A constant function value or power that has no value (log(0),
+        // sqrt(-1), 0^-1) is an error here, before a product with zero or a
+        // cancellation could make it vanish.
+        if let Some(value) = self.undefined_constant(e) {
+            let text = self.text[span.start as usize..span.end as usize].trim().to_string();
+            return Err(self.error(ParseErrorKind::Undefined { text, value: value.to_string() }, span));
+        }
         // Folding can make an exponent the text never wrote: (x^999)^999 is
         // x^998001, x^999*x^999 is x^1998. The limit holds for those too, so
         // that every expression read prints as text that reads back.
@@ -366,6 +385,27 @@ impl Parser<'_, '_, '_> {
             return Err(self.error(ParseErrorKind::ExponentTooLarge { value, limit }, span));
         }
         Ok(e)
+    }
+
+    /// The value of `e` when it is a constant power or function value that has
+    /// none: NaN from finite operands (`sqrt(-1)`, `asin(2)`), or a pole (`0^-1`,
+    /// `log(0)`). An overflow (`exp(1000)`, `10^400` as a float) is a large
+    /// value, not an undefined one, and passes.
+    fn undefined_constant(&self, e: ExprId) -> Option<f64> {
+        let (operands, pole): (Vec<ExprId>, bool) = match self.pool.node(e) {
+            Node::Pow(b, x) => (vec![*b, *x], self.pool.is_zero(*b)),
+            Node::Func(f, a) => (vec![*a], *f == Func::Log),
+            _ => return None,
+        };
+        if self.pool.sym_mask(e) != 0 {
+            return None;
+        }
+        let value = |id: ExprId| self.pool.eval(id, &|_| None).ok();
+        if !operands.iter().all(|&o| value(o).is_some_and(f64::is_finite)) {
+            return None;
+        }
+        let v = value(e)?;
+        (v.is_nan() || (v.is_infinite() && pole)).then_some(v)
     }
 
     /// The exponent of `e` (a power, or a power among the factors of a product)
@@ -512,7 +552,11 @@ impl Parser<'_, '_, '_> {
                 _ => break,
             };
             self.bump()?;
+            let f_start = self.tok.start;
             let f = self.unary()?;
+            if divide && self.pool.is_zero(f) {
+                return Err(self.error(ParseErrorKind::DivisionByZero, Span::new(f_start, self.tok.start)));
+            }
             factors.push(if divide {
                 let m1 = self.pool.minus_one();
                 self.pool.pow(f, m1)
@@ -869,6 +913,21 @@ mod tests {
         check_err("x^-2000", "exponent -2000 is larger than 1000 in magnitude", "-2000");
         check_err("1e300*1e300", "the constant overflows a 64-bit float", "1e300*1e300");
         check("r^-12", "1/r^12");
+    }
+
+    /// A constant without a value is an error where it is written, so that no
+    /// product with zero or cancellation can make it vanish; a large value
+    /// that overflows a float is not one.
+    #[test]
+    fn undefined_constants_are_errors_where_they_are_written() {
+        check_err("0*log(0)", "log(0) has no finite value (it evaluates to -inf)", "log(0)");
+        check_err("(2/0)*x^2", "division by zero", "0");
+        check_err("2*(1/0)", "division by zero", "0");
+        check_err("0*sqrt(-1)", "sqrt(-1) has no finite value (it evaluates to NaN)", "sqrt(-1)");
+        check_err("x^2/(x-x)", "division by zero", "(x-x)");
+        check_err("0*asin(2)", "asin(2) has no finite value (it evaluates to NaN)", "asin(2)");
+        check("0*exp(1000)", "0");
+        check("1/(-64)^171", "1/(-64)^171");
     }
 
     /// Exponents that folding makes are held to the same limit as written ones,
