@@ -39,7 +39,7 @@ pub struct Args {
 
 /// Runs the command.
 pub fn run(args: &Args) -> Result<(), Failure> {
-    crate::input::refuse_overwrite(&[&args.problem], &[args.plot.as_deref()]).map_err(Failure::usage)?;
+    crate::files::refuse_overwrite(&[&args.problem], &[args.plot.as_deref()]).map_err(Failure::usage)?;
     let path = &args.problem;
     let source = crate::read_source(path)?;
     let problem = Problem::parse(&source, &args.set).map_err(|e| Failure::model(path, &source, e))?;

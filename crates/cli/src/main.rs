@@ -8,9 +8,9 @@
 mod decimal;
 mod diagnostics;
 mod extremal;
+mod files;
 mod format;
 mod inertia;
-mod input;
 mod modes;
 mod orbit;
 mod output;
@@ -201,7 +201,7 @@ fn main() -> ExitCode {
 
 /// Reads a model file, or explains why it cannot.
 pub(crate) fn read_source(path: &Path) -> Result<String, Failure> {
-    input::read_text(path, mech::MAX_FILE_BYTES as u64)
+    files::read_text(path, mech::MAX_FILE_BYTES as u64)
         .map_err(|e| Failure::input(path, e.message("cannot read the file")))
 }
 
@@ -211,7 +211,7 @@ pub(crate) fn parse_model(path: &Path, source: &str, set: &[(String, f64)]) -> R
     let folder = path.parent().unwrap_or(Path::new("."));
     let files = |name: &str| -> Result<String, String> {
         let file = folder.join(name);
-        input::read_text(&file, mech::MAX_FILE_BYTES as u64).map_err(|e| format!("{}: {e}", file.display()))
+        files::read_text(&file, mech::MAX_FILE_BYTES as u64).map_err(|e| format!("{}: {e}", file.display()))
     };
     mech::Model::parse_with(source, set, &files).map_err(|e| Failure::model(path, source, e))
 }

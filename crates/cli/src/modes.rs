@@ -41,7 +41,7 @@ const MAX_PRINTED_SHAPE: usize = 8;
 
 /// Runs the command.
 pub fn run(args: &Args) -> Result<(), Failure> {
-    crate::input::refuse_overwrite(&[&args.model], &[args.animate.as_deref()]).map_err(Failure::usage)?;
+    crate::files::refuse_overwrite(&[&args.model], &[args.animate.as_deref()]).map_err(Failure::usage)?;
     let path = &args.model;
     let (source, d) = crate::derive_file(path, &args.set)?;
     d.reject_constraints("`lagrange modes`").map_err(|e| Failure::model(path, &source, e))?;

@@ -33,7 +33,7 @@ pub struct Args {
 
 /// Runs the command.
 pub fn run(args: &Args) -> Result<(), Failure> {
-    crate::input::refuse_overwrite(&[&args.model], &[args.plot.as_deref()]).map_err(Failure::usage)?;
+    crate::files::refuse_overwrite(&[&args.model], &[args.plot.as_deref()]).map_err(Failure::usage)?;
     let path = &args.model;
     let (source, d) = crate::derive_file(path, &args.set)?;
     d.reject_constraints("`lagrange orbit`").map_err(|e| Failure::model(path, &source, e))?;

@@ -11,7 +11,6 @@ use crate::plot::{self, PlotData, Series};
 use mech::{Derivation, RunConfig, RunError, RunReport, StopCondition};
 use num::{Method, Output};
 use serde_json::json;
-use std::fs::File;
 use std::io::{BufWriter, IsTerminal, Write};
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
@@ -49,7 +48,7 @@ pub fn list_methods() -> String {
 }
 
 pub fn run(opts: &Options) -> Result<(), Failure> {
-    crate::input::refuse_overwrite(&[&opts.model], &[opts.out.as_deref(), opts.plot.as_deref()])
+    crate::files::refuse_overwrite(&[&opts.model], &[opts.out.as_deref(), opts.plot.as_deref()])
         .map_err(Failure::usage)?;
     // Setup is timed from here (reading the model file) to the first row, which
     // the integration hands over before its first step: parse, derive, compile
@@ -109,7 +108,8 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     let n = names.len();
     let mut csv = match &opts.out {
         Some(p) => Some(BufWriter::new(
-            File::create(p).map_err(|e| Failure::input(p, format!("cannot create the CSV file: {e}")))?,
+            crate::files::create_locked(p)
+                .map_err(|e| Failure::input(p, format!("cannot create the CSV file: {e}")))?,
         )),
         None => None,
     };

@@ -69,7 +69,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         return merge(args, out);
     }
     let inputs: Vec<&Path> = args.files.iter().map(PathBuf::as_path).collect();
-    crate::input::refuse_overwrite(&inputs, &[args.out.as_deref(), args.heatmap.as_deref()]).map_err(Failure::usage)?;
+    crate::files::refuse_overwrite(&inputs, &[args.out.as_deref(), args.heatmap.as_deref()]).map_err(Failure::usage)?;
     let [path] = args.files.as_slice() else {
         return Err(Failure::usage(format!(
             "sweep takes one model file, not {} files (to join shards: sweep --merge OUT.csv SHARD.csv...)",
@@ -166,10 +166,10 @@ fn usage(e: SweepError) -> Failure {
 /// `sweep --merge OUT.csv SHARD.csv...`.
 fn merge(args: &Args, out: &Path) -> Result<(), Failure> {
     let shards: Vec<&Path> = args.files.iter().map(PathBuf::as_path).collect();
-    crate::input::refuse_overwrite(&shards, &[Some(out), args.heatmap.as_deref()]).map_err(Failure::usage)?;
+    crate::files::refuse_overwrite(&shards, &[Some(out), args.heatmap.as_deref()]).map_err(Failure::usage)?;
     let mut shards = Vec::with_capacity(args.files.len());
     for path in &args.files {
-        let text = crate::input::read_text(path, crate::input::MAX_CSV_BYTES)
+        let text = crate::files::read_text(path, crate::files::MAX_CSV_BYTES)
             .map_err(|e| Failure::input(path, e.to_string()))?;
         let name = path.display().to_string();
         let table = SweepTable::parse(&text, &name).map_err(|e| Failure::input(path, e.to_string()))?;
@@ -191,7 +191,12 @@ fn merge(args: &Args, out: &Path) -> Result<(), Failure> {
 fn write_csv(table: &SweepTable, out: Option<&Path>) -> Result<(), Failure> {
     let text = table.to_csv();
     match out {
-        Some(p) => std::fs::write(p, text).map_err(|e| Failure::run(format!("cannot write {}: {e}", p.display()))),
+        Some(p) => {
+            let mut file =
+                crate::files::create_locked(p).map_err(|e| Failure::input(p, format!("cannot write: {e}")))?;
+            std::io::Write::write_all(&mut file, text.as_bytes())
+                .map_err(|e| Failure::run(format!("cannot write {}: {e}", p.display())))
+        }
         None => crate::write_stdout(&text),
     }
 }

@@ -133,3 +133,24 @@ fn undefined_constants_do_not_vanish() {
         refused(&["simulate", &model.to_string_lossy(), "--until", "1"], message);
     }
 }
+
+/// An output another run is writing is refused, and its rows are left alone:
+/// two runs can no longer interleave their rows in one CSV.
+#[test]
+fn an_output_in_use_by_another_run_is_refused() {
+    let out = scratch("hostile-lock", "shared.csv");
+    std::fs::write(&out, "t,ph,ph'\n0,1,0\n").unwrap();
+    let held = std::fs::File::open(&out).unwrap();
+    held.lock().unwrap();
+    let o = out.to_string_lossy();
+    refused(&["simulate", "examples/pendulum.toml", "--until", "1", "--out", &o], "in use by another run");
+    refused(
+        &["sweep", "examples/pendulum.toml", "--until", "1", "--grid", "ph=0.1:0.2:2", "--out", &o],
+        "in use by another run",
+    );
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "t,ph,ph'\n0,1,0\n");
+    drop(held);
+    let r = run(&["simulate", "examples/pendulum.toml", "--until", "1", "--out", &o]);
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    assert!(std::fs::read_to_string(&out).unwrap().lines().count() > 1000);
+}

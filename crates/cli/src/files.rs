@@ -1,8 +1,10 @@
-//! Reading the files a command is given, bounded: only regular files (a FIFO or
-//! a device such as /dev/zero would block or never end), and never more than a
-//! limit, checked while reading rather than after.
+//! The files a command reads and writes. Reads are bounded: only regular files
+//! (a FIFO or a device such as /dev/zero would block or never end), and never
+//! more than a limit, checked while reading rather than after. Streamed outputs
+//! are locked while written, so two runs cannot interleave their rows in one
+//! file, and no output may replace an input of the same command.
 
-use std::fs::File;
+use std::fs::{File, OpenOptions, TryLockError};
 use std::io::Read;
 use std::path::Path;
 
@@ -71,6 +73,23 @@ pub fn read_text(path: &Path, limit: u64) -> Result<String, ReadError> {
     String::from_utf8(bytes).map_err(ReadError::NotText)
 }
 
+/// Creates (or empties) the output file at `path` for this run alone: it is
+/// opened without truncating, locked exclusively, and only then emptied, so a
+/// second run that names the same file is refused and leaves the first one's
+/// rows alone. The lock lasts as long as the file is open.
+pub fn create_locked(path: &Path) -> Result<File, String> {
+    let file = OpenOptions::new().write(true).create(true).truncate(false).open(path).map_err(|e| e.to_string())?;
+    match file.try_lock() {
+        Ok(()) => {}
+        Err(TryLockError::WouldBlock) => {
+            return Err("in use by another run (it is being written); choose another file".into())
+        }
+        Err(TryLockError::Error(e)) => return Err(format!("cannot lock it: {e}")),
+    }
+    file.set_len(0).map_err(|e| e.to_string())?;
+    Ok(file)
+}
+
 /// An error when an output path names one of the inputs (the model file, a shard
 /// to merge): writing it would destroy what the run reads.
 pub fn refuse_overwrite(inputs: &[&Path], outputs: &[Option<&Path>]) -> Result<(), String> {
@@ -97,6 +116,21 @@ mod tests {
     #[test]
     fn a_device_is_refused_before_anything_is_read() {
         assert!(matches!(read_text(Path::new("/dev/zero"), 1 << 20), Err(ReadError::NotRegular)));
+    }
+
+    #[test]
+    fn a_locked_output_is_refused_and_left_alone() {
+        let path = std::env::temp_dir().join(format!("lagrange-lock-{}.csv", std::process::id()));
+        std::fs::write(&path, "first run's rows\n").unwrap();
+        let held = File::open(&path).unwrap();
+        held.lock().unwrap();
+        assert!(create_locked(&path).unwrap_err().contains("in use by another run"));
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "first run's rows\n", "not truncated");
+        drop(held);
+        let mut f = create_locked(&path).unwrap();
+        std::io::Write::write_all(&mut f, b"x").unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "x");
+        let _ = std::fs::remove_file(&path);
     }
 
     #[test]
