@@ -230,6 +230,19 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
 fn input_failure(path: &Path, source: &str, e: RunError) -> Failure {
     match e {
         RunError::Until { until } => Failure::usage(format!("--until must be a positive time, not {until}")),
+        RunError::TooManySamples { samples, max } => {
+            Failure::usage(format!("--samples {samples} is more rows than a run writes ({max} at most)"))
+        }
+        RunError::TooManySteps { dt, steps, max } => Failure::usage(format!(
+            "--dt {dt:e} would take {steps:.3e} steps to reach the end time; a run takes at most {max}"
+        )),
+        RunError::StepOverSamples { dt, spacing } => Failure::usage(format!(
+            "--dt {dt:e} is longer than the spacing of the samples, {spacing:e} (--until over --samples − 1): give a shorter --dt, more --samples, or --every-step"
+        )),
+        RunError::StepNotApplicable { method } => Failure::usage(format!(
+            "--dt applies only to fixed-step methods, and {} chooses its own step: set its tolerance with --rtol, or choose a fixed-step method (verlet, yoshida4, kahanli6, kahanli8, gauss2, gauss4, gauss6)",
+            method.name()
+        )),
         RunError::Input(e) => Failure::model(path, source, e),
         RunError::Failed { message, .. } => Failure::run(message),
     }

@@ -63,6 +63,10 @@ pub struct Args {
     pub merge: Option<PathBuf>,
 }
 
+/// Most worker threads a sweep starts: far above any machine's cores, far
+/// below what takes the operating system seconds to refuse.
+const MAX_THREADS: usize = 1024;
+
 /// Runs `sweep` (or `sweep --merge`).
 pub fn run(args: &Args) -> Result<(), Failure> {
     if let Some(out) = &args.merge {
@@ -87,6 +91,9 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     }
     if args.threads == Some(0) {
         return Err(Failure::usage("--threads must be at least 1"));
+    }
+    if let Some(threads) = args.threads.filter(|&t| t > MAX_THREADS) {
+        return Err(Failure::usage(format!("--threads {threads} is more than {MAX_THREADS}, the most a sweep starts")));
     }
     let shard = match &args.shard {
         Some(text) => Shard::parse(text).map_err(usage)?,

@@ -154,3 +154,19 @@ fn an_output_in_use_by_another_run_is_refused() {
     assert_eq!(r.code, Some(0), "{}", r.describe());
     assert!(std::fs::read_to_string(&out).unwrap().lines().count() > 1000);
 }
+
+/// Runs that cannot be done as asked are refused before they start, not after
+/// minutes of work or gigabytes of output.
+#[test]
+fn impossible_runs_are_refused_up_front() {
+    let pendulum = ["simulate", "examples/pendulum.toml", "--until", "10"];
+    let with = |extra: &[&'static str]| -> Vec<&'static str> { pendulum.iter().chain(extra).copied().collect() };
+    refused(&with(&["--dt", "1e-300"]), "--dt 1e-300 would take 1.000e301 steps");
+    refused(&with(&["--dt", "1e6"]), "--dt 1e6 is longer than the spacing of the samples, 1e-2");
+    refused(&with(&["--method", "dop853", "--dt", "0.01"]), "--dt applies only to fixed-step methods, and dop853");
+    refused(&with(&["--samples", "1000000000000"]), "--samples 1000000000000 is more rows than a run writes");
+    refused(
+        &["sweep", "examples/pendulum.toml", "--until", "1", "--grid", "ph=0:1:2", "--threads", "100000"],
+        "--threads 100000 is more than 1024",
+    );
+}

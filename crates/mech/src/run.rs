@@ -131,14 +131,38 @@ impl Default for RunConfig {
     }
 }
 
+/// Most output rows a run writes: as many as the steps a solver may take
+/// (`num::Config::max_steps`); beyond that the file, not the motion, is the work.
+pub const MAX_SAMPLES: usize = 10_000_000;
+
 impl RunConfig {
-    /// Checks what a run cannot start without: a positive, finite end time.
+    /// Checks what a run cannot start without, before anything is computed: a
+    /// positive, finite end time; a fixed step, if given, that reaches it within
+    /// the solvers' step budget and is no longer than the spacing of the
+    /// samples; and no more samples than [`MAX_SAMPLES`].
     pub fn check(&self) -> Result<(), RunError> {
-        if is_positive_time(self.until) {
-            Ok(())
-        } else {
-            Err(RunError::Until { until: self.until })
+        if !is_positive_time(self.until) {
+            return Err(RunError::Until { until: self.until });
         }
+        if let Output::Samples(samples) = self.output {
+            if samples > MAX_SAMPLES {
+                return Err(RunError::TooManySamples { samples, max: MAX_SAMPLES });
+            }
+        }
+        if let Some(dt) = self.dt {
+            let max = num::Config::default().max_steps;
+            let steps = self.until / dt;
+            if !(dt.is_finite() && dt > 0.0) || steps > max as f64 {
+                return Err(RunError::TooManySteps { dt, steps, max });
+            }
+            if let Output::Samples(k) = self.output {
+                let spacing = self.until / (k.max(2) - 1) as f64;
+                if dt > spacing * (1.0 + 1e-12) {
+                    return Err(RunError::StepOverSamples { dt, spacing });
+                }
+            }
+        }
+        Ok(())
     }
 }
 
@@ -294,6 +318,39 @@ pub enum RunError {
     Until {
         /// The end time asked for.
         until: f64,
+    },
+    /// More output samples than [`MAX_SAMPLES`].
+    #[error("{samples} samples are more than a run writes ({max} at most)")]
+    TooManySamples {
+        /// The samples asked for.
+        samples: usize,
+        /// [`MAX_SAMPLES`].
+        max: usize,
+    },
+    /// A fixed step that would take more steps than a solver may to reach the end.
+    #[error("the step {dt} would take {steps:.3e} steps; a run takes at most {max}")]
+    TooManySteps {
+        /// The step.
+        dt: f64,
+        /// The steps it would take.
+        steps: f64,
+        /// The solvers' budget.
+        max: usize,
+    },
+    /// A fixed step longer than the spacing of the samples, which would be
+    /// shortened to that spacing rather than taken as given.
+    #[error("the step {dt} is longer than the spacing of the samples ({spacing})")]
+    StepOverSamples {
+        /// The step.
+        dt: f64,
+        /// The spacing of the samples.
+        spacing: f64,
+    },
+    /// A fixed step given for an adaptive method, which chooses its own.
+    #[error("a fixed step applies only to fixed-step methods, and {} chooses its own", .method.name())]
+    StepNotApplicable {
+        /// The method.
+        method: Method,
     },
     /// Bad input: an impossible method, a missing initial value (exit 2).
     #[error("{0}")]

@@ -83,6 +83,22 @@ fn a_run_that_blows_up_fails_with_its_reason_as_data() {
 }
 
 #[test]
+fn settings_that_cannot_be_run_are_refused_before_the_run() {
+    let d = derive(PENDULUM);
+    let refuse = |config: RunConfig| mech::simulate(&d, &config, |_| std::ops::ControlFlow::Continue(())).unwrap_err();
+    let base = RunConfig { until: 10.0, ..RunConfig::default() };
+    assert!(matches!(refuse(RunConfig { dt: Some(1e-300), ..base.clone() }), RunError::TooManySteps { .. }));
+    assert!(matches!(refuse(RunConfig { dt: Some(1.0), ..base.clone() }), RunError::StepOverSamples { .. }));
+    let adaptive = RunConfig { dt: Some(1e-3), method: Some(mech::Method::Dop853), ..base.clone() };
+    assert!(matches!(refuse(adaptive), RunError::StepNotApplicable { method: mech::Method::Dop853 }));
+    let many = RunConfig { output: mech::Output::Samples(mech::MAX_SAMPLES + 1), ..base.clone() };
+    assert!(matches!(refuse(many), RunError::TooManySamples { .. }));
+    // A fixed step that fits is taken as given.
+    let (report, _) = run(&d, &RunConfig { dt: Some(1e-3), method: Some(mech::Method::Verlet), ..base });
+    assert_eq!(report.dt, Some(1e-3));
+}
+
+#[test]
 fn an_end_time_that_is_not_positive_is_a_typed_error() {
     let d = derive(PENDULUM);
     for until in [0.0, -1.0, f64::NAN, f64::INFINITY] {

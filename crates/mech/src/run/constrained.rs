@@ -416,6 +416,9 @@ impl Constrained {
                 ));
             }
         };
+        if config.dt.is_some() {
+            return Err(RunError::StepNotApplicable { method });
+        }
         let set = &d.constraints;
         let (m, n) = (set.list.len(), d.q.len());
         if set.independent < m {

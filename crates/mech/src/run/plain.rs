@@ -30,6 +30,9 @@ impl Plain {
         qd0: &[f64],
     ) -> Result<(Plain, Start), RunError> {
         let (method, form) = choose_method(d, dynamics, config.method).map_err(RunError::Input)?;
+        if config.dt.is_some() && method.is_adaptive() {
+            return Err(RunError::StepNotApplicable { method });
+        }
         let n = dynamics.n_coords();
         let mut system = dynamics.system(form);
         let y0 = system.initial_state(0.0, q0, qd0).map_err(RunError::Input)?;
