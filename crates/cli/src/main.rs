@@ -63,13 +63,13 @@ enum Command {
         #[arg(long)]
         method: Option<String>,
         /// Relative tolerance (default 1e-9); fixed-step methods pick their step from it.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         rtol: Option<f64>,
         /// Absolute tolerance (default 1e-12, or rtol/1000 when --rtol is given).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         atol: Option<f64>,
         /// Fixed step for fixed-step methods.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         dt: Option<f64>,
         /// Write the trajectory to this CSV file.
         #[arg(long)]

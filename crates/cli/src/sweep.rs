@@ -35,10 +35,10 @@ pub struct Args {
     #[arg(long)]
     pub method: Option<String>,
     /// Relative tolerance (default 1e-10).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub rtol: Option<f64>,
     /// Absolute tolerance (default rtol/100).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub atol: Option<f64>,
     /// Write the rows to this CSV file (default: stdout).
     #[arg(long)]

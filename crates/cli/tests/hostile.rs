@@ -170,3 +170,26 @@ fn impossible_runs_are_refused_up_front() {
         "--threads 100000 is more than 1024",
     );
 }
+
+/// Messages say what was expected in the model's terms.
+#[test]
+fn plain_messages_for_values_of_the_wrong_kind() {
+    let text = std::fs::read_to_string(repo_root().join("examples/pendulum.toml")).unwrap();
+    let model = scratch("hostile-kinds", "mass.toml");
+    std::fs::write(&model, text.replace("mass = \"m\"", "mass = true")).unwrap();
+    refused(
+        &["derive", &model.to_string_lossy()],
+        ":15:8: invalid type: boolean `true`, expected a number or an expression string",
+    );
+    // gravity, like mass, may be a number.
+    let model = scratch("hostile-kinds", "gravity.toml");
+    std::fs::write(&model, text.replace("gravity = \"g\"", "gravity = 9.81")).unwrap();
+    let r = run(&["derive", &model.to_string_lossy()]);
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    assert!(r.stdout.contains("ph: l^2*m*ph'' + 9.81*l*m*sin(ph) = 0"), "{}", r.stdout);
+    // A negative tolerance gets our message, not clap's "unexpected argument".
+    refused(
+        &["simulate", "examples/pendulum.toml", "--until", "1", "--rtol", "-1"],
+        "--rtol must be a positive number, not -1",
+    );
+}

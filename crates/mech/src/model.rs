@@ -104,7 +104,7 @@ pub struct Model {
 struct RawModel {
     name: Option<String>,
     coordinates: Option<Spanned<Vec<Spanned<String>>>>,
-    gravity: Option<Spanned<String>>,
+    gravity: Option<Spanned<NumOrText>>,
     lagrangian: Option<Spanned<String>>,
     kinetic: Option<Spanned<String>>,
     potential: Option<Spanned<String>>,
@@ -131,11 +131,38 @@ struct RawParticle {
     potential: Option<Spanned<String>>,
 }
 
-#[derive(Deserialize, Clone)]
-#[serde(untagged)]
+/// A value that is a number or an expression string (`mass = 1`, `mass = "m"`).
+#[derive(Clone)]
 pub(crate) enum NumOrText {
     Num(f64),
     Text(String),
+}
+
+impl<'de> Deserialize<'de> for NumOrText {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        // A visitor rather than `untagged`, whose error names the Rust type
+        // ("did not match any variant of untagged enum NumOrText").
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = NumOrText;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("a number or an expression string")
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<NumOrText, E> {
+                Ok(NumOrText::Num(v as f64))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<NumOrText, E> {
+                Ok(NumOrText::Num(v as f64))
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<NumOrText, E> {
+                Ok(NumOrText::Num(v))
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<NumOrText, E> {
+                Ok(NumOrText::Text(v.to_string()))
+            }
+        }
+        deserializer.deserialize_any(Visitor)
+    }
 }
 
 /// What an expression may refer to, by context.
@@ -351,7 +378,7 @@ impl Model {
         }
 
         // What the system is made of.
-        let gravity = raw.gravity.as_ref().map(|g| r.expr(g, Scope::Parameters, "gravity")).transpose()?;
+        let gravity = raw.gravity.as_ref().map(|g| r.num_or_expr(g, Scope::Parameters, "gravity")).transpose()?;
         let mut particles = Vec::new();
         for p in &raw.particles {
             let mass = r.num_or_expr(&p.get_ref().mass, Scope::Parameters, "the particle's mass")?.expr;
