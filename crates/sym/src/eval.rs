@@ -339,6 +339,28 @@ impl Pool {
         tape.eval(&values, &mut out);
         Ok(out[0])
     }
+
+    /// The value of `e` when it is a constant power or function value that has
+    /// none: NaN from finite operands (`sqrt(-1)`, `asin(2)`), or a pole (`0^-1`,
+    /// `log(0)`). An overflow (`exp(1000)`, `10^400` as a float) is a large
+    /// value, not an undefined one: None. The parser refuses text with an
+    /// undefined constant, so that no simplification can drop it (`0*log(0)`).
+    pub fn undefined_value(&self, e: ExprId) -> Option<f64> {
+        let (operands, pole): (&[ExprId], bool) = match self.node(e) {
+            Node::Pow(b, x) => (&[*b, *x], self.is_zero(*b)),
+            Node::Func(f, a) => (std::slice::from_ref(a), *f == Func::Log),
+            _ => return None,
+        };
+        if self.sym_mask(e) != 0 {
+            return None;
+        }
+        let value = |id: ExprId| self.eval(id, &|_| None).ok();
+        if !operands.iter().all(|&o| value(o).is_some_and(f64::is_finite)) {
+            return None;
+        }
+        let v = value(e)?;
+        (v.is_nan() || (v.is_infinite() && pole)).then_some(v)
+    }
 }
 
 #[cfg(test)]

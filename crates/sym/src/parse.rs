@@ -373,7 +373,7 @@ impl Parser<'_, '_, '_> {
         // A constant function value or power that has no value (log(0),
         // sqrt(-1), 0^-1) is an error here, before a product with zero or a
         // cancellation could make it vanish.
-        if let Some(value) = self.undefined_constant(e) {
+        if let Some(value) = self.pool.undefined_value(e) {
             let text = self.text[span.start as usize..span.end as usize].trim().to_string();
             return Err(self.error(ParseErrorKind::Undefined { text, value: value.to_string() }, span));
         }
@@ -385,27 +385,6 @@ impl Parser<'_, '_, '_> {
             return Err(self.error(ParseErrorKind::ExponentTooLarge { value, limit }, span));
         }
         Ok(e)
-    }
-
-    /// The value of `e` when it is a constant power or function value that has
-    /// none: NaN from finite operands (`sqrt(-1)`, `asin(2)`), or a pole (`0^-1`,
-    /// `log(0)`). An overflow (`exp(1000)`, `10^400` as a float) is a large
-    /// value, not an undefined one, and passes.
-    fn undefined_constant(&self, e: ExprId) -> Option<f64> {
-        let (operands, pole): (Vec<ExprId>, bool) = match self.pool.node(e) {
-            Node::Pow(b, x) => (vec![*b, *x], self.pool.is_zero(*b)),
-            Node::Func(f, a) => (vec![*a], *f == Func::Log),
-            _ => return None,
-        };
-        if self.pool.sym_mask(e) != 0 {
-            return None;
-        }
-        let value = |id: ExprId| self.pool.eval(id, &|_| None).ok();
-        if !operands.iter().all(|&o| value(o).is_some_and(f64::is_finite)) {
-            return None;
-        }
-        let v = value(e)?;
-        (v.is_nan() || (v.is_infinite() && pole)).then_some(v)
     }
 
     /// The exponent of `e` (a power, or a power among the factors of a product)
