@@ -1319,9 +1319,7 @@ mod tests {
     const DOUBLE_PENDULUM: &str = include_str!("../../../examples/double_pendulum.toml");
     const OSCILLATOR: &str = include_str!("../../../examples/oscillator.toml");
 
-    fn derivation(text: &str) -> Derivation {
-        Derivation::new(Model::parse(text, &[]).unwrap()).unwrap()
-    }
+    use crate::test_models::derive as derivation;
 
     #[track_caller]
     fn check_grid(spec: &str, expect: &str) {

@@ -637,6 +637,7 @@ fn cartesian_forces_square(pool: &mut Pool, d: &Derivation, generalized: &[ExprI
 
 #[cfg(test)]
 mod tests {
+    use crate::test_models::derive;
     use crate::{Derivation, Model};
 
     #[test]
@@ -648,10 +649,6 @@ mod tests {
         let shown: Vec<String> = f[0].iter().map(|&e| d.pool().display(e).to_string()).collect();
         // Perpendicular to the wire, of size λ/r (the torque λ over the arm r).
         assert_eq!(shown, ["-lambda_c1*sin(ph)/r", "lambda_c1*cos(ph)/r"]);
-    }
-
-    fn derive(text: &str) -> Derivation {
-        Derivation::new(Model::parse(text, &[]).unwrap()).unwrap()
     }
 
     #[track_caller]

@@ -587,11 +587,10 @@ impl Stepping for Constrained {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Model;
 
     #[test]
     fn the_saddle_point_solve_gives_the_tension() {
-        let d = Derivation::new(Model::parse(crate::test_models::CONSTRAINED_PENDULUM, &[]).unwrap()).unwrap();
+        let d = crate::test_models::derive(crate::test_models::CONSTRAINED_PENDULUM);
         let dynamics = Dynamics::new(&d);
         let mut sys = ConstrainedSystem::new(&d, dynamics);
         let (m, l, g) = (2.0, 1.5, 9.81);

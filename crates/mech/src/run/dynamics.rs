@@ -600,11 +600,9 @@ impl SeparableSystem for System {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Model;
 
     fn dynamics(text: &str) -> Dynamics {
-        let d = Derivation::new(Model::parse(text, &[]).unwrap()).unwrap();
-        Dynamics::new(&d)
+        Dynamics::new(&crate::test_models::derive(text))
     }
 
     #[test]
