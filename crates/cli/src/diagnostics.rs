@@ -89,10 +89,11 @@ impl Failure {
             Failure::Input { file, message, located: Some((source, span)), help } => {
                 let (line, col) = line_col(source, span.start);
                 let mut out = format!("error: {file}:{line}:{col}: {message}\n");
+                // The report carries no message: the line above says it once,
+                // and the drawing below only shows the place.
                 let mut report = Report::build(ReportKind::Error, (file.as_str(), span.clone()))
                     // Spans are byte offsets (TOML and our parser); ariadne counts characters by default.
                     .with_config(ariadne::Config::default().with_color(false).with_index_type(ariadne::IndexType::Byte))
-                    .with_message(message)
                     .with_label(Label::new((file.as_str(), span.clone())).with_message(short(message)));
                 if let Some(h) = help {
                     report = report.with_help(h);
@@ -109,7 +110,10 @@ impl Failure {
                 }
                 let mut buf = Vec::new();
                 if report.finish().write((file.as_str(), Source::from(source.as_str())), &mut buf).is_ok() {
-                    out.push_str(&String::from_utf8_lossy(&buf));
+                    // Drop the drawing's own header line ("Error: "), which
+                    // would repeat the first line.
+                    let drawing = String::from_utf8_lossy(&buf);
+                    out.push_str(drawing.split_once('\n').map_or("", |(_, rest)| rest));
                 } else if let Some(h) = help {
                     out.push_str(&format!("  help: {h}\n"));
                 }

@@ -46,8 +46,8 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let config = ExtremalConfig { check_minimum: args.check_minimum, points: args.points as usize };
     let report = mech::extremal(&problem, &config).map_err(|e| failure(path, &source, e))?;
     if let Some(svg) = &args.plot {
-        let text = figure(&report).map_err(|e| Failure::input(svg, format!("cannot draw the plot: {e}")))?;
-        std::fs::write(svg, text).map_err(|e| Failure::input(svg, format!("cannot write the plot: {e}")))?;
+        let text = figure(&report).map_err(|e| Failure::run(format!("cannot draw the plot: {e}")))?;
+        std::fs::write(svg, text).map_err(|e| Failure::run(format!("cannot write the plot {}: {e}", svg.display())))?;
     }
     let out = match args.format {
         ReportFormat::Json => {

@@ -90,9 +90,21 @@ pub fn create_locked(path: &Path) -> Result<File, String> {
     Ok(file)
 }
 
-/// An error when an output path names one of the inputs (the model file, a shard
-/// to merge): writing it would destroy what the run reads.
+/// An error, before anything is computed, when an output path names one of the
+/// inputs (the model file, a shard to merge), whose writing would destroy what
+/// the run reads, or a place no file can be created (a folder, or inside a
+/// folder that does not exist). Such paths are bad input (exit 2); a write
+/// that fails later, after the run (a full disk), is a failed run (exit 1).
 pub fn refuse_overwrite(inputs: &[&Path], outputs: &[Option<&Path>]) -> Result<(), String> {
+    for out in outputs.iter().flatten() {
+        if out.is_dir() {
+            return Err(format!("{} is a folder; an output must name a file", out.display()));
+        }
+        let parent = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        if !parent.is_dir() {
+            return Err(format!("cannot write {}: the folder {} does not exist", out.display(), parent.display()));
+        }
+    }
     // Only an output that exists can be an input; both sides as the file system
     // resolves them (links, `./`, `..`).
     let inputs: Vec<_> = inputs.iter().filter_map(|p| p.canonicalize().ok()).collect();
@@ -140,6 +152,9 @@ mod tests {
         let other = path.with_extension("csv");
         assert!(refuse_overwrite(&[&path], &[Some(&path)]).is_err());
         assert!(refuse_overwrite(&[&path], &[None, Some(&other)]).is_ok());
+        assert!(refuse_overwrite(&[], &[Some(&std::env::temp_dir())]).unwrap_err().contains("is a folder"));
+        let nowhere = std::env::temp_dir().join("lagrange-no-such-folder").join("out.csv");
+        assert!(refuse_overwrite(&[], &[Some(&nowhere)]).unwrap_err().contains("does not exist"));
         let _ = std::fs::remove_file(&path);
     }
 

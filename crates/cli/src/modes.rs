@@ -70,7 +70,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     }
     if let Some(svg) = &args.animate {
         std::fs::write(svg, animation(&d, &modes))
-            .map_err(|e| Failure::input(svg, format!("cannot write the animation: {e}")))?;
+            .map_err(|e| Failure::run(format!("cannot write the animation {}: {e}", svg.display())))?;
     }
     let text = match args.format {
         ReportFormat::Json => {

@@ -39,8 +39,8 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     d.reject_constraints("`lagrange orbit`").map_err(|e| Failure::model(path, &source, e))?;
     let mut orbit = Orbit::new(&d).map_err(|e| Failure::analysis(path, &source, e))?;
     if let Some(svg) = &args.plot {
-        let text = figure(&d, &mut orbit).map_err(|e| Failure::input(svg, format!("cannot draw the plot: {e}")))?;
-        std::fs::write(svg, text).map_err(|e| Failure::input(svg, format!("cannot write the plot: {e}")))?;
+        let text = figure(&d, &mut orbit).map_err(|e| Failure::run(format!("cannot draw the plot: {e}")))?;
+        std::fs::write(svg, text).map_err(|e| Failure::run(format!("cannot write the plot {}: {e}", svg.display())))?;
     }
     let out = match args.format {
         ReportFormat::Json => {

@@ -14,7 +14,7 @@ use quadratic::{Quadratic, Sparsity, Vars as QVars};
 use sym::{ExprId, NameId, Pool, Symbol};
 
 mod body;
-mod constraint;
+pub(crate) mod constraint;
 mod layout;
 mod quadratic;
 mod verdict;

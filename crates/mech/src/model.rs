@@ -273,7 +273,7 @@ impl Reader<'_> {
                     }
                 }
                 let mut e = ModelError::at(at, message);
-                e.help = help;
+                e.help = help.or_else(|| err.hint(text));
                 Err(e)
             }
         }

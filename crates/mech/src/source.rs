@@ -88,9 +88,32 @@ pub(crate) fn read_toml<T: serde::de::DeserializeOwned>(source: &str, what: &str
     toml::from_str(source).map_err(|e| {
         let message = e.message().trim().to_string();
         match e.span() {
-            Some(span) => ModelError::at(span, message),
+            Some(span) => {
+                let help = primed_key_hint(source, span.start);
+                let error = ModelError::at(span, message);
+                match help {
+                    Some(h) => error.with_help(h),
+                    None => error,
+                }
+            }
             None => ModelError::whole(message),
         }
+    })
+}
+
+/// A hint for a bare key with a prime (`x' = 0`), which TOML does not allow
+/// unquoted: the key as it must be written.
+fn primed_key_hint(source: &str, at: usize) -> Option<String> {
+    if !source.get(at..)?.starts_with('\'') {
+        return None;
+    }
+    let line_start = source[..at].rfind('\n').map_or(0, |i| i + 1);
+    let name = source[line_start..at].trim_start();
+    let primes = source[at..].chars().take_while(|&c| c == '\'').count();
+    let is_name = !name.is_empty() && name.chars().all(|c| c.is_alphanumeric() || c == '_');
+    is_name.then(|| {
+        let key = format!("{name}{}", "'".repeat(primes));
+        format!("a key with a prime must be quoted: \"{key}\" = ...")
     })
 }
 

@@ -58,6 +58,35 @@ pub struct ParseError {
     pub span: Span,
 }
 
+impl ParseError {
+    /// A hint for a common slip, given the parsed `text`: a product written
+    /// without its `*` (`2x`, `2(x+1)`, `x y`), which the language never implies.
+    pub fn hint(&self, text: &str) -> Option<String> {
+        let ParseErrorKind::Expected { what, .. } = &self.kind else { return None };
+        if !what.starts_with("an operator") {
+            return None;
+        }
+        let range = self.span.range();
+        let before = text.get(..range.start)?.trim_end();
+        let found = text.get(range)?;
+        let starts_operand = found.starts_with(|c: char| c.is_alphanumeric() || c == '_' || c == '(');
+        let ends_operand = before.ends_with(|c: char| c.is_alphanumeric() || c == '_' || c == ')' || c == '\'');
+        if !(starts_operand && ends_operand) {
+            return None;
+        }
+        let word = |chars: &mut dyn Iterator<Item = char>| -> String {
+            chars.take_while(|c| c.is_alphanumeric() || matches!(c, '_' | '.' | '\'')).collect()
+        };
+        let left = if before.ends_with(')') {
+            "(...)".to_string()
+        } else {
+            word(&mut before.chars().rev()).chars().rev().collect()
+        };
+        let right = if found.starts_with('(') { "(...)".to_string() } else { word(&mut found.chars()) };
+        Some(format!("a product needs its '*': write {left}*{right}"))
+    }
+}
+
 /// What went wrong in a parse.
 #[derive(Clone, PartialEq, Eq, Debug, thiserror::Error)]
 pub enum ParseErrorKind {
@@ -785,6 +814,12 @@ mod tests {
         check_err("x +", "expected an expression after '+', found end of input", "");
         check_err("x + * y", "expected an expression after '+', found '*'", "*");
         check_err("2x", "expected an operator, found 'x'", "x");
+        let hint = |text: &str| Pool::default().parse(text).err().and_then(|e| e.hint(text));
+        assert_eq!(hint("2x").as_deref(), Some("a product needs its '*': write 2*x"));
+        assert_eq!(hint("m*l x'").as_deref(), Some("a product needs its '*': write l*x'"));
+        assert_eq!(hint("3(x+1)").as_deref(), Some("a product needs its '*': write 3*(...)"));
+        assert_eq!(hint("(x+1)y").as_deref(), Some("a product needs its '*': write (...)*y"));
+        assert_eq!(hint("x +* y"), None);
         check_err("2 x", "expected an operator, found 'x'", "x");
         check_err("(x", "unclosed parenthesis", "(");
         check_err("sin(x", "unclosed parenthesis", "(");

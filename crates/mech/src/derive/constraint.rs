@@ -485,7 +485,7 @@ fn null_space(omega: &[f64], m: usize, dim: usize) -> Option<Vec<Vec<f64>>> {
 }
 
 /// The rank of the matrix of expressions at generic (random) points.
-fn generic_rank(pool: &Pool, rows: &[Vec<ExprId>]) -> usize {
+pub(crate) fn generic_rank(pool: &Pool, rows: &[Vec<ExprId>]) -> usize {
     let m = rows.len();
     let n = rows.first().map_or(0, Vec::len);
     let roots: Vec<ExprId> = rows.iter().flatten().copied().collect();

@@ -22,6 +22,7 @@
 //! beyond round-off (`INITIAL_TOLERANCE`) is bad input (exit 2) naming the
 //! constraint and by how much; within it the state is projected silently.
 
+use crate::derive::constraint::generic_rank;
 use crate::derive::Derivation;
 use crate::error::ModelError;
 use crate::model::ConstraintKind;
@@ -421,16 +422,10 @@ impl Constrained {
         }
         let set = &d.constraints;
         let (m, n) = (set.list.len(), d.q.len());
-        if set.independent < m {
-            return Err(RunError::Input(
-                ModelError::whole(format!(
-                    "the {m} constraints are not independent (A has rank {}): their multipliers are not determined",
-                    set.independent
-                ))
-                .with_help("drop the constraints that follow from the others"),
-            ));
-        }
         let mut system = ConstrainedSystem::new(d, dynamics.clone());
+        if set.independent < m {
+            return Err(RunError::Input(dependent_constraints(d, &mut system, q0, qd0)));
+        }
         let list = d.constraints.list.clone();
 
         // Initial values: round-off is projected away, anything more is an error.
@@ -581,6 +576,57 @@ impl Stepping for Constrained {
             )),
             other => (RunFailure::Step { t: t_last }, other.to_string()),
         }
+    }
+}
+
+/// The error for constraints whose Jacobian A has lower rank than their
+/// number: it names the constraints that take part in a dependency (those
+/// whose row can be dropped without lowering the rank) and, when some of them
+/// hold at the start and others do not, says they may contradict each other
+/// (x = 0 and x = 1 have the same gradient but no common solution) rather than
+/// that one follows from the others.
+fn dependent_constraints(d: &Derivation, system: &mut ConstrainedSystem, q0: &[f64], qd0: &[f64]) -> ModelError {
+    let list = &d.constraints.list;
+    let rows: Vec<Vec<ExprId>> = list.iter().map(|c| c.jacobian.clone()).collect();
+    let rank = d.constraints.independent;
+    let involved: Vec<usize> = (0..list.len())
+        .filter(|&k| {
+            let others: Vec<Vec<ExprId>> =
+                rows.iter().enumerate().filter(|&(j, _)| j != k).map(|(_, r)| r.clone()).collect();
+            generic_rank(d.pool(), &others) == rank
+        })
+        .collect();
+    let names = |ks: &[usize]| ks.iter().map(|&k| format!("'{}'", list[k].name)).collect::<Vec<_>>().join(", ");
+    let m = list.len();
+    let mut y0: Vec<f64> = q0.iter().chain(qd0).copied().collect();
+    if d.constraints.work_balances_h {
+        y0.push(0.0);
+    }
+    let (mut pos, mut vel, mut scale) = (vec![0.0; m], vec![0.0; m], vec![(0.0, 0.0); m]);
+    system.residuals(0.0, &y0, &mut pos, &mut vel, &mut scale);
+    let violated: Vec<usize> =
+        involved.iter().copied().filter(|&k| pos[k].abs() > INITIAL_TOLERANCE * scale[k].0).collect();
+    let held: Vec<usize> = involved.iter().copied().filter(|k| !violated.contains(k)).collect();
+    let head = format!(
+        "the constraints {} are not independent (their Jacobian A has rank {rank}, not {m}), so their multipliers are not determined",
+        names(&involved)
+    );
+    if !violated.is_empty() && !held.is_empty() {
+        let residuals: Vec<String> = violated.iter().map(|&k| format!("'{}' = {:.3e}", list[k].name, pos[k])).collect();
+        ModelError::whole(format!(
+            "{head}; at the start {} hold{} but {} do{} not ({}): they may contradict each other",
+            names(&held),
+            if held.len() == 1 { "s" } else { "" },
+            names(&violated),
+            if violated.len() == 1 { "es" } else { "" },
+            residuals.join(", ")
+        ))
+        .with_help("constraints with the same gradient but different values (x = 0 and x = 1) have no common solution; correct or remove the one you did not mean")
+    } else {
+        ModelError::whole(head).with_help(format!(
+            "keep only independent constraints: drop one of {}, which follows from the others",
+            names(&involved)
+        ))
     }
 }
 

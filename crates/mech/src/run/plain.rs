@@ -36,6 +36,9 @@ impl Plain {
         let n = dynamics.n_coords();
         let mut system = dynamics.system(form);
         let y0 = system.initial_state(0.0, q0, qd0).map_err(RunError::Input)?;
+        if let Some(e) = singular_start(&mut system, dynamics.coordinate_names(), q0, &y0) {
+            return Err(RunError::Input(e));
+        }
         let mut probe_system = system.clone();
         let solver_config = Config {
             rtol: config.rtol,
@@ -106,6 +109,40 @@ impl Stepping for Plain {
     fn describe(&mut self, e: &SolveError, y0: &[f64], at: (f64, Vec<f64>)) -> (RunFailure, String) {
         describe_failure(e, &self.names, self.form, &mut self.system, y0, at)
     }
+}
+
+/// The error for a mass matrix that is singular at the initial state, naming
+/// the coordinates whose velocities have no inertia there (the null vector of
+/// M(q₀)): the spherical pendulum at θ = 0, where φ' costs no kinetic energy.
+fn singular_start(system: &mut System, names: &[String], q0: &[f64], y0: &[f64]) -> Option<ModelError> {
+    let n = names.len();
+    let m = system.mass_matrix_at(0.0, y0);
+    let largest = m.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let pivot = probe::smallest_pivot(&m, n)?;
+    if pivot > 1e-12 * largest && largest > 0.0 {
+        return None;
+    }
+    let svd = nalgebra::DMatrix::from_row_slice(n, n, &m).svd(false, true);
+    let v_t = svd.v_t?;
+    let k = svd.singular_values.imin();
+    let null: Vec<f64> = v_t.row(k).iter().copied().collect();
+    let top = null.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let idle: Vec<&str> =
+        names.iter().zip(&null).filter(|(_, v)| v.abs() > 0.1 * top).map(|(name, _)| name.as_str()).collect();
+    let start: Vec<String> = names.iter().zip(q0).map(|(name, v)| format!("{name} = {v}")).collect();
+    let what = match idle.as_slice() {
+        [one] => format!("the velocity of {one} has no inertia there, so its acceleration is undetermined"),
+        many => format!(
+            "a combination of the velocities of {} has no inertia there, so the accelerations are undetermined",
+            many.join(", ")
+        ),
+    };
+    Some(
+        ModelError::whole(format!("the mass matrix M is singular at the start ({}): {what}", start.join(", ")))
+            .with_help(
+                "the coordinates are singular at this configuration (like polar angles at the pole): start away from it (change [initial]), or choose other coordinates",
+            ),
+    )
 }
 
 /// Why the integrator could not go on, judged from the last good state: a mass
