@@ -130,6 +130,13 @@ fn text(r: &ExtremalReport) -> String {
     if r.extremals.len() > 1 {
         let _ = writeln!(s, "  (the Euler equation only makes J stationary; of several extremals the lowest is kept)");
     }
+    if r.unfinished_shots > 0 {
+        let _ = writeln!(
+            s,
+            "  ({} trial paths ran out of steps before reaching the end: other extremals may exist)",
+            r.unfinished_shots
+        );
+    }
     let n = r.path.len();
     let pick = |i: usize| r.path[i];
     let _ = writeln!(s, "\nPath ({n} points; --format json lists them all):");

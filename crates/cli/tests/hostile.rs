@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{repo_root, run, scratch};
+use common::{close, json, repo_root, run, scratch};
 
 /// Runs the binary and expects bad input: exit 2 with `needle` in the message.
 #[track_caller]
@@ -306,4 +306,49 @@ fn an_output_that_cannot_be_created_is_refused_in_every_command() {
             r.describe()
         );
     }
+}
+
+/// An extremal problem whose extremals oscillate a hundred and fifty times
+/// between the ends: y'' = −y over [0, 1000] has the extremal
+/// y = sin(x)/sin(1000), which the search once missed for want of steps and
+/// then declared not to exist (Goldschmidt's message). Over [0, 10⁵] the
+/// search cannot follow the family, and says it could not decide.
+#[test]
+fn an_oscillating_extremal_is_found_and_an_unfollowable_one_is_undecided() {
+    let problem = |x1: &str| {
+        let path = scratch("hostile-extremal", &format!("osc{x1}.toml"));
+        std::fs::write(
+            &path,
+            format!(
+                "independent = \"x\"\nunknown = \"y\"\nintegrand = \"y'^2 - y^2\"\n[boundary]\nstart = [0, 0]\nend = [{x1}, 1]\n"
+            ),
+        )
+        .unwrap();
+        path
+    };
+    let report = json(&["extremal", &problem("1000").to_string_lossy(), "--format", "json"]);
+    let slope = report["extremals"][0]["start_slope"].as_f64().unwrap();
+    close(slope, 1.0 / 1000f64.sin(), 1e-8);
+    assert!(report["unfinished_shots"].as_u64().unwrap() > 0, "the steep members are not followed to the end");
+    let r = run(&["extremal", &problem("100000").to_string_lossy()]);
+    assert_eq!(r.code, Some(1), "{}", r.describe());
+    assert!(r.stderr.contains("could not decide whether an extremal joins the end points"), "{}", r.describe());
+    assert!(!r.stderr.contains("Goldschmidt"), "{}", r.describe());
+}
+
+/// An integrand that is not real at an end is bad input, not "singular at
+/// both end points" or "no extremal".
+#[test]
+fn an_integrand_not_real_at_an_end_is_refused() {
+    let never = scratch("hostile-extremal", "never_real.toml");
+    std::fs::write(
+        &never,
+        "independent = \"x\"\nunknown = \"y\"\nintegrand = \"sqrt(-1 - y'^2)\"\n[boundary]\nstart = [0, 0]\nend = [1, 1]\n",
+    )
+    .unwrap();
+    refused(&["extremal", &never.to_string_lossy()], ":5:9: the integrand is not real at the start (x, y) = (0, 0)");
+    let text = std::fs::read_to_string(repo_root().join("examples/extremal/brachistochrone.toml")).unwrap();
+    let above = scratch("hostile-extremal", "brachistochrone_above.toml");
+    std::fs::write(&above, text.replace("end = [1.0, 0.8]", "end = [1.0, -0.5]")).unwrap();
+    refused(&["extremal", &above.to_string_lossy()], "the integrand is not real at the end (x, y) = (1, -0.5)");
 }

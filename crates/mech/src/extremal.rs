@@ -23,6 +23,7 @@ use bvp::{Numeric, SolveFailure};
 use rustc_hash::FxHashMap;
 use serde::Serialize;
 use std::collections::BTreeMap;
+use std::f64::consts::FRAC_PI_2;
 use sym::ExprId;
 
 /// Relative tolerance of J along the straight line: the value is compared with
@@ -127,6 +128,9 @@ pub struct ExtremalReport {
     pub end_residual: f64,
     /// Family members integrated to find the extremals.
     pub shots: usize,
+    /// Members that ran out of steps before reaching the end: when not zero,
+    /// extremals other than those listed may exist.
+    pub unfinished_shots: usize,
     /// Whether the extremal is a minimum by the second variation (with `--check-minimum`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub minimum: Option<bool>,
@@ -176,6 +180,23 @@ pub fn extremal(problem: &Problem, config: &ExtremalConfig) -> Result<ExtremalRe
     let [x0, y0] = problem.start;
     let [x1, y1] = problem.end;
     let slope = (y1 - y0) / (x1 - x0);
+
+    // A path must start and end where f is real for some slope; an infinite f
+    // (the brachistochrone's start) is a singular end, a NaN one is outside the
+    // integrand's domain, which no search should be asked to explore.
+    for (k, (which, point)) in [("start", problem.start), ("end", problem.end)].into_iter().enumerate() {
+        if !real_somewhere(&mut num, point) {
+            let [x, y] = point;
+            return Err(ModelError::at(
+                problem.boundary_spans[k].clone(),
+                format!("the integrand is not real at the {which} ({xn}, {yn}) = ({x}, {y}), whatever the slope {yn}' there"),
+            )
+            .with_help(format!(
+                "f must be real along the path: check the signs under square roots and logarithms (the brachistochrone's {yn} is measured downward from its start, so an end above the start is outside its domain)"
+            ))
+            .into());
+        }
+    }
 
     // A singular end and a regular start: solve the mirrored problem x → x0 + x1 − x from the end.
     let singular_start = bvp::is_singular(&mut num, problem.start, slope);
@@ -310,9 +331,20 @@ pub fn extremal(problem: &Problem, config: &ExtremalConfig) -> Result<ExtremalRe
         departure,
         end_residual: best.end_miss,
         shots: solution.shots,
+        unfinished_shots: solution.unfinished,
         minimum: second.as_ref().map(|s| s.minimum),
         conjugate_point: second.as_ref().map(|s| s.conjugate_point),
         second_variation: second,
+    })
+}
+
+/// Whether f is real (finite, or infinite as at a singular end, but not NaN)
+/// at `point` for some slope in a fan of directions.
+fn real_somewhere(num: &mut Numeric, point: [f64; 2]) -> bool {
+    let n = 64;
+    (0..=n).any(|k| {
+        let angle = -FRAC_PI_2 + std::f64::consts::PI * (k as f64 + 0.5) / (n + 1) as f64;
+        !num.at(point[0], point[1], angle.tan()).f.is_nan()
     })
 }
 
@@ -322,6 +354,10 @@ fn no_extremal(e: SolveFailure) -> ExtremalError {
             "no smooth curve makes J stationary between these ends; for a minimal surface of revolution \
              (f = y*sqrt(1 + y'^2)) this is Goldschmidt's case: the rings are too far apart and the minimum \
              is two flat discs joined along the axis"
+                .into(),
+        ),
+        SolveFailure::Undecided { .. } => Some(
+            "the extremals oscillate too often between the ends to be followed; a shorter interval, or other end points, can be decided"
                 .into(),
         ),
         SolveFailure::SingularStart => Some("move the start off the singular set".into()),

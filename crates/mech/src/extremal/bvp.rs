@@ -61,8 +61,14 @@ const VERTICAL_TURN: f64 = 0.02;
 const VERTICAL_STEPS: usize = 400;
 /// Bisections toward the edge of the members that reach x1.
 const EDGE_BISECTIONS: usize = 40;
-/// Most steps of one integration (a smooth extremal needs a few hundred).
-const MAX_STEPS: usize = 5_000;
+/// Most steps of one integration: a smooth extremal needs a few hundred, one
+/// that oscillates a few hundred times between the ends (y'' = −y over
+/// [0, 1000]) some ten thousand.
+const MAX_STEPS: usize = 50_000;
+/// Most steps of all integrations of one search together, which bounds its
+/// time (seconds); members not followed for want of steps make the search
+/// undecided rather than empty.
+const SEARCH_STEPS: usize = 10_000_000;
 
 /// f and y'' with their derivatives, compiled, at (x, y, y') for given parameters.
 pub struct Numeric {
@@ -165,6 +171,9 @@ pub struct Solution {
     pub candidates: Vec<Candidate>,
     /// Family members integrated (the cost of the search).
     pub shots: usize,
+    /// Members that ran out of steps before it was known whether they reach
+    /// the end: when not zero, extremals other than the ones found may exist.
+    pub unfinished: usize,
 }
 
 /// The ODE of one family member in the parametric form, with its variation.
@@ -211,6 +220,11 @@ struct Family<'a> {
     d: f64,
     kind: Start,
     shots: usize,
+    /// Members that ran out of steps (their own or the search's) before
+    /// reaching x1 or turning back: whether they reach the end is not known.
+    unfinished: usize,
+    /// Steps taken by all members so far.
+    steps: usize,
     /// Integrate the value over the series start too (the final trace).
     with_value: bool,
 }
@@ -345,6 +359,10 @@ impl Family<'_> {
     /// Integrates member `a` to the perpendicular through the end; None if it never gets there as a graph.
     fn shoot(&mut self, a: f64) -> Option<Shot> {
         self.shots += 1;
+        if self.steps >= SEARCH_STEPS {
+            self.unfinished += 1;
+            return None;
+        }
         let (sigma0, z0, scale, exponent) = self.handover(a)?;
         let config = self.config();
         let sigma_max = self.sigma_max();
@@ -362,6 +380,10 @@ impl Family<'_> {
             }
             ControlFlow::Continue(())
         });
+        self.steps += solver.statistics().steps;
+        if let Err(num::SolveError::MaxStepsExceeded { .. }) = r {
+            self.unfinished += 1;
+        }
         r.ok()?;
         let (sigma_end, [_, y]) = hit?;
         let miss = y - y1;
@@ -425,6 +447,17 @@ pub enum SolveFailure {
     NoExtremal {
         /// Members tried.
         shots: usize,
+    },
+    /// None was found, but some members could not be followed to the end:
+    /// whether an extremal exists is not known.
+    #[error(
+        "could not decide whether an extremal joins the end points: none was found, but {unfinished} of the {shots} extremals tried ran out of steps before reaching the end ({MAX_STEPS} each, {SEARCH_STEPS} in all)"
+    )]
+    Undecided {
+        /// Members tried.
+        shots: usize,
+        /// Members not followed to the end.
+        unfinished: usize,
     },
     /// The start is singular and no extremal can leave it.
     #[error("the Euler equation is singular at the start and no extremal leaves it with a finite curvature")]
@@ -493,12 +526,20 @@ pub fn solve(num: &mut Numeric, start: [f64; 2], end: [f64; 2], n_points: usize)
         vec![Start::Regular]
     };
     let mut candidates: Vec<Candidate> = Vec::new();
-    let mut shots = 0;
+    let (mut shots, mut unfinished, mut steps) = (0, 0, 0);
     let mut divergent = false;
     for kind in kinds {
-        let mut fam = Family { num: &mut *num, start, end, d, kind, shots: 0, with_value: false };
+        let mut fam = Family { num: &mut *num, start, end, d, kind, shots: 0, unfinished: 0, steps, with_value: false };
         let grid = scan_grid(kind);
-        let misses: Vec<Option<Shot>> = grid.iter().map(|&a| fam.shoot(a)).collect();
+        // The members closest to the chord's direction first: steep ones take
+        // the most steps, and if the search's steps run out they are the ones
+        // left unfollowed.
+        let mut order: Vec<usize> = (0..grid.len()).collect();
+        order.sort_by(|&i, &j| grid[i].abs().total_cmp(&grid[j].abs()));
+        let mut misses: Vec<Option<Shot>> = (0..grid.len()).map(|_| None).collect();
+        for i in order {
+            misses[i] = fam.shoot(grid[i]);
+        }
         let mut roots: Vec<(f64, f64)> = Vec::new();
         for k in 0..grid.len() - 1 {
             let bracket = match (&misses[k], &misses[k + 1]) {
@@ -530,12 +571,20 @@ pub fn solve(num: &mut Numeric, start: [f64; 2], end: [f64; 2], n_points: usize)
             }
         }
         shots += fam.shots;
+        unfinished += fam.unfinished;
+        steps = fam.steps;
     }
     if candidates.is_empty() {
-        return Err(if divergent { SolveFailure::Divergent } else { SolveFailure::NoExtremal { shots } });
+        return Err(if divergent {
+            SolveFailure::Divergent
+        } else if unfinished > 0 {
+            SolveFailure::Undecided { shots, unfinished }
+        } else {
+            SolveFailure::NoExtremal { shots }
+        });
     }
     candidates.sort_by(|a, b| a.value.total_cmp(&b.value));
-    Ok(Solution { candidates, shots })
+    Ok(Solution { candidates, shots, unfinished })
 }
 
 /// Bisects between member `good` (which reaches x1 with miss `m_good`) and `bad`
