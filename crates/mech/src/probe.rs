@@ -14,9 +14,11 @@
 //! and callers claim nothing. The points are deterministic (a fixed-seed
 //! generator), so the same model always gets the same verdict.
 //!
-//! Numeric uses that are not claims stay numeric: [`is_singular`] (a model
-//! whose mass matrix is singular at every probe point is refused) and
-//! [`finite_samples`] (ranks and null spaces at generic points).
+//! Numeric uses that are not claims of zero stay numeric: [`is_singular`] (a
+//! model whose mass matrix is singular at every probe point is refused),
+//! [`smallest_pivot`] (a run's mass matrix going singular) and
+//! [`finite_samples`] (the rank of a constraint Jacobian at generic points, a
+//! lower bound; a rank below full is proven by its minors).
 
 use rustc_hash::FxHashMap;
 use sym::{ExprId, Func, Node, Number, Pool, Tape};

@@ -52,7 +52,8 @@ impl Quadratic {
 
     /// Splits `l` into (M, b, L₀) by differentiation, or None when `l` is not
     /// quadratic in the velocities. The split is checked: `l` minus the
-    /// rebuilt form must vanish at random points.
+    /// rebuilt form must be proven zero ([`probe::is_zero`]); a split that is
+    /// not proven is not used, and L is then treated as not quadratic.
     pub fn split(pool: &mut Pool, l: ExprId, v: &Vars) -> Option<Quadratic> {
         let n = v.q.len();
         let zero_vel: Subst = v.qd.iter().map(|&x| (x, pool.zero())).collect();
