@@ -226,10 +226,15 @@ impl Text<'_> {
             Item::Constraint(c) => {
                 let tags = [
                     Some(c.kind.name()),
-                    Some(if c.rheonomic { "rheonomic" } else { "scleronomic" }),
+                    Some(match c.rheonomic {
+                        Some(true) => "rheonomic",
+                        Some(false) => "scleronomic",
+                        None => "time dependence undecided",
+                    }),
                     match (c.kind, c.integrable) {
                         (mech::ConstraintKind::Velocity, Some(true)) => Some("integrable"),
-                        (mech::ConstraintKind::Velocity, _) => Some("not integrable"),
+                        (mech::ConstraintKind::Velocity, Some(false)) => Some("not integrable"),
+                        (mech::ConstraintKind::Velocity, None) => Some("integrability undecided"),
                         _ => None,
                     },
                 ];
@@ -363,9 +368,13 @@ impl Text<'_> {
         let (d, names) = (self.d, &self.names);
         let pool = d.pool();
         let _ = writeln!(o, "\ncyclic coordinates");
-        if d.cyclic().is_empty() {
+        let undecided = &d.verdicts().cyclic;
+        if d.cyclic().is_empty() && undecided.is_empty() {
             let _ = writeln!(o, "  none: L depends on every coordinate");
             return;
+        }
+        if d.cyclic().is_empty() {
+            let _ = writeln!(o, "  none shown");
         }
         for &i in d.cyclic() {
             let conserved = d.conserved().iter().any(|c| c.name == format!("p_{}", names[i]));
@@ -380,10 +389,17 @@ impl Text<'_> {
                     "is conserved"
                 } else if d.constraints().list.iter().any(|c| !pool.is_zero(c.jacobian[i])) {
                     "would be conserved, but a constraint force acts on it"
+                } else if undecided.iter().any(
+                    |r| matches!(r, mech::CyclicReason::MomentumUndecided { coordinate } if *coordinate == names[i])
+                ) {
+                    "would be conserved, but whether dissipation or a force acts on it is not known"
                 } else {
                     "would be conserved, but dissipation or a force acts on it"
                 }
             );
+        }
+        for reason in undecided {
+            let _ = writeln!(o, "  {reason}");
         }
     }
 }

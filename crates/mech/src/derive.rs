@@ -9,7 +9,7 @@
 
 use crate::error::ModelError;
 use crate::model::Model;
-use crate::probe::{self, Subst};
+use crate::probe::{self, Decision, Subst};
 use quadratic::{Quadratic, Sparsity, Vars as QVars};
 use sym::{ExprId, NameId, Pool, Symbol};
 
@@ -22,7 +22,9 @@ mod verdict;
 pub use body::BodyMotion;
 pub use constraint::{Constraint, Constraints};
 pub use layout::Layout;
-pub use verdict::{ConservationReason, ConservedReason, EnergyReason, HamiltonianReason, RateTerm, Verdicts};
+pub use verdict::{
+    ConservationReason, ConservedReason, CyclicReason, EnergyReason, HamiltonianReason, RateTerm, Verdicts,
+};
 
 /// A quantity the derivation shows to be conserved.
 #[derive(Debug, Clone)]
@@ -68,7 +70,7 @@ pub struct Derivation {
     pub(crate) mass_matrix: Vec<Vec<ExprId>>,
     /// f with E = M q'' − f.
     pub(crate) forcing: Vec<ExprId>,
-    /// Indices of cyclic coordinates (∂L/∂q = 0).
+    /// Indices of cyclic coordinates (∂L/∂q proven to be 0).
     pub(crate) cyclic: Vec<usize>,
     /// Conserved quantities.
     pub(crate) conserved: Vec<Conserved>,
@@ -82,12 +84,13 @@ pub struct Derivation {
     pub(crate) energy: Option<ExprId>,
     /// Whether H is the energy T + U₀; None for a Lagrangian-only model.
     pub(crate) hamiltonian_is_energy: Option<bool>,
-    /// Whether H is conserved (∂L/∂t = 0, no dissipation, no forces).
+    /// Whether H is conserved (∂L/∂t = 0, no dissipation, no forces, each proven).
     pub(crate) hamiltonian_conserved: bool,
     /// Hamilton's equations (dq/dt, dp/dt) per coordinate, in (q, p, t).
     pub(crate) hamilton: Option<Vec<(ExprId, ExprId)>>,
-    /// Whether L depends explicitly on time.
-    pub(crate) explicit_time: bool,
+    /// Whether L depends explicitly on time; None when ∂L/∂t = 0 could be
+    /// neither proven nor refuted.
+    pub(crate) explicit_time: Option<bool>,
     /// Explanations of the verdicts.
     pub(crate) verdicts: Verdicts,
     /// Seconds spent from the model to L, M and f (the equations of motion), the
@@ -172,7 +175,7 @@ struct Judged {
     energy: Option<ExprId>,
     hamiltonian_is_energy: Option<bool>,
     hamiltonian_conserved: bool,
-    explicit_time: bool,
+    explicit_time: Option<bool>,
     verdicts: Verdicts,
 }
 
@@ -193,16 +196,17 @@ impl Derivation {
         let motion = equations_of_motion(pool, &s, &energies, &ext, &is_var);
         let equations_seconds = started.elapsed().as_secs_f64();
         check_regular(pool, &model, &motion.mass_matrix)?;
-        let (cyclic, mut conserved) = cyclic_coordinates(pool, &s, &motion, &ext);
+        let (cyclic, mut conserved, cyclic_reasons) = cyclic_coordinates(pool, &s, &motion, &ext);
         let mut judged = judge(pool, &model, &s, &energies, &motion, &ext, &is_var);
+        judged.verdicts.cyclic = cyclic_reasons;
         if judged.hamiltonian_conserved {
             conserved.push(Conserved {
                 name: "H".into(),
                 expr: judged.energy_function,
-                reason: if judged.hamiltonian_is_energy == Some(true) {
-                    ConservedReason::EnergyConserved
-                } else {
-                    ConservedReason::HamiltonianConserved
+                reason: match judged.hamiltonian_is_energy {
+                    Some(true) => ConservedReason::EnergyConserved,
+                    Some(false) => ConservedReason::HamiltonianConserved,
+                    None => ConservedReason::HamiltonianConservedEnergyUnknown,
                 },
             });
         }
@@ -324,7 +328,9 @@ impl Derivation {
         &self.forcing
     }
 
-    /// Indices of cyclic coordinates (∂L/∂q = 0).
+    /// Indices of cyclic coordinates (∂L/∂q proven to be 0; a coordinate for
+    /// which that could not be decided is not among them, and the verdicts'
+    /// `cyclic` reasons name it).
     pub fn cyclic(&self) -> &[usize] {
         &self.cyclic
     }
@@ -359,7 +365,7 @@ impl Derivation {
         self.hamiltonian_is_energy
     }
 
-    /// Whether H is conserved (∂L/∂t = 0, no dissipation, no forces).
+    /// Whether H is proven conserved (∂L/∂t = 0, no dissipation, no forces).
     pub fn hamiltonian_conserved(&self) -> bool {
         self.hamiltonian_conserved
     }
@@ -369,8 +375,9 @@ impl Derivation {
         self.hamilton.as_deref()
     }
 
-    /// Whether L depends explicitly on time.
-    pub fn explicit_time(&self) -> bool {
+    /// Whether L depends explicitly on time: Some(false) when ∂L/∂t is proven
+    /// to be 0, Some(true) when a point shows it is not, None when neither.
+    pub fn explicit_time(&self) -> Option<bool> {
         self.explicit_time
     }
 
@@ -628,30 +635,49 @@ fn check_regular(pool: &mut Pool, model: &Model, mass_matrix: &[Vec<ExprId>]) ->
     Err(ModelError { message: message.into(), span, help: Some(help.into()), setting: None, within: None })
 }
 
-/// Cyclic coordinates (∂L/∂q = 0) and the momenta that are conserved: those on
-/// which neither dissipation nor a generalized force acts.
-fn cyclic_coordinates(pool: &mut Pool, s: &Symbols, m: &Motion, ext: &External) -> (Vec<usize>, Vec<Conserved>) {
+/// Cyclic coordinates (∂L/∂q proven to be 0) and the momenta that are
+/// conserved: those on which neither dissipation nor a generalized force is
+/// proven absent. A coordinate whose ∂L/∂q (or whose R and Q) could not be
+/// decided gets a reason instead of a claim.
+fn cyclic_coordinates(
+    pool: &mut Pool,
+    s: &Symbols,
+    m: &Motion,
+    ext: &External,
+) -> (Vec<usize>, Vec<Conserved>, Vec<CyclicReason>) {
     let mut cyclic = Vec::new();
     let mut conserved = Vec::new();
+    let mut reasons = Vec::new();
     for i in 0..s.n() {
-        if !probe::is_zero(pool, m.dl_dq[i]) {
-            continue;
+        let coordinate = s.names[i].clone();
+        match probe::decide_zero(pool, m.dl_dq[i]) {
+            Decision::Zero => {}
+            Decision::NonZero => continue,
+            Decision::Undecided => {
+                reasons.push(CyclicReason::Undecided { coordinate });
+                continue;
+            }
         }
         cyclic.push(i);
-        let damped = ext.dissipation.is_some_and(|r| {
-            let d = pool.diff(r, s.qd[i]);
-            !probe::is_zero(pool, d)
-        });
-        let forced = !probe::is_zero(pool, ext.forces[i]);
-        if !damped && !forced {
-            conserved.push(Conserved {
-                name: format!("p_{}", s.names[i]),
+        let damping = match ext.dissipation {
+            Some(r) => {
+                let d = pool.diff(r, s.qd[i]);
+                probe::decide_zero(pool, d)
+            }
+            None => Decision::Zero,
+        };
+        let forcing = probe::decide_zero(pool, ext.forces[i]);
+        match (damping, forcing) {
+            (Decision::Zero, Decision::Zero) => conserved.push(Conserved {
+                name: format!("p_{coordinate}"),
                 expr: m.momenta[i],
-                reason: ConservedReason::Cyclic { coordinate: s.names[i].clone() },
-            });
+                reason: ConservedReason::Cyclic { coordinate },
+            }),
+            (Decision::NonZero, _) | (_, Decision::NonZero) => {}
+            _ => reasons.push(CyclicReason::MomentumUndecided { coordinate }),
         }
     }
-    (cyclic, conserved)
+    (cyclic, conserved, reasons)
 }
 
 /// The energy function h = Σ q' ∂L/∂q' − L and the verdicts on it: whether H is
@@ -676,28 +702,44 @@ fn judge(
             pool.simplify_in(h_sum, is_var)
         }
     };
+    // Each term of dH/dt: H is conserved only when all three are proven 0.
     let dl_dt = pool.diff(e.lagrangian, s.t);
-    let explicit_time = !probe::is_zero(pool, dl_dt);
-    let dissipative = ext.dissipation.is_some_and(|r| !probe::is_zero(pool, r));
-    let forced: Vec<usize> = (0..n).filter(|&i| !probe::is_zero(pool, ext.forces[i])).collect();
-    let hamiltonian_conserved = !explicit_time && !dissipative && forced.is_empty();
+    let time = probe::decide_zero(pool, dl_dt);
+    let dissipation = match ext.dissipation {
+        Some(r) => probe::decide_zero(pool, r),
+        None => Decision::Zero,
+    };
+    let forces: Vec<Decision> = (0..n).map(|i| probe::decide_zero(pool, ext.forces[i])).collect();
+    let forced: Vec<usize> = (0..n).filter(|&i| forces[i].is_nonzero()).collect();
+    let force = if !forced.is_empty() {
+        Decision::NonZero
+    } else if forces.iter().all(|f| f.is_zero()) {
+        Decision::Zero
+    } else {
+        Decision::Undecided
+    };
+    let explicit_time = time.known().map(|zero| !zero);
+    let terms =
+        [(RateTerm::ExplicitTime, time), (RateTerm::Dissipation, dissipation), (RateTerm::GeneralizedForces, force)];
+    let hamiltonian_conserved = terms.iter().all(|(_, d)| d.is_zero());
     let mut verdicts = Verdicts::default();
-    let mut rate = Vec::new();
-    if explicit_time {
+    if time.is_nonzero() {
         verdicts.conservation.push(ConservationReason::ExplicitTime);
-        rate.push(RateTerm::ExplicitTime);
     }
-    if dissipative {
+    if dissipation.is_nonzero() {
         verdicts.conservation.push(ConservationReason::Dissipation);
-        rate.push(RateTerm::Dissipation);
     }
     if !forced.is_empty() {
         let coordinates = forced.iter().map(|&i| s.names[i].clone()).collect();
         verdicts.conservation.push(ConservationReason::GeneralizedForces { coordinates });
-        rate.push(RateTerm::GeneralizedForces);
     }
-    if !rate.is_empty() {
-        verdicts.conservation.push(ConservationReason::Rate { terms: rate });
+    let shown: Vec<RateTerm> = terms.iter().filter(|(_, d)| d.is_nonzero()).map(|&(t, _)| t).collect();
+    if !shown.is_empty() {
+        verdicts.conservation.push(ConservationReason::Rate { terms: shown });
+    }
+    let undecided: Vec<RateTerm> = terms.iter().filter(|(_, d)| *d == Decision::Undecided).map(|&(t, _)| t).collect();
+    if !undecided.is_empty() {
+        verdicts.conservation.push(ConservationReason::Undecided { terms: undecided });
     }
     if hamiltonian_conserved {
         verdicts.conservation.push(ConservationReason::Conserved);
@@ -708,9 +750,9 @@ fn judge(
             let u0 = pool.substitute(uu, &zero_vel);
             let en = pool.add2(tt, u0);
             let en = if model.particles.is_empty() { pool.simplify_in(en, is_var) } else { en };
-            let same = probe::are_equal(pool, energy_function, en);
+            let same = probe::decide_equal(pool, energy_function, en).known();
             explain_energy(pool, &mut verdicts, same, tt, uu, u0, qd);
-            (Some(en), Some(same))
+            (Some(en), same)
         }
         _ => {
             verdicts.energy.push(EnergyReason::OnlyLagrangian);
@@ -1094,7 +1136,7 @@ fn elimination_solve(pool: &mut Pool, mut a: Vec<Vec<ExprId>>, mut r: Vec<ExprId
 fn explain_energy(
     pool: &mut Pool,
     verdicts: &mut Verdicts,
-    same: bool,
+    same: Option<bool>,
     kinetic: ExprId,
     potential: ExprId,
     u0: ExprId,
@@ -1112,17 +1154,21 @@ fn explain_energy(
     let two_t = pool.mul2(two, kinetic);
     terms.push(pool.neg(two_t));
     let euler = pool.add(&terms);
-    let homogeneous = probe::is_zero(pool, euler);
-    let velocity_potential = !probe::are_equal(pool, potential, u0);
-    verdicts.energy.push(if homogeneous {
-        EnergyReason::KineticHomogeneous
-    } else {
-        EnergyReason::KineticNotHomogeneous
+    verdicts.energy.push(match probe::decide_zero(pool, euler) {
+        Decision::Zero => EnergyReason::KineticHomogeneous,
+        Decision::NonZero => EnergyReason::KineticNotHomogeneous,
+        Decision::Undecided => EnergyReason::HomogeneityUndecided,
     });
-    if velocity_potential {
-        verdicts.energy.push(EnergyReason::VelocityDependentPotential);
+    match probe::decide_equal(pool, potential, u0) {
+        Decision::Zero => {}
+        Decision::NonZero => verdicts.energy.push(EnergyReason::VelocityDependentPotential),
+        Decision::Undecided => verdicts.energy.push(EnergyReason::VelocityDependenceUndecided),
     }
-    verdicts.energy.push(if same { EnergyReason::IsEnergy } else { EnergyReason::NotEnergy });
+    verdicts.energy.push(match same {
+        Some(true) => EnergyReason::IsEnergy,
+        Some(false) => EnergyReason::NotEnergy,
+        None => EnergyReason::EnergyUndecided,
+    });
 }
 
 #[cfg(test)]

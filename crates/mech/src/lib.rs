@@ -52,7 +52,7 @@
 // modules of the groups above its own (`tests/layers.rs` checks it).
 // Errors.
 mod error;
-// Leaves: the numeric probe of symbolic facts, Euler angles, TOML files.
+// Leaves: deciding symbolic facts (proofs, numeric refutation), Euler angles, TOML files.
 mod euler;
 mod probe;
 mod source;
@@ -83,8 +83,8 @@ extern crate self as mech;
 
 pub use derive::{BodyMotion, Constraint, Constraints};
 pub use derive::{
-    ConservationReason, Conserved, ConservedReason, Derivation, EnergyReason, HamiltonianReason, Layout, RateTerm,
-    Verdicts,
+    ConservationReason, Conserved, ConservedReason, CyclicReason, Derivation, EnergyReason, HamiltonianReason, Layout,
+    RateTerm, Verdicts,
 };
 pub use error::{ModelError, Setting, Within};
 pub use extremal::{

@@ -21,7 +21,7 @@
 
 use crate::derive::Derivation;
 use crate::error::ModelError;
-use crate::probe::{self, Subst};
+use crate::probe::{self, Decision, Subst, UNDECIDED};
 use crate::report::Ordered;
 use serde::Serialize;
 use sym::{ExprId, Node, Pool, Tape};
@@ -262,15 +262,35 @@ pub(crate) fn short(v: f64) -> String {
 /// small oscillations apply.
 fn potential_of(d: &Derivation, pool: &mut Pool) -> Result<(ExprId, Vec<String>), ModesError> {
     let mut notes = Vec::new();
-    if d.explicit_time {
-        return Err(ModesError::NotConservative {
-            reason: "L depends explicitly on the time t, so there is no fixed equilibrium to oscillate about".into(),
-        });
+    let not_conservative = |reason: String| Err(ModesError::NotConservative { reason });
+    match d.explicit_time {
+        Some(false) => {}
+        Some(true) => {
+            return not_conservative(
+                "L depends explicitly on the time t, so there is no fixed equilibrium to oscillate about".into(),
+            )
+        }
+        None => {
+            return not_conservative(format!(
+                "could not decide whether L depends explicitly on the time t ({UNDECIDED}); small oscillations need it shown free of t"
+            ))
+        }
     }
-    if d.forces.iter().any(|&f| !probe::is_zero(d.pool(), f)) {
-        return Err(ModesError::NotConservative {
-            reason: "the model has generalized forces [forces], which are not derived from a potential".into(),
-        });
+    for &f in d.forces() {
+        match probe::decide_zero(pool, f) {
+            Decision::Zero => {}
+            Decision::NonZero => {
+                return not_conservative(
+                    "the model has generalized forces [forces], which are not derived from a potential".into(),
+                )
+            }
+            Decision::Undecided => {
+                return not_conservative(format!(
+                    "could not decide whether the generalized force {} is zero ({UNDECIDED})",
+                    pool.display(f)
+                ))
+            }
+        }
     }
     if d.dissipation.is_some() {
         notes.push("Rayleigh's dissipation function is left out: these are the undamped normal modes".into());
@@ -280,14 +300,21 @@ fn potential_of(d: &Derivation, pool: &mut Pool) -> Result<(ExprId, Vec<String>)
     // forces) unless b is a gradient; small oscillations as in the notes need none.
     for i in 0..d.q.len() {
         let b = pool.substitute(d.momenta[i], &zero_vel);
-        if !probe::is_zero(pool, b) {
-            let name = &d.model.coordinates[i].name;
-            return Err(ModesError::NotConservative {
-                reason: format!(
+        let name = &d.model.coordinates[i].name;
+        match probe::decide_zero(pool, b) {
+            Decision::Zero => {}
+            Decision::NonZero => {
+                return not_conservative(format!(
                     "L has a term linear in the velocity {name}' (∂L/∂{name}' at rest is {}): gyroscopic forces are not covered",
                     pool.display(b)
-                ),
-            });
+                ))
+            }
+            Decision::Undecided => {
+                return not_conservative(format!(
+                    "could not decide whether L has a term linear in the velocity {name}' (∂L/∂{name}' at rest is {}; {UNDECIDED})",
+                    pool.display(b)
+                ))
+            }
         }
     }
     let l0 = pool.substitute(d.lagrangian, &zero_vel);
@@ -590,7 +617,7 @@ fn symbolic_modes(
         let inv = pool.rational(1, fact);
         let c = pool.mul2(inv, c);
         let c = pool.simplify(c);
-        coeffs.push(probe::zero_if_vanishing(pool, c));
+        coeffs.push(probe::zero_if_proven(pool, c));
     }
     // The secular polynomial in Ω.
     let om2 = pool.powi(om, 2);
@@ -898,7 +925,7 @@ mod tests {
         }
         for (&got, &want) in om2.iter().zip(&expect_exprs) {
             let diff = p.sub(got, want);
-            assert!(probe::is_zero(&p, diff), "Ω² = {} is not {}", p.display(got), p.display(want));
+            assert!(probe::is_zero(&mut p, diff), "Ω² = {} is not {}", p.display(got), p.display(want));
         }
     }
 

@@ -24,7 +24,7 @@
 use crate::derive::Derivation;
 use crate::error::ModelError;
 use crate::modes::short;
-use crate::probe::{self, Subst};
+use crate::probe::{self, Decision, Subst, UNDECIDED};
 use num::DoublingConfig;
 use serde::Serialize;
 use std::f64::consts::PI;
@@ -219,6 +219,12 @@ pub enum OrbitError {
         /// What does not fit.
         reason: String,
     },
+    /// A fact the central form rests on could be neither proven nor refuted.
+    #[error("cannot tell whether this is a central-force model: could not decide {what} ({})", UNDECIDED)]
+    Undecided {
+        /// The fact, as a clause ("whether the potential … depends on the angle th").
+        what: String,
+    },
     /// The initial state has l = 0.
     #[error("the initial state has no angular momentum ({angle}' = 0): the motion is radial, along a line through the centre")]
     Radial {
@@ -244,6 +250,9 @@ impl OrbitError {
             OrbitError::NotCentral { .. } => Some(
                 "give coordinates = [\"r\", \"th\"] and L = mu*(r'^2 + r^2*th'^2)/2 - U(r), e.g. lagrangian = \"mu*(r'^2 + r^2*th'^2)/2 + k/r\", or two particles placed at ±r about their centre of mass".into(),
             ),
+            OrbitError::Undecided { .. } => Some(
+                "an orbit is computed only for a model shown exactly to be central; a term that every probe point rounds to 0 (such as exp(-10000*th^2)) is shown neither absent nor present".into(),
+            ),
             OrbitError::Radial { angle } => Some(format!("give \"{angle}'\" a nonzero initial value")),
             OrbitError::FallsIn | OrbitError::NotFinite { .. } => None,
         }
@@ -258,6 +267,10 @@ impl From<ModelError> for OrbitError {
 
 fn not_central(reason: impl Into<String>) -> OrbitError {
     OrbitError::NotCentral { reason: reason.into() }
+}
+
+fn undecided(what: impl Into<String>) -> OrbitError {
+    OrbitError::Undecided { what: what.into() }
 }
 
 /// The Gauss–Legendre rule of a constant order (within `num`'s range, so it
@@ -280,10 +293,12 @@ impl Orbit {
                 names.join(", ")
             )));
         }
-        if d.explicit_time {
-            return Err(not_central("L depends explicitly on the time"));
+        match d.explicit_time {
+            Some(false) => {}
+            Some(true) => return Err(not_central("L depends explicitly on the time")),
+            None => return Err(undecided("whether L depends explicitly on the time")),
         }
-        if d.dissipation.is_some() || d.forces.iter().any(|&f| !probe::is_zero(d.pool(), f)) {
+        if d.dissipation.is_some() {
             return Err(not_central("it has dissipation or generalized forces; a central force derives from U(r)"));
         }
         let (r, th, rd, thd) = (d.q[0], d.q[1], d.qd[0], d.qd[1]);
@@ -294,35 +309,58 @@ impl Orbit {
         let mut pool_owned = d.pool().clone();
         let pool = &mut pool_owned;
         let (rn, an) = (&names[0], &names[1]);
+        // Each fact of the central form is a claim: a refuted one is "not
+        // central", an undecided one is said as such, and neither gives an orbit.
+        let check = |decision: Decision, not: String, what: String| match decision {
+            Decision::Zero => Ok(()),
+            Decision::NonZero => Err(not_central(not)),
+            Decision::Undecided => Err(undecided(what)),
+        };
+        for (k, &f) in d.forces.iter().enumerate() {
+            check(
+                probe::decide_zero(pool, f),
+                "it has dissipation or generalized forces; a central force derives from U(r)".into(),
+                format!("whether the generalized force on {} is zero", names[k]),
+            )?;
+        }
         for q in [r, th] {
             let dm = pool.diff(m00, q);
-            if !probe::is_zero(pool, dm) {
-                return Err(not_central(format!(
-                    "∂²L/∂{rn}'² = {} is not a constant reduced mass μ",
-                    pool.display(m00)
-                )));
-            }
+            check(
+                probe::decide_zero(pool, dm),
+                format!("∂²L/∂{rn}'² = {} is not a constant reduced mass μ", pool.display(m00)),
+                format!("whether ∂²L/∂{rn}'² = {} is a constant reduced mass μ", pool.display(m00)),
+            )?;
         }
-        if !probe::is_zero(pool, m01) {
-            return Err(not_central(format!("L couples {rn}' and {an}' (∂²L/∂{rn}'∂{an}' = {})", pool.display(m01))));
-        }
+        check(
+            probe::decide_zero(pool, m01),
+            format!("L couples {rn}' and {an}' (∂²L/∂{rn}'∂{an}' = {})", pool.display(m01)),
+            format!("whether ∂²L/∂{rn}'∂{an}' = {} is zero", pool.display(m01)),
+        )?;
         let r2 = pool.powi(r, 2);
         let mu_r2 = pool.mul2(m00, r2);
-        if !probe::are_equal(pool, m11, mu_r2) {
-            return Err(not_central(format!(
+        check(
+            probe::decide_equal(pool, m11, mu_r2),
+            format!(
                 "∂²L/∂{an}'² = {} is not μ·{rn}^2 = {}: the coordinates are not plane polar ({rn}, {an})",
                 pool.display(m11),
                 pool.display(mu_r2)
-            )));
-        }
+            ),
+            format!("whether ∂²L/∂{an}'² = {} equals μ·{rn}^2 = {}", pool.display(m11), pool.display(mu_r2)),
+        )?;
         let zero_vel: Subst = [(rd, pool.zero()), (thd, pool.zero())].into_iter().collect();
         let l0 = pool.substitute(d.lagrangian, &zero_vel);
         let u = pool.neg(l0);
         let u = pool.simplify(u);
         let du_th = pool.diff(u, th);
-        if !probe::is_zero(pool, du_th) {
-            return Err(not_central(format!("the potential U = {} depends on the angle {an}", pool.display(u))));
-        }
+        check(
+            probe::decide_zero(pool, du_th),
+            format!("the potential U = {} depends on the angle {an}", pool.display(u)),
+            format!(
+                "whether the potential U = {} depends on the angle {an}, that is whether ∂U/∂{an} = {} is zero",
+                pool.display(u),
+                pool.display(du_th)
+            ),
+        )?;
         // L must be exactly μ/2·(r'² + r²θ'²) − U(r): no terms linear in the velocities.
         let rd2 = pool.powi(rd, 2);
         let thd2 = pool.powi(thd, 2);
@@ -331,11 +369,11 @@ impl Orbit {
         let half = pool.rational(1, 2);
         let kin = pool.mul(&[half, m00, sum]);
         let expect = pool.sub(kin, u);
-        if !probe::are_equal(pool, d.lagrangian, expect) {
-            return Err(not_central(format!(
-                "L has terms linear in the velocities (L ≠ μ/2·({rn}'^2 + {rn}^2*{an}'^2) − U({rn}))"
-            )));
-        }
+        check(
+            probe::decide_equal(pool, d.lagrangian, expect),
+            format!("L has terms linear in the velocities (L ≠ μ/2·({rn}'^2 + {rn}^2*{an}'^2) − U({rn}))"),
+            format!("whether L = μ/2·({rn}'^2 + {rn}^2*{an}'^2) − U({rn}) exactly"),
+        )?;
         let mu_expr = pool.simplify(m00);
 
         // Kepler: r·U constant.

@@ -1,14 +1,27 @@
-//! Numeric probes of symbolic facts: is an expression identically zero, is a
-//! matrix singular, evaluated at random points.
+//! Deciding symbolic facts: is an expression identically zero, are two equal,
+//! is a matrix singular.
 //!
-//! Simplification is not complete (no CAS decides zero-equivalence in general),
-//! so decisions like "this coordinate is cyclic" or "H is the energy" are made by
-//! evaluating at several random points with a tolerance scaled to the size of
-//! the terms. The points are deterministic (a fixed-seed generator), so the
-//! same model always gets the same verdict.
+//! A claim of zero (a cyclic coordinate, a conserved quantity, H equal to the
+//! energy, a central potential) is made only when it is proven: exactly, by the
+//! kernel's canonical form or by rewriting ([`Pool::is_identically_zero`]:
+//! expansion, trigonometric identities, a common denominator), which also
+//! covers the structural case of a derivative with respect to a symbol that
+//! does not occur. Numbers can only refute: [`decide_zero`] evaluates the
+//! expression at a few seeded random points together with a bound on its
+//! rounding error, and a value well above that bound shows it is not zero. A
+//! narrow function such as `exp(-1000000*x^2)` that underflows to 0 at every
+//! point shows nothing either way: the answer is then [`Decision::Undecided`],
+//! and callers claim nothing. The points are deterministic (a fixed-seed
+//! generator), so the same model always gets the same verdict.
+//!
+//! Numeric uses that are not claims of zero stay numeric: [`is_singular`] (a
+//! model whose mass matrix is singular at every probe point is refused),
+//! [`smallest_pivot`] (a run's mass matrix going singular) and
+//! [`finite_samples`] (the rank of a constraint Jacobian at generic points, a
+//! lower bound; a rank below full is proven by its minors).
 
 use rustc_hash::FxHashMap;
-use sym::{ExprId, Node, Pool, Tape};
+use sym::{ExprId, Func, Node, Number, Pool, Tape};
 
 /// A tiny deterministic generator (SplitMix64).
 #[derive(Debug, Clone)]
@@ -35,6 +48,61 @@ impl Rng {
         lo + (hi - lo) * self.uniform()
     }
 }
+
+/// What is known about whether an expression is identically zero.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Decision {
+    /// Proven: exact rewriting reduces it to 0.
+    Zero,
+    /// Refuted: at some point its value is well above its rounding error.
+    NonZero,
+    /// Neither proven nor refuted: nothing may be claimed either way.
+    Undecided,
+}
+
+impl Decision {
+    /// True when the expression is proven zero.
+    pub fn is_zero(self) -> bool {
+        self == Decision::Zero
+    }
+
+    /// True when a point shows the expression is not zero.
+    pub fn is_nonzero(self) -> bool {
+        self == Decision::NonZero
+    }
+
+    /// Some(true) when proven zero, Some(false) when refuted, None when undecided.
+    pub fn known(self) -> Option<bool> {
+        match self {
+            Decision::Zero => Some(true),
+            Decision::NonZero => Some(false),
+            Decision::Undecided => None,
+        }
+    }
+}
+
+/// Why a zero is undecided, for the sentences that say so.
+pub const UNDECIDED: &str = "no exact rewriting reduces it to 0, and no probe point shows it nonzero";
+
+/// Random points at which [`decide_zero`] looks for a nonzero value.
+const REFUTING_POINTS: usize = 5;
+
+/// A value refutes zero when it exceeds its rounding-error bound this many
+/// times over. The bound is a first-order worst case, so an exact zero
+/// evaluates to well below it; the margin covers what first order leaves out.
+const REFUTING_MARGIN: f64 = 1e3;
+
+/// Relative rounding error charged to each arithmetic operation: one unit in
+/// the last place (twice the unit roundoff of round-to-nearest).
+const OP_ERROR: f64 = f64::EPSILON;
+
+/// Relative error charged to a library function (`sin`, `exp`, `powf`, ...):
+/// a few ulps, more than libm's documented bounds.
+const FUNC_ERROR: f64 = 4.0 * f64::EPSILON;
+
+/// Absolute error charged to each operation for underflow: a result below the
+/// smallest normal float may have lost all its digits.
+const UNDERFLOW_ERROR: f64 = f64::MIN_POSITIVE;
 
 /// Random points for every symbol of some expressions: values in [0.3, 1.7]
 /// (positive, so that masses, lengths and square roots stay in their domains).
@@ -63,41 +131,172 @@ pub fn finite_samples(pool: &Pool, roots: &[ExprId], n_points: usize, seed: u64)
     Some(samples)
 }
 
-/// True when `e` vanishes at random points, relative to the size of its terms.
-/// Points where it is not finite are skipped; if every point is, the answer is
-/// false (nothing was shown).
-pub fn is_zero(pool: &Pool, e: ExprId) -> bool {
+/// Decides whether `e` is identically zero: [`Decision::Zero`] only when exact
+/// rewriting shows it, [`Decision::NonZero`] when a random point shows a value
+/// well above its rounding error, [`Decision::Undecided`] otherwise (see the
+/// module documentation).
+pub fn decide_zero(pool: &mut Pool, e: ExprId) -> Decision {
     if pool.is_zero(e) {
-        return true;
+        return Decision::Zero;
     }
     if pool.as_number(e).is_some() {
-        return false;
+        return Decision::NonZero;
     }
-    let terms = pool.terms(e);
-    let mut roots = vec![e];
-    roots.extend(&terms);
-    let Some(samples) = finite_samples(pool, &roots, 5, 0x5eed_0001) else { return false };
-    let mut tested = 0;
-    for out in &samples {
-        // Relative to the size of the terms, with no absolute floor: a potential
-        // 1e-12*k*x^2 is small, not zero.
-        let scale: f64 = out[1..].iter().map(|v| v.abs()).sum::<f64>();
-        if out[0] != 0.0 && out[0].abs() > 1e-10 * scale {
-            return false;
-        }
-        tested += 1;
+    if refuted_at_points(pool, e) {
+        return Decision::NonZero;
     }
-    tested > 0
+    if pool.is_identically_zero(e) {
+        Decision::Zero
+    } else {
+        Decision::Undecided
+    }
 }
 
-/// True when `a` and `b` are equal at random points.
-pub fn are_equal(pool: &mut Pool, a: ExprId, b: ExprId) -> bool {
+/// Decides whether `a − b` is identically zero ([`decide_zero`]).
+pub fn decide_equal(pool: &mut Pool, a: ExprId, b: ExprId) -> Decision {
     let d = pool.sub(a, b);
-    is_zero(pool, d)
+    decide_zero(pool, d)
+}
+
+/// True when `e` is proven identically zero; false when it is refuted or
+/// undecided, so false is never a claim that `e` is nonzero.
+pub fn is_zero(pool: &mut Pool, e: ExprId) -> bool {
+    decide_zero(pool, e).is_zero()
+}
+
+/// `e` itself, or the literal zero when `e` is proven zero.
+pub fn zero_if_proven(pool: &mut Pool, e: ExprId) -> ExprId {
+    if is_zero(pool, e) {
+        pool.zero()
+    } else {
+        e
+    }
+}
+
+/// True when a random point shows `e` nonzero: finite, and above
+/// [`REFUTING_MARGIN`] times its rounding-error bound. A point where the value
+/// or the bound is not finite is skipped; a value that underflowed to 0 shows
+/// nothing.
+fn refuted_at_points(pool: &Pool, e: ExprId) -> bool {
+    let order = pool.reachable(&[e]);
+    let (symbols, points) = random_points(pool, &[e], REFUTING_POINTS, 0x5eed_0001);
+    let slot: FxHashMap<ExprId, usize> = order.iter().enumerate().map(|(k, &id)| (id, k)).collect();
+    let mut values = vec![Bounded::EXACT_ZERO; order.len()];
+    for point in &points {
+        for (&s, &x) in symbols.iter().zip(point) {
+            values[slot[&s]] = Bounded { value: x, error: 0.0 };
+        }
+        for (k, &id) in order.iter().enumerate() {
+            if !matches!(pool.node(id), Node::Sym(_)) {
+                values[k] = bounded_node(pool, id, |c| values[slot[&c]]);
+            }
+        }
+        let Bounded { value, error } = values[slot[&e]];
+        if value.is_finite() && error.is_finite() && value.abs() > REFUTING_MARGIN * error {
+            return true;
+        }
+    }
+    false
+}
+
+/// A computed value and a bound on its absolute error (first order).
+#[derive(Debug, Clone, Copy)]
+struct Bounded {
+    value: f64,
+    error: f64,
+}
+
+impl Bounded {
+    const EXACT_ZERO: Bounded = Bounded { value: 0.0, error: 0.0 };
+
+    /// A result of an operation, charged `relative` of itself and the underflow floor.
+    fn rounded(value: f64, propagated: f64, relative: f64) -> Bounded {
+        Bounded { value, error: propagated + relative * value.abs() + UNDERFLOW_ERROR }
+    }
+}
+
+/// The value of one node from its children's, with the error bound: errors
+/// carried from the operands by the derivative's size, plus the node's own
+/// rounding.
+fn bounded_node(pool: &Pool, id: ExprId, child: impl Fn(ExprId) -> Bounded) -> Bounded {
+    match pool.node(id) {
+        Node::Num(Number::Float(x)) => Bounded { value: *x, error: 0.0 },
+        Node::Num(n) => {
+            let v = n.to_f64();
+            Bounded { value: v, error: OP_ERROR * v.abs() }
+        }
+        Node::Pi => Bounded { value: std::f64::consts::PI, error: OP_ERROR * std::f64::consts::PI },
+        Node::Sym(_) => unreachable!("symbols are given their point's value"),
+        Node::Add(ts) => {
+            let (mut value, mut propagated, mut size) = (0.0, 0.0, 0.0);
+            for &t in ts.iter() {
+                let b = child(t);
+                value += b.value;
+                propagated += b.error;
+                size += b.value.abs();
+            }
+            let ops = (ts.len() - 1) as f64;
+            Bounded { value, error: propagated + ops * OP_ERROR * size + UNDERFLOW_ERROR }
+        }
+        Node::Mul(fs) => {
+            let parts: Vec<Bounded> = fs.iter().map(|&f| child(f)).collect();
+            // Σ_i e_i Π_{j≠i} |v_j| from prefix and suffix products.
+            let mut suffix = vec![1.0; parts.len() + 1];
+            for i in (0..parts.len()).rev() {
+                suffix[i] = suffix[i + 1] * parts[i].value.abs();
+            }
+            let (mut value, mut prefix, mut propagated) = (1.0, 1.0, 0.0);
+            for (i, b) in parts.iter().enumerate() {
+                propagated += b.error * prefix * suffix[i + 1];
+                prefix *= b.value.abs();
+                value *= b.value;
+            }
+            let ops = (parts.len() - 1) as f64;
+            Bounded::rounded(value, propagated, ops * OP_ERROR)
+        }
+        &Node::Pow(b, x) => {
+            let (base, exp) = (child(b), child(x));
+            let value = base.value.powf(exp.value);
+            // d/db b^x = x b^(x−1), d/dx b^x = b^x ln b.
+            let d_base = exp.value * base.value.powf(exp.value - 1.0);
+            let d_exp = if exp.error == 0.0 { 0.0 } else { value * base.value.abs().ln() };
+            Bounded::rounded(value, d_base.abs() * base.error + d_exp.abs() * exp.error, FUNC_ERROR)
+        }
+        &Node::Func(f, a) => {
+            let arg = child(a);
+            let value = f.apply(arg.value);
+            Bounded::rounded(value, slope(f, arg.value, value).abs() * arg.error, FUNC_ERROR)
+        }
+        &Node::Atan2(y, x) => {
+            let (y, x) = (child(y), child(x));
+            let value = y.value.atan2(x.value);
+            let r2 = x.value * x.value + y.value * y.value;
+            let propagated = (x.value.abs() * y.error + y.value.abs() * x.error) / r2;
+            Bounded::rounded(value, propagated, FUNC_ERROR)
+        }
+    }
+}
+
+/// The derivative of `f` at `x`, where `f(x) = value`.
+fn slope(f: Func, x: f64, value: f64) -> f64 {
+    match f {
+        Func::Sin => x.cos(),
+        Func::Cos => x.sin(),
+        Func::Tan => 1.0 + value * value,
+        Func::Asin | Func::Acos => 1.0 / (1.0 - x * x).sqrt(),
+        Func::Atan => 1.0 / (1.0 + x * x),
+        Func::Sinh => x.cosh(),
+        Func::Cosh => x.sinh(),
+        Func::Tanh => 1.0 - value * value,
+        Func::Exp => value,
+        Func::Log => 1.0 / x,
+        Func::Abs => 1.0,
+    }
 }
 
 /// True when the square matrix of expressions is singular at every one of a few
 /// random points (its smallest pivot is negligible against its largest entry).
+/// A numeric test, used to refuse a model, never to claim a result.
 pub fn is_singular(pool: &Pool, m: &[Vec<ExprId>]) -> bool {
     let n = m.len();
     let roots: Vec<ExprId> = m.iter().flatten().copied().collect();
@@ -126,14 +325,60 @@ pub fn smallest_pivot(m: &[f64], n: usize) -> Option<f64> {
     Some((0..n).map(|i| u[(i, i)].abs()).fold(f64::INFINITY, f64::min))
 }
 
-/// Replaces expressions that are numerically zero by the literal zero.
-pub fn zero_if_vanishing(pool: &Pool, e: ExprId) -> ExprId {
-    if is_zero(pool, e) {
-        pool.zero()
-    } else {
-        e
-    }
-}
-
 /// A map from symbol nodes to nodes, for substitution.
 pub type Subst = FxHashMap<ExprId, ExprId>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[track_caller]
+    fn check(text: &str, expect: Decision) {
+        let mut pool = Pool::default();
+        let e = pool.parse(text).unwrap();
+        assert_eq!(decide_zero(&mut pool, e), expect, "{text}");
+    }
+
+    #[test]
+    fn zeros_are_proven_exactly() {
+        check("x - x", Decision::Zero);
+        check("sin(q)^2 + cos(q)^2 - 1", Decision::Zero);
+        check("l^2*m*(sin(a)*cos(b) - cos(a)*sin(b)) - l^2*m*sin(a - b)", Decision::Zero);
+        check("(r^2 - 1)/(r - 1) - r - 1", Decision::Zero);
+    }
+
+    #[test]
+    fn a_point_refutes_what_is_not_zero() {
+        check("sin(q)^2 - cos(q)^2", Decision::NonZero);
+        check("1e-12*k*x^2", Decision::NonZero);
+        check("2*sin(u)*cos(u) - sin(u)", Decision::NonZero);
+    }
+
+    #[test]
+    fn narrow_functions_are_undecided() {
+        // ∂/∂x of the issue's Lagrangian: exp(-1000000*x^2) underflows to 0 at
+        // every point, so the points show nothing, and no rewrite removes x.
+        check("2000000*x*exp(-1000000*x^2)", Decision::Undecided);
+        check("20000*th*exp(-10000*th^2)/r", Decision::Undecided);
+        // Every term underflows: the sum is 0 at each point, and that proves nothing.
+        check("exp(-1000000*x^2) - exp(-2000000*x^2)", Decision::Undecided);
+    }
+
+    #[test]
+    fn rounding_noise_does_not_refute_an_identity_the_rewrites_miss() {
+        // sqrt(x^2) = x for the positive points, but no rewrite here shows it:
+        // neither proven nor refuted.
+        check("sqrt(x^2) - x", Decision::Undecided);
+        check("exp(log(x)) - x", Decision::Undecided);
+    }
+
+    #[test]
+    fn the_error_bound_covers_cancellation() {
+        let mut pool = Pool::default();
+        let e = pool.parse("(1 + x)^2 - 1 - 2*x - x^2").unwrap();
+        // Not canonical-zero as written: only its expansion is.
+        assert!(!pool.is_zero(e));
+        assert!(!refuted_at_points(&pool, e));
+        assert_eq!(decide_zero(&mut pool, e), Decision::Zero);
+    }
+}

@@ -97,8 +97,9 @@ pub struct DeriveReport {
     pub energy_function: String,
     /// q' in terms of (q, p, t) (extra field).
     pub velocities: Option<Ordered<String>>,
-    /// Whether L depends explicitly on t (extra field).
-    pub explicit_time: bool,
+    /// Whether L depends explicitly on t, or null when that could not be
+    /// decided (extra field).
+    pub explicit_time: Option<bool>,
     /// Explanations of the verdicts, sentence by sentence (extra field).
     pub explanations: Explanations,
     /// The same verdicts as data: each reason an object with its `code` and
@@ -156,11 +157,11 @@ pub struct ConstraintReport {
     pub jacobian: Vec<String>,
     /// The time term a_t.
     pub time_term: String,
-    /// Whether it depends explicitly on t.
-    pub rheonomic: bool,
+    /// Whether it depends explicitly on t (null: could not be decided).
+    pub rheonomic: Option<bool>,
     /// Whether its force does work (a_t ≠ 0), the fact behind its `explanation`'s
-    /// "its force does work" (extra field).
-    pub does_work: bool,
+    /// "its force does work" (extra field; null: could not be decided).
+    pub does_work: Option<bool>,
     /// Whether it is integrable on its own (true for holonomic ones).
     pub integrable: Option<bool>,
     /// F with the constraint equivalent to F = const, when found.
@@ -180,6 +181,9 @@ pub struct Explanations {
     pub conservation: Vec<String>,
     /// Why H is not given in closed form, when it is not.
     pub hamiltonian: Vec<String>,
+    /// Which coordinates could not be decided cyclic, or their momenta conserved.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub cyclic: Vec<String>,
 }
 
 impl DeriveReport {
@@ -233,6 +237,7 @@ impl DeriveReport {
                 energy: d.verdicts.energy.iter().map(ToString::to_string).collect(),
                 conservation: d.verdicts.conservation.iter().map(ToString::to_string).collect(),
                 hamiltonian: d.verdicts.hamiltonian.iter().map(ToString::to_string).collect(),
+                cyclic: d.verdicts.cyclic.iter().map(ToString::to_string).collect(),
             },
             reasons: d.verdicts.clone(),
             bodies: d

@@ -20,10 +20,19 @@
 //! atoms stays (`(x^2 - y^2)/(x^2 + 2*x*y + y^2)` is not reduced), and two
 //! denominator factors are not compared with each other.
 //!
+//! For deciding zero, [`Pool::together_trig`] goes further: sines and cosines
+//! of sums and of integer multiples are expanded by the addition theorems
+//! (`sin(a − b) → sin a·cos b − cos a·sin b`, `cos 2u → cos²u − sin²u`), `tan`
+//! becomes `sin/cos`, and in the numerator `sin²u` is reduced to `1 − cos²u`
+//! and `cosh²u` to `1 + sinh²u`. The reduced numerator is a normal form of the
+//! trigonometric polynomials in those atoms (the remainder modulo
+//! `sin²u + cos²u − 1`), so an identity such as `sin²u + cos²u = 1` or
+//! `sin(a − b) = sin a cos b − cos a sin b` is shown by a numerator of zero.
+//!
 //! Entry points: [`Pool::together`] and [`Pool::simplify_rational`] (the shorter
-//! of `e` and its quotient form).
+//! of `e` and its quotient form), and [`Pool::together_trig`].
 
-use crate::expr::{ExprId, Node, Pool};
+use crate::expr::{ExprId, Func, Node, Pool};
 use crate::number::{Number, Rational};
 use rustc_hash::FxHashMap;
 use std::cmp::Ordering;
@@ -36,6 +45,12 @@ const MAX_TERMS: usize = 4096;
 const MAX_DIVISION_STEPS: usize = 20_000;
 /// Largest integer power of a quotient that is expanded.
 const MAX_POWER: i128 = 12;
+/// Most terms of an angle whose sine and cosine [`Pool::together_trig`]
+/// expands by the addition theorems (the expansion has up to 2^k terms).
+const MAX_ANGLE_TERMS: usize = 8;
+/// Largest integer multiple `n` of an angle whose sine and cosine are written
+/// as polynomials in `sin u` and `cos u` (of degree n).
+const MAX_ANGLE_MULTIPLE: i128 = 12;
 
 /// A monomial: atoms with positive exponents, sorted by atom id.
 #[derive(Clone, PartialEq, Eq, Hash, Debug, Default)]
@@ -475,11 +490,26 @@ fn frac_powi(a: &Frac, n: i128) -> Option<Frac> {
     Some(Frac { num, den })
 }
 
-/// The memos of one call of [`Pool::together`].
+/// The memos of one call of [`Pool::together`] or [`Pool::together_trig`].
 #[derive(Default)]
 struct Memo {
     fracs: FxHashMap<ExprId, Frac>,
     exprs: FxHashMap<ExprId, ExprId>,
+    /// Expand sines and cosines and reduce `sin²` ([`Pool::together_trig`]).
+    trig: bool,
+}
+
+/// `(cos θ, sin θ)` of an angle as quotients.
+type CosSin = (Frac, Frac);
+
+/// `cos(a + b)` and `sin(a + b)` from those of `a` and `b`.
+fn angle_sum(a: &CosSin, b: &CosSin) -> Option<CosSin> {
+    let cc = frac_mul(&a.0, &b.0)?;
+    let ss = frac_mul(&a.1, &b.1)?;
+    let sc = frac_mul(&a.1, &b.0)?;
+    let cs = frac_mul(&a.0, &b.1)?;
+    let minus_ss = Frac { num: scale(&ss.num, Number::MINUS_ONE), den: ss.den };
+    Some((frac_add(&cc, &minus_ss)?, frac_add(&sc, &cs)?))
 }
 
 impl Pool {
@@ -489,6 +519,15 @@ impl Pool {
     /// Subexpressions whose expansion would exceed a budget stay as they are.
     pub fn together(&mut self, e: ExprId) -> ExprId {
         let mut memo = Memo::default();
+        self.together_memo(e, &mut memo)
+    }
+
+    /// Like [`Pool::together`], with sines and cosines expanded and `sin²`
+    /// reduced (see the module documentation): the quotient of a trigonometric
+    /// identity's two sides' difference has the numerator 0. The form is made
+    /// for deciding zero, not for reading.
+    pub fn together_trig(&mut self, e: ExprId) -> ExprId {
+        let mut memo = Memo { trig: true, ..Memo::default() };
         self.together_memo(e, &mut memo)
     }
 
@@ -506,7 +545,12 @@ impl Pool {
         if let Some(&x) = memo.exprs.get(&e) {
             return x;
         }
-        let f = self.frac_of(e, memo);
+        let mut f = self.frac_of(e, memo);
+        if memo.trig {
+            if let Some(num) = self.reduce_squares(&f.num) {
+                f.num = num;
+            }
+        }
         let x = self.frac_expr(&f);
         memo.exprs.insert(e, x);
         x
@@ -571,6 +615,13 @@ impl Pool {
             },
             Node::Func(f, a) => {
                 let a = self.together_memo(a, memo);
+                if memo.trig {
+                    if let Some(expanded) = self.trig_frac(f, a) {
+                        return Some(expanded);
+                    }
+                    let value = self.func(f, a);
+                    return Some(self.signed_atom(value));
+                }
                 let atom = self.func(f, a);
                 Frac::poly(atom_poly(atom))
             }
@@ -581,6 +632,109 @@ impl Pool {
                 Frac::poly(atom_poly(atom))
             }
         })
+    }
+
+    /// A function value as a quotient: a number, or ± an atom (the
+    /// constructors write `sin(−u)` as `−sin(u)`).
+    fn signed_atom(&mut self, value: ExprId) -> Frac {
+        if let Some(n) = self.as_number(value) {
+            return Frac::poly(constant(n));
+        }
+        let (c, atom) = self.split_coeff(value);
+        Frac::poly(scale(&atom_poly(atom), c))
+    }
+
+    /// `sin`, `cos` or `tan` of the (put together) angle `a` by the addition
+    /// theorems, when `a` is a sum or an integer multiple; None when there is
+    /// nothing to expand or the expansion exceeds its budget.
+    fn trig_frac(&mut self, f: Func, a: ExprId) -> Option<Frac> {
+        if !matches!(f, Func::Sin | Func::Cos | Func::Tan) {
+            return None;
+        }
+        let terms = self.terms(a);
+        let multiple = |pool: &mut Pool, t: ExprId| match pool.split_coeff(t) {
+            (Number::Rational(r), rest) if r.is_integer() && r.numer().abs() >= 2 && rest != pool.one() => {
+                Some((r.numer(), rest))
+            }
+            _ => None,
+        };
+        let expands = terms.len() > 1 || f == Func::Tan || multiple(self, a).is_some();
+        if !expands || terms.len() > MAX_ANGLE_TERMS {
+            return None;
+        }
+        let mut total: Option<CosSin> = None;
+        for t in terms {
+            let part = match multiple(self, t) {
+                Some((n, u)) if n.abs() <= MAX_ANGLE_MULTIPLE => {
+                    let base = self.cos_sin_atoms(u);
+                    let mut acc = base.clone();
+                    for _ in 1..n.abs() {
+                        acc = angle_sum(&acc, &base)?;
+                    }
+                    if n < 0 {
+                        acc.1 = Frac { num: scale(&acc.1.num, Number::MINUS_ONE), den: acc.1.den };
+                    }
+                    acc
+                }
+                _ => self.cos_sin_atoms(t),
+            };
+            total = Some(match total {
+                None => part,
+                Some(acc) => angle_sum(&acc, &part)?,
+            });
+        }
+        let (cos, sin) = total?;
+        match f {
+            Func::Sin => Some(sin),
+            Func::Cos => Some(cos),
+            _ => frac_mul(&sin, &frac_inv(&cos)?),
+        }
+    }
+
+    /// `(cos u, sin u)` of one angle as atoms (numbers where they fold).
+    fn cos_sin_atoms(&mut self, u: ExprId) -> CosSin {
+        let c = self.func(Func::Cos, u);
+        let s = self.func(Func::Sin, u);
+        (self.signed_atom(c), self.signed_atom(s))
+    }
+
+    /// The numerator with `sin²u` replaced by `1 − cos²u` and `cosh²u` by
+    /// `1 + sinh²u` in every monomial (the remainder modulo the Pythagorean
+    /// identities); None beyond the budget of terms.
+    fn reduce_squares(&mut self, p: &Poly) -> Option<Poly> {
+        let mut out = Poly::new();
+        for (m, &c) in p {
+            let mut kept = Vec::with_capacity(m.0.len());
+            let mut factor = constant(Number::ONE);
+            for &(a, k) in &m.0 {
+                let swap = match *self.node(a) {
+                    Node::Func(Func::Sin, u) if k >= 2 => Some((Func::Cos, u, Number::MINUS_ONE)),
+                    Node::Func(Func::Cosh, u) if k >= 2 => Some((Func::Sinh, u, Number::ONE)),
+                    _ => None,
+                };
+                let Some((other, u, sign)) = swap else {
+                    kept.push((a, k));
+                    continue;
+                };
+                if k % 2 == 1 {
+                    kept.push((a, 1));
+                }
+                // 1 ∓ other(u)²
+                let o = self.func(other, u);
+                let o = self.signed_atom(o).num;
+                let square = poly_mul(&o, &o)?;
+                let pythagoras = poly_add(&constant(Number::ONE), &scale(&square, sign));
+                factor = poly_mul(&factor, &poly_pow(&pythagoras, k / 2)?)?;
+            }
+            kept.sort_unstable_by_key(|p| p.0);
+            let mut mono = Poly::new();
+            mono.insert(Mono(kept), c);
+            out = poly_add(&out, &poly_mul(&mono, &factor)?);
+            if out.len() > MAX_TERMS {
+                return None;
+            }
+        }
+        Some(out)
     }
 
     fn poly_expr(&mut self, p: &Poly) -> ExprId {
@@ -674,5 +828,33 @@ mod tests {
         let t = pool.together(e);
         assert_eq!(pool.display(t).to_string(), "0^(-1)*x");
         check("(x + y)^40/(x + y)", "(x + y)^39");
+    }
+
+    #[track_caller]
+    fn check_trig(text: &str, expect: &str) {
+        let mut pool = Pool::default();
+        let e = pool.parse(text).unwrap();
+        let t = pool.together_trig(e);
+        assert_eq!(pool.display(t).to_string(), expect, "together_trig({text})");
+    }
+
+    #[test]
+    fn trigonometric_identities_have_a_zero_numerator() {
+        check_trig("sin(u)^2 + cos(u)^2 - 1", "0");
+        check_trig("sin(a - b) - sin(a)*cos(b) + cos(a)*sin(b)", "0");
+        check_trig("cos(2*u) - cos(u)^2 + sin(u)^2", "0");
+        check_trig("sin(3*u) - 3*sin(u) + 4*sin(u)^3", "0");
+        check_trig("tan(u)*cos(u) - sin(u)", "0");
+        check_trig("1/cos(u)^2 - tan(u)^2 - 1", "0");
+        check_trig("cosh(u)^2 - sinh(u)^2 - 1", "0");
+        check_trig("exp(sin(u)^2 + cos(u)^2) - exp(1)", "0");
+        check_trig("m*l^2*(sin(q)^2 + cos(q)^2)*q'^2/2 - m*l^2*q'^2/2", "0");
+    }
+
+    #[test]
+    fn trigonometric_non_identities_stay_nonzero() {
+        check_trig("sin(u)^2 - cos(u)^2", "-2*cos(u)^2 + 1");
+        check_trig("sin(2*u) - 2*sin(u)", "2*sin(u)*(cos(u) - 1)");
+        check_trig("sin(u)^2", "-cos(u)^2 + 1");
     }
 }

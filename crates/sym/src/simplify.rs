@@ -4,7 +4,8 @@
 //!
 //! Entry points: [`Pool::simplify`] (generic) and [`Pool::simplify_in`] (collect
 //! the coefficients of the given variables, as the notes write equations of
-//! motion: `(mA + mB)*lA^2*a'' + …`). Both keep the shorter of the input and the
+//! motion: `(mA + mB)*lA^2*a'' + …`), and [`Pool::is_identically_zero`], which
+//! tries these rewrites and the quotient form to show that an expression is 0. Both keep the shorter of the input and the
 //! rewritten form (and, where a sum stands in a denominator, the single
 //! quotient of [`Pool::together`]), so simplification never makes an
 //! expression longer, and every rewrite is an identity (the property tests
@@ -454,6 +455,27 @@ impl Pool {
         self.shorter_together(best, e)
     }
 
+    /// True when exact rewriting shows that `e` is identically zero (wherever it
+    /// is defined): its canonical form, its expansion with trigonometric terms
+    /// combined, or its quotient form with sines and cosines expanded
+    /// ([`Pool::together_trig`]) is 0. False only means that no rewrite showed
+    /// it: zero-equivalence is undecidable in general, so false is not "nonzero".
+    pub fn is_identically_zero(&mut self, e: ExprId) -> bool {
+        if self.is_zero(e) {
+            return true;
+        }
+        let expanded = self.expand(e);
+        if self.is_zero(expanded) {
+            return true;
+        }
+        let combined = self.combine_trig(expanded);
+        if self.is_zero(combined) {
+            return true;
+        }
+        let quotient = self.together_trig(e);
+        self.is_zero(quotient)
+    }
+
     /// The shorter of two equal expressions, preferring the first on a tie.
     fn shorter(&self, a: ExprId, b: ExprId) -> ExprId {
         if self.tree_size(b) < self.tree_size(a) {
@@ -565,6 +587,27 @@ mod tests {
         // Without a sum in a denominator there is nothing to put together.
         let e = p.parse("1/a + 1/b").unwrap();
         assert_eq!(p.simplify(e), e);
+    }
+
+    #[track_caller]
+    fn check_zero(text: &str, expect: bool) {
+        let mut p = Pool::default();
+        let e = p.parse(text).unwrap();
+        assert_eq!(p.is_identically_zero(e), expect, "{text}");
+    }
+
+    #[test]
+    fn identities_are_shown_to_be_zero() {
+        check_zero("x - x", true);
+        check_zero("(x + y)^2 - x^2 - 2*x*y - y^2", true);
+        check_zero("l^2*q'^2*(sin(q)^2 + cos(q)^2) - l^2*q'^2", true);
+        check_zero("1/(x - 1) - 2/(x^2 - 1) - 1/(x + 1)", true);
+        check_zero("cos(a - b) - cos(a)*cos(b) - sin(a)*sin(b)", true);
+        check_zero("mu*r^2/(mu*r^2) - 1", true);
+        // Not identities, and things no rewrite here shows (false is not "nonzero").
+        check_zero("sin(x)^2 - cos(x)^2", false);
+        check_zero("exp(-1000000*x^2)*x", false);
+        check_zero("sqrt(x^2) - x", false);
     }
 
     #[test]

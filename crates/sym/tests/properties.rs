@@ -3,7 +3,8 @@
 //! Expressions are random trees of constructor calls ([`Gen`], built through the
 //! `Pool` constructors, so they are in canonical form). The properties:
 //! printing then parsing is the identity on ids; `diff` matches a central finite
-//! difference of `eval`; `simplify` and `together` keep the value; a [`Tape`] of several roots
+//! difference of `eval`; `simplify`, `together` and `together_trig` keep the
+//! value; what `is_identically_zero` proves is 0 at every point; a [`Tape`] of several roots
 //! agrees with `eval` of each; and the parser returns `Ok` or `Err`, never panics,
 //! on any text. The runner is seeded, so every run tries the same cases.
 
@@ -135,6 +136,43 @@ proptest! {
             if a.is_finite() && b.is_finite() && a.abs() < 1e8 && finite_inside(&pool, e, p) {
                 prop_assert!(close(a, b, 1e-9, a.abs()),
                     "together({}) = {}, but at {:?} they are {} and {}", pool.display(e), pool.display(t), p, a, b);
+            }
+        }
+    }
+
+    #[test]
+    fn together_trig_keeps_the_value(g in expr(), points in prop::collection::vec(point(), 3)) {
+        let mut pool = Pool::default();
+        let e = build(&mut pool, &g);
+        let t = pool.together_trig(e);
+        for p in &points {
+            let (a, b) = (eval(&pool, e, p), eval(&pool, t, p));
+            if a.is_finite() && b.is_finite() && a.abs() < 1e8 && finite_inside(&pool, e, p) {
+                prop_assert!(close(a, b, 1e-9, a.abs()),
+                    "together_trig({}) = {}, but at {:?} they are {} and {}", pool.display(e), pool.display(t), p, a, b);
+            }
+        }
+    }
+
+    #[test]
+    fn what_is_proven_zero_vanishes(g in expr(), points in prop::collection::vec(point(), 3)) {
+        let mut pool = Pool::default();
+        let e = build(&mut pool, &g);
+        // The expression itself (rarely zero) and its differences from its
+        // rewrites (identities, which the proof should mostly find).
+        let rewrites = [pool.expand(e), pool.simplify(e), pool.together(e)];
+        let mut candidates = vec![e];
+        candidates.extend(rewrites.iter().map(|&r| pool.sub(e, r)));
+        for d in candidates {
+            if !pool.is_identically_zero(d) {
+                continue;
+            }
+            for p in &points {
+                let v = eval(&pool, d, p);
+                if finite_inside(&pool, d, p) {
+                    prop_assert!(v.abs() <= 1e-7 * eval(&pool, e, p).abs().max(1.0),
+                        "{} was proven zero, but at {:?} it is {}", pool.display(d), p, v);
+                }
             }
         }
     }

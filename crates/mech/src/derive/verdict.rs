@@ -1,10 +1,13 @@
 //! The verdicts of a derivation as data: why H is or is not the energy, why it
-//! is or is not conserved, why it is not given in closed form, and why each
-//! conserved quantity is conserved. Each reason is an enum variant with the
+//! is or is not conserved, why it is not given in closed form, why each
+//! conserved quantity is conserved, and which facts could not be decided (a
+//! zero that is neither proven nor refuted, see [`crate::probe`]), so that
+//! nothing is claimed on them. Each reason is an enum variant with the
 //! facts it rests on; its `Display` is the sentence the notes would write, and
 //! [`code`](ConservationReason::code) a stable name a program can branch on
 //! (the `reasons` of the `lagrange.derive/1` report).
 
+use crate::probe::UNDECIDED;
 use serde::Serialize;
 use std::fmt;
 
@@ -24,6 +27,30 @@ pub enum EnergyReason {
     NotEnergy,
     /// The model gives only L, so T and U are not known separately.
     OnlyLagrangian,
+    /// Σ q'·∂T/∂q' − 2T could be neither proven nor refuted to be 0.
+    HomogeneityUndecided,
+    /// U − U₀ could be neither proven nor refuted to be 0.
+    VelocityDependenceUndecided,
+    /// The conclusion: h − (T + U₀) could be neither proven nor refuted to be 0.
+    EnergyUndecided,
+}
+
+/// What could not be decided about a coordinate, so that it is not claimed
+/// cyclic or its momentum is not claimed conserved.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(tag = "code", rename_all = "snake_case")]
+pub enum CyclicReason {
+    /// ∂L/∂q could be neither proven nor refuted to be 0: q is not listed as cyclic.
+    Undecided {
+        /// The coordinate's name.
+        coordinate: String,
+    },
+    /// q is cyclic, but whether ∂R/∂q' and Q_q are 0 could not be decided:
+    /// p_q is not claimed conserved.
+    MomentumUndecided {
+        /// The coordinate's name.
+        coordinate: String,
+    },
 }
 
 /// A term of dH/dt = −∂L/∂t − Σ q'·∂R/∂q' + Σ Q·q'.
@@ -67,6 +94,18 @@ pub enum ConservationReason {
     WorkBalance,
     /// The constraints are free of t: their forces do no work, H stays conserved.
     ConstraintsDoNoWork,
+    /// These terms of dH/dt could be neither proven nor refuted to be 0: H is
+    /// not claimed conserved.
+    Undecided {
+        /// The terms in question.
+        terms: Vec<RateTerm>,
+    },
+    /// Whether these constraints' time terms a_t are 0 could not be decided:
+    /// H is not claimed conserved.
+    ConstraintWorkUndecided {
+        /// The constraints in question.
+        constraints: Vec<String>,
+    },
 }
 
 /// Why H is not given in closed form.
@@ -95,6 +134,9 @@ pub enum ConservedReason {
     EnergyConserved,
     /// H is conserved, but it is not the energy T + U.
     HamiltonianConserved,
+    /// H is conserved; whether it is the energy T + U is not known (the model
+    /// gives only L, or it could not be decided).
+    HamiltonianConservedEnergyUnknown,
 }
 
 /// Why H is or is not the energy, and is or is not conserved.
@@ -106,6 +148,9 @@ pub struct Verdicts {
     pub conservation: Vec<ConservationReason>,
     /// Why H is not given in closed form, when it is not.
     pub hamiltonian: Vec<HamiltonianReason>,
+    /// The coordinates whose cyclicity or conserved momentum could not be decided.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub cyclic: Vec<CyclicReason>,
 }
 
 impl EnergyReason {
@@ -118,6 +163,34 @@ impl EnergyReason {
             EnergyReason::IsEnergy => "is_energy",
             EnergyReason::NotEnergy => "not_energy",
             EnergyReason::OnlyLagrangian => "only_lagrangian",
+            EnergyReason::HomogeneityUndecided => "homogeneity_undecided",
+            EnergyReason::VelocityDependenceUndecided => "velocity_dependence_undecided",
+            EnergyReason::EnergyUndecided => "energy_undecided",
+        }
+    }
+}
+
+impl CyclicReason {
+    /// The reason's stable name.
+    pub fn code(&self) -> &'static str {
+        match self {
+            CyclicReason::Undecided { .. } => "undecided",
+            CyclicReason::MomentumUndecided { .. } => "momentum_undecided",
+        }
+    }
+}
+
+impl fmt::Display for CyclicReason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            CyclicReason::Undecided { coordinate: c } => write!(
+                f,
+                "Could not decide whether ∂L/∂{c} is zero ({UNDECIDED}): {c} is not claimed cyclic, nor p_{c} conserved."
+            ),
+            CyclicReason::MomentumUndecided { coordinate: c } => write!(
+                f,
+                "{c} is cyclic, but whether dissipation or a generalized force acts on it could not be decided ({UNDECIDED}): p_{c} is not claimed conserved."
+            ),
         }
     }
 }
@@ -134,6 +207,8 @@ impl ConservationReason {
             ConservationReason::ConstraintWork { .. } => "constraint_work",
             ConservationReason::WorkBalance => "work_balance",
             ConservationReason::ConstraintsDoNoWork => "constraints_do_no_work",
+            ConservationReason::Undecided { .. } => "undecided",
+            ConservationReason::ConstraintWorkUndecided { .. } => "constraint_work_undecided",
         }
     }
 }
@@ -154,6 +229,15 @@ impl fmt::Display for EnergyReason {
             EnergyReason::NotEnergy => "So H = Σ q'·p − L differs from T + U: H is not the energy.",
             EnergyReason::OnlyLagrangian => {
                 "The model gives only L, so T and U (and hence the energy) are not known separately."
+            }
+            EnergyReason::HomogeneityUndecided => {
+                "Could not decide whether T is homogeneous quadratic in the velocities, that is whether Σ q'·∂T/∂q' − 2T is zero (no exact rewriting reduces it to 0, and no probe point shows it nonzero)."
+            }
+            EnergyReason::VelocityDependenceUndecided => {
+                "Could not decide whether U depends on the velocities, that is whether U − U(q' = 0) is zero (no exact rewriting reduces it to 0, and no probe point shows it nonzero)."
+            }
+            EnergyReason::EnergyUndecided => {
+                "So whether H = Σ q'·p − L equals T + U could not be decided (no exact rewriting reduces their difference to 0, and no probe point shows it nonzero): nothing is claimed."
             }
         })
     }
@@ -204,6 +288,28 @@ impl fmt::Display for ConservationReason {
             ConservationReason::ConstraintsDoNoWork => f.write_str(
                 "The constraints do not depend on t: their forces do no work (Aᵀλ·q' = −λ·a_t = 0), so H stays conserved.",
             ),
+            ConservationReason::Undecided { terms } => {
+                let names: Vec<&str> = terms
+                    .iter()
+                    .map(|t| match t {
+                        RateTerm::ExplicitTime => "∂L/∂t",
+                        RateTerm::Dissipation => "the dissipation function R",
+                        RateTerm::GeneralizedForces => "the generalized forces Q",
+                    })
+                    .collect();
+                write!(
+                    f,
+                    "Could not decide whether {} {} zero ({UNDECIDED}): H is not claimed conserved.",
+                    names.join(" and "),
+                    if names.len() == 1 { "is" } else { "are" }
+                )
+            }
+            ConservationReason::ConstraintWorkUndecided { constraints } => write!(
+                f,
+                "Could not decide whether the time term a_t of {} is zero ({UNDECIDED}): whether {} force does work is not known, so H is not claimed conserved.",
+                constraints.join(", "),
+                if constraints.len() == 1 { "its" } else { "their" }
+            ),
         }
     }
 }
@@ -239,6 +345,7 @@ impl ConservedReason {
             ConservedReason::Cyclic { .. } => "cyclic",
             ConservedReason::EnergyConserved => "energy_conserved",
             ConservedReason::HamiltonianConserved => "hamiltonian_conserved",
+            ConservedReason::HamiltonianConservedEnergyUnknown => "hamiltonian_conserved_energy_unknown",
         }
     }
 }
@@ -251,6 +358,9 @@ impl fmt::Display for ConservedReason {
             }
             ConservedReason::EnergyConserved => f.write_str("H is the energy, and it is conserved"),
             ConservedReason::HamiltonianConserved => f.write_str("H is conserved (it is not the energy T + U)"),
+            ConservedReason::HamiltonianConservedEnergyUnknown => {
+                f.write_str("H is conserved (whether it is the energy T + U is not known)")
+            }
         }
     }
 }
@@ -281,5 +391,8 @@ mod tests {
         assert_eq!(serde_json::to_string(&r).unwrap(), r#"{"code":"generalized_forces","coordinates":["x"]}"#);
         assert_eq!(serde_json::to_string(&EnergyReason::IsEnergy).unwrap(), r#"{"code":"is_energy"}"#);
         assert_eq!(r.code(), "generalized_forces");
+        let c = CyclicReason::Undecided { coordinate: "x".into() };
+        assert_eq!(serde_json::to_string(&c).unwrap(), r#"{"code":"undecided","coordinate":"x"}"#);
+        assert!(c.to_string().starts_with("Could not decide whether ∂L/∂x is zero"), "{c}");
     }
 }

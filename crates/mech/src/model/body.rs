@@ -296,20 +296,24 @@ fn read_inertia(r: &mut Reader<'_>, v: &Spanned<toml::Value>) -> Result<([[ExprI
             }
             for i in 0..3 {
                 for j in i + 1..3 {
-                    if !probe::are_equal(&mut r.pool, m[i][j], m[j][i]) {
-                        return Err(ModelError::at(
-                            span,
-                            format!(
-                                "the inertia tensor is not symmetric: I{}{} = {} but I{}{} = {}",
-                                i + 1,
-                                j + 1,
-                                r.pool.display(m[i][j]),
-                                j + 1,
-                                i + 1,
-                                r.pool.display(m[j][i])
-                            ),
-                        ));
-                    }
+                    // A symmetric tensor is a claim: proven, or the model is refused.
+                    let problem = match probe::decide_equal(&mut r.pool, m[i][j], m[j][i]) {
+                        probe::Decision::Zero => continue,
+                        probe::Decision::NonZero => "the inertia tensor is not symmetric",
+                        probe::Decision::Undecided => "could not show that the inertia tensor is symmetric",
+                    };
+                    return Err(ModelError::at(
+                        span,
+                        format!(
+                            "{problem}: I{}{} = {} but I{}{} = {}",
+                            i + 1,
+                            j + 1,
+                            r.pool.display(m[i][j]),
+                            j + 1,
+                            i + 1,
+                            r.pool.display(m[j][i])
+                        ),
+                    ));
                 }
             }
             Ok((m, false))
