@@ -449,7 +449,7 @@ pub(crate) struct RowBuffer {
     pub(crate) qd: Vec<f64>,
     pub(crate) invariants: Vec<f64>,
     pub(crate) constraints: Vec<f64>,
-    /// Whether the row is an event, interpolated between two steps.
+    /// Whether the row is a stop event or a crossing.
     pub(crate) is_event: bool,
 }
 
@@ -569,7 +569,7 @@ fn drive(
             row_error = Some((RunFailure::Row { t: obs.t }, format!("at t = {}: {e}", obs.t)));
             return ControlFlow::Break(());
         }
-        invariant_audit.observe(&row.invariants, row.is_event);
+        invariant_audit.observe(&row.invariants);
         last.0 = obs.t;
         last.1.copy_from_slice(&row.q);
         last.2.copy_from_slice(&row.qd);

@@ -1,6 +1,8 @@
 //! The convenience driver [`integrate`]: runs a [`Solver`] to an end time, hands every
 //! accepted step or evenly spaced samples (from dense output) to an observer, and
-//! locates events (zero crossings of `g(t, y)`) with Brent's method on the dense output.
+//! locates events (zero crossings of `g(t, y)`) with Brent's method on the dense output,
+//! then, for the methods whose dense output is of lower order than their steps, on
+//! states the method computes itself ([`Solver::restep`]).
 
 use std::ops::ControlFlow;
 
@@ -126,7 +128,8 @@ pub struct Summary {
 /// points `output` asks for and on every event crossing, in time order.
 ///
 /// After a terminal event the solver stands at the end of the step that contained it;
-/// the event's state is the one handed to the observer. Returns
+/// the event's state is the one handed to the observer: interpolated, or from
+/// [`Solver::restep`] for the methods that offer it. Returns
 /// [`SolveError::EndBeforeStart`] when `t_end` lies before the solver's time.
 pub fn integrate<V: Solver + ?Sized>(
     solver: &mut V,
@@ -262,7 +265,7 @@ fn drive_lazily<V: Solver + ?Sized>(
             if counts {
                 solver.prepare_dense()?;
                 let tol = 4.0 * f64::EPSILON * t_a.abs().max(t_b.abs());
-                let root = brent(
+                let mut root = brent(
                     |t| {
                         solver.interpolate(t, &mut y)?;
                         eval_event(ev, k, t, &y)
@@ -273,6 +276,31 @@ fn drive_lazily<V: Solver + ?Sized>(
                     gb,
                     tol,
                 )?;
+                // The interpolant's root is within its error of the method's:
+                // refine it on the method's own states, in the half of the step
+                // the sign there points to.
+                if let Some(restepped) = solver.restep(root, &mut y) {
+                    restepped?;
+                    let g_root = eval_event(ev, k, root, &y)?;
+                    if g_root != 0.0 {
+                        let (a, b, fa, fb) = if (g_root > 0.0) == (ga > 0.0) {
+                            (root, t_b, g_root, gb)
+                        } else {
+                            (t_a, root, ga, g_root)
+                        };
+                        root = brent(
+                            |t| {
+                                state_at(solver, t, &mut y)?;
+                                eval_event(ev, k, t, &y)
+                            },
+                            a,
+                            b,
+                            fa,
+                            fb,
+                            tol,
+                        )?;
+                    }
+                }
                 found.push((root, k));
             }
         }
@@ -308,9 +336,11 @@ fn drive_lazily<V: Solver + ?Sized>(
             }
             if t == t_b {
                 y.copy_from_slice(solver.state());
-            } else {
+            } else if obs_kind == ObservationKind::Sample {
                 solver.prepare_dense()?;
                 solver.interpolate(t, &mut y)?;
+            } else {
+                state_at(solver, t, &mut y)?;
             }
             if stopped(observer(&Observation { t, y: &y, kind: obs_kind })) {
                 return Ok(Summary { t, stop: StopReason::Observer, events: n_events });
@@ -328,6 +358,18 @@ fn drive_lazily<V: Solver + ?Sized>(
         }
         if outcome == StepOutcome::ReachedStop {
             return Ok(Summary { t: t_b, stop: StopReason::Finished, events: n_events });
+        }
+    }
+}
+
+/// The state at `t` within the last step: the method's own
+/// ([`Solver::restep`]) where its dense output is of lower order, else interpolated.
+fn state_at<V: Solver + ?Sized>(solver: &mut V, t: f64, y: &mut [f64]) -> Result<(), SolveError> {
+    match solver.restep(t, y) {
+        Some(result) => result,
+        None => {
+            solver.prepare_dense()?;
+            solver.interpolate(t, y)
         }
     }
 }

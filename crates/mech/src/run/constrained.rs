@@ -538,7 +538,7 @@ impl Stepping for Constrained {
                 audit.max_abs_velocity_residual = audit.max_abs_residual;
             }
         }
-        if self.work && !row.is_event {
+        if self.work {
             let hw = row.invariants[0] - self.y[2 * n];
             let h0 = *self.hw_initial.get_or_insert(hw);
             self.hw_abs = self.hw_abs.max((hw - h0).abs());
