@@ -176,6 +176,11 @@ impl SolverState {
         self.stats
     }
 
+    /// The most accepted steps a run may take ([`Config::max_steps`]).
+    pub fn max_steps(&self) -> usize {
+        self.max_steps
+    }
+
     /// The stop time, if one is pending.
     pub fn stop_time(&self) -> Option<f64> {
         self.stop

@@ -303,10 +303,37 @@ fn bad_input_is_an_error() {
     })
     .unwrap();
     assert_eq!((n, sum.stop), (3, StopReason::Finished));
-    // Max steps.
+}
+
+/// A run that cannot reach its end time within its step budget: a fixed step
+/// fails before its first step, an adaptive run foreseen far beyond its budget at
+/// its first checkpoint, and one that needs a little more than its budget when the
+/// budget is spent.
+#[test]
+fn step_budget_by_foresight() {
     let few = Config { max_steps: 3, dt: Some(0.1), ..Config::default() };
     let mut s = Method::Verlet.build_separable(Oscillator, 0.0, &[1.0, 0.0], &few).unwrap();
-    assert!(matches!(integrate_to(&mut s, 1.0, &mut [0.0; 2]), Err(SolveError::MaxStepsExceeded { max_steps: 3, .. })));
+    let e = integrate_to(&mut s, 1.0, &mut [0.0; 2]).unwrap_err();
+    let SolveError::MaxStepsForeseen { t, steps, projected, max_steps: 3, .. } = e else { panic!("{e:?}") };
+    assert_eq!((t, steps, s.statistics().steps), (0.0, 0, 0));
+    assert!((projected - 10.0).abs() < 1e-9, "{projected}");
+
+    let budget = 12_800;
+    let config = Config { max_steps: budget, rtol: 1e-9, atol: 1e-12, ..Config::default() };
+    let mut s = Method::Dop853.build(Oscillator, 0.0, &[1.0, 0.0], &config).unwrap();
+    let e = integrate_to(&mut s, 1e9, &mut [0.0; 2]).unwrap_err();
+    let SolveError::MaxStepsForeseen { steps, projected, .. } = e else { panic!("{e:?}") };
+    assert_eq!(steps, budget / 128);
+    assert!(projected > 1e8, "{projected}");
+
+    // The pace of this run: steps per unit time.
+    let mut s = Method::Dop853.build(Oscillator, 0.0, &[1.0, 0.0], &config).unwrap();
+    integrate_to(&mut s, 100.0, &mut [0.0; 2]).unwrap();
+    let pace = s.statistics().steps as f64 / 100.0;
+    let mut s = Method::Dop853.build(Oscillator, 0.0, &[1.0, 0.0], &config).unwrap();
+    let e = integrate_to(&mut s, 2.0 * budget as f64 / pace, &mut [0.0; 2]).unwrap_err();
+    assert!(matches!(e, SolveError::MaxStepsExceeded { max_steps, .. } if max_steps == budget), "{e:?}");
+    assert_eq!(s.statistics().steps, budget);
 }
 
 /// An event inside a step of a method whose dense output is of lower order than
