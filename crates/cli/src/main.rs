@@ -5,6 +5,7 @@
 //! Exit codes: 0 done; 2 bad input (file, expression, model, arguments), with a
 //! message naming file, line and column; 1 a run that failed midway.
 
+mod budget;
 mod decimal;
 mod diagnostics;
 mod extremal;

@@ -98,6 +98,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
         },
         stop_when,
         crossings,
+        max_steps: defaults.max_steps,
     };
 
     // Bad settings are reported before any file is created.
@@ -193,7 +194,14 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     }
     let (report, failure) = match result {
         Ok(r) => (r, None),
-        Err(RunError::Failed { message, report }) => (*report, Some(message)),
+        Err(RunError::Failed { message, mut report }) => {
+            // The budget's advice names the flags that follow it.
+            if let Some(mech::RunFailure::StepBudget(b)) = &report.failure_reason {
+                report.failure = Some(crate::budget::ran_out(b));
+            }
+            let message = report.failure.clone().unwrap_or(message);
+            (*report, Some(message))
+        }
         Err(e) => return Err(input_failure(path, &source, e)),
     };
 
@@ -243,6 +251,7 @@ fn input_failure(path: &Path, source: &str, e: RunError) -> Failure {
             "--dt applies only to fixed-step methods, and {} chooses its own step: set its tolerance with --rtol, or choose a fixed-step method (verlet, yoshida4, kahanli6, kahanli8, gauss2, gauss4, gauss6)",
             method.name()
         )),
+        RunError::StepBudget(b) => crate::budget::refused(&b),
         RunError::Input(e) => Failure::model(path, source, e),
         RunError::Failed { message, .. } => Failure::run(message),
     }

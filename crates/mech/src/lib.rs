@@ -99,7 +99,10 @@ pub use report::{BodyReport, ConstraintReport, DeriveReport, HamiltonEquations, 
 pub use run::body::BodyRecorder;
 pub use run::constrained::{constraint_columns, ConstraintAudit};
 pub use run::dynamics::{invariants_of, Form, Invariant};
-pub use run::{simulate, Audit, Row, RunConfig, RunError, RunFailure, RunReport, StopCondition, MAX_SAMPLES};
+pub use run::{
+    approx, simulate, Audit, BudgetAdvice, BudgetStage, Row, RunConfig, RunError, RunFailure, RunReport, StepBudget,
+    StopCondition, TimeScale, MAX_SAMPLES, STEPS_PER_TIME_SCALE,
+};
 pub use source::MAX_FILE_BYTES;
 pub use sweep::{
     merge, sweep, Axis, Grid, Shard, SweepConfig, SweepError, SweepTable, TableRow, Target, DEFAULT_RTOL, MAX_RUNS,

@@ -16,6 +16,7 @@
 
 mod audit;
 pub(crate) mod body;
+mod budget;
 pub(crate) mod constrained;
 pub(crate) mod dynamics;
 pub(crate) mod ensemble;
@@ -25,6 +26,7 @@ pub(crate) mod series;
 use crate::derive::Derivation;
 use crate::error::ModelError;
 use audit::InvariantAudit;
+pub use budget::{approx, BudgetAdvice, BudgetStage, StepBudget, TimeScale, STEPS_PER_TIME_SCALE};
 use dynamics::{Dynamics, Form};
 use num::{
     integrate, integrate_projected, Direction, Event, Method, ObservationKind, Output, RhsError, SolveError, Solver,
@@ -112,6 +114,8 @@ pub struct RunConfig {
     pub stop_when: Vec<StopCondition>,
     /// Crossings to record without stopping (the rows of a Poincaré section).
     pub crossings: Vec<StopCondition>,
+    /// The most steps the run may take: its step budget.
+    pub max_steps: usize,
 }
 
 impl Default for RunConfig {
@@ -127,18 +131,21 @@ impl Default for RunConfig {
             output: Output::Samples(1001),
             stop_when: Vec::new(),
             crossings: Vec::new(),
+            // The solvers' default, 10^7: a long symplectic run fits, a stalled
+            // adaptive one stops within seconds.
+            max_steps: num::Config::default().max_steps,
         }
     }
 }
 
-/// Most output rows a run writes: as many as the steps a solver may take
-/// (`num::Config::max_steps`); beyond that the file, not the motion, is the work.
+/// Most output rows a run writes: as many as the steps a solver may take by
+/// default (`num::Config::max_steps`); beyond that the file, not the motion, is the work.
 pub const MAX_SAMPLES: usize = 10_000_000;
 
 impl RunConfig {
     /// Checks what a run cannot start without, before anything is computed: a
     /// positive, finite end time; a fixed step, if given, that reaches it within
-    /// the solvers' step budget and is no longer than the spacing of the
+    /// the run's step budget and is no longer than the spacing of the
     /// samples; and no more samples than [`MAX_SAMPLES`].
     pub fn check(&self) -> Result<(), RunError> {
         if !is_positive_time(self.until) {
@@ -149,8 +156,11 @@ impl RunConfig {
                 return Err(RunError::TooManySamples { samples, max: MAX_SAMPLES });
             }
         }
+        if self.max_steps == 0 {
+            return Err(RunError::Input(ModelError::whole("a run needs a step budget of at least one step")));
+        }
         if let Some(dt) = self.dt {
-            let max = num::Config::default().max_steps;
+            let max = self.max_steps;
             let steps = self.until / dt;
             if !(dt.is_finite() && dt > 0.0) || steps > max as f64 {
                 return Err(RunError::TooManySteps { dt, steps, max });
@@ -294,6 +304,9 @@ pub enum RunFailure {
         /// When.
         t: f64,
     },
+    /// The run could not reach its end time within its step budget: it spent
+    /// the budget, or its pace was foreseen far beyond it.
+    StepBudget(StepBudget),
 }
 
 impl RunFailure {
@@ -306,6 +319,7 @@ impl RunFailure {
             RunFailure::Singular { .. } => "singular",
             RunFailure::Step { .. } => "step",
             RunFailure::Row { .. } => "row",
+            RunFailure::StepBudget(_) => "step_budget",
         }
     }
 }
@@ -346,6 +360,10 @@ pub enum RunError {
         /// The spacing of the samples.
         spacing: f64,
     },
+    /// A fixed step, chosen from the tolerance, that would take more steps than
+    /// the run's budget to reach the end time (refused before the run).
+    #[error("{0}")]
+    StepBudget(Box<StepBudget>),
     /// A fixed step given for an adaptive method, which chooses its own.
     #[error("a fixed step applies only to fixed-step methods, and {} chooses its own", .method.name())]
     StepNotApplicable {
@@ -449,7 +467,7 @@ pub(crate) struct RowBuffer {
     pub(crate) qd: Vec<f64>,
     pub(crate) invariants: Vec<f64>,
     pub(crate) constraints: Vec<f64>,
-    /// Whether the row is an event, interpolated between two steps.
+    /// Whether the row is a stop event or a crossing.
     pub(crate) is_event: bool,
 }
 
@@ -470,6 +488,8 @@ pub(crate) trait Stepping {
     fn warnings(&self, _warnings: &mut Vec<String>) {}
     /// A solver failure in the user's terms, from the initial state and the last good one.
     fn describe(&mut self, e: &SolveError, y0: &[f64], at: (f64, Vec<f64>)) -> (RunFailure, String);
+    /// The motion's fastest time scale at the solver state (t, y), if it can be told.
+    fn time_scale(&mut self, t: f64, y: &[f64]) -> Option<TimeScale>;
 }
 
 /// Runs a simulation, with or without constraints. `on_row` receives every
@@ -569,7 +589,7 @@ fn drive(
             row_error = Some((RunFailure::Row { t: obs.t }, format!("at t = {}: {e}", obs.t)));
             return ControlFlow::Break(());
         }
-        invariant_audit.observe(&row.invariants, row.is_event);
+        invariant_audit.observe(&row.invariants);
         last.0 = obs.t;
         last.1.copy_from_slice(&row.q);
         last.2.copy_from_slice(&row.qd);
@@ -599,6 +619,19 @@ fn drive(
         None => integrate(&mut solver, config.until, config.output, &mut events, observer),
     };
     drop(events);
+    // A run that failed ends where its solver stands: the summary's final state
+    // is the last one reached, audited like a row, not the last row written.
+    if result.is_err() && solver.t() > last.0 {
+        let y = solver.state();
+        row.is_event = false;
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        if stepping.row(solver.t(), y, &mut row).is_ok() && finite(&row.q) && finite(&row.qd) {
+            invariant_audit.observe(&row.invariants);
+            last.0 = solver.t();
+            last.1.copy_from_slice(&row.q);
+            last.2.copy_from_slice(&row.qd);
+        }
+    }
 
     let stats = solver.statistics();
     let mut audits = invariant_audit.audits();
@@ -644,6 +677,11 @@ fn drive(
         }
         Err(e) => {
             let at = (solver.t(), solver.state().to_vec());
+            let time_scale = || stepping.time_scale(at.0, &at.1);
+            if let Some(budget) = StepBudget::ran_out(&e, &*solver, config.until, time_scale) {
+                let message = budget.to_string();
+                return Err(failed(report, RunFailure::StepBudget(budget), message));
+            }
             // A body near its gimbal singularity: say so rather than only "singular".
             let near = guards.iter().min_by(|a, b| at.1[a.beta].sin().abs().total_cmp(&at.1[b.beta].sin().abs()));
             let (reason, message) = match near.filter(|g| at.1[g.beta].sin().abs() < 0.1) {

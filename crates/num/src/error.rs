@@ -142,6 +142,23 @@ pub enum SolveError {
         /// The limit.
         max_steps: usize,
     },
+    /// The run cannot reach its end time within the maximal number of steps, as
+    /// foreseen before it took them: a fixed step that needs more, or the pace of
+    /// an adaptive method (steps per unit time over its recent steps) that would
+    /// need more than [`crate::FORESIGHT_MARGIN`] times as many (see [`crate::integrate`]).
+    #[error("reaching t = {t_end} would take about {projected:.3e} steps, more than the maximal number ({max_steps}); stopped at t = {t} after {steps}")]
+    MaxStepsForeseen {
+        /// The time reached.
+        t: f64,
+        /// The steps taken.
+        steps: usize,
+        /// The end time.
+        t_end: f64,
+        /// The steps the whole run would take, estimated.
+        projected: f64,
+        /// The limit.
+        max_steps: usize,
+    },
     /// The stage equations of an implicit method did not converge with the fixed step.
     #[error("stage equations did not converge at t = {t} with step {h:e}; use a smaller step")]
     NoConvergence {

@@ -11,7 +11,9 @@
 //! ulps of the state, or stops shrinking), so the quadratic invariants are kept
 //! exactly and energy shows no drift. Starting values extrapolate the previous
 //! step's collocation polynomial; the state is updated with compensated summation.
-//! Dense output is the polynomial through `y_n`, the stage values and `y_{n+1}`.
+//! Dense output is the polynomial through `y_n`, the stage values and `y_{n+1}`
+//! (of order s); where that is not accurate enough (the state at an event),
+//! [`Solver::restep`] solves the step from its start to the time asked for.
 
 use crate::error::SolveError;
 use crate::linalg::DenseLu;
@@ -82,6 +84,8 @@ pub struct Gauss<S> {
     clock: FixedClock,
     n: usize,
     comp: Vec<f64>,
+    /// The last step's start and its compensation.
+    comp_old: Vec<f64>,
     y_old: Vec<f64>,
     /// Stage increments `Z` (`s·n`) of the last step, the working ones and the stage
     /// derivatives `F(Y_i)`.
@@ -136,6 +140,7 @@ impl<S: OdeSystem> Gauss<S> {
             state: SolverState::new(t0, y0, dt, Statistics::default(), config),
             n,
             comp: vec![0.0; n],
+            comp_old: vec![0.0; n],
             y_old: y0.to_vec(),
             z_old: vec![0.0; sn],
             z: vec![0.0; sn],
@@ -312,6 +317,19 @@ impl<S: OdeSystem> Gauss<S> {
         Ok((false, MAX_ITER))
     }
 
+    /// `y_new += h Σ b_i F(Y_i)` with compensation in `comp_new`, from the solved stages.
+    fn add_increment(&mut self, h: f64) {
+        let n = self.n;
+        for a in 0..n {
+            let mut acc = 0.0;
+            for i in 0..self.tab.s {
+                acc += self.tab.b[i] * self.f[i * n + a];
+            }
+            self.incr[a] = h * acc;
+        }
+        compensated_add(&mut self.y_new, &mut self.comp_new, &self.incr);
+    }
+
     /// Solves the stage equations of `[t, t + h]` into `z` and `f`.
     fn solve_stages(&mut self, t: f64, h: f64) -> Result<(), SolveError> {
         // 1. Newton with the current matrix (refactored if h changed).
@@ -367,22 +385,15 @@ impl<S: OdeSystem> Solver for Gauss<S> {
         let (t_next, reached) = self.clock.next(self.state.h, self.state.stop);
         let h = t_next - t;
         self.solve_stages(t, h)?;
-        let n = self.n;
-        for a in 0..n {
-            let mut acc = 0.0;
-            for i in 0..self.tab.s {
-                acc += self.tab.b[i] * self.f[i * n + a];
-            }
-            self.incr[a] = h * acc;
-        }
         self.y_new.copy_from_slice(&self.state.y);
         self.comp_new.copy_from_slice(&self.comp);
-        compensated_add(&mut self.y_new, &mut self.comp_new, &self.incr);
+        self.add_increment(h);
         if let Some(index) = first_non_finite(&self.y_new) {
             return Err(SolveError::NonFiniteState { t: t_next, index });
         }
         std::mem::swap(&mut self.y_old, &mut self.state.y);
         std::mem::swap(&mut self.state.y, &mut self.y_new);
+        std::mem::swap(&mut self.comp_old, &mut self.comp);
         std::mem::swap(&mut self.comp, &mut self.comp_new);
         std::mem::swap(&mut self.z_old, &mut self.z);
         self.have_previous = true;
@@ -403,5 +414,39 @@ impl<S: OdeSystem> Solver for Gauss<S> {
         }
         self.polynomial((t - self.state.t_old) / h, out);
         Ok(())
+    }
+
+    /// The collocation step from the last step's start to `t` (order 2s), where
+    /// the collocation polynomial is of order s.
+    fn restep(&mut self, t: f64, out: &mut [f64]) -> Option<Result<(), SolveError>> {
+        Some((|| {
+            check_len(self.n, out.len())?;
+            let (t0, t1) = (self.state.t_old, self.state.t);
+            check_interpolation(t, t0, t1)?;
+            if t >= t1 {
+                out.copy_from_slice(&self.state.y);
+                return Ok(());
+            }
+            if t <= t0 {
+                out.copy_from_slice(&self.y_old);
+                return Ok(());
+            }
+            // The stages are solved about `state.y`: put the step's start there,
+            // with starting values from the right-hand side (the extrapolation of
+            // the previous step assumes the solver at its end), and swap back.
+            let h = t - t0;
+            std::mem::swap(&mut self.state.y, &mut self.y_old);
+            let had_previous = std::mem::replace(&mut self.have_previous, false);
+            let solved = self.solve_stages(t0, h);
+            self.have_previous = had_previous;
+            if solved.is_ok() {
+                self.y_new.copy_from_slice(&self.state.y);
+                self.comp_new.copy_from_slice(&self.comp_old);
+                self.add_increment(h);
+                out.copy_from_slice(&self.y_new);
+            }
+            std::mem::swap(&mut self.state.y, &mut self.y_old);
+            solved
+        })())
     }
 }

@@ -1,6 +1,16 @@
 //! The convenience driver [`integrate`]: runs a [`Solver`] to an end time, hands every
 //! accepted step or evenly spaced samples (from dense output) to an observer, and
-//! locates events (zero crossings of `g(t, y)`) with Brent's method on the dense output.
+//! locates events (zero crossings of `g(t, y)`) with Brent's method on the dense output,
+//! then, for the methods whose dense output is of lower order than their steps, on
+//! states the method computes itself ([`Solver::restep`]).
+//!
+//! It also keeps a run within its step budget ([`crate::Config::max_steps`]) by
+//! foresight: a fixed step that cannot reach the end time in the budget fails
+//! before its first step, and an adaptive run whose recent pace would need more
+//! than [`FORESIGHT_MARGIN`] times the budget fails at the checkpoint that sees it
+//! ([`SolveError::MaxStepsForeseen`]), rather than after spending the budget. A run
+//! with a terminal event may end long before its end time, so it is held to the
+//! budget alone.
 
 use std::ops::ControlFlow;
 
@@ -122,12 +132,27 @@ pub struct Summary {
     pub events: usize,
 }
 
+/// How many times its step budget an adaptive run's foreseen steps must exceed
+/// for the run to stop early. The pace is measured over the steps since the last
+/// checkpoint; a run whose steps grow later (a transient that dies out) takes
+/// fewer than its pace says, so only a run foreseen far beyond the budget is
+/// stopped, and one that might just make it runs until the budget is spent.
+pub const FORESIGHT_MARGIN: f64 = 4.0;
+
+/// The first budget checkpoint of an adaptive run, as a fraction of its budget
+/// (then at every doubling of the steps): late enough that an initial transient
+/// is behind it, early enough to stop a hopeless run at a hundredth of its cost.
+const FIRST_CHECKPOINT: usize = 128;
+
 /// Integrates with `solver` from its current time to `t_end`, calling `observer` on the
 /// points `output` asks for and on every event crossing, in time order.
 ///
 /// After a terminal event the solver stands at the end of the step that contained it;
-/// the event's state is the one handed to the observer. Returns
-/// [`SolveError::EndBeforeStart`] when `t_end` lies before the solver's time.
+/// the event's state is the one handed to the observer: interpolated, or from
+/// [`Solver::restep`] for the methods that offer it. Returns
+/// [`SolveError::EndBeforeStart`] when `t_end` lies before the solver's time, and
+/// [`SolveError::MaxStepsForeseen`] when the run cannot reach it within the
+/// solver's step budget (see the module documentation).
 pub fn integrate<V: Solver + ?Sized>(
     solver: &mut V,
     t_end: f64,
@@ -238,8 +263,13 @@ fn drive_lazily<V: Solver + ?Sized>(
         return Ok(Summary { t: t0, stop: StopReason::Finished, events: 0 });
     }
     solver.set_stop_time(t_end)?;
+    // A terminal event may end the run long before t_end (a shot stopped where
+    // it reaches its target): then the pace to t_end foresees nothing.
+    let may_end_early = events.iter().any(|e| e.terminal);
+    let mut budget = Budget::new(solver, t_end, may_end_early)?;
     loop {
         let outcome = solver.step()?;
+        budget.check(solver, t_end)?;
         let t_a = solver.step_start();
         let t_b = solver.t();
         if let Some(project) = project.as_mut() {
@@ -262,7 +292,7 @@ fn drive_lazily<V: Solver + ?Sized>(
             if counts {
                 solver.prepare_dense()?;
                 let tol = 4.0 * f64::EPSILON * t_a.abs().max(t_b.abs());
-                let root = brent(
+                let mut root = brent(
                     |t| {
                         solver.interpolate(t, &mut y)?;
                         eval_event(ev, k, t, &y)
@@ -273,6 +303,31 @@ fn drive_lazily<V: Solver + ?Sized>(
                     gb,
                     tol,
                 )?;
+                // The interpolant's root is within its error of the method's:
+                // refine it on the method's own states, in the half of the step
+                // the sign there points to.
+                if let Some(restepped) = solver.restep(root, &mut y) {
+                    restepped?;
+                    let g_root = eval_event(ev, k, root, &y)?;
+                    if g_root != 0.0 {
+                        let (a, b, fa, fb) = if (g_root > 0.0) == (ga > 0.0) {
+                            (root, t_b, g_root, gb)
+                        } else {
+                            (t_a, root, ga, g_root)
+                        };
+                        root = brent(
+                            |t| {
+                                state_at(solver, t, &mut y)?;
+                                eval_event(ev, k, t, &y)
+                            },
+                            a,
+                            b,
+                            fa,
+                            fb,
+                            tol,
+                        )?;
+                    }
+                }
                 found.push((root, k));
             }
         }
@@ -308,9 +363,11 @@ fn drive_lazily<V: Solver + ?Sized>(
             }
             if t == t_b {
                 y.copy_from_slice(solver.state());
-            } else {
+            } else if obs_kind == ObservationKind::Sample {
                 solver.prepare_dense()?;
                 solver.interpolate(t, &mut y)?;
+            } else {
+                state_at(solver, t, &mut y)?;
             }
             if stopped(observer(&Observation { t, y: &y, kind: obs_kind })) {
                 return Ok(Summary { t, stop: StopReason::Observer, events: n_events });
@@ -329,6 +386,70 @@ fn drive_lazily<V: Solver + ?Sized>(
         if outcome == StepOutcome::ReachedStop {
             return Ok(Summary { t: t_b, stop: StopReason::Finished, events: n_events });
         }
+    }
+}
+
+/// The state at `t` within the last step: the method's own
+/// ([`Solver::restep`]) where its dense output is of lower order, else interpolated.
+fn state_at<V: Solver + ?Sized>(solver: &mut V, t: f64, y: &mut [f64]) -> Result<(), SolveError> {
+    match solver.restep(t, y) {
+        Some(result) => result,
+        None => {
+            solver.prepare_dense()?;
+            solver.interpolate(t, y)
+        }
+    }
+}
+
+/// The step budget of one [`integrate`] call, checked by foresight (see the
+/// module documentation).
+struct Budget {
+    /// Steps at the start of the call.
+    start: usize,
+    /// The most steps the solver takes.
+    max_steps: usize,
+    /// Steps and time at the last checkpoint, and the steps of the next one.
+    last: (usize, f64),
+    next: usize,
+}
+
+impl Budget {
+    /// The budget of a run from the solver's state to `t_end`. A fixed step is
+    /// checked at once: its steps are known. A run that `may_end_early` (at a
+    /// terminal event) is held to the budget itself, not to a foresight.
+    fn new<V: Solver + ?Sized>(solver: &V, t_end: f64, may_end_early: bool) -> Result<Budget, SolveError> {
+        let (steps, t, max_steps) = (solver.statistics().steps, solver.t(), solver.solver_state().max_steps());
+        if may_end_early {
+            return Ok(Budget { start: steps, max_steps, last: (steps, t), next: usize::MAX });
+        }
+        if !solver.method().is_adaptive() {
+            let projected = steps as f64 + (t_end - t) / solver.step_size();
+            if projected > max_steps as f64 {
+                return Err(SolveError::MaxStepsForeseen { t, steps, t_end, projected, max_steps });
+            }
+        }
+        let next =
+            if solver.method().is_adaptive() { steps + (max_steps / FIRST_CHECKPOINT).max(1) } else { usize::MAX };
+        Ok(Budget { start: steps, max_steps, last: (steps, t), next })
+    }
+
+    /// After a step: at a checkpoint, the steps the run needs at the pace since
+    /// the last one; an error when they exceed the budget by [`FORESIGHT_MARGIN`].
+    fn check<V: Solver + ?Sized>(&mut self, solver: &V, t_end: f64) -> Result<(), SolveError> {
+        let steps = solver.statistics().steps;
+        if steps < self.next || steps >= self.max_steps {
+            return Ok(());
+        }
+        let t = solver.t();
+        let (last_steps, last_t) = self.last;
+        let pace = (steps - last_steps) as f64 / (t - last_t);
+        let projected = steps as f64 + (t_end - t) * pace;
+        if projected > FORESIGHT_MARGIN * self.max_steps as f64 {
+            return Err(SolveError::MaxStepsForeseen { t, steps, t_end, projected, max_steps: self.max_steps });
+        }
+        self.last = (steps, t);
+        self.next = self.start + 2 * (steps - self.start);
+        Ok(())
     }
 }
 

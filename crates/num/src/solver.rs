@@ -176,6 +176,11 @@ impl SolverState {
         self.stats
     }
 
+    /// The most accepted steps a run may take ([`Config::max_steps`]).
+    pub fn max_steps(&self) -> usize {
+        self.max_steps
+    }
+
     /// The stop time, if one is pending.
     pub fn stop_time(&self) -> Option<f64> {
         self.stop
@@ -264,6 +269,18 @@ pub trait Solver {
     fn prepare_dense(&mut self) -> Result<(), SolveError> {
         Ok(())
     }
+    /// Writes the state at `t`, within the last step (`[step_start(), t()]`), as
+    /// the method itself computes it: by one step of its own from the last step's
+    /// start to `t`, not by [`interpolate`](Solver::interpolate). For the methods
+    /// whose dense output is of lower order than their steps (the compositions'
+    /// cubic Hermite, the Gauss collocation polynomial), so that a state at an
+    /// event inside a step is as accurate as the states at the step ends. The
+    /// solver stays where it was (its counters include the work). `None` for the
+    /// methods whose dense output is as accurate as their steps (the default).
+    fn restep(&mut self, t: f64, out: &mut [f64]) -> Option<Result<(), SolveError>> {
+        let _ = (t, out);
+        None
+    }
 }
 
 impl<S: Solver + ?Sized> Solver for Box<S> {
@@ -308,6 +325,9 @@ impl<S: Solver + ?Sized> Solver for Box<S> {
     }
     fn prepare_dense(&mut self) -> Result<(), SolveError> {
         (**self).prepare_dense()
+    }
+    fn restep(&mut self, t: f64, out: &mut [f64]) -> Option<Result<(), SolveError>> {
+        (**self).restep(t, out)
     }
 }
 

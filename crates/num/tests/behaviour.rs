@@ -303,10 +303,107 @@ fn bad_input_is_an_error() {
     })
     .unwrap();
     assert_eq!((n, sum.stop), (3, StopReason::Finished));
-    // Max steps.
+}
+
+/// A run that cannot reach its end time within its step budget: a fixed step
+/// fails before its first step, an adaptive run foreseen far beyond its budget at
+/// its first checkpoint, and one that needs a little more than its budget when the
+/// budget is spent.
+#[test]
+fn step_budget_by_foresight() {
     let few = Config { max_steps: 3, dt: Some(0.1), ..Config::default() };
     let mut s = Method::Verlet.build_separable(Oscillator, 0.0, &[1.0, 0.0], &few).unwrap();
-    assert!(matches!(integrate_to(&mut s, 1.0, &mut [0.0; 2]), Err(SolveError::MaxStepsExceeded { max_steps: 3, .. })));
+    let e = integrate_to(&mut s, 1.0, &mut [0.0; 2]).unwrap_err();
+    let SolveError::MaxStepsForeseen { t, steps, projected, max_steps: 3, .. } = e else { panic!("{e:?}") };
+    assert_eq!((t, steps, s.statistics().steps), (0.0, 0, 0));
+    assert!((projected - 10.0).abs() < 1e-9, "{projected}");
+
+    let budget = 12_800;
+    let config = Config { max_steps: budget, rtol: 1e-9, atol: 1e-12, ..Config::default() };
+    let mut s = Method::Dop853.build(Oscillator, 0.0, &[1.0, 0.0], &config).unwrap();
+    let e = integrate_to(&mut s, 1e9, &mut [0.0; 2]).unwrap_err();
+    let SolveError::MaxStepsForeseen { steps, projected, .. } = e else { panic!("{e:?}") };
+    assert_eq!(steps, budget / 128);
+    assert!(projected > 1e8, "{projected}");
+
+    // The pace of this run: steps per unit time.
+    let mut s = Method::Dop853.build(Oscillator, 0.0, &[1.0, 0.0], &config).unwrap();
+    integrate_to(&mut s, 100.0, &mut [0.0; 2]).unwrap();
+    let pace = s.statistics().steps as f64 / 100.0;
+    let mut s = Method::Dop853.build(Oscillator, 0.0, &[1.0, 0.0], &config).unwrap();
+    let e = integrate_to(&mut s, 2.0 * budget as f64 / pace, &mut [0.0; 2]).unwrap_err();
+    assert!(matches!(e, SolveError::MaxStepsExceeded { max_steps, .. } if max_steps == budget), "{e:?}");
+    assert_eq!(s.statistics().steps, budget);
+}
+
+/// A run with a terminal event is not stopped by foresight: its pace to the end
+/// time says nothing when the event ends it long before (a shot that stops where
+/// it reaches its target).
+#[test]
+fn a_terminal_event_is_reached_however_far_the_end_time() {
+    let config = Config { max_steps: 12_800, rtol: 1e-9, atol: 1e-12, ..Config::default() };
+    let mut s = Method::Dop853.build(Oscillator, 0.0, &[1.0, 0.0], &config).unwrap();
+    let target = 50.0;
+    let mut events = [Event::new(move |t, _: &[f64]| t - target).with_terminal(true)];
+    let sum = integrate(&mut s, 1e9, Output::EveryStep, &mut events, |_| ControlFlow::Continue(())).unwrap();
+    assert_eq!(sum.stop, StopReason::Event { index: 0 });
+    assert!((sum.t - target).abs() < 1e-9, "{}", sum.t);
+}
+
+/// An event inside a step of a method whose dense output is of lower order than
+/// its steps is located on the method's own states: its time and state are as
+/// accurate as the step ends, where the interpolant is off by far more.
+#[test]
+fn events_inside_a_step_have_the_accuracy_of_the_steps() {
+    for method in [Method::KahanLi8, Method::KahanLi6, Method::Gauss4, Method::Gauss6] {
+        let config = Config { dt: Some(0.1), ..Config::default() };
+        let mut solver = method.build_separable(Oscillator, 0.0, &[0.0, 1.0], &config).unwrap();
+        // x = sin t: x' falls through 0 at π/2, where x = 1.
+        let mut events = [Event::new(|_, y| y[1]).with_direction(Direction::Falling).with_terminal(true)];
+        let mut at = (0.0, vec![]);
+        integrate(&mut solver, 10.0, Output::EveryStep, &mut events, |o| {
+            at = (o.t, o.y.to_vec());
+            ControlFlow::Continue(())
+        })
+        .unwrap();
+        let (t, y) = at;
+        let mut interpolated = [0.0; 2];
+        solver.interpolate(t, &mut interpolated).unwrap();
+        // The steps' own error at the step end, for scale.
+        let (t_b, y_b) = (solver.t(), solver.state());
+        let step_error = (y_b[0] - t_b.sin()).abs().max((y_b[1] - t_b.cos()).abs());
+        let event_error = (t - PI / 2.0).abs().max((y[0] - 1.0).abs()).max(y[1].abs());
+        let interpolant_error = (interpolated[0] - 1.0).abs().max(interpolated[1].abs());
+        eprintln!("{method}: event {event_error:.1e}, step end {step_error:.1e}, interpolant {interpolant_error:.1e}");
+        assert!(event_error <= 2.0 * step_error.max(1e-15), "{method}: {event_error:e} vs {step_error:e}");
+        assert!(interpolant_error > 10.0 * event_error, "{method}: {interpolant_error:e} vs {event_error:e}");
+    }
+}
+
+/// A restep to a time inside the first step is the step of that length from the
+/// start: bit for bit for a composition, to round-off for Gauss.
+#[test]
+fn restep_is_a_step_from_the_start() {
+    for (method, tol) in [(Method::KahanLi8, 0.0), (Method::Gauss6, 4.0 * f64::EPSILON)] {
+        let mut solver = method
+            .build_separable(Oscillator, 0.0, &[0.3, 1.0], &Config { dt: Some(0.2), ..Config::default() })
+            .unwrap();
+        solver.step().unwrap();
+        let mut restepped = [0.0; 2];
+        solver.restep(0.07, &mut restepped).unwrap().unwrap();
+        let mut fresh = method
+            .build_separable(Oscillator, 0.0, &[0.3, 1.0], &Config { dt: Some(0.07), ..Config::default() })
+            .unwrap();
+        fresh.step().unwrap();
+        assert!(dist(&restepped, fresh.state()) <= tol, "{method}: {restepped:?} vs {:?}", fresh.state());
+        // The solver stays at the end of its step.
+        assert_eq!(solver.t(), 0.2);
+        solver.restep(0.2, &mut restepped).unwrap().unwrap();
+        assert_eq!(restepped, solver.state());
+    }
+    let mut dop = Method::Dop853.build(Oscillator, 0.0, &[0.3, 1.0], &Config::default()).unwrap();
+    dop.step().unwrap();
+    assert!(dop.restep(dop.t() / 2.0, &mut [0.0; 2]).is_none());
 }
 
 /// Fixed-step methods given only a tolerance pick a step that meets it.

@@ -381,7 +381,7 @@ impl Family<'_> {
             ControlFlow::Continue(())
         });
         self.steps += solver.statistics().steps;
-        if let Err(num::SolveError::MaxStepsExceeded { .. }) = r {
+        if let Err(num::SolveError::MaxStepsExceeded { .. } | num::SolveError::MaxStepsForeseen { .. }) = r {
             self.unfinished += 1;
         }
         r.ok()?;

@@ -41,19 +41,17 @@ impl InvariantAudit {
         self.names.len()
     }
 
-    /// Records one row's values. Event rows are interpolated between two steps
-    /// (cubic Hermite for the compositions): their error is the interpolant's,
-    /// not the integrator's, so they do not enter the drift.
-    pub(crate) fn observe(&mut self, inv: &[f64], interpolated_event: bool) {
+    /// Records one row's values, every row alike: the states at events are
+    /// the method's own or from dense output as accurate as its steps
+    /// (`num::Solver::restep`), so their drift is the integrator's.
+    pub(crate) fn observe(&mut self, inv: &[f64]) {
         let init = self.initial.get_or_insert_with(|| inv.to_vec());
-        if !interpolated_event {
-            for k in 0..inv.len() {
-                let a = (inv[k] - init[k]).abs();
-                if a.is_finite() {
-                    self.max_abs[k] = self.max_abs[k].max(a);
-                    let scale = init[k].abs();
-                    self.max_rel[k] = self.max_rel[k].max(if scale > 0.0 { a / scale } else { a });
-                }
+        for k in 0..inv.len() {
+            let a = (inv[k] - init[k]).abs();
+            if a.is_finite() {
+                self.max_abs[k] = self.max_abs[k].max(a);
+                let scale = init[k].abs();
+                self.max_rel[k] = self.max_rel[k].max(if scale > 0.0 { a / scale } else { a });
             }
         }
         self.last.copy_from_slice(inv);

@@ -27,7 +27,9 @@ use crate::derive::Derivation;
 use crate::error::ModelError;
 use crate::model::ConstraintKind;
 use crate::run::dynamics::{Dynamics, Form, Kernel};
-use crate::run::{Audit, ProjectionMap, RowBuffer, RunConfig, RunError, RunFailure, Start, Stepping, VelocityMap};
+use crate::run::{
+    Audit, ProjectionMap, RowBuffer, RunConfig, RunError, RunFailure, Start, Stepping, TimeScale, VelocityMap,
+};
 use num::{Config, LinearSolver, Method, OdeSystem, RhsError, SolveError};
 use sym::{ExprId, Tape};
 
@@ -461,8 +463,13 @@ impl Constrained {
         system.fix_integral_levels(0.0, &y0);
         system.project(0.0, &mut y0).map_err(|e| RunError::Input(ModelError::whole(format!("at t = 0: {e}"))))?;
 
-        let solver_config =
-            Config { rtol: config.rtol, atol: config.atol, h_max: Some(config.until), ..Config::default() };
+        let solver_config = Config {
+            rtol: config.rtol,
+            atol: config.atol,
+            h_max: Some(config.until),
+            max_steps: config.max_steps,
+            ..Config::default()
+        };
         let solver = method
             .build(system.clone(), 0.0, &y0, &solver_config)
             .map_err(|e| RunError::Input(ModelError::whole(e.to_string())))?;
@@ -533,7 +540,7 @@ impl Stepping for Constrained {
                 audit.max_abs_velocity_residual = audit.max_abs_residual;
             }
         }
-        if self.work && !row.is_event {
+        if self.work {
             let hw = row.invariants[0] - self.y[2 * n];
             let h0 = *self.hw_initial.get_or_insert(hw);
             self.hw_abs = self.hw_abs.max((hw - h0).abs());
@@ -576,6 +583,10 @@ impl Stepping for Constrained {
             )),
             other => (RunFailure::Step { t: t_last }, other.to_string()),
         }
+    }
+
+    fn time_scale(&mut self, t: f64, y: &[f64]) -> Option<TimeScale> {
+        TimeScale::of(&mut self.system, t, y)
     }
 }
 

@@ -1,10 +1,12 @@
 //! The stepping of a model without constraints: the method the derivation
 //! calls for (or the one asked for), the form it integrates (Lagrange `[q, q']`,
 //! Hamilton `[q, p]`, separable `[q, p]`), pilot runs that fix the step of a
-//! fixed-step method from the tolerance, and failures told in the user's terms.
+//! fixed-step method from the tolerance (refusing a step that cannot reach the
+//! end time within the run's step budget, before running), and failures told in
+//! the user's terms.
 
 use super::dynamics::{Dynamics, Form, System};
-use super::{choose_method, RowBuffer, RunConfig, RunError, RunFailure, Start, Stepping};
+use super::{choose_method, RowBuffer, RunConfig, RunError, RunFailure, Start, StepBudget, Stepping, TimeScale};
 use crate::derive::Derivation;
 use crate::error::ModelError;
 use crate::probe;
@@ -45,6 +47,7 @@ impl Plain {
             atol: config.atol,
             dt: config.dt,
             h_max: Some(config.until),
+            max_steps: config.max_steps,
             ..Config::default()
         };
         let build = |system: System, config: &Config| -> Result<Box<dyn Solver>, SolveError> {
@@ -61,30 +64,49 @@ impl Plain {
         if !method.is_adaptive() {
             // A fixed step chosen from the tolerance at the start may be too long
             // later in the run (a pendulum released from rest speeds up): pilot
-            // runs check the drift of H along the whole run and shorten the step
-            // until it meets the tolerance. Then the step is made to divide the
-            // sample spacing, so that every output row is an integrator state,
-            // not an interpolation between two.
+            // runs check the drift of H along the run (its first tenth of the
+            // budget's steps, where the run is longer) and shorten the step until
+            // it meets the tolerance. Then the step is made to divide the sample
+            // spacing, so that every output row is an integrator state, not an
+            // interpolation between two.
             let mut h = solver.step_size();
             pilot_rhs += solver.statistics().rhs_evaluations;
+            // The steps are known once the step is: a step that cannot reach the
+            // end within the budget is refused before the pilots run it.
+            let refuse_beyond_budget = |h: f64| -> Result<(), RunError> {
+                if config.until / h <= config.max_steps as f64 {
+                    return Ok(());
+                }
+                let mut probe = build(system.clone(), &Config { dt: Some(h), ..solver_config }).map_err(input_error)?;
+                let steps = (0..PROBE_STEPS).take_while(|_| probe.step().is_ok()).count().max(1);
+                let rhs_per_step = probe.statistics().rhs_evaluations as f64 / steps as f64;
+                let mut scale_system = system.clone();
+                let time_scale = || TimeScale::of(&mut scale_system, 0.0, &y0);
+                let refused = StepBudget::refused(method, h, config.until, config.max_steps, rhs_per_step, time_scale);
+                refused.map_or(Ok(()), |b| Err(RunError::StepBudget(Box::new(b))))
+            };
+            refuse_beyond_budget(h)?;
             if config.dt.is_none() && d.hamiltonian_conserved() {
                 let target = 10.0 * config.rtol.max(1e-14);
                 for _ in 0..4 {
                     let cfg = Config { dt: Some(h), ..solver_config };
                     let pilot = build(system.clone(), &cfg).map_err(input_error)?;
-                    let (drift, evaluations) = pilot_drift(pilot, &mut probe_system, config.until, n);
+                    let horizon = config.until.min(h * (config.max_steps / PILOT_SHARE).max(1) as f64);
+                    let (drift, evaluations) = pilot_drift(pilot, &mut probe_system, horizon, n);
                     pilot_rhs += evaluations;
                     let Some(drift) = drift else { break };
                     if drift <= target {
                         break;
                     }
                     h *= (0.9 * (target / drift).powf(1.0 / f64::from(method.order()))).clamp(0.05, 0.9);
+                    refuse_beyond_budget(h)?;
                 }
             }
             if let Output::Samples(k) = config.output {
                 let spacing = config.until / (k.max(2) - 1) as f64;
                 h = spacing / (spacing / h).ceil();
             }
+            refuse_beyond_budget(h)?;
             let cfg = Config { dt: Some(h), ..solver_config };
             solver = build(system.clone(), &cfg).map_err(input_error)?;
             dt = Some(h);
@@ -108,6 +130,10 @@ impl Stepping for Plain {
 
     fn describe(&mut self, e: &SolveError, y0: &[f64], at: (f64, Vec<f64>)) -> (RunFailure, String) {
         describe_failure(e, &self.names, self.form, &mut self.system, y0, at)
+    }
+
+    fn time_scale(&mut self, t: f64, y: &[f64]) -> Option<TimeScale> {
+        TimeScale::of(&mut self.system, t, y)
     }
 }
 
@@ -144,6 +170,15 @@ fn singular_start(system: &mut System, names: &[String], q0: &[f64], y0: &[f64])
             ),
     )
 }
+
+/// A pilot run takes at most this share of the run's step budget (1/10): four
+/// pilots cost less than half a run however long the run, and a tenth of the
+/// budget spans many periods of any motion the step can follow.
+const PILOT_SHARE: usize = 10;
+
+/// Steps a fixed-step method takes to measure its evaluations per step (the
+/// implicit methods' Newton iterations vary), for the estimate of a refused run.
+const PROBE_STEPS: usize = 8;
 
 /// Why the integrator could not go on, judged from the last good state: a mass
 /// matrix that has become singular (measured against its size at the start, so
