@@ -121,8 +121,6 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     // leaves a CSV that reads as one without rows.
     let mut csv = match &opts.out {
         Some(p) => {
-            let file = crate::files::create_locked(p)
-                .map_err(|e| Failure::input(p, format!("cannot create the CSV file: {e}")))?;
             let mut cols = vec!["t".to_string()];
             cols.extend(names.iter().cloned());
             cols.extend(names.iter().map(|c| format!("{c}'")));
@@ -132,11 +130,14 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
             if with_events {
                 cols.push("event".into());
             }
-            let mut w = RowWriter::file(file, 0);
-            w.push(format!("{}\n", cols.join(",")).as_bytes())
-                .and_then(|()| w.flush())
-                .map_err(|e| Failure::run(format!("cannot write {}: {e}", p.display())))?;
-            Some(w)
+            let _held = interrupt::gate();
+            let file = crate::files::open_locked(p)
+                .map_err(|e| Failure::input(p, format!("cannot create the CSV file: {e}")))?;
+            let header = format!("{}\n", cols.join(","));
+            Some(
+                RowWriter::start(file, 0, header.as_bytes())
+                    .map_err(|e| Failure::run(format!("cannot write {}: {e}", p.display())))?,
+            )
         }
         None => None,
     };

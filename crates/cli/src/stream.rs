@@ -4,11 +4,11 @@
 //! on a second signal falls between two chunks; a write that fails midway is
 //! cut back to the last whole row. Memory: one chunk.
 //!
-//! Enter at [`RowWriter::file`] or [`RowWriter::stdout`], then
+//! Enter at [`RowWriter::start`] or [`RowWriter::stdout`], then
 //! [`RowWriter::push`] per line and [`RowWriter::flush`] at the end.
 
 use std::fs::File;
-use std::io::Write;
+use std::io::{Seek, SeekFrom, Write};
 use std::time::{Duration, Instant};
 
 /// Bytes gathered before a write: large enough that writes cost nothing next
@@ -37,10 +37,17 @@ pub struct RowWriter {
 }
 
 impl RowWriter {
-    /// Rows appended to `file`, whose current length `len` ends at a row's end
-    /// (0 for a new file, the kept prefix for a resumed one).
-    pub fn file(file: File, len: u64) -> RowWriter {
-        RowWriter::new(Target::File { file, whole: len })
+    /// Rows in `file` after its first `kept` bytes (0 for a new file, the whole
+    /// rows a resumed run keeps), beginning with the lines `header` (empty
+    /// when the kept part has them): the file is cut to `kept` and the header
+    /// written in one step. The caller holds the interrupt gate from opening
+    /// the file to here, so that a signal finds it as it was or with its
+    /// header whole.
+    pub fn start(mut file: File, kept: u64, header: &[u8]) -> std::io::Result<RowWriter> {
+        file.set_len(kept)?;
+        file.seek(SeekFrom::Start(kept))?;
+        file.write_all(header)?;
+        Ok(RowWriter::new(Target::File { file, whole: kept + header.len() as u64 }))
     }
 
     /// Rows to standard output.

@@ -144,6 +144,10 @@ pub fn run(args: &Args) -> Result<(), Failure> {
 
     // The output, and the rows a resumed sweep already has.
     let mut tally = Tally::default();
+    let write_error = |e: &std::io::Error| match &args.out {
+        Some(out) => format!("cannot write {}: {e}", out.display()),
+        None => format!("cannot write the output: {e}"),
+    };
     let (mut writer, skip) = match &args.out {
         Some(out) if args.resume => {
             let kept = resume::open(out, header, shard, sweep.len(), |row| tally.add(row, map.as_mut()))?;
@@ -153,22 +157,21 @@ pub fn run(args: &Args) -> Result<(), Failure> {
             (kept.writer, kept.rows)
         }
         Some(out) => {
-            let file =
-                crate::files::create_locked(out).map_err(|e| Failure::input(out, format!("cannot write: {e}")))?;
-            (RowWriter::file(file, 0), 0)
+            let _held = interrupt::gate();
+            let file = crate::files::open_locked(out).map_err(|e| Failure::input(out, format!("cannot write: {e}")))?;
+            let writer =
+                RowWriter::start(file, 0, header.to_csv().as_bytes()).map_err(|e| Failure::run(write_error(&e)))?;
+            (writer, 0)
         }
-        None => (RowWriter::stdout(), 0),
+        None => {
+            let mut writer = RowWriter::stdout();
+            writer
+                .push(header.to_csv().as_bytes())
+                .and_then(|()| writer.flush())
+                .map_err(|e| Failure::run(write_error(&e)))?;
+            (writer, 0)
+        }
     };
-    let write_error = |e: &std::io::Error| match &args.out {
-        Some(out) => format!("cannot write {}: {e}", out.display()),
-        None => format!("cannot write the output: {e}"),
-    };
-    if skip == 0 {
-        writer
-            .push(header.to_csv().as_bytes())
-            .and_then(|()| writer.flush())
-            .map_err(|e| Failure::run(write_error(&e)))?;
-    }
 
     let n_runs = sweep.len();
     let progress = progress_bar(n_runs as u64, skip as u64);

@@ -11,7 +11,7 @@
 use crate::diagnostics::Failure;
 use crate::stream::RowWriter;
 use mech::{Shard, SweepHeader, TableRow};
-use std::io::{BufRead, BufReader, Read, Seek, SeekFrom};
+use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
 /// The longest line a partial output may have: far above any row (a few
@@ -70,7 +70,7 @@ pub fn open(
     if std::fs::metadata(path).is_ok_and(|m| !m.is_file()) {
         return Err(Failure::input(path, "not a regular file (a pipe, device or folder holds no rows to continue)"));
     }
-    let mut file = crate::files::open_locked(path).map_err(|e| Failure::input(path, format!("cannot open it: {e}")))?;
+    let file = crate::files::open_locked(path).map_err(|e| Failure::input(path, format!("cannot open it: {e}")))?;
     let name = path.display().to_string();
     let expected = header.to_csv();
     let mut reader = BufReader::new(&file);
@@ -133,10 +133,11 @@ pub fn open(
     };
     drop(reader);
     // What follows the kept rows (a line cut short) goes; the rest is appended.
-    let end = |e: std::io::Error| Failure::input(path, format!("cannot continue it: {e}"));
-    file.set_len(kept).map_err(end)?;
-    file.seek(SeekFrom::Start(kept)).map_err(end)?;
-    Ok(Kept { writer: RowWriter::file(file, kept), rows, note })
+    let header = if kept == 0 { expected.as_bytes() } else { &[] };
+    let _held = crate::interrupt::gate();
+    let writer =
+        RowWriter::start(file, kept, header).map_err(|e| Failure::input(path, format!("cannot continue it: {e}")))?;
+    Ok(Kept { writer, rows, note })
 }
 
 /// Why the header lines `head` of file `name` are not those of the sweep of `header`.
