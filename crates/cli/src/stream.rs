@@ -44,8 +44,11 @@ impl RowWriter {
     /// the file to here, so that a signal finds it as it was or with its
     /// header whole.
     pub fn start(mut file: File, kept: u64, header: &[u8]) -> std::io::Result<RowWriter> {
-        file.set_len(kept)?;
-        file.seek(SeekFrom::Start(kept))?;
+        // A device (`/dev/null`) has no length to cut.
+        if file.metadata()?.is_file() {
+            file.set_len(kept)?;
+            file.seek(SeekFrom::Start(kept))?;
+        }
         file.write_all(header)?;
         Ok(RowWriter::new(Target::File { file, whole: kept + header.len() as u64 }))
     }
