@@ -1,5 +1,6 @@
 //! Failures and how they are shown: bad input (exit 2) rendered with the file,
-//! line and column and the offending text underlined; failed runs (exit 1).
+//! line and column and the offending text underlined; failed runs (exit 1);
+//! runs stopped by SIGINT or SIGTERM (exit 130 or 143).
 
 use ariadne::{Label, Report, ReportKind, Source};
 use std::path::Path;
@@ -13,6 +14,8 @@ pub enum Failure {
     Input { file: String, message: String, located: Option<(String, std::ops::Range<usize>)>, help: Option<String> },
     /// A run that failed midway.
     Run { message: String },
+    /// A run stopped by SIGINT or SIGTERM, after flushing what it wrote.
+    Interrupted { signal: crate::interrupt::Signal, message: String },
 }
 
 impl Failure {
@@ -72,6 +75,7 @@ impl Failure {
         match self {
             Failure::Input { .. } => 2,
             Failure::Run { .. } => 1,
+            Failure::Interrupted { signal, .. } => signal.exit_code(),
         }
     }
 
@@ -79,6 +83,7 @@ impl Failure {
     pub fn render(&self) -> String {
         match self {
             Failure::Run { message } => format!("error: {message}\n"),
+            Failure::Interrupted { message, .. } => format!("{message}\n"),
             Failure::Input { file, message, located: None, help } => {
                 let mut s = format!("error: {file}: {message}\n");
                 if let Some(h) = help {

@@ -78,16 +78,22 @@ pub fn read_text(path: &Path, limit: u64) -> Result<String, ReadError> {
 /// second run that names the same file is refused and leaves the first one's
 /// rows alone. The lock lasts as long as the file is open.
 pub fn create_locked(path: &Path) -> Result<File, String> {
-    let file = OpenOptions::new().write(true).create(true).truncate(false).open(path).map_err(|e| e.to_string())?;
-    match file.try_lock() {
-        Ok(()) => {}
-        Err(TryLockError::WouldBlock) => {
-            return Err("in use by another run (it is being written); choose another file".into())
-        }
-        Err(TryLockError::Error(e)) => return Err(format!("cannot lock it: {e}")),
-    }
+    let file = open_locked(path)?;
     file.set_len(0).map_err(|e| e.to_string())?;
     Ok(file)
+}
+
+/// Opens (or creates) the output file at `path` for reading and writing by
+/// this run alone, keeping what it holds (the partial output a resumed run
+/// continues), and locks it as [`create_locked`] says.
+pub fn open_locked(path: &Path) -> Result<File, String> {
+    let file =
+        OpenOptions::new().read(true).write(true).create(true).truncate(false).open(path).map_err(|e| e.to_string())?;
+    match file.try_lock() {
+        Ok(()) => Ok(file),
+        Err(TryLockError::WouldBlock) => Err("in use by another run (it is being written); choose another file".into()),
+        Err(TryLockError::Error(e)) => Err(format!("cannot lock it: {e}")),
+    }
 }
 
 /// An error, before anything is computed, when an output path names one of the

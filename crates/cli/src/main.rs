@@ -3,7 +3,8 @@
 //! by the `mech` library; this crate only does IO.
 //!
 //! Exit codes: 0 done; 2 bad input (file, expression, model, arguments), with a
-//! message naming file, line and column; 1 a run that failed midway.
+//! message naming file, line and column; 1 a run that failed midway; 130 and
+//! 143 a run stopped by SIGINT and SIGTERM (`simulate`, `sweep`).
 
 mod budget;
 mod decimal;
@@ -12,11 +13,13 @@ mod extremal;
 mod files;
 mod format;
 mod inertia;
+mod interrupt;
 mod modes;
 mod orbit;
 mod output;
 mod plot;
 mod simulate;
+mod stream;
 mod sweep;
 mod top;
 

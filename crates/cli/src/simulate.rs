@@ -2,16 +2,20 @@
 //! CSV, draw it, and print the audit of the conserved quantities.
 //!
 //! The run itself is `mech::simulate`; this module parses the options, writes
-//! the CSV row by row (constant memory; flushed even when the run fails),
-//! keeps a bounded, decimated copy for the plot, and shows progress on a
-//! terminal.
+//! the CSV row by row (constant memory; flushed even when the run fails, whole
+//! to its last row whatever stops it: `stream.rs`), keeps a bounded, decimated
+//! copy for the plot, and shows progress on a terminal. SIGINT or SIGTERM stop
+//! the run between two rows (`interrupt.rs`): the summary says where, and the
+//! exit code is 130 or 143.
 
 use crate::diagnostics::Failure;
+use crate::interrupt::{self, Signal};
 use crate::plot::{self, PlotData, Series};
+use crate::stream::RowWriter;
 use mech::{Derivation, RunConfig, RunError, RunReport, StopCondition};
 use num::{Method, Output};
 use serde_json::json;
-use std::io::{BufWriter, IsTerminal, Write};
+use std::io::{IsTerminal, Write};
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -48,6 +52,7 @@ pub fn list_methods() -> String {
 }
 
 pub fn run(opts: &Options) -> Result<(), Failure> {
+    interrupt::install();
     crate::files::refuse_overwrite(&[&opts.model], &[opts.out.as_deref(), opts.plot.as_deref()])
         .map_err(Failure::usage)?;
     // Setup is timed from here (reading the model file) to the first row, which
@@ -107,43 +112,57 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     // Columns: t, coordinates, velocities, invariants.
     let names: Vec<String> = derivation.coordinate_names().iter().map(|s| s.to_string()).collect();
     let n = names.len();
-    let mut csv = match &opts.out {
-        Some(p) => Some(BufWriter::new(
-            crate::files::create_locked(p)
-                .map_err(|e| Failure::input(p, format!("cannot create the CSV file: {e}")))?,
-        )),
-        None => None,
-    };
-    let mut header_written = false;
-    let mut line: Vec<u8> = Vec::with_capacity(256);
     let with_events = !opts.crossing.is_empty();
-    let mut crossings_seen = 0usize;
-    let mut csv_error: Option<std::io::Error> = None;
-    let mut plot_data = PlotKeeper::new(n);
-    let progress = progress_bar(until);
     let inv_names: Vec<String> = mech::invariants_of(&derivation).into_iter().map(|i| i.name).collect();
     // Rigid bodies: ω and L per body as extra columns.
     let mut bodies = mech::BodyRecorder::new(&derivation);
     let mut body_values = vec![0.0; bodies.as_ref().map_or(0, |b| b.columns().len())];
     let constraint_cols = mech::constraint_columns(&derivation);
+    // The header is written first, so that a run stopped before its first row
+    // leaves a CSV that reads as one without rows.
+    let mut csv = match &opts.out {
+        Some(p) => {
+            let mut cols = vec!["t".to_string()];
+            cols.extend(names.iter().cloned());
+            cols.extend(names.iter().map(|c| format!("{c}'")));
+            cols.extend(inv_names.iter().cloned());
+            cols.extend(bodies.iter().flat_map(|b| b.columns().iter().cloned()));
+            cols.extend(constraint_cols.iter().cloned());
+            if with_events {
+                cols.push("event".into());
+            }
+            let _held = interrupt::gate();
+            let file = crate::files::open_locked(p)
+                .map_err(|e| Failure::input(p, format!("cannot create the CSV file: {e}")))?;
+            let header = format!("{}\n", cols.join(","));
+            Some(
+                RowWriter::start(file, 0, header.as_bytes())
+                    .map_err(|e| Failure::run(format!("cannot write {}: {e}", p.display())))?,
+            )
+        }
+        None => None,
+    };
+    let mut line: Vec<u8> = Vec::with_capacity(256);
+    let mut crossings_seen = 0usize;
+    let mut csv_error: Option<std::io::Error> = None;
+    let mut plot_data = PlotKeeper::new(n);
+    let progress = progress_bar(until);
+    // The time of the last row handed over (written, with --out), and the
+    // signal that stopped the run before the next one.
+    let mut last_row: Option<f64> = None;
+    let mut stopped_by: Option<Signal> = None;
 
     let result = mech::simulate(&derivation, &config, |row| {
-        first_row.get_or_insert_with(|| started.elapsed().as_secs_f64());
+        first_row.get_or_insert_with(|| {
+            interrupt::streaming();
+            started.elapsed().as_secs_f64()
+        });
+        if let Some(signal) = interrupt::received() {
+            stopped_by = Some(signal);
+            return ControlFlow::Break(());
+        }
         if let Some(w) = csv.as_mut() {
             let r = (|| -> std::io::Result<()> {
-                if !header_written {
-                    let mut cols = vec!["t".to_string()];
-                    cols.extend(names.iter().cloned());
-                    cols.extend(names.iter().map(|c| format!("{c}'")));
-                    cols.extend(inv_names.iter().cloned());
-                    cols.extend(bodies.iter().flat_map(|b| b.columns().iter().cloned()));
-                    cols.extend(constraint_cols.iter().cloned());
-                    if with_events {
-                        cols.push("event".into());
-                    }
-                    writeln!(w, "{}", cols.join(","))?;
-                    header_written = true;
-                }
                 line.clear();
                 crate::decimal::push_f64(&mut line, row.t);
                 if let Some(b) = bodies.as_mut() {
@@ -162,13 +181,14 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
                     )?;
                 }
                 line.push(b'\n');
-                w.write_all(&line)
+                w.push(&line)
             })();
             if let Err(e) = r {
                 csv_error = Some(e);
                 return ControlFlow::Break(());
             }
         }
+        last_row = Some(row.t);
         if row.event.is_some() {
             crossings_seen += 1;
         }
@@ -204,15 +224,16 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
         }
         Err(e) => return Err(input_failure(path, &source, e)),
     };
+    let interrupted = stopped_by.map(|signal| Interrupted { signal, t: last_row });
 
     if let Some(plot_path) = &opts.plot {
         let data = plot_data.into_plot(&derivation.model().name, &report, &names, &inv_names);
         plot::write_svg(plot_path, &data).map_err(Failure::run)?;
     }
     let mut text = if opts.summary_json {
-        summary_json(&report, &names, Timing { derive_seconds: derived, setup_seconds: first_row })
+        summary_json(&report, &names, Timing { derive_seconds: derived, setup_seconds: first_row }, interrupted)
     } else {
-        summary_text(&report, &names, &derivation)
+        summary_text(&report, &names, &derivation, interrupted)
     };
     if !opts.summary_json && !opts.crossing.is_empty() {
         text.push_str(&format!(
@@ -225,11 +246,16 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     for w in &report.warnings {
         eprintln!("warning: {w}");
     }
+    let keeps = |what: &str| opts.out.as_ref().map_or(String::new(), |p| format!(" ({} keeps {what})", p.display()));
+    if let Some(Interrupted { signal, t }) = interrupted {
+        let at = t.map_or("before the first row".to_string(), |t| format!("at t = {t}"));
+        return Err(Failure::Interrupted {
+            signal,
+            message: format!("interrupted by {} {at}{}", signal.name(), keeps("every row up to there, each whole")),
+        });
+    }
     match failure {
-        Some(message) => Err(Failure::run(format!(
-            "{message}{}",
-            opts.out.as_ref().map_or(String::new(), |p| format!(" ({} keeps the rows up to there)", p.display()))
-        ))),
+        Some(message) => Err(Failure::run(format!("{message}{}", keeps("the rows up to there")))),
         None => Ok(()),
     }
 }
@@ -275,6 +301,14 @@ fn progress_bar(until: f64) -> Option<indicatif::ProgressBar> {
     Some(pb)
 }
 
+/// A run that a signal stopped: which, and the time of the last row handed
+/// over (None when it came before the first).
+#[derive(Clone, Copy)]
+struct Interrupted {
+    signal: Signal,
+    t: Option<f64>,
+}
+
 /// Where the time before the integration went, for the JSON summary.
 struct Timing {
     /// Reading, parsing and deriving the model.
@@ -283,7 +317,7 @@ struct Timing {
     setup_seconds: Option<f64>,
 }
 
-fn summary_json(r: &RunReport, names: &[String], timing: Timing) -> String {
+fn summary_json(r: &RunReport, names: &[String], timing: Timing, interrupted: Option<Interrupted>) -> String {
     let mut fin = serde_json::Map::new();
     for (i, name) in names.iter().enumerate() {
         fin.insert(name.clone(), json!(r.final_q[i]));
@@ -323,6 +357,7 @@ fn summary_json(r: &RunReport, names: &[String], timing: Timing) -> String {
         "wall_seconds": r.wall_seconds,
         "derive_seconds": timing.derive_seconds,
         "setup_seconds": timing.setup_seconds,
+        "interrupted": interrupted.map(|i| json!({"signal": i.signal.name(), "t": i.t})),
     });
     let mut v = v;
     if !r.constraints.is_empty() {
@@ -347,7 +382,7 @@ fn summary_json(r: &RunReport, names: &[String], timing: Timing) -> String {
     s
 }
 
-fn summary_text(r: &RunReport, names: &[String], d: &Derivation) -> String {
+fn summary_text(r: &RunReport, names: &[String], d: &Derivation, interrupted: Option<Interrupted>) -> String {
     let mut s = String::new();
     s.push_str(&format!("{}\n", d.model().name));
     let step = match r.dt {
@@ -380,6 +415,13 @@ fn summary_text(r: &RunReport, names: &[String], d: &Derivation) -> String {
         r.wall_seconds
     ));
     match (&r.failure, &r.stopped_by) {
+        _ if interrupted.is_some() => {
+            let Interrupted { signal, t } = interrupted.expect("matched");
+            match t {
+                Some(t) => s.push_str(&format!("interrupted at t = {t} ({})\n", signal.name())),
+                None => s.push_str(&format!("interrupted before the first row ({})\n", signal.name())),
+            }
+        }
         (Some(_), _) => s.push_str(&format!("FAILED after t = {} (see the error below)\n", r.t_final)),
         (None, Some(why)) => s.push_str(&format!("stopped at t = {} ({why})\n", r.t_final)),
         (None, None) => s.push_str(&format!("reached t = {}\n", r.t_final)),

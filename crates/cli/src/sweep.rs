@@ -4,15 +4,27 @@
 //! Two forms: `lagrange sweep MODEL --until T --grid SPEC [...]` runs a sweep (or
 //! the shard `--shard i/n` of one), and `lagrange sweep --merge OUT.csv
 //! SHARD.csv...` joins the shards' CSV files into the whole sweep's. Both may
-//! draw `--heatmap FILE.svg`. The computation is `mech::sweep`; this module
+//! draw `--heatmap FILE.svg`. The computation is `mech::Sweep`; this module
 //! parses options, shows progress on a terminal and does the IO.
+//!
+//! Rows stream to `--out` (or stdout) in grid order as they finish, whole
+//! (`stream.rs`); the heat map and the counts are gathered as they pass. A
+//! sweep stopped by SIGINT or SIGTERM (`interrupt.rs`), or by a write that
+//! failed, leaves the rows of its first runs, and `--resume` continues such
+//! an output (`resume.rs`): it checks that the file is this sweep's, keeps its
+//! whole rows, and appends the rest.
 
 mod heatmap;
+mod resume;
 
 use crate::diagnostics::Failure;
-use mech::{Grid, Shard, SweepConfig, SweepError, SweepTable};
+use crate::interrupt;
+use crate::stream::RowWriter;
+use heatmap::HeatMap;
+use mech::{Grid, Shard, SweepConfig, SweepError, SweepTable, TableRow};
 use num::Method;
 use std::io::IsTerminal;
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -58,8 +70,11 @@ pub struct Args {
     /// Skip the Lyapunov exponent's perturbed twin (halves the cost).
     #[arg(long)]
     pub no_lyapunov: bool,
+    /// Continue the sweep whose partial output --out holds (from an interrupted run): keep its rows, run the rest.
+    #[arg(long, requires = "out")]
+    pub resume: bool,
     /// Join the shard CSV files given in place of MODEL into OUT.csv.
-    #[arg(long, value_name = "OUT.csv", conflicts_with_all = ["until", "grid", "set", "method", "rtol", "atol", "out", "shard", "threads", "no_lyapunov"])]
+    #[arg(long, value_name = "OUT.csv", conflicts_with_all = ["until", "grid", "set", "method", "rtol", "atol", "out", "shard", "threads", "no_lyapunov", "resume"])]
     pub merge: Option<PathBuf>,
 }
 
@@ -72,6 +87,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     if let Some(out) = &args.merge {
         return merge(args, out);
     }
+    interrupt::install();
     let inputs: Vec<&Path> = args.files.iter().map(PathBuf::as_path).collect();
     crate::files::refuse_overwrite(&inputs, &[args.out.as_deref(), args.heatmap.as_deref()]).map_err(Failure::usage)?;
     let [path] = args.files.as_slice() else {
@@ -106,16 +122,6 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let (source, derivation) = crate::derive_file(path, &args.set)?;
     derivation.reject_constraints("`lagrange sweep`").map_err(|e| Failure::model(path, &source, e))?;
     let grid = Grid::parse(args.grid.as_deref().unwrap_or_default(), derivation.model()).map_err(usage)?;
-    if args.heatmap.is_some() {
-        let mut columns: Vec<String> = vec!["t_final".into(), "energy_drift".into()];
-        if !args.no_lyapunov {
-            columns.push("lyapunov".into());
-        }
-        for c in derivation.coordinate_names() {
-            columns.extend([format!("final_{c}"), format!("final_{c}'")]);
-        }
-        heatmap::check_request(grid.axes.len(), &args.color, &columns).map_err(Failure::usage)?;
-    }
     let rtol = args.rtol.unwrap_or(mech::DEFAULT_RTOL);
     let config = SweepConfig {
         until,
@@ -126,37 +132,162 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         shard,
         threads: args.threads,
     };
+    let sweep = mech::Sweep::new(&derivation, &grid, &config).map_err(|e| match e {
+        SweepError::Model(e) => Failure::model(path, &source, e),
+        other => usage(other),
+    })?;
+    let header = sweep.header();
+    let mut map = match &args.heatmap {
+        Some(_) => Some(HeatMap::new(header, &args.color).map_err(Failure::usage)?),
+        None => None,
+    };
 
-    let n_runs = shard.runs(grid.len()).count();
-    let progress = progress_bar(n_runs as u64);
+    // The output, and the rows a resumed sweep already has.
+    let mut tally = Tally::default();
+    let write_error = |e: &std::io::Error| match &args.out {
+        Some(out) => format!("cannot write {}: {e}", out.display()),
+        None => format!("cannot write the output: {e}"),
+    };
+    let (mut writer, skip) = match &args.out {
+        Some(out) if args.resume => {
+            let kept = resume::open(out, header, shard, sweep.len(), |row| tally.add(row, map.as_mut()))?;
+            if let Some(note) = &kept.note {
+                eprintln!("{note}");
+            }
+            (kept.writer, kept.rows)
+        }
+        Some(out) => {
+            let _held = interrupt::gate();
+            let file = crate::files::open_locked(out).map_err(|e| Failure::input(out, format!("cannot write: {e}")))?;
+            let writer =
+                RowWriter::start(file, 0, header.to_csv().as_bytes()).map_err(|e| Failure::run(write_error(&e)))?;
+            (writer, 0)
+        }
+        None => {
+            let mut writer = RowWriter::stdout();
+            writer
+                .push(header.to_csv().as_bytes())
+                .and_then(|()| writer.flush())
+                .map_err(|e| Failure::run(write_error(&e)))?;
+            (writer, 0)
+        }
+    };
+
+    let n_runs = sweep.len();
+    let progress = progress_bar(n_runs as u64, skip as u64);
     let start = Instant::now();
     let tick = || {
         if let Some(pb) = &progress {
             pb.inc(1);
         }
     };
-    let result = mech::sweep(&derivation, &grid, &config, &tick);
+    // The workers look at the signal between runs: a sweep stops between rows from its start.
+    interrupt::streaming();
+    let stop = || interrupt::received().is_some();
+    let mut line = String::new();
+    let mut failed_write: Option<std::io::Error> = None;
+    let result = sweep.run(skip, &tick, &stop, |row| {
+        line.clear();
+        row.write_csv(&mut line);
+        if let Err(e) = writer.push(line.as_bytes()) {
+            failed_write = Some(e);
+            return ControlFlow::Break(());
+        }
+        tally.add(&row, map.as_mut());
+        ControlFlow::Continue(())
+    });
     if let Some(pb) = &progress {
         pb.finish_and_clear();
     }
-    let table = result.map_err(|e| match e {
-        SweepError::Model(e) => Failure::model(path, &source, e),
-        other => usage(other),
-    })?;
-    let seconds = start.elapsed().as_secs_f64();
-    write_csv(&table, args.out.as_deref())?;
-    if let Some(svg) = &args.heatmap {
-        heatmap::write_svg(svg, &table, &args.color).map_err(Failure::run)?;
+    if let Err(e) = writer.flush() {
+        failed_write.get_or_insert(e);
     }
-    let failed = table.rows.iter().filter(|r| !r.failure.is_empty()).count();
+    let complete = result.map_err(usage)?;
+    let seconds = start.elapsed().as_secs_f64();
+    if let (Some(svg), Some(map)) = (&args.heatmap, &map) {
+        map.write_svg(svg).map_err(Failure::run)?;
+    }
+    let kept = |what: &str| match &args.out {
+        Some(out) => format!(
+            "{} keeps the rows of the first {} runs{what}, each whole; to run the rest:\n  {}",
+            out.display(),
+            tally.rows,
+            resume_command()
+        ),
+        None => "the rows so far went to stdout (give --out FILE.csv to be able to resume)".to_string(),
+    };
+    if let Some(e) = failed_write {
+        // A reader that went away (`| head`) wanted no more rows.
+        if args.out.is_none() && e.kind() == std::io::ErrorKind::BrokenPipe {
+            return Ok(());
+        }
+        return Err(Failure::run(format!("{}; {}", write_error(&e), kept(""))));
+    }
+    if !complete {
+        if let Some(signal) = interrupt::received() {
+            return Err(Failure::Interrupted {
+                signal,
+                message: format!(
+                    "interrupted by {}: {} of {n_runs} runs finished; {}",
+                    signal.name(),
+                    tally.rows,
+                    kept(" in grid order")
+                ),
+            });
+        }
+    }
+    let resumed = if skip > 0 { format!(" ({skip} kept, {} run now)", n_runs - skip) } else { String::new() };
     eprintln!(
-        "{n_runs} runs{} in {seconds:.2} s on {} threads ({}, rtol {:e}); {failed} failed",
+        "{n_runs} runs{}{resumed} in {seconds:.2} s on {} threads ({}, rtol {:e}); {} failed",
         if shard.is_whole() { String::new() } else { format!(" (shard {shard} of {} runs)", grid.len()) },
         args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
-        table.meta("method").unwrap_or("?"),
+        header.meta("method").unwrap_or("?"),
         config.rtol,
+        tally.failed,
     );
     Ok(())
+}
+
+/// The rows written so far and how many of them failed.
+#[derive(Default)]
+struct Tally {
+    rows: usize,
+    failed: usize,
+}
+
+impl Tally {
+    /// Counts a row, and draws it into the heat map if there is one.
+    fn add(&mut self, row: &TableRow, map: Option<&mut HeatMap>) {
+        self.rows += 1;
+        if !row.failure.is_empty() {
+            self.failed += 1;
+        }
+        if let Some(map) = map {
+            map.add(row);
+        }
+    }
+}
+
+/// This command line with `--resume` (once), quoted for a POSIX shell.
+fn resume_command() -> String {
+    let mut words: Vec<String> = std::env::args().collect();
+    if let Some(first) = words.first_mut() {
+        *first = "lagrange".into();
+    }
+    if !words.iter().any(|w| w == "--resume") {
+        words.push("--resume".into());
+    }
+    words.iter().map(|w| shell_quoted(w)).collect::<Vec<_>>().join(" ")
+}
+
+/// `word` as a shell reads it back: as it is when it is plain, otherwise in single quotes.
+fn shell_quoted(word: &str) -> String {
+    let plain = !word.is_empty() && word.chars().all(|c| c.is_ascii_alphanumeric() || "-_./=:,+@%".contains(c));
+    if plain {
+        word.to_string()
+    } else {
+        format!("'{}'", word.replace('\'', "'\\''"))
+    }
 }
 
 /// A sweep's error in the CLI's terms: its settings named by their flags.
@@ -183,32 +314,30 @@ fn merge(args: &Args, out: &Path) -> Result<(), Failure> {
         shards.push((name, table));
     }
     let table = mech::merge(&shards).map_err(|e| Failure::usage(e.to_string()))?;
-    if args.heatmap.is_some() {
-        let n_axes = table.axes().map_or(0, |a| a.len());
-        heatmap::check_request(n_axes, &args.color, &table.columns).map_err(Failure::usage)?;
-    }
-    write_csv(&table, Some(out))?;
-    if let Some(svg) = &args.heatmap {
-        heatmap::write_svg(svg, &table, &args.color).map_err(Failure::run)?;
+    let map = match &args.heatmap {
+        Some(_) => {
+            let mut map = HeatMap::new(&table.header, &args.color).map_err(Failure::usage)?;
+            table.rows.iter().for_each(|row| map.add(row));
+            Some(map)
+        }
+        None => None,
+    };
+    write_csv(&table, out)?;
+    if let (Some(svg), Some(map)) = (&args.heatmap, &map) {
+        map.write_svg(svg).map_err(Failure::run)?;
     }
     eprintln!("merged {} shards: {} runs into {}", shards.len(), table.rows.len(), out.display());
     Ok(())
 }
 
-fn write_csv(table: &SweepTable, out: Option<&Path>) -> Result<(), Failure> {
-    let text = table.to_csv();
-    match out {
-        Some(p) => {
-            let mut file =
-                crate::files::create_locked(p).map_err(|e| Failure::input(p, format!("cannot write: {e}")))?;
-            std::io::Write::write_all(&mut file, text.as_bytes())
-                .map_err(|e| Failure::run(format!("cannot write {}: {e}", p.display())))
-        }
-        None => crate::write_stdout(&text),
-    }
+/// Writes a merged table to `out`.
+fn write_csv(table: &SweepTable, out: &Path) -> Result<(), Failure> {
+    let mut file = crate::files::create_locked(out).map_err(|e| Failure::input(out, format!("cannot write: {e}")))?;
+    std::io::Write::write_all(&mut file, table.to_csv().as_bytes())
+        .map_err(|e| Failure::run(format!("cannot write {}: {e}", out.display())))
 }
 
-fn progress_bar(len: u64) -> Option<indicatif::ProgressBar> {
+fn progress_bar(len: u64, done: u64) -> Option<indicatif::ProgressBar> {
     if !std::io::stderr().is_terminal() {
         return None;
     }
@@ -217,5 +346,6 @@ fn progress_bar(len: u64) -> Option<indicatif::ProgressBar> {
         indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} runs  {elapsed} (eta {eta})")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
+    pb.set_position(done);
     Some(pb)
 }

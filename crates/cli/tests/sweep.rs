@@ -136,6 +136,9 @@ fn bad_grids_and_requests_exit_2() {
         (&["--grid", "a=0:1:3", "--heatmap", "x.svg"], "--heatmap needs a 2-D grid"),
         (&["--grid", "a=0:1:3,b=0:1:3", "--heatmap", "x.svg", "--color", "c"], "--color 'c' is not available"),
         (&["--grid", "a=0:1:3", "--shard", "3/3"], "--shard must be I/N"),
+        // A map's cells are held while the rows stream: at most 10^6, refused before any run.
+        (&["--grid", "a=0:1:2000,b=0:1:1000", "--heatmap", "x.svg"], "--heatmap draws at most 1000000 cells"),
+        (&["--grid", "a=0:1:3,b=0:1:3", "--heatmap", "x.svg", "--no-lyapunov"], "--color 'lyapunov' is not available"),
     ];
     for (extra, expect) in cases {
         let mut args = vec!["sweep", model, "--until", "1"];

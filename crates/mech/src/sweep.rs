@@ -1,9 +1,12 @@
 //! Ensembles: many trajectories of one model over a grid of initial values or
 //! parameters, on all cores, one result row per run.
 //!
-//! Enter at [`Grid::parse`] (the `--grid` text against a model), then [`sweep`],
-//! which returns a [`SweepTable`]; [`SweepTable::to_csv`] / [`SweepTable::parse`]
-//! are its file form and [`merge`] joins the tables of shards.
+//! Enter at [`Grid::parse`] (the `--grid` text against a model), then
+//! [`Sweep::new`], whose [`Sweep::run`] streams the rows in grid order with
+//! memory bounded whatever the grid (`sweep/window.rs`), and may skip the rows
+//! a resumed sweep already has; [`sweep`] collects them into a [`SweepTable`].
+//! [`SweepHeader`] and [`TableRow`] are the CSV's lines, [`SweepTable::to_csv`] /
+//! [`SweepTable::parse`] its whole text, and [`merge`] joins the tables of shards.
 //!
 //! # A run
 //!
@@ -66,11 +69,13 @@ use crate::run::dynamics::{Dynamics, Form, System};
 use crate::run::ensemble::{propagate, Batch, LANES};
 use crate::run::series::LagrangeSeries;
 use num::{integrate, integrate_to, Config, Method, Output, SolveError, Solver, StopReason};
-use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::ops::ControlFlow;
+use std::thread;
 use sym::Lanes;
+
+mod window;
 
 /// Initial separation of the Lyapunov twin, in state units.
 pub const LYAPUNOV_D0: f64 = 1e-8;
@@ -385,6 +390,16 @@ impl Shard {
         (self.index..total).step_by(self.count)
     }
 
+    /// The number of this shard's runs among `total`.
+    pub fn len(self, total: usize) -> usize {
+        total.saturating_sub(self.index).div_ceil(self.count)
+    }
+
+    /// The grid index of this shard's `k`-th run.
+    pub fn nth(self, k: usize) -> usize {
+        self.index + k * self.count
+    }
+
     /// Whether the sweep is split at all.
     pub fn is_whole(self) -> bool {
         self.count == 1
@@ -443,23 +458,64 @@ pub struct TableRow {
     pub failure: String,
 }
 
-/// A sweep's result: provenance, columns and rows, in run order. Its file form
-/// is CSV with one comment line of provenance first ([`SweepTable::to_csv`]).
+impl TableRow {
+    /// Appends the row's CSV line, newline included, to `out`. Numbers print in
+    /// the shortest form that reads back exactly (`1e-10`, `0.5`, `NaN`).
+    pub fn write_csv(&self, out: &mut String) {
+        let _ = write!(out, "{}", self.run);
+        for v in &self.values {
+            let _ = write!(out, ",{v:?}");
+        }
+        out.push(',');
+        out.push_str(&csv_field(&self.failure));
+        out.push('\n');
+    }
+
+    /// Reads one line that [`TableRow::write_csv`] wrote (without its newline),
+    /// under `header`; `file` and `line_no` name it in errors.
+    pub fn parse(line: &str, header: &SweepHeader, file: &str, line_no: usize) -> Result<TableRow, SweepError> {
+        let err = |reason: String| SweepError::Table { file: file.to_string(), line: line_no, reason };
+        let columns = &header.columns;
+        let n_values = columns.len() - 2;
+        let mut fields = line.splitn(n_values + 2, ',');
+        let run = fields
+            .next()
+            .and_then(|f| f.parse::<usize>().ok())
+            .ok_or_else(|| err("the run index is not a whole number".into()))?;
+        let mut values = Vec::with_capacity(n_values);
+        for c in 0..n_values {
+            let field = fields.next().ok_or_else(|| err(format!("{} columns expected", columns.len())))?;
+            let v = field
+                .parse::<f64>()
+                .map_err(|_| err(format!("'{field}' in column '{}' is not a number", columns[c + 1])))?;
+            values.push(v);
+        }
+        let last = fields.next().ok_or_else(|| err(format!("{} columns expected", columns.len())))?;
+        let failure = failure_field(last).ok_or_else(|| {
+            err(format!(
+                "{} columns expected: the last, 'failure', is empty, text without commas or quotes, or quoted; found '{last}'",
+                columns.len()
+            ))
+        })?;
+        Ok(TableRow { run, values, failure })
+    }
+}
+
+/// The first two lines of a sweep's CSV: the provenance comment and the
+/// column names. Two sweeps with equal headers compute equal rows.
 ///
 /// Columns: `run`, the grid's names (inputs), `t_final`, `final_<q>` per
 /// coordinate, `final_<q>'` per velocity, `energy_drift`, `lyapunov`, `failure`.
 #[derive(Debug, Clone, PartialEq)]
-pub struct SweepTable {
+pub struct SweepHeader {
     /// Provenance as `key=value` pairs (`model`, `grid`, `runs`, `until`, `method`,
     /// `rtol`, `atol`, `parameters`, `lyapunov`, and `shard` for a part).
     pub meta: Vec<(String, String)>,
     /// Column names, `run` first and `failure` last.
     pub columns: Vec<String>,
-    /// The rows, ascending by run.
-    pub rows: Vec<TableRow>,
 }
 
-impl SweepTable {
+impl SweepHeader {
     /// A provenance value.
     pub fn meta(&self, key: &str) -> Option<&str> {
         self.meta.iter().find(|(k, _)| k == key).map(|(_, v)| v.as_str())
@@ -481,34 +537,22 @@ impl SweepTable {
         (k >= 1 && k + 1 < self.columns.len()).then(|| k - 1)
     }
 
-    /// The CSV text: the provenance comment, the header and one line per row.
-    /// Numbers print in the shortest form that reads back exactly (`1e-10`, `0.5`, `NaN`).
+    /// The two header lines, each ending in a newline.
     pub fn to_csv(&self) -> String {
-        let mut s = String::with_capacity(64 * (self.rows.len() + 2));
-        s.push_str(CSV_MAGIC);
+        let mut s = String::from(CSV_MAGIC);
         for (k, v) in &self.meta {
             let _ = write!(s, "; {k}={v}");
         }
         s.push('\n');
         s.push_str(&self.columns.join(","));
         s.push('\n');
-        for row in &self.rows {
-            let _ = write!(s, "{}", row.run);
-            for v in &row.values {
-                let _ = write!(s, ",{v:?}");
-            }
-            s.push(',');
-            s.push_str(&csv_field(&row.failure));
-            s.push('\n');
-        }
         s
     }
 
-    /// Reads the text [`SweepTable::to_csv`] writes; `file` names it in errors.
-    pub fn parse(text: &str, file: &str) -> Result<SweepTable, SweepError> {
+    /// Reads the two lines [`SweepHeader::to_csv`] writes (without their
+    /// newlines); `file` names them in errors.
+    pub fn parse(first: &str, second: &str, file: &str) -> Result<SweepHeader, SweepError> {
         let err = |line: usize, reason: String| SweepError::Table { file: file.to_string(), line, reason };
-        let mut lines = text.lines();
-        let first = lines.next().unwrap_or_default();
         let Some(rest) = first.strip_prefix(CSV_MAGIC) else {
             return Err(err(
                 1,
@@ -520,43 +564,49 @@ impl SweepTable {
             let (k, v) = pair.split_once('=').ok_or_else(|| err(1, format!("provenance '{pair}' is not KEY=VALUE")))?;
             meta.push((k.to_string(), v.to_string()));
         }
-        let columns: Vec<String> = lines.next().unwrap_or_default().split(',').map(str::to_string).collect();
+        let columns: Vec<String> = second.split(',').map(str::to_string).collect();
         if columns.len() < 2 || columns[0] != "run" || columns.last().map(String::as_str) != Some("failure") {
             return Err(err(2, "the header should start with 'run' and end with 'failure'".into()));
         }
-        let n_values = columns.len() - 2;
+        Ok(SweepHeader { meta, columns })
+    }
+}
+
+/// A sweep's result held whole: its header and rows, in run order. Its file
+/// form is CSV with one comment line of provenance first ([`SweepTable::to_csv`]).
+/// A sweep streams its rows ([`Sweep::run`]); a table is for what needs them
+/// all at once ([`merge`], tests).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepTable {
+    /// Provenance and columns.
+    pub header: SweepHeader,
+    /// The rows, ascending by run.
+    pub rows: Vec<TableRow>,
+}
+
+impl SweepTable {
+    /// The CSV text: the provenance comment, the header and one line per row.
+    pub fn to_csv(&self) -> String {
+        let mut s = self.header.to_csv();
+        s.reserve(64 * self.rows.len());
+        for row in &self.rows {
+            row.write_csv(&mut s);
+        }
+        s
+    }
+
+    /// Reads the text [`SweepTable::to_csv`] writes; `file` names it in errors.
+    pub fn parse(text: &str, file: &str) -> Result<SweepTable, SweepError> {
+        let mut lines = text.lines();
+        let first = lines.next().unwrap_or_default();
+        let header = SweepHeader::parse(first, lines.next().unwrap_or_default(), file)?;
         let mut rows = Vec::new();
         for (k, line) in lines.enumerate() {
-            let line_no = k + 3;
-            if line.is_empty() {
-                continue;
+            if !line.is_empty() {
+                rows.push(TableRow::parse(line, &header, file, k + 3)?);
             }
-            let mut fields = line.splitn(n_values + 2, ',');
-            let run = fields
-                .next()
-                .and_then(|f| f.parse::<usize>().ok())
-                .ok_or_else(|| err(line_no, "the run index is not a whole number".into()))?;
-            let mut values = Vec::with_capacity(n_values);
-            for c in 0..n_values {
-                let field = fields.next().ok_or_else(|| err(line_no, format!("{} columns expected", columns.len())))?;
-                let v = field
-                    .parse::<f64>()
-                    .map_err(|_| err(line_no, format!("'{field}' in column '{}' is not a number", columns[c + 1])))?;
-                values.push(v);
-            }
-            let last = fields.next().ok_or_else(|| err(line_no, format!("{} columns expected", columns.len())))?;
-            let failure = failure_field(last).ok_or_else(|| {
-                err(
-                    line_no,
-                    format!(
-                        "{} columns expected: the last, 'failure', is empty, text without commas or quotes, or quoted; found '{last}'",
-                        columns.len()
-                    ),
-                )
-            })?;
-            rows.push(TableRow { run, values, failure });
         }
-        Ok(SweepTable { meta, columns, rows })
+        Ok(SweepTable { header, rows })
     }
 }
 
@@ -584,109 +634,186 @@ fn failure_field(field: &str) -> Option<String> {
     }
 }
 
-/// Runs the sweep of `grid` (the runs of `config.shard`) in parallel and returns
-/// its table, rows in run order whatever the scheduling. `progress` is called once
-/// per finished run, from any thread. A run that fails does not stop the sweep:
-/// its row holds NaN where values are missing and the reason in `failure`.
-pub fn sweep(
-    d: &Derivation,
-    grid: &Grid,
-    config: &SweepConfig,
-    progress: &(dyn Fn() + Sync),
-) -> Result<SweepTable, SweepError> {
-    if !crate::run::is_positive_time(config.until) {
-        return Err(SweepError::Until { until: config.until });
-    }
-    let dynamics = Dynamics::new(d);
-    // Rigid bodies need the gimbal guard's events, which the lock-step batches
-    // do not check: DOP853 by default there.
-    let default = if d.model.bodies.is_empty() { Method::Taylor } else { Method::Dop853 };
-    let (method, form) =
-        choose_method(d, &dynamics, Some(config.method.unwrap_or(default))).map_err(SweepError::Model)?;
-    // Initial values from the model; a value neither in [initial] nor on an axis
-    // is an error before anything runs.
-    let base = initial_values(&d.model).map_err(SweepError::Model)?;
-    if grid.is_empty() {
-        return Err(SweepError::EmptyGrid);
-    }
-    complete(&base, grid, &grid.point(0), &d.model).map_err(SweepError::Model)?;
-    let has_parameters = grid.targets.iter().any(|t| matches!(t, Target::Parameter(_)));
-    let system = dynamics.system(form);
-    let runs: Vec<usize> = config.shard.runs(grid.len()).collect();
-    let n = dynamics.n_coords();
-    // Rigid bodies: a run through the Euler angles' gimbal singularity fails
-    // there (as `simulate` does) instead of integrating garbage.
-    let guards = crate::run::body::gimbal_guards(d, config.rtol);
-    let plan = Plan { method, form, config, guards: &guards };
+/// Jobs a worker thread may run ahead of the row being written, per thread:
+/// enough that a slow job at the head of the line (a chaotic region) does not
+/// idle the others, few enough that the rows held stay a handful of jobs'.
+const WINDOW_PER_THREAD: usize = 4;
 
-    // The Taylor method on smooth Lagrange-form models runs batches of
-    // trajectories in lock step (`run/ensemble.rs`); its code is compiled once here.
-    let batched = (method == Method::Taylor && form == Form::Lagrange && guards.is_empty())
-        .then(|| dynamics.lagrange_series::<LANES>(num::taylor_order(config.rtol)));
+/// A sweep ready to run: its inputs checked, its method chosen, its header
+/// known. [`Sweep::run`] streams its rows in grid order; [`sweep`] collects
+/// them into a table.
+pub struct Sweep<'a> {
+    d: &'a Derivation,
+    grid: &'a Grid,
+    config: &'a SweepConfig,
+    dynamics: Dynamics,
+    method: Method,
+    form: Form,
+    /// The model's `[initial]` values (None where the grid must give them).
+    base: Initial,
+    /// Rigid bodies: one gimbal guard per body.
+    guards: Vec<GimbalGuard>,
+    header: SweepHeader,
+}
 
-    // Each worker owns its systems (and, for parameter grids, a derivation to
-    // recompile); rows come back in the order of `runs`.
-    let work = || -> Vec<TableRow> {
-        if let Some(series) = &batched {
+impl<'a> Sweep<'a> {
+    /// Checks a sweep before anything runs: the end time, the method, the
+    /// initial values the model and the grid give.
+    pub fn new(d: &'a Derivation, grid: &'a Grid, config: &'a SweepConfig) -> Result<Sweep<'a>, SweepError> {
+        if !crate::run::is_positive_time(config.until) {
+            return Err(SweepError::Until { until: config.until });
+        }
+        let dynamics = Dynamics::new(d);
+        // Rigid bodies need the gimbal guard's events, which the lock-step batches
+        // do not check: DOP853 by default there.
+        let default = if d.model.bodies.is_empty() { Method::Taylor } else { Method::Dop853 };
+        let (method, form) =
+            choose_method(d, &dynamics, Some(config.method.unwrap_or(default))).map_err(SweepError::Model)?;
+        // Initial values from the model; a value neither in [initial] nor on an axis
+        // is an error before anything runs.
+        let base = initial_values(&d.model).map_err(SweepError::Model)?;
+        if grid.is_empty() {
+            return Err(SweepError::EmptyGrid);
+        }
+        complete(&base, grid, &grid.point(0), &d.model).map_err(SweepError::Model)?;
+        // Rigid bodies: a run through the Euler angles' gimbal singularity fails
+        // there (as `simulate` does) instead of integrating garbage.
+        let guards = crate::run::body::gimbal_guards(d, config.rtol);
+        let header = header(d, grid, config, method, dynamics.coordinate_names());
+        Ok(Sweep { d, grid, config, dynamics, method, form, base, guards, header })
+    }
+
+    /// The provenance and columns of the sweep's CSV.
+    pub fn header(&self) -> &SweepHeader {
+        &self.header
+    }
+
+    /// The number of runs (of the shard, for a part).
+    pub fn len(&self) -> usize {
+        self.config.shard.len(self.grid.len())
+    }
+
+    /// True when there is no run (a shard beyond a grid smaller than the shard count).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Runs the sweep's runs after the first `skip` (those a resumed sweep
+    /// already has) on worker threads, and hands their rows to `on_row` on
+    /// the calling thread, one at a time, in grid order, holding a bounded
+    /// window of rows (see `sweep/window.rs`) however large the grid.
+    /// `progress` is called once per finished run, from any thread. `stop` is
+    /// looked at between rows and by the workers between runs (in lock step:
+    /// between segments); once it is true, or once `on_row` breaks, the rows
+    /// handed over are a prefix in grid order and `run` returns `Ok(false)`.
+    /// A run that fails does not stop the sweep: its row holds NaN where values
+    /// are missing and the reason in `failure`.
+    pub fn run(
+        &self,
+        skip: usize,
+        progress: &(dyn Fn() + Sync),
+        stop: &(dyn Fn() -> bool + Sync),
+        mut on_row: impl FnMut(TableRow) -> ControlFlow<()>,
+    ) -> Result<bool, SweepError> {
+        let (config, grid, d, base) = (self.config, self.grid, self.d, &self.base);
+        let remaining = self.len().saturating_sub(skip);
+        let threads = config.threads.unwrap_or_else(|| thread::available_parallelism().map_or(1, |n| n.get()));
+        let shard = config.shard;
+        // The k-th run of the rest: its index in the whole grid.
+        let run_at = |k: usize| shard.nth(skip + k);
+        let has_parameters = grid.targets.iter().any(|t| matches!(t, Target::Parameter(_)));
+        let system = self.dynamics.system(self.form);
+        let n = self.dynamics.n_coords();
+        let plan = Plan { method: self.method, form: self.form, config, guards: &self.guards };
+        let mut emit = |rows: Vec<TableRow>| {
+            for row in rows {
+                if stop() {
+                    return ControlFlow::Break(());
+                }
+                on_row(row)?;
+            }
+            ControlFlow::Continue(())
+        };
+        let shape = |per_job: usize| window::Plan {
+            jobs: remaining.div_ceil(per_job),
+            threads,
+            window: WINDOW_PER_THREAD * threads,
+        };
+        let jobs_of = |job: usize, per_job: usize| job * per_job..((job + 1) * per_job).min(remaining);
+
+        // The Taylor method on smooth Lagrange-form models runs batches of
+        // trajectories in lock step (`run/ensemble.rs`); its code is compiled once here.
+        let batched = (self.method == Method::Taylor && self.form == Form::Lagrange && self.guards.is_empty())
+            .then(|| self.dynamics.lagrange_series::<LANES>(num::taylor_order(config.rtol)));
+        let end = if let Some(series) = &batched {
             // Jobs of up to 8 lanes' worth of runs (lanes take the next run as
             // theirs ends), at least 4 jobs per thread while there are runs enough.
             let slots = if config.lyapunov { LANES / 2 } else { LANES };
-            let per_job = runs.len().div_ceil(4 * rayon::current_num_threads()).clamp(slots, 8 * slots);
-            return runs
-                .par_chunks(per_job)
-                .map_init(
-                    || (series.clone(), system.clone(), Vec::new(), has_parameters.then(|| d.model.clone())),
-                    |(series, sys, scratch, derivation), chunk| {
-                        let starts: Vec<Start> = chunk
-                            .iter()
-                            .map(|&run| {
-                                let inputs = grid.point(run);
-                                let start = start_of(&inputs, grid, &base, d, derivation.as_mut());
-                                (run, inputs, start)
-                            })
-                            .collect();
-                        let rows = plan.run_batch(series, sys, scratch, n, starts);
-                        for _ in chunk {
-                            progress();
-                        }
-                        rows
-                    },
-                )
-                .flatten()
-                .collect();
-        }
-        runs.par_iter()
-            .map_init(
-                || (system.clone(), system.clone(), has_parameters.then(|| d.model.clone())),
-                |(sys, twin, derivation), &run| {
-                    let inputs = grid.point(run);
-                    let outcome = start_of(&inputs, grid, &base, d, derivation.as_mut()).map(|(q, qd, values)| {
-                        if has_parameters {
-                            // The tapes take the parameters as inputs: no recompilation.
-                            sys.set_parameters(&values);
-                            twin.set_parameters(&values);
-                        }
-                        plan.run(sys, twin, &q, &qd)
-                    });
-                    progress();
-                    row(run, inputs, n, outcome)
+            let per_job = remaining.div_ceil(4 * threads).clamp(slots, 8 * slots);
+            window::ordered(
+                shape(per_job),
+                || (series.clone(), system.clone(), Vec::new(), has_parameters.then(|| d.model.clone())),
+                |(series, sys, scratch, model), job, halted| {
+                    let runs = jobs_of(job, per_job);
+                    let count = runs.len();
+                    let starts: Vec<Start> = runs
+                        .map(|k| {
+                            let run = run_at(k);
+                            let inputs = grid.point(run);
+                            let start = start_of(&inputs, grid, base, d, model.as_mut());
+                            (run, inputs, start)
+                        })
+                        .collect();
+                    let rows = plan.run_batch(series, sys, scratch, n, starts, halted)?;
+                    (0..count).for_each(|_| progress());
+                    Some(rows)
                 },
+                stop,
+                &mut emit,
             )
-            .collect()
-    };
-    let rows = match config.threads {
-        None => work(),
-        Some(threads) => rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .map_err(|e| SweepError::Threads { threads, reason: e.to_string() })?
-            .install(work),
-    };
+        } else {
+            let per_job = remaining.div_ceil(4 * threads).clamp(1, 16);
+            window::ordered(
+                shape(per_job),
+                || (system.clone(), system.clone(), has_parameters.then(|| d.model.clone())),
+                |(sys, twin, model), job, halted| {
+                    let mut rows = Vec::with_capacity(per_job);
+                    for k in jobs_of(job, per_job) {
+                        if halted() {
+                            return None;
+                        }
+                        let run = run_at(k);
+                        let inputs = grid.point(run);
+                        let outcome = start_of(&inputs, grid, base, d, model.as_mut()).map(|(q, qd, values)| {
+                            if has_parameters {
+                                // The tapes take the parameters as inputs: no recompilation.
+                                sys.set_parameters(&values);
+                                twin.set_parameters(&values);
+                            }
+                            plan.run(sys, twin, &q, &qd)
+                        });
+                        progress();
+                        rows.push(row(run, inputs, n, outcome));
+                    }
+                    Some(rows)
+                },
+                stop,
+                &mut emit,
+            )
+        };
+        match end {
+            Ok(end) => Ok(end == window::End::Finished),
+            Err(e) => Err(SweepError::Threads { threads, reason: e.to_string() }),
+        }
+    }
+}
 
+/// The header of a sweep: its columns, and its provenance (every setting that
+/// changes a row; not the threads, which do not).
+fn header(d: &Derivation, grid: &Grid, config: &SweepConfig, method: Method, names: &[String]) -> SweepHeader {
     let mut columns = vec!["run".to_string()];
     columns.extend(grid.axes.iter().map(|a| a.name.clone()));
     columns.push("t_final".into());
-    let names = dynamics.coordinate_names();
     columns.extend(names.iter().map(|c| format!("final_{c}")));
     columns.extend(names.iter().map(|c| format!("final_{c}'")));
     columns.extend(["energy_drift".into(), "lyapunov".into(), "failure".into()]);
@@ -709,7 +836,25 @@ pub fn sweep(
     if !config.shard.is_whole() {
         meta.push(("shard".into(), config.shard.to_string()));
     }
-    Ok(SweepTable { meta, columns, rows })
+    SweepHeader { meta, columns }
+}
+
+/// Runs the sweep of `grid` (the runs of `config.shard`) and returns its table,
+/// rows in run order whatever the scheduling: [`Sweep::run`] with every row kept.
+/// `progress` is called once per finished run, from any thread.
+pub fn sweep(
+    d: &Derivation,
+    grid: &Grid,
+    config: &SweepConfig,
+    progress: &(dyn Fn() + Sync),
+) -> Result<SweepTable, SweepError> {
+    let sweep = Sweep::new(d, grid, config)?;
+    let mut rows = Vec::with_capacity(sweep.len());
+    sweep.run(0, progress, &|| false, |row| {
+        rows.push(row);
+        ControlFlow::Continue(())
+    })?;
+    Ok(SweepTable { header: sweep.header.clone(), rows })
 }
 
 /// What one run produced.
@@ -1028,7 +1173,8 @@ impl Plan<'_> {
     /// The runs of one job with the Taylor method in lock step
     /// ([`crate::run::ensemble`]), each in the same segments as [`Plan::run`]. A
     /// lane (with its twin's) takes the job's next run as soon as its run
-    /// ends, so that no lane idles while runs remain.
+    /// ends, so that no lane idles while runs remain. Gives up (None) when
+    /// `halted()` turns true, which it looks at between rounds of the lanes.
     fn run_batch(
         &self,
         series: &mut LagrangeSeries<LANES>,
@@ -1036,14 +1182,15 @@ impl Plan<'_> {
         scratch: &mut Vec<Lanes<LANES>>,
         n: usize,
         starts: Vec<Start>,
-    ) -> Vec<TableRow> {
+        halted: &dyn Fn() -> bool,
+    ) -> Option<Vec<TableRow>> {
         let cfg = self.config;
         let slots = if cfg.lyapunov { LANES / 2 } else { LANES };
         let twin_of = |slot: usize| slot + LANES / 2;
         let mut pending = (0..starts.len()).filter(|&i| starts[i].2.is_ok());
         let mut outcomes: Vec<Option<RunOutcome>> = (0..starts.len()).map(|_| None).collect();
         let Some(first) = starts.iter().find_map(|s| s.2.as_ref().ok()) else {
-            return finish(starts, outcomes, n);
+            return Some(finish(starts, outcomes, n));
         };
         // Lanes left without a run keep the first run's state (finite, never read back).
         let mut batch = Batch::new(&[[first.0.as_slice(), &first.1].concat()]);
@@ -1081,6 +1228,9 @@ impl Plan<'_> {
         series.set_parameters(&params);
         let solver_config = Config { rtol: cfg.rtol, atol: cfg.atol, h_max: Some(cfg.until), ..Config::default() };
         while on.iter().any(Option::is_some) {
+            if halted() {
+                return None;
+            }
             propagate(series, &mut batch, &target, &solver_config, scratch);
             let mut refilled = false;
             for slot in 0..slots {
@@ -1129,7 +1279,7 @@ impl Plan<'_> {
                 series.set_parameters(&params);
             }
         }
-        finish(starts, outcomes, n)
+        Some(finish(starts, outcomes, n))
     }
 
     /// The outcome of the run that ended on lane `slot`.
@@ -1221,16 +1371,17 @@ pub fn merge(shards: &[(String, SweepTable)]) -> Result<SweepTable, SweepError> 
     let Some((first_name, first)) = shards.first() else {
         return Err(SweepError::NothingToMerge);
     };
-    let whole =
-        |t: &SweepTable| -> Vec<(String, String)> { t.meta.iter().filter(|(k, _)| k != "shard").cloned().collect() };
+    let whole = |t: &SweepTable| -> Vec<(String, String)> {
+        t.header.meta.iter().filter(|(k, _)| k != "shard").cloned().collect()
+    };
     let meta = whole(first);
-    let total = first.total_runs().ok_or_else(|| SweepError::Table {
+    let total = first.header.total_runs().ok_or_else(|| SweepError::Table {
         file: first_name.clone(),
         line: 1,
         reason: "the provenance line has no 'runs='".into(),
     })?;
     let shard_of = |name: &str, t: &SweepTable| -> Result<Shard, SweepError> {
-        match t.meta("shard") {
+        match t.header.meta("shard") {
             None => Ok(Shard::default()),
             Some(text) => Shard::parse(text).map_err(|_| SweepError::Table {
                 file: name.to_string(),
@@ -1244,11 +1395,11 @@ pub fn merge(shards: &[(String, SweepTable)]) -> Result<SweepTable, SweepError> 
     let mut rows: Vec<(usize, &str, &TableRow)> = Vec::new();
     for (name, table) in shards {
         let mismatch = |reason: String| SweepError::Mismatch { first: first_name.clone(), file: name.clone(), reason };
-        if table.columns != first.columns {
+        if table.header.columns != first.header.columns {
             return Err(mismatch(format!(
                 "its columns are {} instead of {}",
-                table.columns.join(","),
-                first.columns.join(",")
+                table.header.columns.join(","),
+                first.header.columns.join(",")
             )));
         }
         let other = whole(table);
@@ -1309,7 +1460,8 @@ pub fn merge(shards: &[(String, SweepTable)]) -> Result<SweepTable, SweepError> 
             shards: absent.join(", "),
         });
     }
-    Ok(SweepTable { meta, columns: first.columns.clone(), rows: rows.into_iter().map(|r| r.2.clone()).collect() })
+    let header = SweepHeader { meta, columns: first.header.columns.clone() };
+    Ok(SweepTable { header, rows: rows.into_iter().map(|r| r.2.clone()).collect() })
 }
 
 #[cfg(test)]
@@ -1373,6 +1525,12 @@ mod tests {
                     shard.runs(total).for_each(|r| hits[r] += 1);
                 }
                 assert!(hits.iter().all(|&h| h == 1), "{total} runs in {count} shards: {hits:?}");
+                for index in 0..count {
+                    let shard = Shard { index, count };
+                    let runs: Vec<usize> = shard.runs(total).collect();
+                    assert_eq!(shard.len(total), runs.len(), "{shard} of {total}");
+                    assert!(runs.iter().enumerate().all(|(k, &r)| shard.nth(k) == r), "{shard} of {total}");
+                }
             }
         }
         for bad in ["3/3", "1", "a/2", "0/0", "-1/2", ""] {
@@ -1385,7 +1543,7 @@ mod tests {
     }
 
     fn column(t: &SweepTable, name: &str) -> Vec<f64> {
-        let k = t.value_index(name).unwrap();
+        let k = t.header.value_index(name).unwrap();
         t.rows.iter().map(|r| r.values[k]).collect()
     }
 
@@ -1445,11 +1603,43 @@ mod tests {
             "part0.csv is not a shard of the same sweep as part0.csv: both are shard 0/2"
         );
         let mut other = p1.clone();
-        other.1.meta.iter_mut().find(|(k, _)| k == "until").unwrap().1 = "3".into();
+        other.1.header.meta.iter_mut().find(|(k, _)| k == "until").unwrap().1 = "3".into();
         assert_eq!(
             err(&[p0, other]),
             "part1.csv is not a shard of the same sweep as part0.csv: until is '1.5' there and '3' here"
         );
+    }
+
+    /// A sweep that skips the rows it has (a resumed one) gives the rest of
+    /// the rows of a whole run, bit for bit, on lanes and run by run; one that
+    /// is stopped has given a prefix in grid order.
+    #[test]
+    fn a_resumed_sweep_gives_the_rest_and_a_stopped_one_a_prefix() {
+        let d = derivation(DOUBLE_PENDULUM);
+        let grid = Grid::parse("a=-3:3:5,b'=-1:1:5", &d.model).unwrap();
+        for method in [None, Some(Method::Dop853)] {
+            let cfg = SweepConfig { method, threads: Some(2), ..config(1.5) };
+            let whole = sweep(&d, &grid, &cfg, &|| {}).unwrap();
+            let s = Sweep::new(&d, &grid, &cfg).unwrap();
+            let mut rest = Vec::new();
+            let done = s.run(17, &|| {}, &|| false, |row| {
+                rest.push(row);
+                ControlFlow::Continue(())
+            });
+            assert_eq!(done, Ok(true));
+            assert_eq!(format!("{rest:?}"), format!("{:?}", &whole.rows[17..]), "{method:?}");
+
+            let given = std::sync::atomic::AtomicUsize::new(0);
+            let mut prefix = Vec::new();
+            let stop = || given.load(std::sync::atomic::Ordering::Relaxed) >= 6;
+            let done = s.run(0, &|| {}, &stop, |row| {
+                prefix.push(row);
+                given.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                ControlFlow::Continue(())
+            });
+            assert_eq!(done, Ok(false));
+            assert_eq!(format!("{prefix:?}"), format!("{:?}", &whole.rows[..6]), "{method:?}");
+        }
     }
 
     #[test]

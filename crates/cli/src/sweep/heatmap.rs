@@ -2,7 +2,9 @@
 //! axis), coloured by one column (the Lyapunov exponent: the chaos map), with a
 //! colour bar, axis labels named after the grid and a title.
 //!
-//! Enter at [`check_request`] (before running) and [`write_svg`]. Colours are
+//! Enter at [`HeatMap::new`] (before running), [`HeatMap::add`] per row as
+//! the sweep streams (one `f32` per cell: at most [`MAX_CELLS`]), and
+//! [`HeatMap::write_svg`]. Colours are
 //! viridis (perceptually uniform, legible in grey and to colour-blind readers);
 //! the range spans the 0.5th to 99.5th percentile so that a few outliers do not
 //! wash out the map, and the bar's ends say when values were clipped. The drift
@@ -10,7 +12,7 @@
 //! in a row are drawn as one rectangle, which keeps a 200×200 map's file small.
 
 use crate::plot::{nice_step, pos, px, superscript, text_style, FONT};
-use mech::{Axis, SweepTable};
+use mech::{Axis, SweepHeader, TableRow};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::error::Error;
@@ -36,6 +38,10 @@ const VIRIDIS: [(u8, u8, u8); 11] = [
     (0xfd, 0xe7, 0x25),
 ];
 
+/// The most cells a heat map holds: one `f32` each, 4 MB, whatever the sweep;
+/// an SVG of more cells than a screen has pixels would show nothing more.
+pub const MAX_CELLS: usize = 1_000_000;
+
 /// The column a `--color` names: `lyapunov`, `drift`, a final coordinate or velocity (`a`, `a'`), or any column.
 fn column_of(color: &str) -> String {
     match color {
@@ -46,30 +52,91 @@ fn column_of(color: &str) -> String {
     }
 }
 
-/// Refuses, before any run, a heat map that cannot be drawn: a grid that is not
-/// 2-D, or a colour that is not a column.
-pub fn check_request(n_axes: usize, color: &str, columns: &[String]) -> Result<(), String> {
-    if n_axes != 2 {
-        return Err(format!(
-            "--heatmap needs a 2-D grid (two axes, as in --grid \"a=-3:3:100,b=-3:3:100\"); this one has {n_axes}; the CSV has every run"
-        ));
-    }
-    let column = column_of(color);
-    if !columns.contains(&column) {
-        let mut known = vec!["lyapunov".to_string(), "drift".into()];
-        known.extend(columns.iter().filter_map(|c| c.strip_prefix("final_").map(str::to_string)));
-        return Err(format!("--color '{color}' is not available; choose one of {}", known.join(", ")));
-    }
-    Ok(())
+/// What a heat map draws, gathered row by row as a sweep streams: one value
+/// per cell (the colour column, as log₁₀ for the drift), and the counts the
+/// subtitle gives.
+pub struct HeatMap {
+    ax: Axis,
+    ay: Axis,
+    /// The column drawn, and its index among a row's values.
+    column: String,
+    value: usize,
+    /// Whether cells hold log₁₀ of the values.
+    log: bool,
+    /// Row-major by the first axis: `cells[i·ny + j]`; NaN where no colour (yet).
+    cells: Vec<f32>,
+    rows: usize,
+    failed: usize,
+    header: SweepHeader,
 }
 
-/// Draws the heat map of `table`'s 2-D grid, coloured by `color`, to `path`.
-pub fn write_svg(path: &Path, table: &SweepTable, color: &str) -> Result<(), String> {
-    let svg = render(table, color).map_err(|e| format!("cannot draw the heat map {}: {e}", path.display()))?;
-    std::fs::write(path, svg).map_err(|e| format!("cannot write the heat map {}: {e}", path.display()))
+impl HeatMap {
+    /// An empty map for the sweep of `header`, coloured by `color`; refused
+    /// before any run when the grid is not 2-D, has more than [`MAX_CELLS`]
+    /// cells, or the colour is not a column.
+    pub fn new(header: &SweepHeader, color: &str) -> Result<HeatMap, String> {
+        let axes = header.axes().unwrap_or_default();
+        let [ax, ay] = axes.as_slice() else {
+            return Err(format!(
+                "--heatmap needs a 2-D grid (two axes, as in --grid \"a=-3:3:100,b=-3:3:100\"); this one has {}; the CSV has every run",
+                axes.len()
+            ));
+        };
+        let cells = ax.count * ay.count;
+        if cells > MAX_CELLS {
+            return Err(format!(
+                "--heatmap draws at most {MAX_CELLS} cells, and this grid has {} × {} = {cells}; the CSV has every run (draw a coarser grid, or plot the CSV)",
+                ax.count, ay.count
+            ));
+        }
+        let column = column_of(color);
+        let lyapunov_off = header.meta("lyapunov") == Some("off");
+        let drawable = |c: &str| !(lyapunov_off && c == "lyapunov");
+        let value = header.value_index(&column).filter(|_| drawable(&column)).ok_or_else(|| {
+            let mut known = vec!["drift".to_string()];
+            if !lyapunov_off {
+                known.insert(0, "lyapunov".into());
+            }
+            known.extend(header.columns.iter().filter_map(|c| c.strip_prefix("final_").map(str::to_string)));
+            format!("--color '{color}' is not available; choose one of {}", known.join(", "))
+        })?;
+        Ok(HeatMap {
+            ax: ax.clone(),
+            ay: ay.clone(),
+            log: column == "energy_drift",
+            column,
+            value,
+            cells: vec![f32::NAN; cells],
+            rows: 0,
+            failed: 0,
+            header: header.clone(),
+        })
+    }
+
+    /// Takes a row's value into its cell.
+    pub fn add(&mut self, row: &TableRow) {
+        self.rows += 1;
+        if !row.failure.is_empty() {
+            self.failed += 1;
+        }
+        let v = row.values[self.value];
+        let v = if self.log { v.log10() } else { v };
+        if let Some(cell) = self.cells.get_mut(row.run) {
+            // Finite values beyond f32's range keep their sign at its end.
+            let limit = f64::from(f32::MAX);
+            *cell = if v.is_finite() { v.clamp(-limit, limit) as f32 } else { f32::NAN };
+        }
+    }
+
+    /// Draws the map to `path`; cells without a row (a sweep interrupted, a
+    /// shard) are grey like failed runs.
+    pub fn write_svg(&self, path: &Path) -> Result<(), String> {
+        let svg = self.render().map_err(|e| format!("cannot draw the heat map {}: {e}", path.display()))?;
+        std::fs::write(path, svg).map_err(|e| format!("cannot write the heat map {}: {e}", path.display()))
+    }
 }
 
-/// How values map to colours.
+/// How values (log₁₀ of them on a log scale) map to colours.
 struct Scale {
     lo: f64,
     hi: f64,
@@ -79,25 +146,25 @@ struct Scale {
 }
 
 impl Scale {
-    fn new(values: &[f64], log: bool) -> Scale {
-        let mut v: Vec<f64> =
-            values.iter().map(|&x| if log { x.log10() } else { x }).filter(|x| x.is_finite()).collect();
-        v.sort_by(f64::total_cmp);
+    fn new(values: &[f32], log: bool) -> Scale {
+        let mut v: Vec<f32> = values.iter().copied().filter(|x| x.is_finite()).collect();
+        v.sort_by(f32::total_cmp);
         if v.is_empty() {
             return Scale { lo: 0.0, hi: 1.0, log, clipped_lo: false, clipped_hi: false };
         }
-        let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
+        let at = |q: f64| f64::from(v[((v.len() - 1) as f64 * q).round() as usize]);
         let (mut lo, mut hi) = (at(0.005), at(0.995));
         if hi - lo <= 1e-12 * lo.abs().max(hi.abs()).max(1e-300) {
             let pad = if lo == 0.0 { 1.0 } else { 0.1 * lo.abs() };
             (lo, hi) = (lo - pad, hi + pad);
         }
-        Scale { lo, hi, log, clipped_lo: v[0] < lo, clipped_hi: v[v.len() - 1] > hi }
+        let (min, max) = (f64::from(v[0]), f64::from(v[v.len() - 1]));
+        Scale { lo, hi, log, clipped_lo: min < lo, clipped_hi: max > hi }
     }
 
-    /// Position in 0..=1 of a value, None when it has no colour.
-    fn fraction(&self, value: f64) -> Option<f64> {
-        let x = if self.log { value.log10() } else { value };
+    /// Position in 0..=1 of a cell's value, None when it has no colour.
+    fn fraction(&self, x: f32) -> Option<f64> {
+        let x = f64::from(x);
         x.is_finite().then(|| ((x - self.lo) / (self.hi - self.lo)).clamp(0.0, 1.0))
     }
 }
@@ -120,107 +187,102 @@ fn describe(column: &str) -> String {
     }
 }
 
-fn render(table: &SweepTable, color: &str) -> Result<String, Box<dyn Error>> {
-    let axes = table.axes().ok_or("the table has no grid in its provenance")?;
-    let [ax, ay] = axes.as_slice() else { return Err("the grid is not 2-D".into()) };
-    let column = column_of(color);
-    let k = table.value_index(&column).ok_or_else(|| format!("no column '{column}'"))?;
-    let values: Vec<f64> = table.rows.iter().map(|r| r.values[k]).collect();
-    let scale = Scale::new(&values, column == "energy_drift");
-    // Cell colours, [i][j] for the i-th value of the first axis and j-th of the second.
-    let mut cells = vec![vec![MISSING; ay.count]; ax.count];
-    for row in &table.rows {
-        let (i, j) = (row.run / ay.count, row.run % ay.count);
-        if i < ax.count {
-            if let Some(f) = scale.fraction(row.values[k]) {
-                cells[i][j] = viridis(f);
+impl HeatMap {
+    fn render(&self) -> Result<String, Box<dyn Error>> {
+        let (ax, ay, column) = (&self.ax, &self.ay, &self.column);
+        let scale = Scale::new(&self.cells, self.log);
+        // Cell colours, [i][j] for the i-th value of the first axis and j-th of the second.
+        let mut cells = vec![vec![MISSING; ay.count]; ax.count];
+        for (k, &x) in self.cells.iter().enumerate() {
+            if let Some(f) = scale.fraction(x) {
+                cells[k / ay.count][k % ay.count] = viridis(f);
             }
         }
-    }
-    let edges = |a: &Axis| {
-        let half = if a.count > 1 { 0.5 * (a.stop - a.start) / (a.count - 1) as f64 } else { 0.5 };
-        let (lo, hi) = (a.start - half, a.stop + half);
-        if lo <= hi {
-            (lo, hi, half)
-        } else {
-            (hi, lo, half)
-        }
-    };
-    let (x_lo, x_hi, hx) = edges(ax);
-    let (y_lo, y_hi, hy) = edges(ay);
+        let edges = |a: &Axis| {
+            let half = if a.count > 1 { 0.5 * (a.stop - a.start) / (a.count - 1) as f64 } else { 0.5 };
+            let (lo, hi) = (a.start - half, a.stop + half);
+            if lo <= hi {
+                (lo, hi, half)
+            } else {
+                (hi, lo, half)
+            }
+        };
+        let (x_lo, x_hi, hx) = edges(ax);
+        let (y_lo, y_hi, hy) = edges(ay);
 
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (px(WIDTH), px(HEIGHT))).into_drawing_area();
-        root.fill(&WHITE)?;
-        let (header, body) = root.split_vertically(px(86));
-        let center = pos(WIDTH as i32 / 2);
-        let model = table.meta("model").unwrap_or("sweep");
-        let title = format!("{model}: {}", describe(&column));
-        let bold = TextStyle::from((FONT, px(26)).into_font().style(FontStyle::Bold))
-            .color(&INK)
-            .pos(Pos::new(HPos::Center, VPos::Top));
-        header.draw_text(&title, &bold, (center, pos(16)))?;
-        let failed = table.rows.iter().filter(|r| !r.failure.is_empty()).count();
-        let mut subtitle = format!(
-            "{} × {} runs to t = {}, {} at rtol {}",
-            ax.count,
-            ay.count,
-            table.meta("until").unwrap_or("?").trim_end_matches(".0"),
-            table.meta("method").unwrap_or("?"),
-            table.meta("rtol").unwrap_or("?"),
-        );
-        if column == "lyapunov" {
-            subtitle.push_str(", twin at d₀ = 10⁻⁸ renormalized every time unit");
-        }
-        if failed > 0 || table.rows.len() < ax.count * ay.count {
-            subtitle
-                .push_str(&format!("; grey: {} failed or missing", failed + ax.count * ay.count - table.rows.len()));
-        }
-        header.draw_text(&subtitle, &text_style(17, &MUTED, (HPos::Center, VPos::Top)), (center, pos(52)))?;
+        let mut svg = String::new();
+        {
+            let root = SVGBackend::with_string(&mut svg, (px(WIDTH), px(HEIGHT))).into_drawing_area();
+            root.fill(&WHITE)?;
+            let (header, body) = root.split_vertically(px(86));
+            let center = pos(WIDTH as i32 / 2);
+            let model = self.header.meta("model").unwrap_or("sweep");
+            let title = format!("{model}: {}", describe(column));
+            let bold = TextStyle::from((FONT, px(26)).into_font().style(FontStyle::Bold))
+                .color(&INK)
+                .pos(Pos::new(HPos::Center, VPos::Top));
+            header.draw_text(&title, &bold, (center, pos(16)))?;
+            let failed = self.failed;
+            let mut subtitle = format!(
+                "{} × {} runs to t = {}, {} at rtol {}",
+                ax.count,
+                ay.count,
+                self.header.meta("until").unwrap_or("?").trim_end_matches(".0"),
+                self.header.meta("method").unwrap_or("?"),
+                self.header.meta("rtol").unwrap_or("?"),
+            );
+            if column == "lyapunov" {
+                subtitle.push_str(", twin at d₀ = 10⁻⁸ renormalized every time unit");
+            }
+            let missing = (ax.count * ay.count).saturating_sub(self.rows);
+            if failed > 0 || missing > 0 {
+                subtitle.push_str(&format!("; grey: {} failed or missing", failed + missing));
+            }
+            header.draw_text(&subtitle, &text_style(17, &MUTED, (HPos::Center, VPos::Top)), (center, pos(52)))?;
 
-        let (left, right) = body.split_horizontally(px(WIDTH - 170));
-        let mut chart = ChartBuilder::on(&left.margin(px(4), px(10), px(10), px(10)))
-            .x_label_area_size(px(56))
-            .y_label_area_size(px(74))
-            .build_cartesian_2d(x_lo..x_hi, y_lo..y_hi)?;
-        chart
-            .configure_mesh()
-            .disable_mesh()
-            .x_desc(ax.name.as_str())
-            .y_desc(ay.name.as_str())
-            .x_labels(8)
-            .y_labels(8)
-            .x_label_formatter(&|v| tick(*v))
-            .y_label_formatter(&|v| tick(*v))
-            .axis_style(MUTED.stroke_width(px(1)))
-            .set_all_tick_mark_size(px(5))
-            .label_style(text_style(17, &INK, (HPos::Center, VPos::Top)))
-            .axis_desc_style(text_style(21, &INK, (HPos::Center, VPos::Top)))
-            .draw()?;
-        // One rectangle per run of equal colour along the first axis.
-        let mut rects = Vec::new();
-        for j in 0..ay.count {
-            let y = ay.value(j);
-            let mut i = 0;
-            while i < ax.count {
-                let c = cells[i][j];
-                let mut end = i + 1;
-                while end < ax.count && cells[end][j] == c {
-                    end += 1;
+            let (left, right) = body.split_horizontally(px(WIDTH - 170));
+            let mut chart = ChartBuilder::on(&left.margin(px(4), px(10), px(10), px(10)))
+                .x_label_area_size(px(56))
+                .y_label_area_size(px(74))
+                .build_cartesian_2d(x_lo..x_hi, y_lo..y_hi)?;
+            chart
+                .configure_mesh()
+                .disable_mesh()
+                .x_desc(ax.name.as_str())
+                .y_desc(ay.name.as_str())
+                .x_labels(8)
+                .y_labels(8)
+                .x_label_formatter(&|v| tick(*v))
+                .y_label_formatter(&|v| tick(*v))
+                .axis_style(MUTED.stroke_width(px(1)))
+                .set_all_tick_mark_size(px(5))
+                .label_style(text_style(17, &INK, (HPos::Center, VPos::Top)))
+                .axis_desc_style(text_style(21, &INK, (HPos::Center, VPos::Top)))
+                .draw()?;
+            // One rectangle per run of equal colour along the first axis.
+            let mut rects = Vec::new();
+            for j in 0..ay.count {
+                let y = ay.value(j);
+                let mut i = 0;
+                while i < ax.count {
+                    let c = cells[i][j];
+                    let mut end = i + 1;
+                    while end < ax.count && cells[end][j] == c {
+                        end += 1;
+                    }
+                    let (x0, x1) = (ax.value(i) - hx, ax.value(end - 1) + hx);
+                    rects.push(Rectangle::new([(x0, y - hy), (x1, y + hy)], c.filled()));
+                    i = end;
                 }
-                let (x0, x1) = (ax.value(i) - hx, ax.value(end - 1) + hx);
-                rects.push(Rectangle::new([(x0, y - hy), (x1, y + hy)], c.filled()));
-                i = end;
             }
-        }
-        chart.draw_series(rects)?;
+            chart.draw_series(rects)?;
 
-        draw_colorbar(&right, &scale, &describe(&column))?;
-        root.present()?;
+            draw_colorbar(&right, &scale, &describe(column))?;
+            root.present()?;
+        }
+        let big = format!("width=\"{}\" height=\"{}\"", px(WIDTH), px(HEIGHT));
+        Ok(svg.replacen(&big, &format!("width=\"{WIDTH}\" height=\"{HEIGHT}\" shape-rendering=\"crispEdges\""), 1))
     }
-    let big = format!("width=\"{}\" height=\"{}\"", px(WIDTH), px(HEIGHT));
-    Ok(svg.replacen(&big, &format!("width=\"{WIDTH}\" height=\"{HEIGHT}\" shape-rendering=\"crispEdges\""), 1))
 }
 
 type Area<'a> = DrawingArea<SVGBackend<'a>, plotters::coord::Shift>;
@@ -292,8 +354,8 @@ mod tests {
         assert_eq!(column_of("a'"), "final_a'");
         assert_eq!(superscript("−11"), "⁻¹¹");
         assert_eq!(column_of("drift"), "energy_drift");
-        let s = Scale::new(&[1e-12, 1e-10, f64::NAN], true);
-        assert_eq!(s.fraction(1e-12), Some(0.0));
-        assert_eq!(s.fraction(f64::NAN), None);
+        let s = Scale::new(&[-12.0, -10.0, f32::NAN], true);
+        assert_eq!(s.fraction(-12.0), Some(0.0));
+        assert_eq!(s.fraction(f32::NAN), None);
     }
 }
