@@ -363,7 +363,12 @@ impl Parser<'_, '_, '_> {
 
     /// Fails when the parse has grown the pool past the node limit.
     fn check_nodes(&self, e: ExprId, span: Span) -> PResult<ExprId> {
-        if self.pool.as_number(e).is_some_and(|n| !n.to_f64().is_finite()) {
+        // The canonical form may hold nodes the text never wrote, one level
+        // down: asin(-2) is -asin(2), and a product folds its numeric factors
+        // into one (1e300*x*1e300 is inf*x). They are checked with `e`.
+        let node = self.pool.node(e);
+        let parts = || std::iter::once(e).chain(self.pool.children(node));
+        if parts().any(|id| self.pool.as_number(id).is_some_and(|n| !n.to_f64().is_finite())) {
             return Err(self.error(ParseErrorKind::NonFiniteConstant, span));
         }
         let limit = self.opts.limits.max_nodes;
@@ -373,7 +378,7 @@ impl Parser<'_, '_, '_> {
         // A constant function value or power that has no value (log(0),
         // sqrt(-1), 0^-1) is an error here, before a product with zero or a
         // cancellation could make it vanish.
-        if let Some(value) = self.pool.undefined_value(e) {
+        if let Some(value) = parts().find_map(|id| self.pool.undefined_value(id)) {
             let text = self.text[span.start as usize..span.end as usize].trim().to_string();
             return Err(self.error(ParseErrorKind::Undefined { text, value: value.to_string() }, span));
         }
@@ -907,6 +912,23 @@ mod tests {
         check_err("0*asin(2)", "asin(2) has no finite value (it evaluates to NaN)", "asin(2)");
         check("0*exp(1000)", "0");
         check("1/(-64)^171", "1/(-64)^171");
+        // Found by fuzzing: an odd function takes the sign out (asin(-2) is
+        // -asin(2)), and the undefined value sat one level down.
+        check_err("asin(-2)", "asin(-2) has no finite value (it evaluates to NaN)", "asin(-2)");
+        check_err(
+            "x + atan(1)*asin(-1000/2)",
+            "asin(-1000/2) has no finite value (it evaluates to NaN)",
+            "asin(-1000/2)",
+        );
+    }
+
+    /// Found by fuzzing: numeric factors fold into one coefficient, which may
+    /// overflow although no literal does; it printed as `inf`, a symbol.
+    #[test]
+    fn a_folded_coefficient_that_overflows_is_an_error() {
+        check_err("x/1e-300*y/1e-300", "the constant overflows a 64-bit float", "x/1e-300*y/1e-300");
+        check_err("1e300*x*1e300", "the constant overflows a 64-bit float", "1e300*x*1e300");
+        check("1e300*x*1e-300", "1.0*x");
     }
 
     /// Exponents that folding makes are held to the same limit as written ones,
