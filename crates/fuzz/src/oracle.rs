@@ -211,15 +211,32 @@ impl Oracle {
         pool.eval(e, &|name| self.value(point, name)).map_err(|err| err.to_string())
     }
 
-    /// A random point (q in ±1.2, q' and q'' in ±1, t in [0, 1.5], parameters
-    /// in [0.5, 2]: every result is symbolic in them, and the model's own values
-    /// may be extreme) with the momenta of the oracle there; None where they are
-    /// not finite.
+    /// A random point for comparing values: q in ±1.2, q' and q'' in ±1, t in
+    /// [0, 1.5], parameters in [0.5, 2] (every result is symbolic in them, and
+    /// the model's own values may be extreme), with the oracle's momenta there;
+    /// None where they are not finite.
     pub fn point(&self, rng: &mut crate::rng::Rng) -> Option<Point> {
         let n = self.names.len();
+        let q = (0..n).map(|_| rng.range(-1.2, 1.2)).collect();
+        let qd = (0..n).map(|_| rng.range(-1.0, 1.0)).collect();
+        self.complete(rng, q, qd)
+    }
+
+    /// A random point for deciding whether something vanishes identically: q in
+    /// ±1.5 and velocities of magnitude 0.5 to 1.5, so that a high power of a
+    /// velocity (q'^65) is not negligible at every point.
+    pub fn probe_point(&self, rng: &mut crate::rng::Rng) -> Option<Point> {
+        let n = self.names.len();
+        let q = (0..n).map(|_| rng.range(-1.5, 1.5)).collect();
+        let qd = (0..n).map(|_| rng.range(0.5, 1.5) * if rng.chance(0.5) { -1.0 } else { 1.0 }).collect();
+        self.complete(rng, q, qd)
+    }
+
+    fn complete(&self, rng: &mut crate::rng::Rng, q: Vec<f64>, qd: Vec<f64>) -> Option<Point> {
+        let n = self.names.len();
         let mut point = Point {
-            q: (0..n).map(|_| rng.range(-1.2, 1.2)).collect(),
-            qd: (0..n).map(|_| rng.range(-1.0, 1.0)).collect(),
+            q,
+            qd,
             qdd: (0..n).map(|_| rng.range(-1.0, 1.0)).collect(),
             p: vec![0.0; n],
             t: rng.range(0.0, 1.5),
