@@ -2,8 +2,9 @@
 //! differential test against SymPy. Enter with [`model`].
 //!
 //! A model has 1 to 3 coordinates and 2 to 6 parameters (all positive), and is
-//! one of: a `lagrangian`; `kinetic` and `potential`; or `[[particles]]` (with
-//! gravity, particle potentials, and sometimes an extra `kinetic`). The kinetic
+//! one of: a `lagrangian`; `kinetic` and `potential`; `[[particles]]` (with
+//! gravity, particle potentials, and sometimes an extra `kinetic`); or, with
+//! three coordinates, a rigid body whose Euler angles they are. The kinetic
 //! energy is ½ Σ (P + E(q)²) q'² plus couplings |c| ≤ 1/10 and velocity-linear
 //! terms, so its mass matrix is diagonally dominant and regular (particles alone
 //! may be singular; derive must then say so). Sometimes: a quartic velocity
@@ -51,8 +52,10 @@ pub fn model(rng: &mut Rng) -> String {
     let list = |items: &[&str]| items.iter().map(|c| format!("\"{c}\"")).collect::<Vec<_>>().join(", ");
     let _ = writeln!(out, "name = \"generated\"");
     let _ = writeln!(out, "coordinates = [{}]", list(&names.coordinates));
-    let style = rng.below(3);
-    let gravity = style == 2 && rng.chance(0.5);
+    // 0: lagrangian, 1: kinetic and potential, 2: particles, 3: a rigid body
+    // whose Euler angles are the three coordinates.
+    let style = if names.coordinates.len() == 3 && rng.chance(0.25) { 3 } else { rng.below(3) };
+    let gravity = style >= 2 && rng.chance(0.5);
     if gravity {
         let _ = writeln!(out, "gravity = \"g\"");
     }
@@ -66,10 +69,15 @@ pub fn model(rng: &mut Rng) -> String {
             let _ = writeln!(out, "kinetic = \"{}\"", kinetic(rng, &names));
             let _ = writeln!(out, "potential = \"{}\"", potential(rng, &names, time));
         }
-        _ => {
+        2 => {
             if rng.chance(0.5) {
                 let _ = writeln!(out, "kinetic = \"{}\"", kinetic(rng, &names));
             }
+            if rng.chance(0.3) {
+                let _ = writeln!(out, "potential = \"{}\"", potential(rng, &names, time));
+            }
+        }
+        _ => {
             if rng.chance(0.3) {
                 let _ = writeln!(out, "potential = \"{}\"", potential(rng, &names, time));
             }
@@ -96,6 +104,23 @@ pub fn model(rng: &mut Rng) -> String {
         let _ = writeln!(out, "g = 9.81");
     }
 
+    if style == 3 {
+        let p = |rng: &mut Rng| rng.pick(&names.parameters).to_string();
+        let (i1, i3) = (p(rng), p(rng));
+        let i2 = if rng.chance(0.5) { i1.clone() } else { p(rng) };
+        let position = if rng.chance(0.7) {
+            "\"0\", \"0\", \"0\"".to_string()
+        } else {
+            format!("\"0\", \"0\", \"{}*cos(t)\"", p(rng))
+        };
+        let angles = names.coordinates.iter().map(|c| format!("\"{c}\"")).collect::<Vec<_>>().join(", ");
+        let _ = writeln!(
+            out,
+            "\n[[bodies]]\nmass = \"{}\"\ninertia = [\"{i1}\", \"{i2}\", \"{i3}\"]\nangles = [{angles}]\nposition = [{position}]\ncenter_of_mass = [\"0\", \"0\", \"{}\"]",
+            p(rng),
+            p(rng)
+        );
+    }
     if style == 2 {
         for _ in 0..1 + rng.below(3) {
             let dims = if gravity { 2 + rng.below(2) } else { 1 + rng.below(3) };

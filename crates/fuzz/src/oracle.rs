@@ -70,7 +70,17 @@ impl Oracle {
         if !model.bodies.is_empty() {
             return None;
         }
-        let mut pool = model.pool.clone();
+        Some(Oracle::build(model, model.pool.clone(), None))
+    }
+
+    /// The oracle of a model with rigid bodies, from the T and U the derivation
+    /// built (in `pool`, its pool): what follows from them is still derived
+    /// independently (momenta, M, the equations, h, H's checks, the verdicts).
+    pub fn with_energies(model: &Model, pool: Pool, kinetic: ExprId, potential: ExprId) -> Oracle {
+        Oracle::build(model, pool, Some((kinetic, potential)))
+    }
+
+    fn build(model: &Model, mut pool: Pool, energies: Option<(ExprId, ExprId)>) -> Oracle {
         let pool_ref = &mut pool;
         let names: Vec<String> = model.coordinates.iter().map(|c| c.name.clone()).collect();
         let q: Vec<ExprId> = names.iter().map(|c| pool_ref.var(c, 0)).collect();
@@ -79,9 +89,16 @@ impl Oracle {
         let t = pool_ref.symbol("t");
         let n = names.len();
 
-        let (lagrangian, energy) = match &model.lagrangian {
-            Some(l) => (l.expr, None),
-            None => {
+        let (lagrangian, energy) = match (&model.lagrangian, energies) {
+            (_, Some((tt, uu))) => {
+                let zero = pool_ref.zero();
+                let at_rest = qd.iter().map(|&v| (v, zero)).collect();
+                let u0 = pool_ref.substitute(uu, &at_rest);
+                let energy = pool_ref.add2(tt, u0);
+                (pool_ref.sub(tt, uu), Some(energy))
+            }
+            (Some(l), None) => (l.expr, None),
+            (None, None) => {
                 let mut kinetic = Vec::new();
                 let mut potential = Vec::new();
                 for part in &model.particles {
@@ -164,7 +181,7 @@ impl Oracle {
                 }
             })
             .collect();
-        Some(Oracle {
+        Oracle {
             pool,
             names,
             parameters: model.parameters.iter().map(|p| p.name.clone()).collect(),
@@ -181,7 +198,7 @@ impl Oracle {
             energy_function,
             momentum_rates,
             constraints,
-        })
+        }
     }
 
     /// The value of a symbol at `point`: a coordinate, velocity, acceleration,
