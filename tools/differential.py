@@ -346,6 +346,20 @@ class Reference:
         v = complex(v)
         return v.real if abs(v.imag) <= 1e-12 * (1 + abs(v.real)) else math.nan
 
+    def regular_at(self, rng: random.Random):
+        """A point where SymPy's M is clearly regular (|det M| above 1e-8 of the
+        product of its rows' norms), or None when it is singular at every point."""
+        n = len(self.names)
+        for pt in self.points(rng, 4):
+            m = [[self.value(self.M[i][j], pt) for j in range(n)] for i in range(n)]
+            if not all(math.isfinite(v) for row in m for v in row):
+                continue
+            norms = math.prod(math.sqrt(sum(v * v for v in row)) for row in m)
+            det = float(self.sp.Matrix(m).det())
+            if norms > 0 and abs(det) > 1e-8 * norms:
+                return fmt_point(pt)
+        return None
+
     def points(self, rng: random.Random, count: int) -> list[dict]:
         sp = self.sp
         out = []
@@ -520,11 +534,16 @@ def main(argv=None) -> int:
                               capture_output=True, text=True, timeout=args.timeout)
         if proc.returncode != 0:
             first = (proc.stderr.strip().splitlines() or ["?"])[0]
-            reason = re.sub(r"^.*?error: ", "", first)
+            reason = re.sub(r"^(error: )?.*?:\d+:\d+: ", "", first)
             summary["rejected"][reason] = summary["rejected"].get(reason, 0) + 1
+            ref = None
             if "singular" not in reason:
                 problems.append(f"derive exited {proc.returncode}: {first}")
-            ref = None
+            else:
+                # lagrange calls M singular: so must SymPy's M be, at every point.
+                gap = Reference(text, sp).regular_at(random.Random(k))
+                if gap is not None:
+                    problems.append(f"derive calls M singular, but SymPy's M is regular at {gap}")
         else:
             summary["derived"] += 1
             report = json.loads(proc.stdout)
@@ -586,7 +605,7 @@ def main(argv=None) -> int:
         if (k + 1) % 25 == 0:
             log(f"{k + 1} models, {len(summary['disagreements'])} disagreements, {time.time() - started:.0f} s")
     summary["seconds"] = round(time.time() - started, 1)
-    print(json.dumps(summary, indent=2))
+    print(json.dumps(summary, indent=2, ensure_ascii=False))
     return 1 if summary["disagreements"] else 0
 
 
