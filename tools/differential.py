@@ -207,8 +207,10 @@ FUNCTIONS = {"sin", "cos", "tan", "asin", "acos", "atan", "atan2", "sinh", "cosh
 NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*('{0,2})")
 
 
-def to_sympy(text: str, sp):
-    """A lagrange expression as SymPy: q' is the symbol q__d, q'' is q__dd."""
+def to_sympy(text: str, sp, exact: bool = False):
+    """A lagrange expression as SymPy: q' is the symbol q__d, q'' is q__dd. With
+    `exact`, decimals are exact rationals (0.3 is 3/10), so that SymPy's own
+    derivation of the model has no rounding of its own."""
     names = {}
 
     def rename(match):
@@ -224,7 +226,7 @@ def to_sympy(text: str, sp):
     python = NAME.sub(rename, text).replace("^", "**")
     local = dict(names)
     local.update({"pi": sp.pi, "Abs": sp.Abs, "log": sp.log, "sqrt": sp.sqrt, "atan2": sp.atan2})
-    return sp.sympify(python, locals=local, rational=False)
+    return sp.sympify(python, locals=local, rational=exact)
 
 
 # ------------------------------------------------------------------ SymPy's derivation
@@ -266,28 +268,29 @@ class Reference:
                 e = e.subs(a, b)
             return e
 
-        read = lambda key: to_sympy(data[key], sp) if key in data else None  # noqa: E731
+        exact = lambda text: to_sympy(str(text), sp, exact=True)  # noqa: E731
+        read = lambda key: exact(data[key]) if key in data else None  # noqa: E731
         if "lagrangian" in data:
             L = read("lagrangian")
             self.kinetic = self.potential = None
         else:
             T = read("kinetic") or sp.Integer(0)
             U = read("potential") or sp.Integer(0)
-            g = to_sympy(str(data["gravity"]), sp) if "gravity" in data else None
+            g = exact(data["gravity"]) if "gravity" in data else None
             for part in data.get("particles", []):
-                mass = to_sympy(str(part["mass"]), sp)
-                xs = [dyn(to_sympy(str(x), sp)) for x in part["position"]]
+                mass = exact(part["mass"])
+                xs = [dyn(exact(x)) for x in part["position"]]
                 T += plain(mass * sum(x.diff(t) ** 2 for x in xs) / 2)
                 if g is not None:
                     U += mass * g * plain(xs[-1])
                 if "potential" in part:
-                    U += to_sympy(part["potential"], sp)
+                    U += exact(part["potential"])
             L = T - U
             self.kinetic, self.potential = T, U
         self.L = L
         self.R = read("dissipation") or sp.Integer(0)
         forces = data.get("forces", {})
-        self.Q = [to_sympy(forces[n], sp) if n in forces else sp.Integer(0) for n in self.names]
+        self.Q = [exact(forces[n]) if n in forces else sp.Integer(0) for n in self.names]
 
         n = len(self.names)
         Ld = dyn(L)
