@@ -457,6 +457,15 @@ fn report_reads_back(d: &Derivation) -> Option<Outcome> {
     exprs.extend(d.forcing());
     exprs.extend(d.mass_matrix().iter().flatten());
     exprs.extend(d.hamiltonian());
+    exprs.extend(d.equations());
+    exprs.extend([d.kinetic(), d.potential(), d.energy(), d.dissipation()].into_iter().flatten());
+    exprs.extend(d.velocities().unwrap_or_default());
+    exprs.extend(d.hamilton().unwrap_or_default().iter().flat_map(|&(dq, dp)| [dq, dp]));
+    exprs.extend(d.conserved().iter().map(|c| c.expr));
+    for c in &d.constraints().list {
+        exprs.extend(&c.jacobian);
+        exprs.extend([c.expr, c.time_term]);
+    }
     let pool = d.pool();
     let unlimited = ParseOptions::default().with_limits(Limits { max_exponent: u64::MAX, ..Limits::default() });
     let mut fresh = Pool::default();
