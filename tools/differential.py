@@ -7,7 +7,8 @@ and velocity-linear terms, or point particles with gravity; potentials with
 polynomial and trigonometric terms, sometimes time-dependent or velocity-dependent;
 sometimes Rayleigh dissipation and generalized forces) it
 
-1. writes the model as a lagrange TOML file;
+1. writes the model as a lagrange TOML file (sometimes with a quartic velocity term,
+   so that L is not quadratic and there is no H);
 2. runs `lagrange derive FILE --format json` and reads its expressions into SymPy;
 3. derives the same model with SymPy itself (dynamicsymbols: L, p = dL/dq',
    E = d/dt dL/dq' - dL/dq + dR/dq' - Q, M = dE/dq'', f = M q'' - E, h = q' p - L)
@@ -149,6 +150,9 @@ class Generator:
                     terms.append(f"1/10*cos({self.expr(qs, ps, 1)})*{qs[i]}'*{qs[j]}'")
         if self.rng.random() < 0.3:
             terms.append(f"({self.expr(qs, ps, 1)})*{self.rng.choice(qs)}'")
+        if self.rng.random() < 0.1:
+            # Not quadratic in the velocities: no H, and M depends on q'.
+            terms.append(f"{self.rng.choice(ps)}/12*{self.rng.choice(qs)}'^4")
         return " + ".join(terms)
 
     def model(self) -> str:
@@ -519,7 +523,7 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     gen = Generator(random.Random(args.seed))
     summary = {"models": 0, "derived": 0, "rejected": {}, "derive_agreed": 0, "simulated": 0,
-               "simulate_agreed": 0, "stopped_early": {}, "both_failed_to_simulate": 0, "undecided_flags": 0,
+               "simulate_agreed": 0, "stopped_early": {}, "both_failed_to_simulate": 0, "coverage": {}, "undecided_flags": 0,
                "disagreements": [], "seed": args.seed, "out": str(out)}
     started = time.time()
     count = len(args.files) or args.models
@@ -550,6 +554,14 @@ def main(argv=None) -> int:
         else:
             summary["derived"] += 1
             report = json.loads(proc.stdout)
+            # What the derived models were like, to show what the agreements cover.
+            cover = summary["coverage"]
+            for key, value in (("with_cyclic", bool(report["cyclic"])),
+                               ("hamiltonian_given", report["hamiltonian"] is not None),
+                               ("hamiltonian_conserved", report["hamiltonian_conserved"]),
+                               ("hamiltonian_is_energy", report["hamiltonian_is_energy"])):
+                tally = cover.setdefault(key, {})
+                tally[json.dumps(value)] = tally.get(json.dumps(value), 0) + 1
             ref = Reference(text, sp)
             found, undecided = compare_derivation(ref, report, random.Random(k), sp)
             problems += found
