@@ -72,12 +72,18 @@ pub fn check_file(text: &str, body_files: &[(String, String)]) -> Outcome {
 pub struct LoaderTarget {
     corpus: Vec<String>,
     body_files: Vec<(String, String)>,
+    /// Expressions to splice into string values.
+    expressions: Vec<String>,
 }
 
 impl LoaderTarget {
     /// A target seeded with the corpus's files.
     pub fn new(corpus: &Corpus) -> LoaderTarget {
-        LoaderTarget { corpus: corpus.files.iter().map(|s| s.text.clone()).collect(), body_files: corpus.body_files() }
+        LoaderTarget {
+            corpus: corpus.files.iter().map(|s| s.text.clone()).collect(),
+            body_files: corpus.body_files(),
+            expressions: corpus.expressions.clone(),
+        }
     }
 }
 
@@ -91,6 +97,11 @@ impl Target for LoaderTarget {
 
     fn input(&mut self, rng: &mut Rng) -> String {
         let seed = rng.pick(&self.corpus).clone();
+        if rng.chance(0.5) {
+            if let Some(text) = mutate_a_string(rng, &seed, &self.expressions) {
+                return text;
+            }
+        }
         let others: Vec<&str> = (0..2).map(|_| rng.pick(&self.corpus).as_str()).collect();
         mutate(rng, &seed, &others)
     }
@@ -113,9 +124,45 @@ impl Target for LoaderTarget {
     }
 }
 
+/// Mutates the text inside one basic string (`"..."` on one line) of
+/// `text`, so that the TOML stays valid and the expression reader and derive
+/// see the mutant: its own text mutated, or another expression spliced in.
+/// None when the text has no such string.
+fn mutate_a_string(rng: &mut Rng, text: &str, expressions: &[String]) -> Option<String> {
+    let mut strings = Vec::new();
+    let mut offset = 0;
+    for line in text.split_inclusive('\n') {
+        let quotes: Vec<usize> = line.match_indices('"').map(|(i, _)| offset + i).collect();
+        strings.extend(quotes.chunks_exact(2).map(|pair| (pair[0] + 1, pair[1])));
+        offset += line.len();
+    }
+    if strings.is_empty() {
+        return None;
+    }
+    let (start, end) = *rng.pick(&strings);
+    let splice = !expressions.is_empty() && rng.chance(0.3);
+    let inner = if splice { rng.pick(expressions).clone() } else { text[start..end].to_string() };
+    let others: Vec<&str> = expressions.iter().take(2).map(String::as_str).collect();
+    let mutant = mutate(rng, &inner, &others);
+    // What would end or escape the string is left out.
+    let clean: String = mutant.chars().filter(|c| !matches!(c, '"' | '\\' | '\n' | '\r') && !c.is_control()).collect();
+    Some(format!("{}{clean}{}", &text[..start], &text[end..]))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn string_mutants_keep_the_toml_valid() {
+        let mut rng = Rng::new(5);
+        let text = "coordinates = [\"x\"]\nlagrangian = \"x'^2/2 - x^2/2\"\n";
+        for _ in 0..200 {
+            let mutant = mutate_a_string(&mut rng, text, &["sin(x)".to_string()]).expect("the text has strings");
+            assert!(mutant.parse::<toml::Table>().is_ok(), "{mutant}");
+        }
+        assert!(mutate_a_string(&mut rng, "a = 1\n", &[]).is_none());
+    }
 
     #[test]
     fn every_seed_passes_the_checks() {
