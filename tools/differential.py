@@ -323,21 +323,32 @@ class Reference:
 
     def is_zero(self, e, points) -> bool | None:
         """Whether `e` is identically zero: numerically at the points (against the
-        size of its terms), and when it vanishes there, by SymPy's simplify too.
-        None when the two disagree (simplify is incomplete; numbers may cancel)."""
+        size of its terms, `size`), and when it vanishes there, by SymPy's
+        simplify too. None when the two disagree (simplify is incomplete)."""
         sp = self.sp
-        expanded = sp.expand(e)
-        if expanded == 0:
+        e = sp.expand(e)
+        if e == 0:
             return True
-        terms = sp.Add.make_args(expanded)
-        values, sizes = [], []
         for pt in points:
-            values.append(self.value(e, pt))
-            sizes.append(sum(abs(self.value(t, pt)) for t in terms))
-        finite = [(v, s) for v, s in zip(values, sizes) if math.isfinite(v) and math.isfinite(s)]
-        if any(abs(v) > 1e-10 * s for v, s in finite):
-            return False
+            v, size = self.value(e, pt), self.size(e, pt)
+            if math.isfinite(v) and math.isfinite(size) and abs(v) > 1e-10 * size:
+                return False
         return True if sp.simplify(e) == 0 else None
+
+    def size(self, e, point: dict) -> float:
+        """The value of `e` with every term of every sum taken positive: the scale
+        against which a value that should cancel to zero is judged."""
+        sp = self.sp
+        if e.is_Add:
+            return sum(self.size(a, point) for a in e.args)
+        if e.is_Mul:
+            return math.prod(self.size(a, point) for a in e.args)
+        if e.is_Pow and e.exp.is_number:
+            try:
+                return self.size(e.base, point) ** float(e.exp)
+            except (OverflowError, ZeroDivisionError):
+                return math.inf
+        return abs(self.value(e, point))
 
     def value(self, e, point: dict) -> float:
         """The value of `e` at `point` (a dict from symbols to numbers); NaN
