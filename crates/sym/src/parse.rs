@@ -153,6 +153,13 @@ pub enum ParseErrorKind {
         /// What it evaluates to (`NaN`, `-inf`).
         value: String,
     },
+    /// A power of zero with an exponent that is not a number (`0^x`): it is 0 or
+    /// has no value by the exponent's sign, and its derivative holds `log(0)`.
+    #[error("{text} is a power of zero with a variable exponent: 0 or no value by the exponent's sign")]
+    ZeroToVariablePower {
+        /// The power as written.
+        text: String,
+    },
     /// The parse would add more than [`Limits::max_nodes`] nodes to the pool.
     #[error("expression has more than {limit} nodes")]
     TooManyNodes {
@@ -378,6 +385,14 @@ impl Parser<'_, '_, '_> {
         // A constant function value or power that has no value (log(0),
         // sqrt(-1), 0^-1) is an error here, before a product with zero or a
         // cancellation could make it vanish.
+        let zero_power = |id: ExprId| match self.pool.node(id) {
+            Node::Pow(b, x) => self.pool.is_zero(*b) && self.pool.as_number(*x).is_none(),
+            _ => false,
+        };
+        if parts().any(zero_power) {
+            let text = self.text[span.start as usize..span.end as usize].trim().to_string();
+            return Err(self.error(ParseErrorKind::ZeroToVariablePower { text }, span));
+        }
         if let Some(value) = parts().find_map(|id| self.pool.undefined_value(id)) {
             let text = self.text[span.start as usize..span.end as usize].trim().to_string();
             return Err(self.error(ParseErrorKind::Undefined { text, value: value.to_string() }, span));
@@ -920,6 +935,19 @@ mod tests {
             "asin(-1000/2) has no finite value (it evaluates to NaN)",
             "asin(-1000/2)",
         );
+    }
+
+    /// Found by fuzzing: `0^-x^2` read, and its derivative printed as
+    /// `x*log(0)/0^x^2`, which has no value and does not read back.
+    #[test]
+    fn a_power_of_zero_needs_a_numeric_exponent() {
+        let message = |text: &str| {
+            format!("{text} is a power of zero with a variable exponent: 0 or no value by the exponent's sign")
+        };
+        check_err("m*x'^2/2 - 0^- x^2/2", &message("0^- x^2"), "0^- x^2");
+        check_err("(x - x)^y", &message("(x - x)^y"), "(x - x)^y");
+        check_err("2*0^(t + 1)", &message("0^(t + 1)"), "0^(t + 1)");
+        check("0^2*x + 0^(1/2)", "0");
     }
 
     /// Found by fuzzing: numeric factors fold into one coefficient, which may
