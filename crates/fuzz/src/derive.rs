@@ -6,7 +6,7 @@
 //! the text; a singular mass matrix is one the oracle finds singular too; the
 //! report serializes and every expression in it parses back to the same value.
 //! At random points where the oracle's values are finite and moderate: L, the
-//! momenta, M (and its symmetry), the equations `E = M q'' − f`, the energy
+//! momenta, M (entry by entry against a symmetric one), the equations `E = M q'' − f`, the energy
 //! function, T + U₀, H(q, p), q'(q, p) and Hamilton's equations agree with the
 //! oracle; M and f are finite. Over the points: the cyclic coordinates are those
 //! with ∂L/∂q = 0, H is conserved exactly when ∂L/∂t, R, Q and the constraints'
@@ -26,7 +26,8 @@ const POINTS: usize = 8;
 /// Values beyond this are not compared: rounding in long sums of large terms
 /// would dominate.
 const MODERATE: f64 = 1e4;
-/// Relative tolerance of a comparison, against 1 + |a| + |b|.
+/// Relative tolerance of a comparison, against 1 + |a| + |b| + the largest
+/// of the oracle's values at the point (terms of that size may cancel).
 const RTOL: f64 = 1e-7;
 
 /// Loads, derives and checks the model `text` against the oracle.
