@@ -186,33 +186,49 @@ fn vanishes(o: &Oracle, e: ExprId, point: &Point) -> Option<Zero> {
     (size >= 1e-6 && !tiny_term).then_some(Zero::Yes)
 }
 
-/// The value of `e` with every term of every sum taken positive, memoized.
-fn magnitude(o: &Oracle, e: ExprId, point: &Point, memo: &mut std::collections::HashMap<ExprId, f64>) -> Option<f64> {
+/// The scale of the rounding error of evaluating `e` at `point`, in units of
+/// the unit roundoff, to first order: a number or function value is its own
+/// scale; a sum adds its terms' scales (so a sum that cancels keeps the size of
+/// its terms); a product sums each factor's scale times the others' values; a
+/// power bⁿ is |n|·|b|ⁿ⁻¹ times b's scale. Memoized as (value, scale).
+fn magnitude(o: &Oracle, e: ExprId, point: &Point, memo: &mut Memo) -> Option<f64> {
+    scaled(o, e, point, memo).map(|(_, scale)| scale)
+}
+
+/// Values and rounding scales of subexpressions at one point.
+type Memo = std::collections::HashMap<ExprId, (f64, f64)>;
+
+fn scaled(o: &Oracle, e: ExprId, point: &Point, memo: &mut Memo) -> Option<(f64, f64)> {
     if let Some(&m) = memo.get(&e) {
         return Some(m);
     }
     let pool = &o.pool;
-    let m = match pool.node(e) {
+    let value = o.eval(pool, e, point).ok()?;
+    let scale = match pool.node(e) {
         sym::Node::Add(terms) => {
             let mut total = 0.0;
             for &t in terms.iter() {
-                total += magnitude(o, t, point, memo)?;
+                total += scaled(o, t, point, memo)?.1;
             }
             total
         }
         sym::Node::Mul(factors) => {
-            let mut total = 1.0;
-            for &f in factors.iter() {
-                total *= magnitude(o, f, point, memo)?;
+            let parts: Vec<(f64, f64)> = factors.iter().map(|&f| scaled(o, f, point, memo)).collect::<Option<_>>()?;
+            let mut total = 0.0;
+            for (i, (_, scale)) in parts.iter().enumerate() {
+                let others: f64 = parts.iter().enumerate().filter(|&(j, _)| j != i).map(|(_, p)| p.0.abs()).product();
+                total += scale * others;
             }
             total
         }
         sym::Node::Pow(base, exp) if pool.as_number(*exp).is_some() => {
-            let x = pool.as_number(*exp)?.to_f64();
-            magnitude(o, *base, point, memo)?.powf(x)
+            let n = pool.as_number(*exp)?.to_f64();
+            let (b, scale) = scaled(o, *base, point, memo)?;
+            n.abs() * b.abs().powf(n - 1.0) * scale
         }
-        _ => o.eval(pool, e, point).ok()?.abs(),
+        _ => value.abs(),
     };
+    let m = (value, scale.max(value.abs()));
     memo.insert(e, m);
     Some(m)
 }
@@ -521,6 +537,28 @@ impl Target for DeriveTarget {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// What `vanishes` says about `e(oracle)` at the probe points of `text`.
+    fn verdicts(text: &str, e: impl Fn(&Oracle) -> ExprId) -> Vec<Option<Zero>> {
+        let o = Oracle::new(&Model::parse(text, &[]).unwrap()).unwrap();
+        let mut rng = Rng::new(1);
+        (0..POINTS).filter_map(|_| o.probe_point(&mut rng)).map(|p| vanishes(&o, e(&o), &p)).collect()
+    }
+
+    #[test]
+    fn zero_is_told_from_tiny_and_from_large_cancelling_terms() {
+        let model =
+            |top: &str, tables: &str| format!("coordinates = [\"r\"]\n{top}\n[parameters]\nm = 1.0\nw = 1.0\n{tables}");
+        // A bead on a rotating wire: ∂L/∂t is a sum of terms that cancel.
+        let wire = model("", "[[particles]]\nmass = \"m\"\nposition = [\"r*cos(w*t)\", \"r*sin(w*t)\"]\n");
+        assert!(verdicts(&wire, |o| o.dl_dt).iter().all(|v| *v == Some(Zero::Yes)));
+        // h − T for T = (r'^-2 − 2)^127 is large and does not cancel.
+        let steep = model("kinetic = \"m*(r'^-2 - 2)^127\"", "");
+        assert!(verdicts(&steep, |o| o.energy_gap.unwrap()).contains(&Some(Zero::No)));
+        // h − T for T = r'^1000 underflows: no point can tell it from zero.
+        let tiny = model("kinetic = \"m*r'^1000/2\"", "");
+        assert!(!verdicts(&tiny, |o| o.energy_gap.unwrap()).contains(&Some(Zero::Yes)));
+    }
 
     #[test]
     fn an_example_agrees_with_the_oracle_and_a_wrong_flag_would_be_caught() {
