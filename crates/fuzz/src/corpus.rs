@@ -130,6 +130,51 @@ impl Corpus {
     }
 }
 
+/// What a mutating target draws from: its seeds, which stay, and the mutants
+/// kept for a new outcome, at most `limit` (then each new one replaces the
+/// oldest), so that a long run neither grows without bound nor loses its seeds.
+#[derive(Clone, Debug)]
+pub struct Inputs {
+    seeds: Vec<String>,
+    kept: Vec<String>,
+    limit: usize,
+    next: usize,
+}
+
+impl Inputs {
+    /// Inputs from these seeds (at least one), keeping at most `limit` mutants.
+    pub fn new(seeds: Vec<String>, limit: usize) -> Inputs {
+        debug_assert!(!seeds.is_empty());
+        Inputs { seeds, kept: Vec::new(), limit, next: 0 }
+    }
+
+    /// A seed or a kept mutant, even odds while there are kept ones.
+    pub fn pick(&self, rng: &mut crate::rng::Rng) -> &str {
+        let from = if self.kept.is_empty() || rng.chance(0.5) { &self.seeds } else { &self.kept };
+        rng.pick(from).as_str()
+    }
+
+    /// Keeps a mutant whose outcome was new.
+    pub fn keep(&mut self, input: String) {
+        if self.kept.len() < self.limit {
+            self.kept.push(input);
+        } else if self.limit > 0 {
+            self.kept[self.next] = input;
+            self.next = (self.next + 1) % self.limit;
+        }
+    }
+
+    /// Seeds and kept mutants.
+    pub fn len(&self) -> usize {
+        self.seeds.len() + self.kept.len()
+    }
+
+    /// Never: there is at least one seed.
+    pub fn is_empty(&self) -> bool {
+        self.seeds.is_empty() && self.kept.is_empty()
+    }
+}
+
 /// Every `.toml` file under `dir`, recursively, in a stable order.
 fn toml_files(dir: &Path, out: &mut Vec<PathBuf>) -> std::io::Result<()> {
     let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)?.map(|e| e.map(|e| e.path())).collect::<Result<_, _>>()?;
@@ -168,5 +213,18 @@ mod tests {
         assert!(corpus.expressions.len() > 100, "{} expressions", corpus.expressions.len());
         assert!(corpus.expressions.iter().any(|e| e == "x^2 + y^2 - l^2"));
         assert!(corpus.body_files().iter().any(|(name, _)| name == "cone_top_body.toml"));
+    }
+
+    #[test]
+    fn kept_mutants_are_bounded_and_the_seeds_stay() {
+        let mut inputs = Inputs::new(vec!["seed".into()], 3);
+        for i in 0..10 {
+            inputs.keep(format!("mutant {i}"));
+        }
+        assert_eq!(inputs.len(), 4);
+        let mut rng = crate::rng::Rng::new(1);
+        let picks: Vec<String> = (0..200).map(|_| inputs.pick(&mut rng).to_string()).collect();
+        assert!(picks.iter().any(|p| p == "seed"));
+        assert!(picks.iter().any(|p| p == "mutant 9") && !picks.iter().any(|p| p == "mutant 6"));
     }
 }

@@ -7,7 +7,7 @@
 //! as LaTeX, differentiates, and simplifies to an expression of the same value
 //! wherever every subexpression is finite and moderate.
 
-use crate::corpus::Corpus;
+use crate::corpus::{Corpus, Inputs};
 use crate::mutate::{mutate, DICTIONARY};
 use crate::rng::Rng;
 use crate::run::{FindingKind, Outcome, Target};
@@ -117,18 +117,18 @@ fn shape(pool: &Pool, e: ExprId) -> String {
 /// The expression parser under the fuzz loop: mutants of the corpus's
 /// expressions, and now and then a soup of tokens.
 pub struct ExprTarget {
-    corpus: Vec<String>,
+    inputs: Inputs,
 }
 
 impl ExprTarget {
     /// A target seeded with the corpus's expressions.
     pub fn new(corpus: &Corpus) -> ExprTarget {
-        ExprTarget { corpus: corpus.expressions.clone() }
+        ExprTarget { inputs: Inputs::new(corpus.expressions.clone(), MAX_KEPT) }
     }
 }
 
-/// Largest corpus kept; new entries then replace random old ones.
-const MAX_CORPUS: usize = 4096;
+/// Most mutants kept for a new outcome.
+const MAX_KEPT: usize = 4096;
 
 impl Target for ExprTarget {
     fn name(&self) -> &'static str {
@@ -136,12 +136,13 @@ impl Target for ExprTarget {
     }
 
     fn input(&mut self, rng: &mut Rng) -> String {
-        if rng.chance(0.1) || self.corpus.is_empty() {
+        if rng.chance(0.1) {
             let n = rng.below(40);
             return (0..n).map(|_| *rng.pick(DICTIONARY)).collect();
         }
-        let seed = rng.pick(&self.corpus).clone();
-        let others: Vec<&str> = (0..4).map(|_| rng.pick(&self.corpus).as_str()).collect();
+        let seed = self.inputs.pick(rng).to_string();
+        let others: Vec<String> = (0..4).map(|_| self.inputs.pick(rng).to_string()).collect();
+        let others: Vec<&str> = others.iter().map(String::as_str).collect();
         let mut text = mutate(rng, &seed, &others);
         // Expressions are short; the length limit has its own unit test.
         text.truncate(text.floor_char_boundary_at(4096));
@@ -153,16 +154,11 @@ impl Target for ExprTarget {
     }
 
     fn keep(&mut self, input: String) {
-        if self.corpus.len() < MAX_CORPUS {
-            self.corpus.push(input);
-        } else {
-            let i = input.len() % MAX_CORPUS;
-            self.corpus[i] = input;
-        }
+        self.inputs.keep(input);
     }
 
     fn corpus_len(&self) -> usize {
-        self.corpus.len()
+        self.inputs.len()
     }
 }
 

@@ -40,7 +40,7 @@ mod rng;
 mod run;
 mod spans;
 
-pub use corpus::{Corpus, FileKind, Seed, EXPRESSIONS, SEED_DIRS};
+pub use corpus::{Corpus, FileKind, Inputs, Seed, EXPRESSIONS, SEED_DIRS};
 pub use derive::{check_derivation, DeriveTarget};
 pub use expr::{check_expression, ExprTarget};
 pub use loader::{check_file, LoaderTarget};

@@ -8,7 +8,7 @@
 //! checks of [`crate::check_derivation`]; a body file that loads has its mass
 //! properties computed.
 
-use crate::corpus::{Corpus, FileKind};
+use crate::corpus::{Corpus, FileKind, Inputs};
 use crate::derive::check_model;
 use crate::mutate::mutate;
 use crate::rng::Rng;
@@ -70,7 +70,7 @@ pub fn check_file(text: &str, body_files: &[(String, String)]) -> Outcome {
 
 /// The loaders under the fuzz loop: mutants of the corpus's files.
 pub struct LoaderTarget {
-    corpus: Vec<String>,
+    inputs: Inputs,
     body_files: Vec<(String, String)>,
     /// Expressions to splice into string values.
     expressions: Vec<String>,
@@ -80,15 +80,15 @@ impl LoaderTarget {
     /// A target seeded with the corpus's files.
     pub fn new(corpus: &Corpus) -> LoaderTarget {
         LoaderTarget {
-            corpus: corpus.files.iter().map(|s| s.text.clone()).collect(),
+            inputs: Inputs::new(corpus.files.iter().map(|s| s.text.clone()).collect(), MAX_KEPT),
             body_files: corpus.body_files(),
             expressions: corpus.expressions.clone(),
         }
     }
 }
 
-/// Largest corpus kept; new entries then replace old ones.
-const MAX_CORPUS: usize = 2048;
+/// Most mutants kept for a new outcome.
+const MAX_KEPT: usize = 2048;
 
 impl Target for LoaderTarget {
     fn name(&self) -> &'static str {
@@ -96,13 +96,14 @@ impl Target for LoaderTarget {
     }
 
     fn input(&mut self, rng: &mut Rng) -> String {
-        let seed = rng.pick(&self.corpus).clone();
+        let seed = self.inputs.pick(rng).to_string();
         if rng.chance(0.5) {
             if let Some(text) = mutate_a_string(rng, &seed, &self.expressions) {
                 return text;
             }
         }
-        let others: Vec<&str> = (0..2).map(|_| rng.pick(&self.corpus).as_str()).collect();
+        let others: Vec<String> = (0..2).map(|_| self.inputs.pick(rng).to_string()).collect();
+        let others: Vec<&str> = others.iter().map(String::as_str).collect();
         mutate(rng, &seed, &others)
     }
 
@@ -111,16 +112,11 @@ impl Target for LoaderTarget {
     }
 
     fn keep(&mut self, input: String) {
-        if self.corpus.len() < MAX_CORPUS {
-            self.corpus.push(input);
-        } else {
-            let i = input.len() % MAX_CORPUS;
-            self.corpus[i] = input;
-        }
+        self.inputs.keep(input);
     }
 
     fn corpus_len(&self) -> usize {
-        self.corpus.len()
+        self.inputs.len()
     }
 }
 
