@@ -279,6 +279,32 @@ impl Reader<'_> {
         }
     }
 
+    /// Parses a potential, which may depend on velocities (a generalized
+    /// potential) but must have a value at rest: the energy T + U₀ takes its
+    /// velocity-independent part as U₀ = U(q, 0, t), and `-G*m/r'^2` has none.
+    fn potential(&mut self, text: &Spanned<String>, what: &str) -> Result<Located, ModelError> {
+        let u = self.expr(text, Scope::State, what)?;
+        let zero = self.pool.zero();
+        let names: Vec<String> = self.coordinates.iter().map(|c| c.name.clone()).collect();
+        let at_rest: crate::probe::Subst = names.iter().map(|c| (self.pool.var(c, 1), zero)).collect();
+        let u0 = self.pool.substitute(u.expr, &at_rest);
+        let undefined = self.pool.reachable(&[u0]).into_iter().find_map(|e| self.pool.undefined_value(e));
+        if let Some(value) = undefined {
+            let at = match content_offset(self.source, &text.span(), text.get_ref()) {
+                Some(o) => o..o + text.get_ref().len(),
+                None => text.span(),
+            };
+            return Err(ModelError::at(
+                at,
+                format!("{what} has no value at rest: with every velocity q' = 0 it evaluates to {value}"),
+            )
+            .with_help(
+                "the energy T + U takes U at q' = 0; a generalized potential is U(q, t) plus terms in the velocities that vanish at rest",
+            ));
+        }
+        Ok(u)
+    }
+
     pub(crate) fn num_or_expr(
         &mut self,
         v: &Spanned<NumOrText>,
@@ -397,7 +423,7 @@ impl Model {
                 .get_ref()
                 .potential
                 .as_ref()
-                .map(|u| r.expr(u, Scope::State, "the particle's potential"))
+                .map(|u| r.potential(u, "the particle's potential"))
                 .transpose()?
                 .map(|l| l.expr);
             if gravity.is_some() && position.len() == 1 {
@@ -420,7 +446,7 @@ impl Model {
         }
         let lagrangian = raw.lagrangian.as_ref().map(|l| r.expr(l, Scope::State, "the Lagrangian")).transpose()?;
         let kinetic = raw.kinetic.as_ref().map(|l| r.expr(l, Scope::State, "the kinetic energy")).transpose()?;
-        let potential = raw.potential.as_ref().map(|l| r.expr(l, Scope::State, "the potential")).transpose()?;
+        let potential = raw.potential.as_ref().map(|l| r.potential(l, "the potential")).transpose()?;
         let dissipation =
             raw.dissipation.as_ref().map(|l| r.expr(l, Scope::State, "the dissipation function")).transpose()?;
         if let Some(l) = &lagrangian {
@@ -592,5 +618,44 @@ impl Model {
     /// The value of a parameter by name.
     pub fn parameter(&self, name: &str) -> Option<f64> {
         self.parameters.iter().find(|p| p.name == name).map(|p| p.value)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Reads a model whose `[parameters]` are `m` and `G` and coordinates `r`, `th`
+    /// from the top-level lines `head`, and returns the error and the text it points at.
+    #[track_caller]
+    fn check_err(head: &str, expect: &str, at: &str) {
+        let text = format!("coordinates = [\"r\", \"th\"]\n{head}\n[parameters]\nm = 1.0\nG = 1.0\n");
+        let err = Model::parse(&text, &[]).expect_err(&text);
+        assert_eq!(err.message, expect, "{text}");
+        let span = err.span.clone().expect("the error has a place");
+        assert_eq!(&text[span], at, "{text}");
+    }
+
+    /// Found by fuzzing: a potential with a velocity in a denominator has no
+    /// U₀ = U(q, 0, t), and the energy T + U₀ printed as `-0^(-2)*G*m^2 + ...`.
+    #[test]
+    fn a_potential_must_have_a_value_at_rest() {
+        check_err(
+            "kinetic = \"m*(r'^2 + r^2*th'^2)/2\"\npotential = \"-G*m^2/r'^2\"",
+            "the potential has no value at rest: with every velocity q' = 0 it evaluates to inf",
+            "-G*m^2/r'^2",
+        );
+        check_err(
+            "kinetic = \"m*r'^2/2\"\npotential = \"log(r'^2) + th'\"",
+            "the potential has no value at rest: with every velocity q' = 0 it evaluates to -inf",
+            "log(r'^2) + th'",
+        );
+        let particle = "[[particles]]\nmass = \"m\"\nposition = [\"r\", \"th\"]\npotential = \"G/(r'*th')\"\n";
+        let text = format!("coordinates = [\"r\", \"th\"]\n[parameters]\nm = 1.0\nG = 1.0\n{particle}");
+        let err = Model::parse(&text, &[]).expect_err(&text);
+        assert!(err.message.starts_with("the particle's potential has no value at rest"), "{}", err.message);
+        // A charge in a magnetic field: terms linear in the velocities vanish at rest.
+        let text = "coordinates = [\"r\", \"th\"]\nkinetic = \"m*(r'^2 + th'^2)/2\"\npotential = \"G*(r*th' - th*r') + 1/(1 + r'^2)\"\n[parameters]\nm = 1.0\nG = 1.0\n";
+        assert!(Model::parse(text, &[]).is_ok());
     }
 }

@@ -182,6 +182,13 @@ pub enum ParseErrorKind {
         /// What it evaluates to (`NaN`, `-inf`).
         value: String,
     },
+    /// A power of zero with an exponent that is not a number (`0^x`): it is 0 or
+    /// has no value by the exponent's sign, and its derivative holds `log(0)`.
+    #[error("{text} is a power of zero with a variable exponent: 0 or no value by the exponent's sign")]
+    ZeroToVariablePower {
+        /// The power as written.
+        text: String,
+    },
     /// The parse would add more than [`Limits::max_nodes`] nodes to the pool.
     #[error("expression has more than {limit} nodes")]
     TooManyNodes {
@@ -392,7 +399,12 @@ impl Parser<'_, '_, '_> {
 
     /// Fails when the parse has grown the pool past the node limit.
     fn check_nodes(&self, e: ExprId, span: Span) -> PResult<ExprId> {
-        if self.pool.as_number(e).is_some_and(|n| !n.to_f64().is_finite()) {
+        // The canonical form may hold nodes the text never wrote, one level
+        // down: asin(-2) is -asin(2), and a product folds its numeric factors
+        // into one (1e300*x*1e300 is inf*x). They are checked with `e`.
+        let node = self.pool.node(e);
+        let parts = || std::iter::once(e).chain(self.pool.children(node));
+        if parts().any(|id| self.pool.as_number(id).is_some_and(|n| !n.to_f64().is_finite())) {
             return Err(self.error(ParseErrorKind::NonFiniteConstant, span));
         }
         let limit = self.opts.limits.max_nodes;
@@ -402,7 +414,15 @@ impl Parser<'_, '_, '_> {
         // A constant function value or power that has no value (log(0),
         // sqrt(-1), 0^-1) is an error here, before a product with zero or a
         // cancellation could make it vanish.
-        if let Some(value) = self.pool.undefined_value(e) {
+        let zero_power = |id: ExprId| match self.pool.node(id) {
+            Node::Pow(b, x) => self.pool.is_zero(*b) && self.pool.as_number(*x).is_none(),
+            _ => false,
+        };
+        if parts().any(zero_power) {
+            let text = self.text[span.start as usize..span.end as usize].trim().to_string();
+            return Err(self.error(ParseErrorKind::ZeroToVariablePower { text }, span));
+        }
+        if let Some(value) = parts().find_map(|id| self.pool.undefined_value(id)) {
             let text = self.text[span.start as usize..span.end as usize].trim().to_string();
             return Err(self.error(ParseErrorKind::Undefined { text, value: value.to_string() }, span));
         }
@@ -942,6 +962,36 @@ mod tests {
         check_err("0*asin(2)", "asin(2) has no finite value (it evaluates to NaN)", "asin(2)");
         check("0*exp(1000)", "0");
         check("1/(-64)^171", "1/(-64)^171");
+        // Found by fuzzing: an odd function takes the sign out (asin(-2) is
+        // -asin(2)), and the undefined value sat one level down.
+        check_err("asin(-2)", "asin(-2) has no finite value (it evaluates to NaN)", "asin(-2)");
+        check_err(
+            "x + atan(1)*asin(-1000/2)",
+            "asin(-1000/2) has no finite value (it evaluates to NaN)",
+            "asin(-1000/2)",
+        );
+    }
+
+    /// Found by fuzzing: `0^-x^2` read, and its derivative printed as
+    /// `x*log(0)/0^x^2`, which has no value and does not read back.
+    #[test]
+    fn a_power_of_zero_needs_a_numeric_exponent() {
+        let message = |text: &str| {
+            format!("{text} is a power of zero with a variable exponent: 0 or no value by the exponent's sign")
+        };
+        check_err("m*x'^2/2 - 0^- x^2/2", &message("0^- x^2"), "0^- x^2");
+        check_err("(x - x)^y", &message("(x - x)^y"), "(x - x)^y");
+        check_err("2*0^(t + 1)", &message("0^(t + 1)"), "0^(t + 1)");
+        check("0^2*x + 0^(1/2)", "0");
+    }
+
+    /// Found by fuzzing: numeric factors fold into one coefficient, which may
+    /// overflow although no literal does; it printed as `inf`, a symbol.
+    #[test]
+    fn a_folded_coefficient_that_overflows_is_an_error() {
+        check_err("x/1e-300*y/1e-300", "the constant overflows a 64-bit float", "x/1e-300*y/1e-300");
+        check_err("1e300*x*1e300", "the constant overflows a 64-bit float", "1e300*x*1e300");
+        check("1e300*x*1e-300", "1.0*x");
     }
 
     /// Exponents that folding makes are held to the same limit as written ones,

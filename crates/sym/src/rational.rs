@@ -273,7 +273,13 @@ fn split(a: &Poly) -> (Number, Mono, Poly) {
     let common = common.unwrap_or_default();
     let lead = a.last_key_value().map_or(Number::ONE, |p| *p.1);
     let content = if has_float(a) {
-        lead
+        // A subnormal lead has no finite reciprocal: dividing by it would make
+        // the coefficients infinite (x^5e-324 became x^inf), so it stays.
+        if lead.to_f64().recip().is_finite() {
+            lead
+        } else {
+            Number::ONE
+        }
     } else {
         let (mut num, mut den) = (0i128, 1i128);
         let mut exact = true;
@@ -810,6 +816,14 @@ mod tests {
     fn catenary_and_brachistochrone_accelerations() {
         check("-1/(y*(y'^2/(y'^2 + 1) - 1))", "(y'^2 + 1)/y");
         check("-(y'^2 - y'^2/(y'^2 + 1) - y'^4/(y'^2 + 1) - 1)/(y*(2*y'^2/(y'^2 + 1) - 2))", "-(y'^2 + 1)/(2*y)");
+    }
+
+    /// Found by fuzzing: the exponent 5e-324 (subnormal) was divided by
+    /// itself as a float content, and the power came back as `m^inf`.
+    #[test]
+    fn a_subnormal_coefficient_is_not_divided_out() {
+        check("m^sin(4.9e-324)/(m1 + 0.2*m^sin(4.9e-324))", "5.0*m^5e-324/(1.0*m^5e-324 + 5.0*m1)");
+        check("5e-324*x + 5e-324", "5e-324*x + 5e-324");
     }
 
     #[test]
