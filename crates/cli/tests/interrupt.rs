@@ -7,23 +7,11 @@
 
 mod common;
 
-use common::{ok, repo_root, run as lagrange, scratch};
+use common::{ok, run as lagrange, scratch, start};
 use std::path::Path;
-use std::process::{Child, Command, Output, Stdio};
+use std::process::{Child, Command, Output};
 use std::thread::sleep;
 use std::time::{Duration, Instant};
-
-/// Starts `lagrange ARGS` in the repository root.
-fn start(args: &[&str]) -> Child {
-    Command::new(env!("CARGO_BIN_EXE_lagrange"))
-        .args(args)
-        .current_dir(repo_root())
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap_or_else(|e| panic!("cannot start lagrange {args:?}: {e}"))
-}
 
 /// Waits until the child catches SIGINT and SIGTERM (Linux shows it in
 /// /proc/PID/status, line `SigCgt`): from then on a signal is the run's to

@@ -11,7 +11,7 @@
 use serde_json::Value;
 use std::io::Read;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::{Child, Command, Stdio};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::thread;
 use std::time::{Duration, Instant};
@@ -53,17 +53,22 @@ impl Run {
     }
 }
 
-/// Runs `lagrange ARGS` in the repository root, reading stdout and stderr while
-/// it runs, and fails the test when it runs past [`TIMEOUT`].
-pub fn run(args: &[&str]) -> Run {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_lagrange"))
+/// Starts `lagrange ARGS` in the repository root, with stdout and stderr piped.
+pub fn start(args: &[&str]) -> Child {
+    Command::new(env!("CARGO_BIN_EXE_lagrange"))
         .args(args)
         .current_dir(repo_root())
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
-        .unwrap_or_else(|e| panic!("cannot start lagrange {args:?}: {e}"));
+        .unwrap_or_else(|e| panic!("cannot start lagrange {args:?}: {e}"))
+}
+
+/// Runs `lagrange ARGS` in the repository root, reading stdout and stderr while
+/// it runs, and fails the test when it runs past [`TIMEOUT`].
+pub fn run(args: &[&str]) -> Run {
+    let mut child = start(args);
     let read = |mut pipe: Box<dyn Read + Send>| {
         thread::spawn(move || {
             let mut buf = Vec::new();
