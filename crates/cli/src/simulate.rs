@@ -346,11 +346,13 @@ fn summary_json(r: &RunReport, names: &[String], timing: Timing, interrupted: Op
         "steps": r.steps,
         "rejected_steps": r.rejected,
         "rhs_evaluations": r.rhs_evaluations,
+        "look_ahead_evaluations": r.look_ahead_evaluations,
         "t_final": r.t_final,
         "stopped_by": r.stopped_by,
         "failure": r.failure,
         "failure_reason": r.failure_reason,
         "pilot_rhs_evaluations": r.pilot_rhs_evaluations,
+        "tolerance_controls": tolerance_controls(r),
         "final": fin,
         "invariants": inv,
         "warnings": r.warnings,
@@ -382,6 +384,16 @@ fn summary_json(r: &RunReport, names: &[String], timing: Timing, interrupted: Op
     s
 }
 
+/// What the run's tolerance controlled: the method's sentence, or nothing
+/// when the user gave the fixed step.
+fn tolerance_controls(r: &RunReport) -> &'static str {
+    if r.step_given {
+        "nothing: the step was given (--dt)"
+    } else {
+        r.method.tolerance_controls()
+    }
+}
+
 fn summary_text(r: &RunReport, names: &[String], d: &Derivation, interrupted: Option<Interrupted>) -> String {
     let mut s = String::new();
     s.push_str(&format!("{}\n", d.model().name));
@@ -396,6 +408,7 @@ fn summary_text(r: &RunReport, names: &[String], d: &Derivation, interrupted: Op
         step,
         if r.form.name() == "lagrange" { "q'" } else { "p" }
     ));
+    s.push_str(&format!("tolerance controls {}\n", tolerance_controls(r)));
     // The Taylor method's work unit is one expansion of the series per step.
     let evaluations = if r.method == num::Method::Taylor {
         format!("Taylor expansions of order {}", num::taylor_order(r.rtol))
@@ -409,6 +422,8 @@ fn summary_text(r: &RunReport, names: &[String], d: &Derivation, interrupted: Op
         r.rhs_evaluations,
         if r.pilot_rhs_evaluations > 0 {
             format!(" (+{} choosing the step)", r.pilot_rhs_evaluations)
+        } else if r.look_ahead_evaluations > 0 {
+            format!(" (+{} right-hand sides looking ahead)", r.look_ahead_evaluations)
         } else {
             String::new()
         },

@@ -29,7 +29,7 @@ fn expect(args: &[&str], code: i32, needles: &[&str], absent: &[&str]) -> common
 fn a_stiff_oscillator_is_refused_before_the_run_with_the_estimate() {
     // k = m om² = 10^12: period 6.3e-6, 1.6 million of them in 10 time units.
     expect(
-        &["simulate", "examples/oscillator.toml", "--until", "10", "--set", "om=1e6"],
+        &["simulate", "examples/oscillator.toml", "--until", "10", "--set", "om=1e6", "--method", "kahanli8"],
         2,
         &[
             "kahanli8 would take 3.50e7 steps of 2.86e-7",
@@ -93,14 +93,21 @@ fn a_low_order_method_at_a_tight_tolerance_is_refused_before_the_run() {
 
 #[test]
 fn a_run_far_beyond_the_budget_is_refused_or_stopped_at_once() {
-    // Case 10: the default fixed step is refused before the run; an adaptive
-    // method stops at its first checkpoint, a 128th of the budget.
+    // Case 10: a fixed step is refused before the run; an adaptive method (the
+    // default's, or DOP853) stops at its first checkpoint, a 128th of the budget.
     expect(
-        &["simulate", "examples/pendulum.toml", "--until", "1e12"],
+        &["simulate", "examples/pendulum.toml", "--until", "1e12", "--method", "kahanli8"],
         2,
         &["kahanli8 would take", "to reach t = 1000000000000", "--until"],
         &[],
     );
+    let default = expect(
+        &["simulate", "examples/pendulum.toml", "--until", "1e12", "--summary", "json"],
+        1,
+        &["taylor stopped early", "(the period of an oscillation)"],
+        &["blew up"],
+    );
+    assert_eq!(default.json()["steps"], 10_000_000 / 128);
     let r = expect(
         &["simulate", "examples/pendulum.toml", "--until", "1e12", "--method", "dop853", "--summary", "json"],
         1,
@@ -132,9 +139,20 @@ fn stopped_at_the_bottom(extra: &[&str]) -> Value {
 fn a_stop_event_meets_the_tolerance_and_is_audited_like_every_row() {
     // Case 16: released at ph = 1 from rest, the pendulum (g = 9.81, l = 1)
     // passes the bottom with ph'² = 2 g/l (1 − cos 1).
-    let out = TempFile::new("budget-event", "csv");
-    let summary = stopped_at_the_bottom(&["--out", out.path()]);
-    assert_eq!(summary["method"], "kahanli8");
+    // The default method, and a fixed-step one whose event falls between steps.
+    for method in ["taylor", "kahanli8"] {
+        let out = TempFile::new("budget-event", "csv");
+        let extra: &[&str] = if method == "taylor" { &[] } else { &["--method", method] };
+        let summary = stopped_at_the_bottom(&[extra, &["--out", out.path()]].concat());
+        assert_eq!(summary["method"], method);
+        stop_event_is_accurate(&summary, &out);
+    }
+}
+
+/// The pendulum's stop at the bottom of its swing: as accurate as the tolerance,
+/// audited, the CSV's last row.
+#[track_caller]
+fn stop_event_is_accurate(summary: &Value, out: &TempFile) {
     let speed = -(2.0 * 9.81 * (1.0 - 1f64.cos())).sqrt();
     close(summary["final"]["ph'"].as_f64().unwrap(), speed, 1e-9);
     assert!(summary["final"]["ph"].as_f64().unwrap().abs() < 1e-12, "{summary}");

@@ -94,12 +94,12 @@ fn harmonic_oscillator_follows_the_cosine() {
     assert_eq!(csv.header, ["t", "x", "x'", "H"]);
     assert_eq!(csv.rows.len(), 1001, "default: 1001 evenly spaced rows");
     // 1e-8: amplitude ~1.2, ~6 periods at rtol 1e-10 (the default method is
-    // the 8th-order Kahan-Li composition, its step chosen from rtol).
+    // the adaptive Taylor method).
     assert_close_rows(&csv, "x", 1e-8, |t| a * (om * t).cos() + v0 / om * (om * t).sin());
     assert_close_rows(&csv, "x'", 2e-8, |t| -a * om * (om * t).sin() + v0 * (om * t).cos());
     // H = m/2 (x'^2 + om^2 x^2) = 3/2 (0.36 + 4) in every row (8 digits of rtol 1e-10).
     assert_close_rows(&csv, "H", 1e-8, |_| 1.5 * (v0 * v0 + om * om * a * a));
-    assert_eq!(summary["method"], "kahanli8", "H conserved and separable: the 8th-order composition");
+    assert_eq!(summary["method"], "taylor", "unconstrained and analytic: the Taylor method");
     assert!(num(&summary["t_final"], "t_final") == 20.0);
 }
 
@@ -110,10 +110,10 @@ fn damped_oscillator_is_underdamped_closed_form() {
     let (summary, csv) = simulate("examples/damped_oscillator.toml", &["--until", "30", "--rtol", "1e-10"]);
     let g: f64 = 0.1 / 2.0;
     let w = (1.0 - g * g).sqrt();
-    // 1e-8 absolute: x decays from 1 to ~0.2 over ~5 periods; dop853 at rtol 1e-10.
+    // 1e-8 absolute: x decays from 1 to ~0.2 over ~5 periods; the Taylor method at rtol 1e-10.
     assert_close_rows(&csv, "x", 1e-8, |t| (-g * t).exp() * ((w * t).cos() + g / w * (w * t).sin()));
     assert_close_rows(&csv, "x'", 1e-8, |t| -(-g * t).exp() * (1.0 + g * g / (w * w)) * w * (w * t).sin());
-    assert_eq!(summary["method"], "dop853", "H is not conserved: the general-purpose method");
+    assert_eq!(summary["method"], "taylor", "dissipation is analytic: the Taylor method");
     // H = T + U decays monotonically (dH/dt = -be x'^2 <= 0), and the audit says it is not conserved.
     let h = csv.column("H");
     assert!(h.windows(2).all(|w| w[1] <= w[0] + 1e-12), "H increases somewhere");
@@ -260,9 +260,9 @@ fn kepler_conservation_audit() {
         let a = &inv[name];
         assert_eq!(a["conserved"], true, "{name}: {a}");
         assert!((num(&a["initial"], "initial") - initial).abs() < 1e-15, "{name}: {a}");
-        // Default rtol 1e-9; the symplectic default keeps H to ~1e-10 and p_th
-        // (a quadratic invariant of Gauss methods, linear in p) to round-off.
-        let limit = if name == "H" { 1e-8 } else { 1e-13 };
+        // Default rtol 1e-9: the Taylor method keeps both to ~1e-10 over ~6
+        // periods (Gauss–Legendre would keep p_th, linear in p, to round-off).
+        let limit = 1e-8;
         assert!(num(&a["max_rel_drift"], "max_rel_drift") < limit, "{name}: {a}");
         assert!(num(&a["max_abs_drift"], "max_abs_drift") < limit, "{name}: {a}");
     }
@@ -615,4 +615,15 @@ fn singular_mass_matrix_midrun_2d_default_method() {
 #[test]
 fn singular_mass_matrix_midrun_2d_dop853() {
     singular_mass_matrix_is_reported("crates/cli/tests/bad_simulate/singular_midrun_2d.toml", &["--method", "dop853"]);
+}
+
+/// Gauss–Legendre, chosen by name, keeps Kepler's p_th (linear in p, so a
+/// quadratic invariant of the method) to round-off, and H to its tolerance.
+#[test]
+fn kepler_under_gauss_legendre_keeps_p_th_to_round_off() {
+    let (summary, _) = simulate("examples/kepler.toml", &["--until", "100", "--method", "gauss6"]);
+    assert_eq!(summary["method"], "gauss6");
+    assert_eq!(summary["form"], "hamilton");
+    assert!(num(&summary["invariants"]["p_th"]["max_rel_drift"], "p_th drift") < 1e-13, "{summary}");
+    assert!(num(&summary["invariants"]["H"]["max_rel_drift"], "H drift") < 1e-8, "{summary}");
 }

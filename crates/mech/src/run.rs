@@ -227,6 +227,8 @@ pub struct RunReport {
     pub form: Form,
     /// The fixed step used, for fixed-step methods.
     pub dt: Option<f64>,
+    /// Whether that step was given (`RunConfig::dt`) rather than chosen from the tolerance.
+    pub step_given: bool,
     /// Tolerances.
     pub rtol: f64,
     /// Absolute tolerance.
@@ -237,6 +239,8 @@ pub struct RunReport {
     pub rejected: usize,
     /// Right-hand-side evaluations.
     pub rhs_evaluations: usize,
+    /// Right-hand-side evaluations of the Taylor method's look-ahead.
+    pub look_ahead_evaluations: usize,
     /// Time reached.
     pub t_final: f64,
     /// Coordinates at the end.
@@ -413,15 +417,29 @@ fn failed(mut report: RunReport, reason: RunFailure, message: String) -> RunErro
 }
 
 /// The default method and the form it integrates, or the form a requested method needs.
+///
+/// The default (no `requested` method) is the adaptive Taylor method when the
+/// equations are analytic: it bounds every step's error like DOP853, takes no
+/// rejected steps, and at the tolerances people ask for it is the fastest of
+/// our methods and drifts least in H on every bench system (the guide's
+/// methods and performance chapters give the measurements). A kink in the
+/// equations (`abs`) is invisible to a Taylor series, so there DOP853, whose
+/// error estimate sees it. A fixed step (`fixed_step`: `--dt` without a
+/// method) asks for a fixed-step method: the 8th-order composition when H is
+/// separable and conserved, Gauss–Legendre otherwise. Models with constraints
+/// choose in [`constrained`].
 pub fn choose_method(
     d: &Derivation,
     dynamics: &Dynamics,
     requested: Option<Method>,
+    fixed_step: bool,
 ) -> Result<(Method, Form), ModelError> {
     let conserved = d.hamiltonian_conserved;
     Ok(match requested {
-        None if conserved && dynamics.is_separable() => (Method::KahanLi8, Form::Separable),
-        None if conserved && dynamics.has_hamilton_form() => (Method::Gauss6, Form::Hamilton),
+        None if fixed_step && conserved && dynamics.is_separable() => (Method::KahanLi8, Form::Separable),
+        None if fixed_step && dynamics.has_hamilton_form() => (Method::Gauss6, Form::Hamilton),
+        None if fixed_step => (Method::Gauss6, Form::Lagrange),
+        None if dynamics.is_analytic() => (Method::Taylor, Form::Lagrange),
         None => (Method::Dop853, Form::Lagrange),
         Some(m) if m.needs_separable() => {
             if !dynamics.is_separable() {
@@ -642,16 +660,24 @@ fn drive(
     let explained = if config.dt.is_some() { 1e-2 } else { (1e3 * config.rtol).max(1e-12) };
     let mut warnings = audit::drift_warnings(&audits, explained);
     stepping.warnings(&mut warnings);
+    if method == Method::Taylor && !dynamics.is_analytic() {
+        warnings.push(
+            "the equations contain abs(), whose kink a Taylor series does not see: a step across it is not error-controlled (dop853 is the default for such models)"
+                .into(),
+        );
+    }
     let (t_last, final_q, final_qd) = last;
     let mut report = RunReport {
         method,
         form,
         dt,
+        step_given: config.dt.is_some(),
         rtol: config.rtol,
         atol: config.atol,
         steps: stats.steps,
         rejected: stats.rejected,
         rhs_evaluations: stats.rhs_evaluations,
+        look_ahead_evaluations: stats.look_ahead_evaluations,
         t_final: t_last,
         final_q,
         final_qd,

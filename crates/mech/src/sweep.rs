@@ -665,10 +665,11 @@ impl<'a> Sweep<'a> {
         }
         let dynamics = Dynamics::new(d);
         // Rigid bodies need the gimbal guard's events, which the lock-step batches
-        // do not check: DOP853 by default there.
-        let default = if d.model.bodies.is_empty() { Method::Taylor } else { Method::Dop853 };
+        // do not check, and equations with a kink (abs) that a Taylor series does
+        // not see: DOP853 by default there.
+        let default = if d.model.bodies.is_empty() && dynamics.is_analytic() { Method::Taylor } else { Method::Dop853 };
         let (method, form) =
-            choose_method(d, &dynamics, Some(config.method.unwrap_or(default))).map_err(SweepError::Model)?;
+            choose_method(d, &dynamics, Some(config.method.unwrap_or(default)), false).map_err(SweepError::Model)?;
         // Initial values from the model; a value neither in [initial] nor on an axis
         // is an error before anything runs.
         let base = initial_values(&d.model).map_err(SweepError::Model)?;

@@ -43,7 +43,8 @@ fn ran_out(d: &mech::Derivation, config: &RunConfig) -> (StepBudget, mech::RunRe
 fn a_fixed_step_beyond_the_budget_is_refused_before_the_run() {
     let d = derive(STIFF);
     let mut rows = 0;
-    let e = mech::simulate(&d, &RunConfig { until: 10.0, ..RunConfig::default() }, |_| {
+    let config = RunConfig { until: 10.0, method: Some(Method::KahanLi8), ..RunConfig::default() };
+    let e = mech::simulate(&d, &config, |_| {
         rows += 1;
         ControlFlow::Continue(())
     })
@@ -60,7 +61,7 @@ fn a_fixed_step_beyond_the_budget_is_refused_before_the_run() {
     assert_eq!(b.advice(), BudgetAdvice::ShorterRun);
     assert!((b.reach - b.step * 1e7).abs() < 1e-9 * b.reach);
     // A shorter run is run.
-    let short = RunConfig { until: 1e-3 * b.reach, ..RunConfig::default() };
+    let short = RunConfig { until: 1e-3 * b.reach, ..config };
     let report = mech::simulate(&d, &short, |_| ControlFlow::Continue(())).unwrap();
     assert_eq!(report.method, Method::KahanLi8);
 }
@@ -114,16 +115,19 @@ fn a_stop_event_is_as_accurate_as_the_steps_and_audited_like_every_row() {
         let config = RunConfig { until: 10.0, method, rtol, stop_when: vec![stop.clone()], ..RunConfig::default() };
         mech::simulate(&d, &config, |_| ControlFlow::Continue(())).unwrap()
     };
-    let report = run(None, 1e-9);
-    assert_eq!(report.method, Method::KahanLi8);
-    assert_eq!(report.stopped_by.as_deref(), Some("th < 0"));
-    let speed = -(2.0 * 9.81 / 1.5 * (1.0 - 1f64.cos())).sqrt();
-    assert!(report.final_q[0].abs() < 1e-12, "{}", report.final_q[0]);
-    assert!((report.final_qd[0] / speed - 1.0).abs() < 1e-9, "{} vs {speed}", report.final_qd[0]);
-    let h = &report.invariants[0];
-    assert!((h.final_value - h.initial).abs() < 1e-9 * h.initial.abs(), "{h:?}");
-    assert!(h.max_abs_drift >= (h.final_value - h.initial).abs(), "{h:?}");
-    // The time agrees with a run at a far tighter tolerance.
     let reference = run(Some(Method::Dop853), 1e-13);
-    assert!((report.t_final - reference.t_final).abs() < 1e-9, "{} vs {}", report.t_final, reference.t_final);
+    // The default (Taylor) and a fixed-step composition, whose event falls between steps.
+    for (method, expected) in [(None, Method::Taylor), (Some(Method::KahanLi8), Method::KahanLi8)] {
+        let report = run(method, 1e-9);
+        assert_eq!(report.method, expected);
+        assert_eq!(report.stopped_by.as_deref(), Some("th < 0"));
+        let speed = -(2.0 * 9.81 / 1.5 * (1.0 - 1f64.cos())).sqrt();
+        assert!(report.final_q[0].abs() < 1e-12, "{}", report.final_q[0]);
+        assert!((report.final_qd[0] / speed - 1.0).abs() < 1e-9, "{} vs {speed}", report.final_qd[0]);
+        let h = &report.invariants[0];
+        assert!((h.final_value - h.initial).abs() < 1e-9 * h.initial.abs(), "{h:?}");
+        assert!(h.max_abs_drift >= (h.final_value - h.initial).abs(), "{h:?}");
+        // The time agrees with a run at a far tighter tolerance.
+        assert!((report.t_final - reference.t_final).abs() < 1e-9, "{} vs {}", report.t_final, reference.t_final);
+    }
 }

@@ -44,11 +44,32 @@ pub enum Direction {
 /// The boxed event function of an [`Event`].
 type EventFn<'a> = Box<dyn FnMut(f64, &[f64]) -> f64 + 'a>;
 
+/// Probes per run for events in long steps, at least (see [`Event`]).
+pub const PROBES_PER_RUN: usize = 1000;
+
+impl Direction {
+    /// Whether the change of g from `ga` to `gb` is a crossing this direction counts.
+    fn counts(self, ga: f64, gb: f64) -> bool {
+        let rising = ga < 0.0 && gb >= 0.0;
+        let falling = ga > 0.0 && gb <= 0.0;
+        match self {
+            Direction::Rising => rising,
+            Direction::Falling => falling,
+            Direction::Both => rising || falling,
+        }
+    }
+}
+
 /// An event function `g(t, y)` whose zero crossings are located.
 ///
-/// At most one crossing per event and step is found (the one the sign change between
-/// the step's ends brackets); a step that crosses twice hides both, so bound the step
-/// (`Config::h_max`) when `g` oscillates faster than the solution.
+/// A step longer than the event grid's spacing (the spacing of the samples, and
+/// at most a thousandth of the run) is probed on that grid through its dense
+/// output, so that a step does not hide two crossings that the rows would show:
+/// the Taylor method's steps can span the whole run where the motion is a
+/// polynomial. Every crossing that a sign change between neighbouring probes
+/// brackets is found; two crossings closer together than the grid's spacing
+/// may still hide each other, so bound the step (`Config::h_max`) or ask for
+/// more samples when `g` changes faster.
 pub struct Event<'a> {
     g: EventFn<'a>,
     direction: Direction,
@@ -246,6 +267,14 @@ fn drive_lazily<V: Solver + ?Sized>(
             t0 + (t_end - t0) * (k as f64 / (n - 1) as f64)
         }
     };
+    // The grid on which long steps are probed for events (see [`Event`]).
+    let probe_spacing = (t_end - t0)
+        / match output {
+            Output::Samples(n) => (n - 1).max(PROBES_PER_RUN),
+            Output::EveryStep => PROBES_PER_RUN,
+        } as f64;
+    let mut probes: Vec<f64> = Vec::new();
+    let mut brackets: Vec<(f64, f64, f64, f64)> = Vec::new();
     let stopped = |flow: ControlFlow<()>| flow.is_break();
     if stopped(observer(&Observation { t: t0, y: solver.state(), kind })) {
         return Ok(Summary { t: t0, stop: StopReason::Observer, events: 0 });
@@ -279,17 +308,31 @@ fn drive_lazily<V: Solver + ?Sized>(
         }
         // Events in this step.
         found.clear();
+        probes.clear();
+        if !events.is_empty() && probe_spacing > 0.0 {
+            let first = ((t_a - t0) / probe_spacing).floor() as usize + 1;
+            probes.extend((first..).map(|j| t0 + j as f64 * probe_spacing).take_while(|&t| t < t_b));
+        }
         for (k, ev) in events.iter_mut().enumerate() {
             g_new[k] = eval_event(ev, k, t_b, solver.state())?;
-            let (ga, gb) = (g_prev[k], g_new[k]);
-            let rising = ga < 0.0 && gb >= 0.0;
-            let falling = ga > 0.0 && gb <= 0.0;
-            let counts = match ev.direction {
-                Direction::Rising => rising,
-                Direction::Falling => falling,
-                Direction::Both => rising || falling,
-            };
-            if counts {
+            // Every bracket [t_a, t_b] of neighbouring probes whose sign change counts.
+            brackets.clear();
+            let (mut t_a, mut ga) = (t_a, g_prev[k]);
+            for j in 0..=probes.len() {
+                let (t_p, g_p) = match probes.get(j) {
+                    Some(&t_p) => {
+                        solver.prepare_dense()?;
+                        solver.interpolate(t_p, &mut y)?;
+                        (t_p, eval_event(ev, k, t_p, &y)?)
+                    }
+                    None => (t_b, g_new[k]),
+                };
+                if ev.direction.counts(ga, g_p) {
+                    brackets.push((t_a, ga, t_p, g_p));
+                }
+                (t_a, ga) = (t_p, g_p);
+            }
+            for &(t_a, ga, t_b, gb) in &brackets {
                 solver.prepare_dense()?;
                 let tol = 4.0 * f64::EPSILON * t_a.abs().max(t_b.abs());
                 let mut root = brent(

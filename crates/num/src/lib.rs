@@ -80,7 +80,7 @@ pub use error::{LinalgError, NewtonError, QuadratureError, RhsError, SolveError}
 pub use gauss::Gauss;
 pub use integrate::{
     integrate, integrate_projected, integrate_to, Direction, Event, Observation, ObservationKind, Output, Projection,
-    StopReason, Summary, FORESIGHT_MARGIN,
+    StopReason, Summary, FORESIGHT_MARGIN, PROBES_PER_RUN,
 };
 pub use linalg::{LinearSolver, DEFAULT_PIVOT_RATIO};
 pub use method::Method;

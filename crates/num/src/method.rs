@@ -95,6 +95,27 @@ impl Method {
         }
     }
 
+    /// What `rtol` and `atol` control with this method, in one sentence.
+    ///
+    /// The adaptive methods bound each step's local error; the fixed-step
+    /// methods only take their step from the tolerance (the local error at the
+    /// start, and the drift of H over pilot runs where H is conserved), so the
+    /// tolerance bounds neither their trajectory's error nor, beyond the pilot
+    /// runs, H's drift: the audit at the end of a run measures the latter.
+    pub fn tolerance_controls(self) -> &'static str {
+        match self {
+            Method::Taylor => {
+                "each step's truncation error, per component (atol + rtol*|y_i|), estimated from the series' last two terms"
+            }
+            Method::Dopri5 | Method::Dop853 | Method::Radau5 => {
+                "each step's local error estimate, per component (atol + rtol*|y_i|); rejected steps are retried shorter"
+            }
+            _ => {
+                "the fixed step only: chosen so that the first step's local error meets it and, where H is conserved, so that H drifts by at most 10*rtol over pilot runs; not the trajectory's error"
+            }
+        }
+    }
+
     /// The classical order of accuracy (the Taylor method's at its default rtol of
     /// 1e-9; [`crate::taylor_order`] gives it for any tolerance).
     pub fn order(self) -> u32 {

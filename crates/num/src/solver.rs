@@ -35,6 +35,10 @@ pub struct Statistics {
     pub lu_decompositions: usize,
     /// Newton (or fixed-point) iterations of implicit methods.
     pub newton_iterations: usize,
+    /// Evaluations of the right-hand side by the Taylor method's look-ahead
+    /// ([`Config::look_ahead`]), not counted in `rhs_evaluations` (which counts
+    /// its expansions).
+    pub look_ahead_evaluations: usize,
 }
 
 /// The PI or standard step-size controller of the adaptive explicit methods.
@@ -71,6 +75,10 @@ pub struct Config {
     pub dt: Option<f64>,
     /// Step-size controller of the explicit adaptive methods.
     pub controller: Controller,
+    /// The Taylor method's look-ahead: a step longer than this is checked at
+    /// points this far apart against the equations themselves (see
+    /// [`crate::Taylor`]); `None` trusts the series' own step.
+    pub look_ahead: Option<f64>,
 }
 
 impl Default for Config {
@@ -83,6 +91,7 @@ impl Default for Config {
             h_max: None,
             dt: None,
             controller: Controller::Pi,
+            look_ahead: None,
         }
     }
 }

@@ -15,6 +15,13 @@
 //!   rtol 1e-10).
 //! - Dense output for free: the step's polynomial is exact to the same order
 //!   anywhere inside the step.
+//! - A look-ahead where the series cannot see ahead ([`Config::look_ahead`]):
+//!   the last two coefficients measure the motion at the step's start, and a
+//!   feature ahead that leaves them ~0 there (a narrow barrier whose force is
+//!   still e^{-100}) would be stepped over. A step longer than the look-ahead
+//!   spacing is checked at points that far apart: the equations' rate at the
+//!   series' state must match the series' derivative to what truncation
+//!   explains, or the step ends at the last point that did.
 //!
 //! The cost of a step is one Taylor expansion, `O(p²)` for each nonlinear
 //! operation of the right-hand side, but transcendental functions are
@@ -86,6 +93,10 @@ pub struct Taylor<S> {
     state: SolverState,
     /// The expansion at the start of the last step, order-major.
     series: Vec<f64>,
+    /// The spacing of the look-ahead checks, if any.
+    look_ahead: Option<f64>,
+    /// Scratch of the look-ahead: state, the series' rate, the equations' rate.
+    probe: [Vec<f64>; 3],
 }
 
 impl<S: OdeSystem> Taylor<S> {
@@ -111,6 +122,8 @@ impl<S: OdeSystem> Taylor<S> {
             h_max: config.h_max.unwrap_or(f64::INFINITY),
             state: SolverState::new(t0, y0, 0.0, stats, config),
             series,
+            look_ahead: config.look_ahead.filter(|&d| d.is_finite() && d > 0.0),
+            probe: [vec![0.0; n], vec![0.0; n], vec![0.0; n]],
         })
     }
 
@@ -122,6 +135,48 @@ impl<S: OdeSystem> Taylor<S> {
     /// The system, e.g. to read counters it keeps.
     pub fn system(&self) -> &S {
         &self.system
+    }
+
+    /// The step `h` from `t`, or the part of it that the look-ahead confirms:
+    /// at `t + j·spacing` inside the step, the equations' rate F(t, y(θ)) must
+    /// match the series' derivative y'(θ) to within what truncation explains,
+    /// `10·p·(atol + rtol·|y_i|)/θ` (the derivative of a remainder of size
+    /// `atol + rtol·|y_i|` at θ), or the step ends at the last point that did
+    /// (or half-way to the first point, where the next expansion sees more).
+    fn look_ahead(&mut self, t: f64, h: f64) -> Option<f64> {
+        let spacing = self.look_ahead.filter(|&d| h > d)?;
+        let n = self.state.y.len();
+        let p = self.order;
+        let [y, rate, f] = &mut self.probe;
+        let mut theta = spacing;
+        while theta < h {
+            // y(θ) and y'(θ) by Horner's rule.
+            y.copy_from_slice(&self.series[p * n..]);
+            rate.iter_mut().zip(&self.series[p * n..]).for_each(|(r, c)| *r = p as f64 * c);
+            for k in (0..p).rev() {
+                let row = &self.series[k * n..(k + 1) * n];
+                for i in 0..n {
+                    if k > 0 {
+                        rate[i] = rate[i] * theta + k as f64 * row[i];
+                    }
+                    y[i] = y[i] * theta + row[i];
+                }
+            }
+            self.state.stats.look_ahead_evaluations += 1;
+            // Equations that cannot be evaluated there (a singular mass matrix
+            // ahead) confirm nothing either: the events and the next
+            // expansions meet what is there.
+            let confirmed = self.system.rhs(t + theta, y, f).is_ok() && {
+                let bound = |i: usize| 10.0 * p as f64 * (self.atol + self.rtol * y[i].abs()) / theta;
+                // A NaN defect fails too.
+                (0..n).all(|i| (f[i] - rate[i]).abs() <= bound(i))
+            };
+            if !confirmed {
+                return Some(if theta > spacing { theta - spacing } else { 0.5 * theta });
+            }
+            theta += spacing;
+        }
+        None
     }
 
     /// Σ_k series[k] θ^k by Horner's rule.
@@ -168,8 +223,11 @@ impl<S: OdeSystem> Solver for Taylor<S> {
             taylor_ratio(&self.series[(p - 1) * n..p * n], &self.state.y, floor),
             taylor_ratio(&self.series[p * n..], &self.state.y, floor),
         );
-        let (h, reaches_stop) =
+        let (mut h, mut reaches_stop) =
             taylor_advance(h, t, self.h_max, self.state.stop).map_err(|h| SolveError::StepSizeTooSmall { t, h })?;
+        if let Some(shorter) = self.look_ahead(t, h) {
+            (h, reaches_stop) = (shorter, false);
+        }
         let mut y_new = std::mem::take(&mut self.state.y);
         self.sum(h, &mut y_new);
         self.state.y = y_new;

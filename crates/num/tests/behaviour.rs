@@ -446,3 +446,51 @@ fn stop_time_is_exact() {
         assert!((y[0] - 2.5f64.cos()).abs() < 0.05, "{method}: {y:?}");
     }
 }
+
+/// Free fall `x'' = -1`, `y = [x, v]`: its Taylor series ends at order 2, so
+/// the Taylor method's step spans the whole run.
+struct FreeFall;
+
+impl OdeSystem for FreeFall {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), RhsError> {
+        dy[0] = y[1];
+        dy[1] = -1.0;
+        Ok(())
+    }
+    fn taylor_series(&mut self, _t: f64, y: &[f64], order: usize, s: &mut [f64]) -> Option<Result<(), RhsError>> {
+        s.fill(0.0);
+        s[..2].copy_from_slice(y);
+        if order >= 1 {
+            s[2] = y[1];
+            s[3] = -1.0;
+        }
+        if order >= 2 {
+            s[4] = -0.5;
+        }
+        Some(Ok(()))
+    }
+}
+
+/// A ball thrown up passes a height twice within one Taylor step: both
+/// crossings are found, in order, at their exact times 1 ∓ 1/√2.
+#[test]
+fn two_crossings_in_one_long_step_are_both_found() {
+    let config = Config { rtol: 1e-10, atol: 1e-10, ..Config::default() };
+    let mut s = Method::Taylor.build(FreeFall, 0.0, &[0.0, 1.0], &config).unwrap();
+    let mut events = [Event::new(|_, y: &[f64]| y[0] - 0.25)];
+    let mut crossings = Vec::new();
+    let sum = integrate(&mut s, 4.0, Output::Samples(5), &mut events, |o| {
+        if let ObservationKind::Event { .. } = o.kind {
+            crossings.push(o.t);
+        }
+        ControlFlow::Continue(())
+    })
+    .unwrap();
+    assert!(s.statistics().steps <= 2, "the run is one long step: {:?}", s.statistics());
+    assert_eq!(sum.events, 2, "{crossings:?}");
+    let r = 0.5f64.sqrt();
+    assert!((crossings[0] - (1.0 - r)).abs() < 1e-12 && (crossings[1] - (1.0 + r)).abs() < 1e-12, "{crossings:?}");
+}

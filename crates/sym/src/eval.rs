@@ -278,6 +278,13 @@ impl Tape {
         self.ops.is_empty()
     }
 
+    /// Whether every instruction is analytic where it is defined: no `abs`,
+    /// whose kink a Taylor series cannot see coming (a series of `|u|` is the
+    /// series of `±u` and stays so across u = 0).
+    pub fn is_analytic(&self) -> bool {
+        !self.ops.iter().any(|op| matches!(op, Op::Func(Func::Abs, _)))
+    }
+
     /// The instructions, in order: instruction `i` writes slot `i`, and its
     /// operands are earlier slots; `Input(k)` has `k < n_inputs`.
     pub(crate) fn ops(&self) -> &[Op] {

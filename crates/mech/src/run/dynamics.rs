@@ -276,6 +276,12 @@ impl Dynamics {
         self.separable
     }
 
+    /// True when the equations of motion are analytic where defined (no `abs`):
+    /// a Taylor series of the motion then describes it up to its radius.
+    pub fn is_analytic(&self) -> bool {
+        self.mass_forcing_tape.is_analytic()
+    }
+
     /// True when Hamilton's form is available (L quadratic in the velocities).
     pub fn has_hamilton_form(&self) -> bool {
         self.quadratic && self.hamilton.is_some()
