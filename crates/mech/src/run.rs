@@ -642,6 +642,7 @@ fn drive(
     let explained = if config.dt.is_some() { 1e-2 } else { (1e3 * config.rtol).max(1e-12) };
     let mut warnings = audit::drift_warnings(&audits, explained);
     stepping.warnings(&mut warnings);
+    warnings.extend(solver.subdivisions().map(|s| s.to_string()));
     let (t_last, final_q, final_qd) = last;
     let mut report = RunReport {
         method,
