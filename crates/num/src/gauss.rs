@@ -136,8 +136,10 @@ struct Pending {
     /// Whether `end` is the stop time.
     reached: bool,
     done: u64,
-    /// Whether any sub-step of it was shorter than the whole.
+    /// Whether any sub-step of it was shorter than the whole, and whether it was
+    /// counted in [`Subdivisions::steps`].
     subdivided: bool,
+    counted: bool,
 }
 
 /// A Gauss–Legendre collocation solver; see the module documentation.
@@ -532,7 +534,7 @@ impl<S: OdeSystem> Solver for Gauss<S> {
             None => {
                 let (end, reached) = self.clock.next(self.state.h, self.state.stop);
                 self.level = self.level.saturating_sub(1);
-                Pending { start: self.state.t, end, reached, done: 0, subdivided: self.level > 0 }
+                Pending { start: self.state.t, end, reached, done: 0, subdivided: self.level > 0, counted: false }
             }
         };
         let (t, t_next) = loop {
@@ -570,9 +572,12 @@ impl<S: OdeSystem> Solver for Gauss<S> {
         p.done += 1;
         if p.subdivided {
             let sub = t_next - t;
-            match &mut self.subdivisions {
-                Some(d) => d.shortest = d.shortest.min(sub),
-                None => self.subdivisions = Some(Subdivisions { steps: 0, first_t: p.start, shortest: sub }),
+            let d = self.subdivisions.get_or_insert(Subdivisions { steps: 0, first_t: p.start, shortest: sub });
+            d.shortest = d.shortest.min(sub);
+            // Counted at its first sub-step, so that a run failing inside it counts it.
+            if !p.counted {
+                d.steps += 1;
+                p.counted = true;
             }
         }
         if p.done < 1u64 << self.level {
@@ -581,11 +586,6 @@ impl<S: OdeSystem> Solver for Gauss<S> {
             return Ok(StepOutcome::Stepped);
         }
         self.pending = None;
-        if p.subdivided {
-            if let Some(d) = &mut self.subdivisions {
-                d.steps += 1;
-            }
-        }
         if p.reached {
             // The stop time this grid step was cut to, even if it was moved since.
             self.state.stop = Some(p.end);
