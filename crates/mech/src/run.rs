@@ -666,6 +666,7 @@ fn drive(
                 .into(),
         );
     }
+    warnings.extend(solver.subdivisions().map(|s| s.to_string()));
     let (t_last, final_q, final_qd) = last;
     let mut report = RunReport {
         method,

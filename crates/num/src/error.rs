@@ -167,6 +167,17 @@ pub enum SolveError {
         /// The step size.
         h: f64,
     },
+    /// A step of a fixed-step implicit method whose stages did not converge even as
+    /// many short sub-steps: the motion there is too fast for a fixed step.
+    #[error("stage equations did not converge at t = {t}, not even with the step {h:e} cut into {sub_steps} sub-steps; the motion is too fast here for a fixed step: use an adaptive method")]
+    SubStepsFailed {
+        /// Start of the failing sub-step.
+        t: f64,
+        /// The fixed step.
+        h: f64,
+        /// How many sub-steps it was cut into.
+        sub_steps: usize,
+    },
     /// A linear solve inside the solver failed.
     #[error("linear algebra failed at t = {t}: {source}")]
     Linalg {

@@ -77,7 +77,7 @@ pub use composition::{Composition, Scheme};
 pub use dop853::Dop853;
 pub use dopri5::Dopri5;
 pub use error::{LinalgError, NewtonError, QuadratureError, RhsError, SolveError};
-pub use gauss::Gauss;
+pub use gauss::{Gauss, Subdivisions};
 pub use integrate::{
     integrate, integrate_projected, integrate_to, Direction, Event, Observation, ObservationKind, Output, Projection,
     StopReason, Summary, FORESIGHT_MARGIN, PROBES_PER_RUN,

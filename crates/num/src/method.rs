@@ -168,7 +168,7 @@ impl Method {
             let dt = select_step(
                 |h, steps, out| {
                     let cfg = Config { dt: Some(h), ..config };
-                    run_fixed(Gauss::new(&mut system, self, t0, y0, &cfg), steps, out)
+                    run_fixed(Gauss::new(&mut system, self, t0, y0, &cfg).map(Gauss::without_sub_steps), steps, out)
                 },
                 self.order(),
                 y0,

@@ -5,6 +5,7 @@
 //! norms, Hermite dense output, the fixed-step clock).
 
 use crate::error::SolveError;
+use crate::gauss::Subdivisions;
 use crate::method::Method;
 use crate::system::first_non_finite;
 
@@ -290,6 +291,11 @@ pub trait Solver {
         let _ = (t, out);
         None
     }
+    /// The steps of a fixed-step method taken as shorter sub-steps so far (see
+    /// [`crate::Gauss`]), if any; `None` for the other methods.
+    fn subdivisions(&self) -> Option<Subdivisions> {
+        None
+    }
 }
 
 impl<S: Solver + ?Sized> Solver for Box<S> {
@@ -337,6 +343,9 @@ impl<S: Solver + ?Sized> Solver for Box<S> {
     }
     fn restep(&mut self, t: f64, out: &mut [f64]) -> Option<Result<(), SolveError>> {
         (**self).restep(t, out)
+    }
+    fn subdivisions(&self) -> Option<Subdivisions> {
+        (**self).subdivisions()
     }
 }
 

@@ -20,6 +20,18 @@ pub(crate) struct Plain {
     names: Vec<String>,
     form: Form,
     n: usize,
+    promise: Option<Promise>,
+}
+
+/// What the pilot runs promised of the drift of H, and the run's drift so far.
+struct Promise {
+    /// The relative drift the pilots found the step to meet.
+    bound: f64,
+    /// Beyond this the audit warns on its own (the drift the tolerance explains).
+    explained: f64,
+    /// H at the first row.
+    h0: Option<f64>,
+    drift: f64,
 }
 
 impl Plain {
@@ -62,6 +74,8 @@ impl Plain {
         let mut solver = build(system.clone(), &solver_config).map_err(input_error)?;
         let mut dt = None;
         let mut pilot_rhs = 0;
+        // The drift of H the pilot runs found the step to meet, if they did.
+        let mut promise = None;
         if !method.is_adaptive() {
             // A fixed step chosen from the tolerance at the start may be too long
             // later in the run (a pendulum released from rest speeds up): pilot
@@ -89,6 +103,7 @@ impl Plain {
             refuse_beyond_budget(h)?;
             if config.dt.is_none() && d.hamiltonian_conserved() {
                 let target = 10.0 * config.rtol.max(1e-14);
+                let mut previous: Option<f64> = None;
                 for _ in 0..4 {
                     let cfg = Config { dt: Some(h), ..solver_config };
                     let pilot = build(system.clone(), &cfg).map_err(input_error)?;
@@ -97,8 +112,17 @@ impl Plain {
                     pilot_rhs += evaluations;
                     let Some(drift) = drift else { break };
                     if drift <= target {
+                        promise = Some(target);
                         break;
                     }
+                    // A drift that did not fall with the step is not the step's (H
+                    // small beside the kinetic and potential energies of a motion
+                    // that runs away, whose every method loses digits of H): a
+                    // shorter step would only cost more.
+                    if previous.is_some_and(|p| drift > 0.5 * p) {
+                        break;
+                    }
+                    previous = Some(drift);
                     h *= (0.9 * (target / drift).powf(1.0 / f64::from(method.order()))).clamp(0.05, 0.9);
                     refuse_beyond_budget(h)?;
                 }
@@ -112,7 +136,9 @@ impl Plain {
             solver = build(system.clone(), &cfg).map_err(input_error)?;
             dt = Some(h);
         }
-        let plain = Plain { system: probe_system, names: dynamics.coordinate_names().to_vec(), form, n };
+        let explained = (1e3 * config.rtol).max(1e-12);
+        let promise = promise.map(|bound| Promise { bound, explained, h0: None, drift: 0.0 });
+        let plain = Plain { system: probe_system, names: dynamics.coordinate_names().to_vec(), form, n, promise };
         let initial = (q0.to_vec(), qd0.to_vec());
         Ok((plain, Start { solver, y0, initial, method, form, dt, pilot_rhs_evaluations: pilot_rhs }))
     }
@@ -140,7 +166,26 @@ impl Stepping for Plain {
 
     fn row(&mut self, t: f64, y: &[f64], row: &mut RowBuffer) -> Result<(), RhsError> {
         row.q.copy_from_slice(&y[..self.n]);
-        self.system.invariants_at(t, y, &mut row.qd, &mut row.invariants)
+        self.system.invariants_at(t, y, &mut row.qd, &mut row.invariants)?;
+        if let (Some(p), Some(&h)) = (&mut self.promise, row.invariants.first()) {
+            let h0 = *p.h0.get_or_insert(h);
+            let d = (h - h0).abs() / h0.abs().max(f64::MIN_POSITIVE);
+            if d.is_finite() {
+                p.drift = p.drift.max(d);
+            }
+        }
+        Ok(())
+    }
+
+    fn warnings(&self, warnings: &mut Vec<String>) {
+        if let Some(p) = &self.promise {
+            if p.drift > p.bound && p.drift <= p.explained {
+                warnings.push(format!(
+                    "H drifted by {:.3e} (relative), more than the {:.1e} the pilot runs chose the step for: the motion after them needed a shorter step (give a smaller --dt, or a longer pilot with a shorter --until)",
+                    p.drift, p.bound
+                ));
+            }
+        }
     }
 
     fn describe(&mut self, e: &SolveError, y0: &[f64], at: (f64, Vec<f64>)) -> (RunFailure, String) {
