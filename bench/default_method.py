@@ -3,6 +3,7 @@
 
     python3 bench/default_method.py            # the full run (about 5-8 minutes on 2 cores)
     python3 bench/default_method.py --quick    # a few minutes: 3 repeats, t = 10^4, 16 bodies
+    python3 bench/default_method.py --report RUN.jsonl   # the tables of an earlier run again
 
 What it does, in order (every run is the whole `lagrange simulate` process, timed from
 outside as bench/simulate.py times it: time.perf_counter() around subprocess.run):
@@ -273,7 +274,7 @@ def systems_table(records: list[dict]) -> str:
         label = r["requested"] if r["requested"] != "default" else f"default ({r.get('method') or '?'})"
         if r.get("error"):
             lines.append(f"| {r['system']} | {label} | – | {'refused' if r.get('refused') else 'failed'}: "
-                         f"{short(r['error'])} | | | | |")
+                         f"{short(r['error'], 64)} | | | | |")
             continue
         if r.get("dt"):
             label += f", dt {r['dt']:.3g}"
@@ -415,7 +416,7 @@ def runaway_table(records: list[dict]) -> str:
             label += f", dt {r['dt']:.3g}"
         reached = r["t_final"] is not None and abs(r["t_final"] - 3.0) < 1e-12
         rel = f"{abs(r['u'] - ref) / abs(ref):.1e}" if reached and r["u"] is not None else "–"
-        stop = short(r["error"], 160) if r["error"] else ""
+        stop = short(r["error"], 100) if r["error"] else ""
         lines.append(f"| {label} | {r['exit']} | {fmt_opt(r['t_final'], '.6g')} | {fmt_opt(r['u'], '.8g')} | {rel} "
                      f"| {fmt_s(r['process_wall_s'])} | {stop} |")
     for s in scipy:
@@ -485,6 +486,12 @@ def random_body(rng: random.Random, index: int) -> tuple[str, dict]:
                   "offset": offset, "initial": initial}
 
 
+def stopped_early(t_final, ref_t: float, dt) -> bool:
+    """Whether a run ended before the reference did, by more than 10^-3 or two of its fixed
+    steps (a fixed-step run stops at the end of a step)."""
+    return t_final is not None and t_final < ref_t - max(1e-3, 2 * (dt or 0.0))
+
+
 def gimbal(run: dict) -> bool:
     text = ((run.get("summary") or {}).get("failure") or "") + (run.get("error") or "")
     return "sin" in text and ("β" in text or "be" in text or "Euler" in text)
@@ -532,7 +539,7 @@ def measure_bodies(binary: Path, count: int, until: float, seed: int, workdir: P
                 final_error = scaled_error([summary["final"][n] for n in names], ref_final, scale, RTOL)
             results[method] = {"method": summary.get("method"), "exit": run["exit"], "t_final": t_final,
                                "dt": summary.get("dt"), "gimbal": gimbal(run),
-                               "stopped_early": t_final is not None and t_final < ref_t - 1e-3,
+                               "stopped_early": stopped_early(t_final, ref_t, summary.get("dt")),
                                "h_drift": conserved_drifts(summary).get("H"), "final_error": final_error,
                                "wall_s": run["wall_s"], "error": run["error"]}
         record["runs"] = results
@@ -570,7 +577,9 @@ def bodies_table(records: list[dict]) -> str:
         final = [(r["runs"][method], r["index"]) for r in scored]
         chosen = sorted({run["method"] for run, _ in runs if run["method"]})
         label = method if method != "default" else f"default ({', '.join(chosen)})"
-        gimbal_early = sum(run["gimbal"] and run["stopped_early"] for run, _ in runs)
+        early = {i: stopped_early(run["t_final"], r["ref_t_final"], run["dt"])
+                 for r in bodies for run, i in [(r["runs"][method], r["index"])]}
+        gimbal_early = sum(run["gimbal"] and early[i] for run, i in runs)
         failed = sum(run["exit"] not in (0, None) and not run["gimbal"] for run, _ in runs)
         h_bad = sum(run["h_drift"] is not None and run["h_drift"] > 100 * RTOL for run, _ in runs)
         e_over = sum(run["final_error"] is not None and run["final_error"] > 1 for run, _ in final)
@@ -610,6 +619,28 @@ def median_of(values):
     return statistics.median(values) if values else None
 
 
+def report(records) -> str:
+    """The tables of a run's records, as the run printed them."""
+    records = list(records)
+    kinds = {r.get("record") for r in records}
+    machine = next((r for r in records if r.get("record") == "machine"), {})
+    text = [f"Started {machine.get('started', '?')} (`{machine.get('command', '?')}`).\n"]
+    if "run" in kinds:
+        text.append("## Per system, per method (t = 0..100, 1001-row CSV)\n\n" + systems_table(records))
+    long_records = [r for r in records if r.get("record") == "long"]
+    if long_records:
+        until = max(r["t_end"] for r in long_records)
+        text.append(f"## Long horizon (t = {until:g}, --samples 11)\n\n" + long_table(long_records, until))
+    runaway = [r for r in records if r.get("record") in ("runaway", "runaway_scipy")]
+    if runaway:
+        text.append("## Robustness: the runaway model to t = 3\n\n" + runaway_table(runaway))
+    bodies = [r for r in records if r.get("record") == "body"]
+    if bodies:
+        text.append(f"## Robustness: {len(bodies)} random rigid bodies to t = {bodies[0]['until']:g}\n\n"
+                    + bodies_table(bodies))
+    return "\n".join(text)
+
+
 # ------------------------------------------------------------------ main
 
 
@@ -630,6 +661,8 @@ def main(argv=None) -> int:
     parser.add_argument("--binary", type=Path, default=REPO / "target" / "release" / "lagrange")
     parser.add_argument("--no-build", action="store_true", help="never run cargo")
     parser.add_argument("--anchors", type=Path, default=DEFAULT_ANCHORS, help="folder of the anchors' requirements")
+    parser.add_argument("--report", type=Path, default=None,
+                        help="print the tables of an earlier run's JSON lines (its --out) and run nothing")
     parser.add_argument("--out", type=Path,
                         default=Path(os.environ.get("TMPDIR") or "/tmp") / "lagrange-default-method.jsonl")
     args = parser.parse_args(argv)
@@ -640,6 +673,9 @@ def main(argv=None) -> int:
     body_until = args.body_until or (5.0 if args.quick else 10.0)
     parts = set(p for p in args.parts.split(",") if p)
 
+    if args.report is not None:
+        print(report(json.loads(line) for line in args.report.read_text().splitlines() if line.strip()))
+        return 0
     if not derive_bench.ensure_binary(args.binary, build=not args.no_build):
         return 1
     started = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
