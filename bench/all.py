@@ -2,17 +2,20 @@
 """Every benchmark of `lagrange` against its anchors, in one run: `derive.py` (deriving
 the N-link pendulum and the spring chain, against SymPy and SymEngine), `simulate.py`
 (model file to first step, one right-hand side, whole runs against SciPy's DOP853 and
-heyoka, and the chaos map) and `sweep_memory.py` (peak memory of sweeps of 10^4 and 10^6
-runs against the 100 MB target), one after the other on the same machine, each printing
-its tables and writing its JSON lines.
+heyoka, and the chaos map), `default_method.py` (the default method against every other
+on six systems, the long horizon, and its robustness) and `sweep_memory.py` (peak memory
+of sweeps of 10^4 and 10^6 runs against the 100 MB target), one after the other on the
+same machine, each printing its tables and writing its JSON lines.
 
-    python3 bench/all.py            # derive.py's default sizes, then simulate.py, then sweep_memory.py
+    python3 bench/all.py            # derive.py's default sizes, then simulate.py,
+                                    # default_method.py and sweep_memory.py
     python3 bench/all.py --quick    # a few minutes: small derive sizes, simulate without
-                                    # the chaos map and with 3 repeats, sweeps up to 9*10^4 runs
+                                    # the chaos map and with 3 repeats, default_method.py
+                                    # --quick, sweeps up to 9*10^4 runs
 
 Further options go to every script unchanged only where all know them (`--no-install`,
 `--no-build`, `--binary`); each script has its own `--help`. Standard library only.
-Exits with the first non-zero exit code of the three (all always run).
+Exits with the first non-zero exit code of the four (all always run).
 """
 
 from __future__ import annotations
@@ -28,7 +31,8 @@ HERE = Path(__file__).resolve().parent
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true",
-                        help="small derive sizes; simulate with 3 repeats and no chaos map; sweeps up to 9*10^4 runs")
+                        help="small derive sizes; simulate with 3 repeats and no chaos map; default_method --quick; "
+                             "sweeps up to 9*10^4 runs")
     parser.add_argument("--no-install", action="store_true", help="never create or fill the anchors' venv")
     parser.add_argument("--no-build", action="store_true", help="never run cargo")
     parser.add_argument("--binary", default=None, help="the lagrange binary (default target/release/lagrange)")
@@ -40,9 +44,10 @@ def main(argv=None) -> int:
     derive = [sys.executable, str(HERE / "derive.py"), *shared] + (["--quick"] if args.quick else [])
     simulate = [sys.executable, str(HERE / "simulate.py"), *shared] + (
         ["--repeats", "3", "--ensemble-grid", "0"] if args.quick else ["--repeats", "7"])
+    default = [sys.executable, str(HERE / "default_method.py"), *shared] + (["--quick"] if args.quick else [])
     memory = [sys.executable, str(HERE / "sweep_memory.py"), *shared] + (["--sides", "100,300"] if args.quick else [])
     status = 0
-    for command in (derive, simulate, memory):
+    for command in (derive, simulate, default, memory):
         print(f"[all.py] {' '.join(command[1:])}", file=sys.stderr, flush=True)
         code = subprocess.run(command).returncode
         status = status or code
