@@ -29,7 +29,7 @@ outside as bench/simulate.py times it: time.perf_counter() around subprocess.run
    t = 100 (part 1) says it would take longer than --long-budget seconds is given 20 s at
    the whole horizon (the step budget refuses before integrating), then run to the
    largest power of ten that fits, and the table says so.
-3. **Robustness.** (a) bench/models/runaway.toml (the issue's runaway model) to t = 3
+3. **Robustness.** (a) crates/cli/tests/robust/cubic_runaway.toml (the issue's runaway model) to t = 3
    under the default and every method: t reached and u(3), against SciPy's DOP853 at
    rtol = atol = 1e-12 on the hand-written ODE (cross-checked at 1e-13), computed in the
    anchors' venv. (b) --bodies random rigid bodies (seeded): principal moments about
@@ -91,7 +91,7 @@ SYSTEMS = [
 ]
 METHODS = ["default", "taylor", "dop853", "dopri5", "gauss6", "gauss4", "kahanli8"]
 LONG_SYSTEMS = ["double_pendulum", "kepler", "heavy_top", "chain50"]
-RUNAWAY = "bench/models/runaway.toml"
+RUNAWAY = "crates/cli/tests/robust/cubic_runaway.toml"
 RUNAWAY_SCIPY_ISSUE = -714.25234
 
 
