@@ -12,10 +12,13 @@
 //! which a short run pays in full. For a linearly implicit second-order
 //! system `A y'' = b` ([`NativeTaylor::second_order`]) each order's function
 //! includes the coupling, so the functions run in turn make the whole
-//! expansion. The
-//! functions are compiled on two threads ([`compile_shared`]). The
-//! interpreter in `taylor.rs` stays the reference and the fallback; both
-//! agree to rounding (the same operations, summed in the same order).
+//! expansion. The functions are compiled on two threads ([`compile_shared`]),
+//! or, for one trajectory, on one thread in the background while the
+//! interpreter steps ([`crate::TaylorTape::compile_second_order_in_background`]).
+//! The interpreter in `taylor.rs` stays the reference and the fallback; both
+//! do the same operations in the same order, fusing the same multiply-adds
+//! where the host has FMA, so that they agree to the last bit and a run
+//! gives the same numbers whichever of the two computed each step.
 
 // Calling JIT-compiled code can only be done through a raw function pointer;
 // see `jit.rs` for the same pattern. Two unsafe blocks: the pointer casts in
@@ -23,7 +26,7 @@
 #![allow(unsafe_code)]
 
 use crate::expr::Func;
-use crate::jit::shared::{compile_shared, Part};
+use crate::jit::shared::{compile_here, compile_shared, Part};
 use crate::jit::{codegen, define_function, offset, unary, Codegen, Imports, JitError, ATAN2, POWF};
 use crate::taylor::{TaylorTape, T};
 use cranelift_codegen::ir::{condcodes::FloatCC, types, AbiParam, InstBuilder, MemFlagsData, Signature, Value};
@@ -31,6 +34,17 @@ use cranelift_frontend::FunctionBuilder;
 use cranelift_jit::JITModule;
 use cranelift_module::{FuncId, Linkage, Module};
 use std::sync::{Mutex, PoisonError};
+
+/// Where [`NativeTaylor::second_order`] compiles.
+pub(crate) enum Threads {
+    /// On the calling thread and one helper ([`compile_shared`]).
+    Two,
+    /// On the calling thread alone, while `wanted()` holds.
+    One {
+        /// Whether the code is still wanted (checked before each function).
+        wanted: Box<dyn Fn() -> bool + Send>,
+    },
+}
 
 /// `(coefficients, series)`: the tape's buffer, and the caller's order-major
 /// series of a second-order expansion (null for the tape's orders alone).
@@ -72,13 +86,14 @@ struct Emitter<'a, 'b, const L: usize> {
     series: Value,
     stride: usize,
     width: usize,
-    /// Whether the host fuses multiply-adds.
+    /// Whether the host fuses multiply-adds (the interpreter then fuses the
+    /// same ones).
     fma: bool,
 }
 
 /// Whether `fma` compiles to one instruction here (elsewhere cranelift would
 /// call a library routine).
-fn host_has_fma() -> bool {
+pub(crate) fn host_has_fma() -> bool {
     #[cfg(target_arch = "x86_64")]
     return std::arch::is_x86_feature_detected!("fma");
     #[cfg(target_arch = "aarch64")]
@@ -161,8 +176,8 @@ impl<const L: usize> Emitter<'_, '_, L> {
         Ok((s.expect("asked for"), c.expect("asked for")))
     }
 
-    /// `acc + x·y`, fused where the host has FMA (one rounding; the
-    /// interpreter rounds twice, within the tolerance the tests allow).
+    /// `acc + x·y`, fused where the host has FMA (one rounding, as the
+    /// interpreter's `madd`).
     fn mul_add(&mut self, x: Value, y: Value, acc: Value) -> Value {
         if self.fma {
             self.b.ins().fma(x, y, acc)
@@ -698,17 +713,20 @@ impl NativeTaylor {
     /// the coupling that yields the state's next order, one function per
     /// order, compiled on two threads ([`compile_shared`]: compiling costs
     /// more than a thousand steps of a small system).
+    ///
+    /// `threads` says where: [`Threads::Two`] on this thread and a helper,
+    /// [`Threads::One`] on this thread alone (a background thread), giving up
+    /// with an error as soon as its `wanted()` turns false.
     pub(crate) fn second_order<const L: usize>(
-        tape: &TaylorTape<L>,
-        layout: &SecondOrderLayout,
+        program: Vec<(u32, T)>,
+        order: usize,
+        layout: SecondOrderLayout,
         buffer_len: usize,
+        threads: Threads,
     ) -> Result<NativeTaylor, JitError> {
-        let order = tape.order();
-        let program = tape.program().to_vec();
         let series_len = (order + 1) * 2 * layout.n * L;
-        let layout = layout.clone();
         // Function i computes order p − 1 − i: the longest first.
-        let parts = compile_shared(order, Codegen::Quick, move |module, i| {
+        let define_order = move |module: &mut JITModule, i: usize| {
             let k = order - 1 - i;
             let sig = signature(module);
             define::<L>(module, &format!("expand{k}"), &sig, order, |e| {
@@ -718,7 +736,16 @@ impl NativeTaylor {
                 }
                 e.couple(&layout, k)
             })
-        })?;
+        };
+        let parts = match threads {
+            Threads::Two => compile_shared(order, Codegen::Quick, define_order)?,
+            Threads::One { wanted } => compile_here(order, Codegen::Quick, |module, i| {
+                if !wanted() {
+                    return Err(JitError::Codegen { message: "no longer wanted".into() });
+                }
+                define_order(module, i)
+            })?,
+        };
         Ok(NativeTaylor::assemble(parts, order, |i| order - 1 - i, buffer_len, series_len))
     }
 

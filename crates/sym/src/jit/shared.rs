@@ -123,6 +123,23 @@ where
     Ok(parts)
 }
 
+/// Compiles functions `0..count` as [`compile_shared`] does, on this thread
+/// alone (one that runs beside the thread waiting for the code).
+pub(crate) fn compile_here<D>(count: usize, codegen: Codegen, define: D) -> Result<Vec<Part>, JitError>
+where
+    D: Fn(&mut JITModule, usize) -> Result<FuncId, JitError>,
+{
+    let shared = Shared {
+        next: AtomicUsize::new(0),
+        helper: AtomicUsize::new(CLOSED),
+        slot: Mutex::new(None),
+        count,
+        codegen,
+        define,
+    };
+    Ok(work(&shared)?.into_iter().collect())
+}
+
 /// Takes and compiles functions until none is left; `None` if it took none.
 fn work<D>(shared: &Shared<D>) -> Result<Option<Part>, JitError>
 where
