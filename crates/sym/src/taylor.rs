@@ -951,8 +951,8 @@ impl<const L: usize> TaylorTape<L> {
                     T::Mul(a, b) => {
                         let (a, b) = (s(a), s(b));
                         let mut acc = [0.0; L];
-                        for j in 0..=k {
-                            madd::<F, L>(&mut acc, &c[a + j], &c[b + k - j]);
+                        for (x, y) in c[a..=a + k].iter().zip(c[b..=b + k].iter().rev()) {
+                            madd::<F, L>(&mut acc, x, y);
                         }
                         acc
                     }
@@ -1023,15 +1023,14 @@ impl<const L: usize> TaylorTape<L> {
                     }
                     T::Sin { du, cos, .. } => {
                         let (du, cs) = (s(du), s(cos));
-                        let sin = derived::<F, L>(c, du, cs, k);
-                        let cos = derived::<F, L>(c, du, w, k);
+                        let (sin, cos) = derived_pair::<F, L>(c, du, cs, w, k);
                         c[cs + k] = lanes(|l| -cos[l]);
                         sin
                     }
                     T::Sinh { du, cosh, .. } => {
                         let (du, ch) = (s(du), s(cosh));
-                        let sinh = derived::<F, L>(c, du, ch, k);
-                        c[ch + k] = derived::<F, L>(c, du, w, k);
+                        let (sinh, cosh) = derived_pair::<F, L>(c, du, ch, w, k);
+                        c[ch + k] = cosh;
                         sinh
                     }
                     T::Tan { du, aux, sign, .. } => {
@@ -1164,11 +1163,31 @@ fn order_zero<const L: usize>(c: &mut [Lanes<L>], op: T, stride: usize) -> Lanes
 #[inline(always)]
 fn derived<const F: bool, const L: usize>(c: &[Lanes<L>], du: usize, b: usize, k: usize) -> Lanes<L> {
     let mut acc = [0.0; L];
-    for j in 1..=k {
-        madd::<F, L>(&mut acc, &c[du + j], &c[b + k - j]);
+    for (d, x) in c[du + 1..=du + k].iter().zip(c[b..b + k].iter().rev()) {
+        madd::<F, L>(&mut acc, d, x);
     }
     let kf = k as f64;
     lanes(|l| acc[l] / kf)
+}
+
+/// [`derived`] for two slots `a` and `b` at once (sin and cos, sinh and
+/// cosh): the same sums, two independent chains in one loop.
+#[inline(always)]
+fn derived_pair<const F: bool, const L: usize>(
+    c: &[Lanes<L>],
+    du: usize,
+    a: usize,
+    b: usize,
+    k: usize,
+) -> (Lanes<L>, Lanes<L>) {
+    let (mut sa, mut sb) = ([0.0; L], [0.0; L]);
+    let terms = c[du + 1..=du + k].iter().zip(c[a..a + k].iter().rev()).zip(c[b..b + k].iter().rev());
+    for ((d, x), y) in terms {
+        madd::<F, L>(&mut sa, d, x);
+        madd::<F, L>(&mut sb, d, y);
+    }
+    let kf = k as f64;
+    (lanes(|l| sa[l] / kf), lanes(|l| sb[l] / kf))
 }
 
 /// `Σ_{j=lo..=hi} j a[j] b[k-j] / k` (the recurrence of `w' = a' b`).

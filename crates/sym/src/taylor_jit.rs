@@ -219,6 +219,21 @@ impl<const L: usize> Emitter<'_, '_, L> {
         Ok(self.b.ins().fdiv(acc, kf))
     }
 
+    /// [`derived`](Self::derived) for two slots `a` and `b` at once (sin
+    /// and cos): the same sums, each `du[j]` loaded once for both.
+    fn derived_pair(&mut self, du: u32, a: u32, b: u32, k: usize, lane: usize) -> Result<(Value, Value), JitError> {
+        let (mut sa, mut sb) = (self.c(0.0), self.c(0.0));
+        for j in 1..=k {
+            let d = self.ld(du, j, lane)?;
+            let x = self.ld(a, k - j, lane)?;
+            sa = self.mul_add(d, x, sa);
+            let y = self.ld(b, k - j, lane)?;
+            sb = self.mul_add(d, y, sb);
+        }
+        let kf = self.c(k as f64);
+        Ok((self.b.ins().fdiv(sa, kf), self.b.ins().fdiv(sb, kf)))
+    }
+
     /// `acc − Σ_{j ∈ js} a[j] · b[k−j]`.
     fn sub_sum(
         &mut self,
@@ -463,15 +478,13 @@ impl<const L: usize> Emitter<'_, '_, L> {
                 self.b.ins().fdiv(num, a0)
             }
             T::Sin { du, cos, .. } => {
-                let sin = self.derived(du, cos, k, lane)?;
-                let c = self.derived(du, w, k, lane)?;
+                let (sin, c) = self.derived_pair(du, cos, w, k, lane)?;
                 let c = self.b.ins().fneg(c);
                 self.st(cos, k, lane, c)?;
                 sin
             }
             T::Sinh { du, cosh, .. } => {
-                let sinh = self.derived(du, cosh, k, lane)?;
-                let c = self.derived(du, w, k, lane)?;
+                let (sinh, c) = self.derived_pair(du, cosh, w, k, lane)?;
                 self.st(cosh, k, lane, c)?;
                 sinh
             }
