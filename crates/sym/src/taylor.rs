@@ -31,8 +31,8 @@
 use crate::eval::{Op, Tape};
 use crate::expr::Func;
 use crate::jit::JitError;
-use crate::taylor_jit::{host_has_fma, NativeTaylor, SecondOrderLayout, Threads, NATIVE_MAX_WORK};
-use std::sync::{Arc, OnceLock, Weak};
+use crate::taylor_jit::{host_has_fma, NativeTaylor, SecondOrderLayout, NATIVE_MAX_WORK};
+use std::sync::{Arc, OnceLock};
 
 /// One coefficient of one slot on every lane.
 pub type Lanes<const L: usize> = [f64; L];
@@ -158,18 +158,6 @@ struct SecondOrder {
     native: Arc<NativeCell>,
     /// Whether a compilation was started (and will set `native`).
     compiling: bool,
-}
-
-/// Sets a compilation's cell when the compiling thread ends without having
-/// set it (a panic), so that [`TaylorTape::wait_for_native`] returns.
-struct Publish(Weak<NativeCell>);
-
-impl Drop for Publish {
-    fn drop(&mut self) {
-        if let Some(cell) = self.0.upgrade() {
-            let _ = cell.set(Err(JitError::Codegen { message: "the compiling thread stopped".into() }));
-        }
-    }
 }
 
 /// A linearly implicit second-order system of ODEs,
@@ -529,48 +517,44 @@ impl<const L: usize> TaylorTape<L> {
         }
         let (program, len) = (self.program.clone(), self.buffer_len());
         let s = self.second_order.as_mut().expect("set above");
-        let native = NativeTaylor::second_order::<L>(program, self.order, (*s.layout).clone(), len, Threads::Two)?;
+        let native = NativeTaylor::second_order::<L>(program, self.order, (*s.layout).clone(), len)?;
         let _ = s.native.set(Ok(native));
         s.compiling = true;
         Ok(true)
     }
 
     /// Compiles the second-order expansion prepared by
-    /// [`set_second_order`](Self::set_second_order) into native code on a
-    /// thread of its own, and returns at once: the expansions run
-    /// interpreted until the code is ready, then natively. With one lane the
-    /// two give the same numbers, bit for bit, so a run does not depend on
-    /// when the code became ready. The thread gives up when every clone of
-    /// this tape is gone. Returns false (nothing to wait for) when there is
-    /// no second-order expansion, its code would be too large, or no thread
-    /// could be started.
+    /// [`set_second_order`](Self::set_second_order) into native code on this
+    /// thread and a helper, and returns as soon as this thread has no function
+    /// left to take: the expansions run interpreted until the helper has
+    /// finished its last, then natively. With the same numbers, bit for bit,
+    /// so a run does not depend on when the code became ready. The helper
+    /// gives up when every clone of this tape is gone. Returns false (nothing
+    /// to wait for) when there is no second-order expansion or its code would
+    /// be too large.
     pub fn compile_second_order_in_background(&mut self) -> bool {
         if self.second_order.is_none() || self.second_order_too_large() {
             return false;
         }
         let (program, order, len) = (self.program.clone(), self.order, self.buffer_len());
         let s = self.second_order.as_mut().expect("checked above");
+        s.compiling = true;
         let layout = (*s.layout).clone();
         let cell = Arc::downgrade(&s.native);
-        let spawned = std::thread::Builder::new().name("lagrange-jit".into()).spawn(move || {
-            let publish = Publish(cell);
-            let wanted = publish.0.clone();
-            let threads = Threads::One { wanted: Box::new(move || wanted.strong_count() > 0) };
-            let result = NativeTaylor::second_order::<L>(program, order, layout, len, threads);
-            if let Some(cell) = publish.0.upgrade() {
-                let _ = cell.set(result);
-            }
-        });
-        match spawned {
-            Ok(_) => {
-                s.compiling = true;
-                true
-            }
-            Err(e) => {
-                let _ = s.native.set(Err(JitError::Codegen { message: format!("no thread to compile on: {e}") }));
-                false
-            }
-        }
+        let wanted = cell.clone();
+        NativeTaylor::second_order_then::<L>(
+            program,
+            order,
+            layout,
+            len,
+            move || wanted.strong_count() > 0,
+            move |result| {
+                if let Some(cell) = cell.upgrade() {
+                    let _ = cell.set(result);
+                }
+            },
+        );
+        true
     }
 
     /// Whether [`set_second_order`](Self::set_second_order) was called.

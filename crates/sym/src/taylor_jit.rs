@@ -12,9 +12,11 @@
 //! which a short run pays in full. For a linearly implicit second-order
 //! system `A y'' = b` ([`NativeTaylor::second_order`]) each order's function
 //! includes the coupling, so the functions run in turn make the whole
-//! expansion. The functions are compiled on two threads ([`compile_shared`]),
-//! or, for one trajectory, on one thread in the background while the
-//! interpreter steps ([`crate::TaylorTape::compile_second_order_in_background`]).
+//! expansion. The functions are compiled on two threads ([`compile_shared`]);
+//! for one trajectory the caller steps with the interpreter as soon as it
+//! has no function left to take, while the helper finishes its last
+//! ([`compile_shared_then`],
+//! [`crate::TaylorTape::compile_second_order_in_background`]).
 //! The interpreter in `taylor.rs` stays the reference and the fallback; both
 //! do the same operations in the same order, fusing the same multiply-adds
 //! where the host has FMA, so that they agree to the last bit and a run
@@ -26,7 +28,7 @@
 #![allow(unsafe_code)]
 
 use crate::expr::Func;
-use crate::jit::shared::{compile_here, compile_shared, Part};
+use crate::jit::shared::{compile_shared, compile_shared_then, Part};
 use crate::jit::{codegen, define_function, offset, unary, Codegen, Imports, JitError, ATAN2, POWF};
 use crate::taylor::{TaylorTape, T};
 use cranelift_codegen::ir::{condcodes::FloatCC, types, AbiParam, InstBuilder, MemFlagsData, Signature, Value};
@@ -34,17 +36,6 @@ use cranelift_frontend::FunctionBuilder;
 use cranelift_jit::JITModule;
 use cranelift_module::{FuncId, Linkage, Module};
 use std::sync::{Mutex, PoisonError};
-
-/// Where [`NativeTaylor::second_order`] compiles.
-pub(crate) enum Threads {
-    /// On the calling thread and one helper ([`compile_shared`]).
-    Two,
-    /// On the calling thread alone, while `wanted()` holds.
-    One {
-        /// Whether the code is still wanted (checked before each function).
-        wanted: Box<dyn Fn() -> bool + Send>,
-    },
-}
 
 /// `(coefficients, series)`: the tape's buffer, and the caller's order-major
 /// series of a second-order expansion (null for the tape's orders alone).
@@ -726,40 +717,37 @@ impl NativeTaylor {
     /// the coupling that yields the state's next order, one function per
     /// order, compiled on two threads ([`compile_shared`]: compiling costs
     /// more than a thousand steps of a small system).
-    ///
-    /// `threads` says where: [`Threads::Two`] on this thread and a helper,
-    /// [`Threads::One`] on this thread alone (a background thread), giving up
-    /// with an error as soon as its `wanted()` turns false.
+
     pub(crate) fn second_order<const L: usize>(
         program: Vec<(u32, T)>,
         order: usize,
         layout: SecondOrderLayout,
         buffer_len: usize,
-        threads: Threads,
     ) -> Result<NativeTaylor, JitError> {
         let series_len = (order + 1) * 2 * layout.n * L;
-        // Function i computes order p − 1 − i: the longest first.
-        let define_order = move |module: &mut JITModule, i: usize| {
-            let k = order - 1 - i;
-            let sig = signature(module);
-            define::<L>(module, &format!("expand{k}"), &sig, order, |e| {
-                e.orders(&program, k)?;
-                if k == 0 {
-                    e.invert(&layout)?;
-                }
-                e.couple(&layout, k)
-            })
-        };
-        let parts = match threads {
-            Threads::Two => compile_shared(order, Codegen::Quick, define_order)?,
-            Threads::One { wanted } => compile_here(order, Codegen::Quick, |module, i| {
-                if !wanted() {
-                    return Err(JitError::Codegen { message: "no longer wanted".into() });
-                }
-                define_order(module, i)
-            })?,
-        };
+        let parts =
+            compile_shared(order, Codegen::Quick, second_order_functions::<L>(program, order, layout, || true))?;
         Ok(NativeTaylor::assemble(parts, order, |i| order - 1 - i, buffer_len, series_len))
+    }
+
+    /// [`second_order`](Self::second_order) for a caller that steps on
+    /// meanwhile ([`compile_shared_then`]): returns when no function is left
+    /// for this thread to compile; `publish` gets the code (or the error)
+    /// from whichever thread finishes last. The helper gives up as soon as
+    /// `wanted()` turns false.
+    pub(crate) fn second_order_then<const L: usize>(
+        program: Vec<(u32, T)>,
+        order: usize,
+        layout: SecondOrderLayout,
+        buffer_len: usize,
+        wanted: impl Fn() -> bool + Send + Sync + 'static,
+        publish: impl FnOnce(Result<NativeTaylor, JitError>) + Send + 'static,
+    ) {
+        let series_len = (order + 1) * 2 * layout.n * L;
+        let define = second_order_functions::<L>(program, order, layout, wanted);
+        compile_shared_then(order, Codegen::Quick, define, move |parts| {
+            publish(parts.map(|parts| NativeTaylor::assemble(parts, order, |i| order - 1 - i, buffer_len, series_len)))
+        });
     }
 
     /// Compiles every order of `tape`, one function each, on two threads.
@@ -843,6 +831,30 @@ impl NativeTaylor {
             // borrowed.
             unsafe { f(coef.as_mut_ptr(), series.as_mut_ptr()) }
         }
+    }
+}
+
+/// Defines function `i` of a second-order expansion (order `p − 1 − i`: the
+/// longest first) with the coupling, while `wanted()` holds.
+fn second_order_functions<const L: usize>(
+    program: Vec<(u32, T)>,
+    order: usize,
+    layout: SecondOrderLayout,
+    wanted: impl Fn() -> bool + Send + Sync + 'static,
+) -> impl Fn(&mut JITModule, usize) -> Result<FuncId, JitError> + Send + Sync + 'static {
+    move |module, i| {
+        if !wanted() {
+            return Err(JitError::Codegen { message: "no longer wanted".into() });
+        }
+        let k = order - 1 - i;
+        let sig = signature(module);
+        define::<L>(module, &format!("expand{k}"), &sig, order, |e| {
+            e.orders(&program, k)?;
+            if k == 0 {
+                e.invert(&layout)?;
+            }
+            e.couple(&layout, k)
+        })
     }
 }
 
