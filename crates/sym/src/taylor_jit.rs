@@ -717,7 +717,6 @@ impl NativeTaylor {
     /// the coupling that yields the state's next order, one function per
     /// order, compiled on two threads ([`compile_shared`]: compiling costs
     /// more than a thousand steps of a small system).
-
     pub(crate) fn second_order<const L: usize>(
         program: Vec<(u32, T)>,
         order: usize,
