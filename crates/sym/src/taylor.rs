@@ -493,6 +493,14 @@ impl<const L: usize> TaylorTape<L> {
             Some(SecondOrder { layout: Arc::new(layout), native: Arc::new(OnceLock::new()), compiling: false });
     }
 
+    /// Undoes [`set_second_order`](Self::set_second_order): the tape is
+    /// computed order by order again.
+    pub fn clear_second_order(&mut self) {
+        if let Some(s) = self.second_order.take() {
+            self.coef.truncate(s.layout.second[0] as usize * (self.order + 1));
+        }
+    }
+
     /// Whether native code for the second-order expansion would be too large
     /// to pay for its compilation.
     fn second_order_too_large(&self) -> bool {
@@ -503,9 +511,9 @@ impl<const L: usize> TaylorTape<L> {
     /// [`set_second_order`](Self::set_second_order), then compiles the whole
     /// expansion into native code, each order's function with the coupling,
     /// so that the functions run in turn make the whole expansion (on this
-    /// thread and a helper). Returns `Ok(false)` (nothing compiled: the
-    /// expansion stays interpreted) when the code would be too large to pay
-    /// for its compilation.
+    /// thread and a helper). Returns `Ok(false)` when the code would be too
+    /// large to pay for its compilation; then, and on an error, the tape is
+    /// left as it was.
     ///
     /// # Panics
     ///
@@ -513,14 +521,22 @@ impl<const L: usize> TaylorTape<L> {
     pub fn compile_second_order(&mut self, system: &LinearSecondOrder<'_>) -> Result<bool, JitError> {
         self.set_second_order(system);
         if self.second_order_too_large() {
+            self.clear_second_order();
             return Ok(false);
         }
         let (program, len) = (self.program.clone(), self.buffer_len());
         let s = self.second_order.as_mut().expect("set above");
-        let native = NativeTaylor::second_order::<L>(program, self.order, (*s.layout).clone(), len)?;
-        let _ = s.native.set(Ok(native));
-        s.compiling = true;
-        Ok(true)
+        match NativeTaylor::second_order::<L>(program, self.order, (*s.layout).clone(), len) {
+            Ok(native) => {
+                let _ = s.native.set(Ok(native));
+                s.compiling = true;
+                Ok(true)
+            }
+            Err(e) => {
+                self.clear_second_order();
+                Err(e)
+            }
+        }
     }
 
     /// Compiles the second-order expansion prepared by

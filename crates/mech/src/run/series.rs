@@ -92,13 +92,16 @@ impl<const L: usize> LagrangeSeries<L> {
                 if !native {
                     tape.set_second_order(&system);
                 } else if L == 1 {
-                    // One trajectory: the interpreter steps while the code
-                    // compiles, with the same numbers (see `TaylorTape`).
+                    // One trajectory: the interpreter steps while the helper
+                    // finishes the code, with the same numbers (see `TaylorTape`).
                     tape.set_second_order(&system);
-                    tape.compile_second_order_in_background();
-                } else {
-                    // A batch runs long: compile first, on two threads.
-                    let _ = tape.compile_second_order(&system);
+                    if !tape.compile_second_order_in_background() {
+                        // Too large to compile whole: the tape's orders, as below.
+                        tape.clear_second_order();
+                        let _ = tape.compile_native();
+                    }
+                } else if !matches!(tape.compile_second_order(&system), Ok(true)) {
+                    let _ = tape.compile_native();
                 }
             }
             None if native => {
