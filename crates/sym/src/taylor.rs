@@ -18,8 +18,12 @@
 //!
 //! A linearly implicit second-order system `A(y, y', t) y'' = b(y, y', t)`
 //! whose `A` and `b` are the tape's outputs ([`LinearSecondOrder`]) expands
-//! whole in native code: [`TaylorTape::compile_second_order`], then
-//! [`TaylorTape::expand_second_order`] per expansion point.
+//! whole: [`TaylorTape::set_second_order`], then
+//! [`TaylorTape::expand_second_order`] per expansion point, interpreted until
+//! native code is compiled ([`TaylorTape::compile_second_order`], or
+//! [`TaylorTape::compile_second_order_in_background`] for one lane, which
+//! steps on meanwhile: for one lane both give the same numbers to the last
+//! bit, so it does not matter which computed a step).
 //!
 //! Every coefficient is an array of `L` lanes: `L` independent trajectories
 //! run in lock step, and the loops over lanes vectorize.
@@ -27,8 +31,8 @@
 use crate::eval::{Op, Tape};
 use crate::expr::Func;
 use crate::jit::JitError;
-use crate::taylor_jit::{NativeTaylor, SecondOrderLayout, NATIVE_MAX_WORK};
-use std::sync::Arc;
+use crate::taylor_jit::{host_has_fma, NativeTaylor, SecondOrderLayout, NATIVE_MAX_WORK};
+use std::sync::{Arc, OnceLock};
 
 /// One coefficient of one slot on every lane.
 pub type Lanes<const L: usize> = [f64; L];
@@ -132,9 +136,28 @@ pub struct TaylorTape<const L: usize> {
     constant: Vec<bool>,
     /// The orders as native code, shared by clones ([`TaylorTape::compile_native`]).
     native: Option<Arc<NativeTaylor>>,
-    /// The whole expansion of a linearly implicit second-order system as
-    /// native code ([`TaylorTape::compile_second_order`]).
-    second_order: Option<(SecondOrderLayout, Arc<NativeTaylor>)>,
+    /// The whole expansion of a linearly implicit second-order system
+    /// ([`TaylorTape::set_second_order`]).
+    second_order: Option<SecondOrder>,
+    /// Scratch of the interpreted second-order expansion: one order of `b`.
+    rhs: Vec<Lanes<L>>,
+    /// Whether the interpreter fuses the multiply-adds that native code
+    /// fuses (where the host has FMA), so that both give the same numbers.
+    fused: bool,
+}
+
+/// The native code of a second-order expansion, or why there is none; set
+/// once, by the compilation, and shared by the clones of a tape.
+type NativeCell = OnceLock<Result<NativeTaylor, JitError>>;
+
+/// The whole expansion of a second-order system: where its parts sit among
+/// the slots, and its native code once compiled.
+#[derive(Clone, Debug)]
+struct SecondOrder {
+    layout: Arc<SecondOrderLayout>,
+    native: Arc<NativeCell>,
+    /// Whether a compilation was started (and will set `native`).
+    compiling: bool,
 }
 
 /// A linearly implicit second-order system of ODEs,
@@ -407,26 +430,27 @@ impl<const L: usize> TaylorTape<L> {
             constant: b.constant,
             native: None,
             second_order: None,
+            rhs: Vec::new(),
+            fused: host_has_fma(),
         }
     }
 
-    /// Compiles the whole Taylor expansion of the linearly implicit
-    /// second-order system `system` ([`LinearSecondOrder`]: `A y'' = b` read off
-    /// this tape) into native code, run by
-    /// [`expand_second_order`](Self::expand_second_order).
+    /// Prepares the whole Taylor expansion of the linearly implicit
+    /// second-order system `system` ([`LinearSecondOrder`]: `A y'' = b` read
+    /// off this tape), run by [`expand_second_order`](Self::expand_second_order):
+    /// interpreted until native code is compiled
+    /// ([`compile_second_order`](Self::compile_second_order),
+    /// [`compile_second_order_in_background`](Self::compile_second_order_in_background)).
     ///
     /// The Cauchy product gives `A[0] y''[k] = b[k] − Σ_{j=1..k} A[j] y''[k−j]`
     /// at each order `k`, and `y[k+1] = y'[k]/(k+1)`, `y'[k+1] = y''[k]/(k+1)`;
-    /// `A[0]` is inverted once per expansion as `system.inverse` says, and each
-    /// order's function includes the coupling, so that the functions run in turn
-    /// make the whole expansion. Returns `Ok(false)` (nothing compiled) when the
-    /// code would be too large to pay for its compilation.
+    /// `A[0]` is inverted once per expansion as `system.inverse` says.
     ///
     /// # Panics
     ///
     /// When the tape's inputs and outputs are not those `system` describes, or
     /// `system.inverse` does not apply to it (see [`ClosedFormInverse`]).
-    pub fn compile_second_order(&mut self, system: &LinearSecondOrder<'_>) -> Result<bool, JitError> {
+    pub fn set_second_order(&mut self, system: &LinearSecondOrder<'_>) {
         let LinearSecondOrder { dim: n, entries, inverse } = *system;
         assert!(self.input_slots.len() > 2 * n, "inputs y, y', t come first");
         assert!(self.variable_inputs[..=2 * n].iter().all(|&v| v), "y, y' and t vary");
@@ -441,13 +465,13 @@ impl<const L: usize> TaylorTape<L> {
                 assert!(n <= max, "ClosedFormInverse::Adjugate: n = {n} > {max}")
             }
         }
-        let work = self.native_work() + entries.len() * (self.order + 1) * (self.order + 2) / 2 * L;
-        if work > NATIVE_MAX_WORK {
-            return Ok(false);
-        }
         let diagonal = inverse == ClosedFormInverse::Diagonal;
         let stride = self.order + 1;
-        let first = self.coef.len() / stride;
+        // A tape prepared again keeps its extra slots.
+        let first = match &self.second_order {
+            Some(s) => s.layout.second[0] as usize,
+            None => self.coef.len() / stride,
+        };
         let extra = n + if diagonal { n } else { n * n };
         let slots: Vec<u32> = (first..first + extra).map(|s| s as u32).collect();
         let (second, inverse_slots) = slots.split_at(n);
@@ -463,31 +487,252 @@ impl<const L: usize> TaylorTape<L> {
             inverse: inverse_slots.to_vec(),
             diagonal,
         };
-        let len = (first + extra) * stride * L;
-        let native = NativeTaylor::second_order(self, &layout, len)?;
         self.coef.resize((first + extra) * stride, [0.0; L]);
-        self.second_order = Some((layout, Arc::new(native)));
-        Ok(true)
+        self.rhs = vec![[0.0; L]; n];
+        self.second_order =
+            Some(SecondOrder { layout: Arc::new(layout), native: Arc::new(OnceLock::new()), compiling: false });
     }
 
-    /// Whether [`compile_second_order`](Self::compile_second_order) succeeded.
+    /// Undoes [`set_second_order`](Self::set_second_order): the tape is
+    /// computed order by order again.
+    pub fn clear_second_order(&mut self) {
+        if let Some(s) = self.second_order.take() {
+            self.coef.truncate(s.layout.second[0] as usize * (self.order + 1));
+        }
+    }
+
+    /// Whether native code for the second-order expansion would be too large
+    /// to pay for its compilation.
+    fn second_order_too_large(&self) -> bool {
+        let entries = self.second_order.as_ref().map_or(0, |s| s.layout.entries.len());
+        self.native_work() + entries * (self.order + 1) * (self.order + 2) / 2 * L > NATIVE_MAX_WORK
+    }
+
+    /// [`set_second_order`](Self::set_second_order), then compiles the whole
+    /// expansion into native code, each order's function with the coupling,
+    /// so that the functions run in turn make the whole expansion (on this
+    /// thread and a helper). Returns `Ok(false)` when the code would be too
+    /// large to pay for its compilation; then, and on an error, the tape is
+    /// left as it was.
+    ///
+    /// # Panics
+    ///
+    /// As [`set_second_order`](Self::set_second_order).
+    pub fn compile_second_order(&mut self, system: &LinearSecondOrder<'_>) -> Result<bool, JitError> {
+        self.set_second_order(system);
+        if self.second_order_too_large() {
+            self.clear_second_order();
+            return Ok(false);
+        }
+        let (program, len) = (self.program.clone(), self.buffer_len());
+        let s = self.second_order.as_mut().expect("set above");
+        match NativeTaylor::second_order::<L>(program, self.order, (*s.layout).clone(), len) {
+            Ok(native) => {
+                let _ = s.native.set(Ok(native));
+                s.compiling = true;
+                Ok(true)
+            }
+            Err(e) => {
+                self.clear_second_order();
+                Err(e)
+            }
+        }
+    }
+
+    /// Compiles the second-order expansion prepared by
+    /// [`set_second_order`](Self::set_second_order) into native code on this
+    /// thread and a helper, and returns as soon as this thread has no function
+    /// left to take: the expansions run interpreted until the helper has
+    /// finished its last, then natively. With the same numbers, bit for bit,
+    /// so a run does not depend on when the code became ready. The helper
+    /// gives up when every clone of this tape is gone. Returns false (nothing
+    /// to wait for) when there is no second-order expansion or its code would
+    /// be too large.
+    pub fn compile_second_order_in_background(&mut self) -> bool {
+        if self.second_order.is_none() || self.second_order_too_large() {
+            return false;
+        }
+        let (program, order, len) = (self.program.clone(), self.order, self.buffer_len());
+        let s = self.second_order.as_mut().expect("checked above");
+        s.compiling = true;
+        let layout = (*s.layout).clone();
+        let cell = Arc::downgrade(&s.native);
+        let wanted = cell.clone();
+        NativeTaylor::second_order_then::<L>(
+            program,
+            order,
+            layout,
+            len,
+            move || wanted.strong_count() > 0,
+            move |result| {
+                if let Some(cell) = cell.upgrade() {
+                    let _ = cell.set(result);
+                }
+            },
+        );
+        true
+    }
+
+    /// Whether [`set_second_order`](Self::set_second_order) was called.
     pub fn is_second_order(&self) -> bool {
         self.second_order.is_some()
+    }
+
+    /// Waits for the compilation of the second-order expansion, if one was
+    /// started; whether its expansions now run native code.
+    pub fn wait_for_native(&self) -> bool {
+        match &self.second_order {
+            Some(s) if s.compiling => s.native.wait().is_ok(),
+            _ => false,
+        }
     }
 
     /// The whole expansion of the second-order system: from order 0 of `y`, `y'`
     /// and orders 0 and 1 of `t` in the inputs' coefficients, writes orders
     /// `1..=order` of `y` and `y'` there and into `series` (order-major:
     /// `series[k·2n + i]` is order k of `[y, y'][i]`; the caller's order 0 is
-    /// left as it is).
+    /// left as it is). Native code where it is compiled, the interpreter
+    /// otherwise: for one lane, the same numbers.
     ///
     /// # Panics
     ///
-    /// When [`compile_second_order`](Self::compile_second_order) did not
-    /// succeed, or `series` is not `(order + 1)·2n` long.
+    /// When [`set_second_order`](Self::set_second_order) was not called, or
+    /// `series` is not `(order + 1)·2n` long.
     pub fn expand_second_order(&mut self, series: &mut [Lanes<L>]) {
-        let (_, native) = self.second_order.as_ref().expect("compile_second_order succeeded");
-        native.run_all(self.coef.as_flattened_mut(), series.as_flattened_mut());
+        let s = self.second_order.as_ref().expect("set_second_order was called");
+        if let Some(Ok(native)) = s.native.get() {
+            native.run_all(self.coef.as_flattened_mut(), series.as_flattened_mut());
+            return;
+        }
+        let layout = Arc::clone(&s.layout);
+        assert_eq!(series.len(), (self.order + 1) * 2 * layout.n, "expand_second_order: wrong series length");
+        #[cfg(target_arch = "x86_64")]
+        if self.fused {
+            // SAFETY: as in `compute`.
+            #[allow(unsafe_code)]
+            unsafe {
+                return self.expand_fma(&layout, series);
+            }
+        }
+        if self.fused {
+            self.expand_interpreted::<true>(&layout, series)
+        } else {
+            self.expand_interpreted::<false>(&layout, series)
+        }
+    }
+
+    /// [`expand_interpreted`](Self::expand_interpreted) with fused
+    /// multiply-adds compiled to the processor's instruction.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "fma")]
+    fn expand_fma(&mut self, layout: &SecondOrderLayout, series: &mut [Lanes<L>]) {
+        self.expand_interpreted::<true>(layout, series)
+    }
+
+    /// The second-order expansion, interpreted: the native code's steps.
+    #[inline(always)]
+    fn expand_interpreted<const F: bool>(&mut self, layout: &SecondOrderLayout, series: &mut [Lanes<L>]) {
+        for k in 0..self.order {
+            self.compute_interpreted::<F>(k);
+            if k == 0 {
+                self.invert_interpreted(layout);
+            }
+            self.couple_interpreted::<F>(layout, k, series);
+        }
+    }
+
+    /// `A[0]⁻¹` on every lane into its slots, as the native code computes it
+    /// (reciprocals, or the adjugate over the determinant).
+    fn invert_interpreted(&mut self, s: &SecondOrderLayout) {
+        let (n, stride) = (s.n, self.order + 1);
+        let at = |slot: u32| slot as usize * stride;
+        let c = &mut self.coef;
+        for lane in 0..L {
+            if s.diagonal {
+                for (e, &(i, _)) in s.entries.iter().enumerate() {
+                    c[at(s.inverse[i])][lane] = 1.0 / c[at(s.matrix[e])][lane];
+                }
+                continue;
+            }
+            let mut m = [[0.0; ClosedFormInverse::ADJUGATE_MAX_DIM]; ClosedFormInverse::ADJUGATE_MAX_DIM];
+            for (e, &(i, j)) in s.entries.iter().enumerate() {
+                m[i][j] = c[at(s.matrix[e])][lane];
+            }
+            // Cofactors C_ij; A⁻¹_ij = C_ji / det.
+            let mut cof = [[0.0; ClosedFormInverse::ADJUGATE_MAX_DIM]; ClosedFormInverse::ADJUGATE_MAX_DIM];
+            match n {
+                1 => cof[0][0] = 1.0,
+                2 => cof = [[m[1][1], -m[1][0], 0.0], [-m[0][1], m[0][0], 0.0], [0.0; 3]],
+                _ => {
+                    for i in 0..3 {
+                        for j in 0..3 {
+                            let (r0, r1) = ((i + 1) % 3, (i + 2) % 3);
+                            let (c0, c1) = ((j + 1) % 3, (j + 2) % 3);
+                            cof[i][j] = m[r0][c0] * m[r1][c1] - m[r0][c1] * m[r1][c0];
+                        }
+                    }
+                }
+            }
+            let mut det = m[0][0] * cof[0][0];
+            for j in 1..n {
+                det += m[0][j] * cof[0][j];
+            }
+            let r = 1.0 / det;
+            for i in 0..n {
+                for j in 0..n {
+                    c[at(s.inverse[i * n + j])][lane] = cof[j][i] * r;
+                }
+            }
+        }
+    }
+
+    /// Order `k` of y'' and order `k + 1` of y and y' (into the slots and
+    /// `series`), as the native code computes them:
+    /// `y''[k] = A[0]⁻¹ (b[k] − Σ_{j=1..k} A[j] y''[k−j])`.
+    #[inline(always)]
+    fn couple_interpreted<const F: bool>(&mut self, s: &SecondOrderLayout, k: usize, series: &mut [Lanes<L>]) {
+        let (n, stride) = (s.n, self.order + 1);
+        let at = |slot: u32, j: usize| slot as usize * stride + j;
+        let c = &mut self.coef;
+        let rhs = &mut self.rhs;
+        for i in 0..n {
+            rhs[i] = c[at(s.rhs[i], k)];
+        }
+        if k > 0 {
+            for (e, &(row, col)) in s.entries.iter().enumerate() {
+                if !s.varying[e] {
+                    continue;
+                }
+                let mut acc = [0.0; L];
+                for j in 1..=k {
+                    madd::<F, L>(&mut acc, &c[at(s.matrix[e], j)], &c[at(s.second[col], k - j)]);
+                }
+                rhs[row] = lanes(|l| rhs[row][l] - acc[l]);
+            }
+        }
+        let scale = 1.0 / (k + 1) as f64;
+        let row = (k + 1) * 2 * n;
+        for i in 0..n {
+            let a = if s.diagonal {
+                let r = c[at(s.inverse[i], 0)];
+                lanes(|l| r[l] * rhs[i][l])
+            } else {
+                let r = c[at(s.inverse[i * n], 0)];
+                let mut acc = lanes(|l| r[l] * rhs[0][l]);
+                for j in 1..n {
+                    madd::<F, L>(&mut acc, &c[at(s.inverse[i * n + j], 0)], &rhs[j]);
+                }
+                acc
+            };
+            c[at(s.second[i], k)] = a;
+            let next_v = lanes(|l| a[l] * scale);
+            c[at(s.dy[i], k + 1)] = next_v;
+            let v = c[at(s.dy[i], k)];
+            let next_q = lanes(|l| v[l] * scale);
+            c[at(s.y[i], k + 1)] = next_q;
+            series[row + i] = next_q;
+            series[row + n + i] = next_v;
+        }
     }
 
     /// Compiles every order to native code ([`crate::Compiled`]'s JIT), used by
@@ -655,6 +900,34 @@ impl<const L: usize> TaylorTape<L> {
             native.run(k, self.coef.as_flattened_mut());
             return;
         }
+        #[cfg(target_arch = "x86_64")]
+        if self.fused {
+            // SAFETY: `fused` is set only where the processor has FMA
+            // (`host_has_fma`), the one feature `compute_fma` enables.
+            #[allow(unsafe_code)]
+            unsafe {
+                return self.compute_fma(k);
+            }
+        }
+        if self.fused {
+            self.compute_interpreted::<true>(k)
+        } else {
+            self.compute_interpreted::<false>(k)
+        }
+    }
+
+    /// [`compute_interpreted`](Self::compute_interpreted) with fused
+    /// multiply-adds compiled to the processor's instruction.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "fma")]
+    fn compute_fma(&mut self, k: usize) {
+        self.compute_interpreted::<true>(k)
+    }
+
+    /// Order `k` of every variable slot, interpreted; `F`: whether the
+    /// multiply-adds that native code fuses are fused ([`madd`]).
+    #[inline(always)]
+    fn compute_interpreted<const F: bool>(&mut self, k: usize) {
         let stride = self.order + 1;
         for idx in 0..self.program.len() {
             let (out, op) = self.program[idx];
@@ -678,8 +951,8 @@ impl<const L: usize> TaylorTape<L> {
                     T::Mul(a, b) => {
                         let (a, b) = (s(a), s(b));
                         let mut acc = [0.0; L];
-                        for j in 0..=k {
-                            fma(&mut acc, &c[a + j], &c[b + k - j]);
+                        for (x, y) in c[a..=a + k].iter().zip(c[b..=b + k].iter().rev()) {
+                            madd::<F, L>(&mut acc, x, y);
                         }
                         acc
                     }
@@ -687,7 +960,7 @@ impl<const L: usize> TaylorTape<L> {
                         let a = s(a);
                         let mut acc = [0.0; L];
                         for j in 0..k.div_ceil(2) {
-                            fma(&mut acc, &c[a + j], &c[a + k - j]);
+                            madd::<F, L>(&mut acc, &c[a + j], &c[a + k - j]);
                         }
                         let mut out = lanes(|l| 2.0 * acc[l]);
                         if k.is_multiple_of(2) {
@@ -740,35 +1013,34 @@ impl<const L: usize> TaylorTape<L> {
                     }
                     T::Exp { du, .. } => {
                         // w' = u' w: w[k] = Σ_{j=1..k} j u[j] w[k-j] / k
-                        derived(c, s(du), w, k)
+                        derived::<F, L>(c, s(du), w, k)
                     }
                     T::Log(a) => {
                         // a w' = a': w[k] = (a[k] - Σ_{j=1..k-1} j w[j] a[k-j] / k) / a[0]
                         let a = s(a);
-                        let sum = weighted(c, w, a, k, 1, k - 1);
+                        let sum = weighted::<F, L>(c, w, a, k, 1, k - 1);
                         lanes(|l| (c[a + k][l] - sum[l]) / c[a][l])
                     }
                     T::Sin { du, cos, .. } => {
                         let (du, cs) = (s(du), s(cos));
-                        let sin = derived(c, du, cs, k);
-                        let cos = derived(c, du, w, k);
+                        let (sin, cos) = derived_pair::<F, L>(c, du, cs, w, k);
                         c[cs + k] = lanes(|l| -cos[l]);
                         sin
                     }
                     T::Sinh { du, cosh, .. } => {
                         let (du, ch) = (s(du), s(cosh));
-                        let sinh = derived(c, du, ch, k);
-                        c[ch + k] = derived(c, du, w, k);
+                        let (sinh, cosh) = derived_pair::<F, L>(c, du, ch, w, k);
+                        c[ch + k] = cosh;
                         sinh
                     }
                     T::Tan { du, aux, sign, .. } => {
                         // w' = u' (1 ± w²)
                         let (du, x) = (s(du), s(aux));
-                        let v = derived(c, du, x, k);
+                        let v = derived::<F, L>(c, du, x, k);
                         c[w + k] = v;
                         let mut sq = [0.0; L];
                         for j in 0..=k {
-                            fma(&mut sq, &c[w + j], &c[w + k - j]);
+                            madd::<F, L>(&mut sq, &c[w + j], &c[w + k - j]);
                         }
                         c[x + k] = lanes(|l| sign * sq[l]);
                         v
@@ -778,7 +1050,7 @@ impl<const L: usize> TaylorTape<L> {
                         let (u, i, r) = (s(u), s(inner), s(root));
                         let mut sq = [0.0; L];
                         for j in 0..=k {
-                            fma(&mut sq, &c[u + j], &c[u + k - j]);
+                            madd::<F, L>(&mut sq, &c[u + j], &c[u + k - j]);
                         }
                         c[i + k] = lanes(|l| -sq[l]);
                         let mut acc = c[i + k];
@@ -793,7 +1065,7 @@ impl<const L: usize> TaylorTape<L> {
                         let (u, x) = (s(u), s(aux));
                         let mut sq = [0.0; L];
                         for j in 0..=k {
-                            fma(&mut sq, &c[u + j], &c[u + k - j]);
+                            madd::<F, L>(&mut sq, &c[u + j], &c[u + k - j]);
                         }
                         c[x + k] = sq;
                         derivative_quotient(c, u, x, w, k, 1.0)
@@ -889,24 +1161,50 @@ fn order_zero<const L: usize>(c: &mut [Lanes<L>], op: T, stride: usize) -> Lanes
 
 /// `Σ_{j=1..=k} du[j] b[k-j] / k` with `du[j] = j u[j]` (the recurrence of `w' = u' b`).
 #[inline(always)]
-fn derived<const L: usize>(c: &[Lanes<L>], du: usize, b: usize, k: usize) -> Lanes<L> {
+fn derived<const F: bool, const L: usize>(c: &[Lanes<L>], du: usize, b: usize, k: usize) -> Lanes<L> {
     let mut acc = [0.0; L];
-    for j in 1..=k {
-        fma(&mut acc, &c[du + j], &c[b + k - j]);
+    for (d, x) in c[du + 1..=du + k].iter().zip(c[b..b + k].iter().rev()) {
+        madd::<F, L>(&mut acc, d, x);
     }
     let kf = k as f64;
     lanes(|l| acc[l] / kf)
 }
 
+/// [`derived`] for two slots `a` and `b` at once (sin and cos, sinh and
+/// cosh): the same sums, two independent chains in one loop.
+#[inline(always)]
+fn derived_pair<const F: bool, const L: usize>(
+    c: &[Lanes<L>],
+    du: usize,
+    a: usize,
+    b: usize,
+    k: usize,
+) -> (Lanes<L>, Lanes<L>) {
+    let (mut sa, mut sb) = ([0.0; L], [0.0; L]);
+    let terms = c[du + 1..=du + k].iter().zip(c[a..a + k].iter().rev()).zip(c[b..b + k].iter().rev());
+    for ((d, x), y) in terms {
+        madd::<F, L>(&mut sa, d, x);
+        madd::<F, L>(&mut sb, d, y);
+    }
+    let kf = k as f64;
+    (lanes(|l| sa[l] / kf), lanes(|l| sb[l] / kf))
+}
+
 /// `Σ_{j=lo..=hi} j a[j] b[k-j] / k` (the recurrence of `w' = a' b`).
 #[inline(always)]
-fn weighted<const L: usize>(c: &[Lanes<L>], a: usize, b: usize, k: usize, lo: usize, hi: usize) -> Lanes<L> {
+fn weighted<const F: bool, const L: usize>(
+    c: &[Lanes<L>],
+    a: usize,
+    b: usize,
+    k: usize,
+    lo: usize,
+    hi: usize,
+) -> Lanes<L> {
     let mut acc = [0.0; L];
     for j in lo..=hi {
         let jf = j as f64;
-        for l in 0..L {
-            acc[l] += jf * c[a + j][l] * c[b + k - j][l];
-        }
+        let weighted: Lanes<L> = lanes(|l| jf * c[a + j][l]);
+        madd::<F, L>(&mut acc, &weighted, &c[b + k - j]);
     }
     let kf = k as f64;
     lanes(|l| acc[l] / kf)
@@ -932,6 +1230,17 @@ fn lanes<const L: usize>(f: impl Fn(usize) -> f64) -> Lanes<L> {
     std::array::from_fn(f)
 }
 
+/// `acc += a·b` lane by lane, fused (one rounding) when `F`: what native
+/// code computes for a sum of products where the host has FMA.
+#[inline(always)]
+fn madd<const F: bool, const L: usize>(acc: &mut Lanes<L>, a: &Lanes<L>, b: &Lanes<L>) {
+    for l in 0..L {
+        acc[l] = if F { a[l].mul_add(b[l], acc[l]) } else { acc[l] + a[l] * b[l] };
+    }
+}
+
+/// `acc += a·b` lane by lane, two roundings (native code's explicit
+/// product and sum).
 #[inline(always)]
 fn fma<const L: usize>(acc: &mut Lanes<L>, a: &Lanes<L>, b: &Lanes<L>) {
     for l in 0..L {

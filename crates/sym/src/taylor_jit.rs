@@ -12,10 +12,15 @@
 //! which a short run pays in full. For a linearly implicit second-order
 //! system `A y'' = b` ([`NativeTaylor::second_order`]) each order's function
 //! includes the coupling, so the functions run in turn make the whole
-//! expansion. The
-//! functions are compiled on two threads ([`compile_shared`]). The
-//! interpreter in `taylor.rs` stays the reference and the fallback; both
-//! agree to rounding (the same operations, summed in the same order).
+//! expansion. The functions are compiled on two threads ([`compile_shared`]);
+//! for one trajectory the caller steps with the interpreter as soon as it
+//! has no function left to take, while the helper finishes its last
+//! ([`compile_shared_then`],
+//! [`crate::TaylorTape::compile_second_order_in_background`]).
+//! The interpreter in `taylor.rs` stays the reference and the fallback; both
+//! do the same operations in the same order, fusing the same multiply-adds
+//! where the host has FMA, so that they agree to the last bit and a run
+//! gives the same numbers whichever of the two computed each step.
 
 // Calling JIT-compiled code can only be done through a raw function pointer;
 // see `jit.rs` for the same pattern. Two unsafe blocks: the pointer casts in
@@ -23,7 +28,7 @@
 #![allow(unsafe_code)]
 
 use crate::expr::Func;
-use crate::jit::shared::{compile_shared, Part};
+use crate::jit::shared::{compile_shared, compile_shared_then, Part};
 use crate::jit::{codegen, define_function, offset, unary, Codegen, Imports, JitError, ATAN2, POWF};
 use crate::taylor::{TaylorTape, T};
 use cranelift_codegen::ir::{condcodes::FloatCC, types, AbiParam, InstBuilder, MemFlagsData, Signature, Value};
@@ -72,13 +77,14 @@ struct Emitter<'a, 'b, const L: usize> {
     series: Value,
     stride: usize,
     width: usize,
-    /// Whether the host fuses multiply-adds.
+    /// Whether the host fuses multiply-adds (the interpreter then fuses the
+    /// same ones).
     fma: bool,
 }
 
 /// Whether `fma` compiles to one instruction here (elsewhere cranelift would
 /// call a library routine).
-fn host_has_fma() -> bool {
+pub(crate) fn host_has_fma() -> bool {
     #[cfg(target_arch = "x86_64")]
     return std::arch::is_x86_feature_detected!("fma");
     #[cfg(target_arch = "aarch64")]
@@ -161,8 +167,8 @@ impl<const L: usize> Emitter<'_, '_, L> {
         Ok((s.expect("asked for"), c.expect("asked for")))
     }
 
-    /// `acc + x·y`, fused where the host has FMA (one rounding; the
-    /// interpreter rounds twice, within the tolerance the tests allow).
+    /// `acc + x·y`, fused where the host has FMA (one rounding, as the
+    /// interpreter's `madd`).
     fn mul_add(&mut self, x: Value, y: Value, acc: Value) -> Value {
         if self.fma {
             self.b.ins().fma(x, y, acc)
@@ -202,6 +208,21 @@ impl<const L: usize> Emitter<'_, '_, L> {
         let acc = self.sum(du, b, k, 1..=k, |_| None, lane)?;
         let kf = self.c(k as f64);
         Ok(self.b.ins().fdiv(acc, kf))
+    }
+
+    /// [`derived`](Self::derived) for two slots `a` and `b` at once (sin
+    /// and cos): the same sums, each `du[j]` loaded once for both.
+    fn derived_pair(&mut self, du: u32, a: u32, b: u32, k: usize, lane: usize) -> Result<(Value, Value), JitError> {
+        let (mut sa, mut sb) = (self.c(0.0), self.c(0.0));
+        for j in 1..=k {
+            let d = self.ld(du, j, lane)?;
+            let x = self.ld(a, k - j, lane)?;
+            sa = self.mul_add(d, x, sa);
+            let y = self.ld(b, k - j, lane)?;
+            sb = self.mul_add(d, y, sb);
+        }
+        let kf = self.c(k as f64);
+        Ok((self.b.ins().fdiv(sa, kf), self.b.ins().fdiv(sb, kf)))
     }
 
     /// `acc − Σ_{j ∈ js} a[j] · b[k−j]`.
@@ -448,15 +469,13 @@ impl<const L: usize> Emitter<'_, '_, L> {
                 self.b.ins().fdiv(num, a0)
             }
             T::Sin { du, cos, .. } => {
-                let sin = self.derived(du, cos, k, lane)?;
-                let c = self.derived(du, w, k, lane)?;
+                let (sin, c) = self.derived_pair(du, cos, w, k, lane)?;
                 let c = self.b.ins().fneg(c);
                 self.st(cos, k, lane, c)?;
                 sin
             }
             T::Sinh { du, cosh, .. } => {
-                let sinh = self.derived(du, cosh, k, lane)?;
-                let c = self.derived(du, w, k, lane)?;
+                let (sinh, c) = self.derived_pair(du, cosh, w, k, lane)?;
                 self.st(cosh, k, lane, c)?;
                 sinh
             }
@@ -699,27 +718,35 @@ impl NativeTaylor {
     /// order, compiled on two threads ([`compile_shared`]: compiling costs
     /// more than a thousand steps of a small system).
     pub(crate) fn second_order<const L: usize>(
-        tape: &TaylorTape<L>,
-        layout: &SecondOrderLayout,
+        program: Vec<(u32, T)>,
+        order: usize,
+        layout: SecondOrderLayout,
         buffer_len: usize,
     ) -> Result<NativeTaylor, JitError> {
-        let order = tape.order();
-        let program = tape.program().to_vec();
         let series_len = (order + 1) * 2 * layout.n * L;
-        let layout = layout.clone();
-        // Function i computes order p − 1 − i: the longest first.
-        let parts = compile_shared(order, Codegen::Quick, move |module, i| {
-            let k = order - 1 - i;
-            let sig = signature(module);
-            define::<L>(module, &format!("expand{k}"), &sig, order, |e| {
-                e.orders(&program, k)?;
-                if k == 0 {
-                    e.invert(&layout)?;
-                }
-                e.couple(&layout, k)
-            })
-        })?;
+        let parts =
+            compile_shared(order, Codegen::Quick, second_order_functions::<L>(program, order, layout, || true))?;
         Ok(NativeTaylor::assemble(parts, order, |i| order - 1 - i, buffer_len, series_len))
+    }
+
+    /// [`second_order`](Self::second_order) for a caller that steps on
+    /// meanwhile ([`compile_shared_then`]): returns when no function is left
+    /// for this thread to compile; `publish` gets the code (or the error)
+    /// from whichever thread finishes last. The helper gives up as soon as
+    /// `wanted()` turns false.
+    pub(crate) fn second_order_then<const L: usize>(
+        program: Vec<(u32, T)>,
+        order: usize,
+        layout: SecondOrderLayout,
+        buffer_len: usize,
+        wanted: impl Fn() -> bool + Send + Sync + 'static,
+        publish: impl FnOnce(Result<NativeTaylor, JitError>) + Send + 'static,
+    ) {
+        let series_len = (order + 1) * 2 * layout.n * L;
+        let define = second_order_functions::<L>(program, order, layout, wanted);
+        compile_shared_then(order, Codegen::Quick, define, move |parts| {
+            publish(parts.map(|parts| NativeTaylor::assemble(parts, order, |i| order - 1 - i, buffer_len, series_len)))
+        });
     }
 
     /// Compiles every order of `tape`, one function each, on two threads.
@@ -803,6 +830,30 @@ impl NativeTaylor {
             // borrowed.
             unsafe { f(coef.as_mut_ptr(), series.as_mut_ptr()) }
         }
+    }
+}
+
+/// Defines function `i` of a second-order expansion (order `p − 1 − i`: the
+/// longest first) with the coupling, while `wanted()` holds.
+fn second_order_functions<const L: usize>(
+    program: Vec<(u32, T)>,
+    order: usize,
+    layout: SecondOrderLayout,
+    wanted: impl Fn() -> bool + Send + Sync + 'static,
+) -> impl Fn(&mut JITModule, usize) -> Result<FuncId, JitError> + Send + Sync + 'static {
+    move |module, i| {
+        if !wanted() {
+            return Err(JitError::Codegen { message: "no longer wanted".into() });
+        }
+        let k = order - 1 - i;
+        let sig = signature(module);
+        define::<L>(module, &format!("expand{k}"), &sig, order, |e| {
+            e.orders(&program, k)?;
+            if k == 0 {
+                e.invert(&layout)?;
+            }
+            e.couple(&layout, k)
+        })
     }
 }
 

@@ -120,6 +120,17 @@ impl LazyKernel {
             None => self.tape.eval(inputs, outputs),
         }
     }
+
+    /// One evaluation that does not call for native code: that code where it
+    /// is compiled already, the interpreter otherwise (a check at the start
+    /// of a run must not pay for compiling what the run may never use; the
+    /// Taylor method, for one, expands its own tape).
+    pub(crate) fn eval_once(&mut self, inputs: &[f64], outputs: &mut [f64]) {
+        match self.native.get() {
+            Some(Some(native)) => native.eval(inputs, outputs),
+            _ => self.tape.eval(inputs, outputs),
+        }
+    }
 }
 
 /// Where the entries of M that are not identically zero sit.
@@ -455,7 +466,7 @@ impl System {
         }
         self.inputs[2 * n] = t;
         let e = self.dynamics.pattern.len();
-        self.dynamics.mass_forcing.eval(&self.inputs, &mut self.out[..e + n]);
+        self.dynamics.mass_forcing.eval_once(&self.inputs, &mut self.out[..e + n]);
         let mut m = vec![0.0; n * n];
         self.dynamics.pattern.scatter(&self.out[..e], &mut m);
         m

@@ -75,10 +75,10 @@ impl<const L: usize> LagrangeSeries<L> {
         // Inputs [q, q', t] vary along a trajectory; the parameters do not.
         let variable: Vec<bool> = (0..tape.n_inputs()).map(|k| k <= 2 * n).collect();
         let mut tape = TaylorTape::new(tape, order, &variable);
-        // Native code where the host has a code generator: the whole expansion in
-        // one function when M can be inverted in closed form (diagonal, or at most
-        // 3 coordinates), the tape's orders otherwise; the interpreter where there
-        // is no code generator.
+        // The whole expansion with the coupling when M can be inverted in closed
+        // form (diagonal, or at most 3 coordinates), in native code where the
+        // host has a code generator; otherwise the tape's orders (native or
+        // interpreted), coupled here.
         let closed_form = if diagonal {
             Some(ClosedFormInverse::Diagonal)
         } else if n <= ClosedFormInverse::ADJUGATE_MAX_DIM {
@@ -86,13 +86,28 @@ impl<const L: usize> LagrangeSeries<L> {
         } else {
             None
         };
-        let whole = native
-            && closed_form.is_some_and(|inverse| {
+        match closed_form {
+            Some(inverse) => {
                 let system = LinearSecondOrder { dim: n, entries: &entries, inverse };
-                matches!(tape.compile_second_order(&system), Ok(true))
-            });
-        if native && !whole {
-            let _ = tape.compile_native();
+                if !native {
+                    tape.set_second_order(&system);
+                } else if L == 1 {
+                    // One trajectory: the interpreter steps while the helper
+                    // finishes the code, with the same numbers (see `TaylorTape`).
+                    tape.set_second_order(&system);
+                    if !tape.compile_second_order_in_background() {
+                        // Too large to compile whole: the tape's orders, as below.
+                        tape.clear_second_order();
+                        let _ = tape.compile_native();
+                    }
+                } else if !matches!(tape.compile_second_order(&system), Ok(true)) {
+                    let _ = tape.compile_native();
+                }
+            }
+            None if native => {
+                let _ = tape.compile_native();
+            }
+            None => {}
         }
         let varying = (0..entries.len()).filter(|&e| !tape.output_is_constant(e)).collect();
         let input_at = (0..=2 * n).map(|i| tape.input_index(i)).collect();
@@ -121,14 +136,16 @@ impl<const L: usize> LagrangeSeries<L> {
         }
     }
 
-    /// How the expansion runs: `"whole"` (one native function), `"orders"`
-    /// (native code per order, coupling here) or `"interpreted"`.
+    /// How the expansion runs once its code is compiled (this waits for it):
+    /// `"whole"` (native functions with the coupling), `"whole, interpreted"`,
+    /// `"orders"` (native code per order, coupling here) or `"interpreted"`.
     #[cfg(test)]
     fn code(&self) -> &'static str {
-        match (self.tape.is_second_order(), self.tape.is_native()) {
-            (true, _) => "whole",
-            (false, true) => "orders",
-            (false, false) => "interpreted",
+        match (self.tape.is_second_order(), self.tape.wait_for_native(), self.tape.is_native()) {
+            (true, true, _) => "whole",
+            (true, false, _) => "whole, interpreted",
+            (false, _, true) => "orders",
+            (false, _, false) => "interpreted",
         }
     }
 
@@ -367,11 +384,49 @@ c = 0.5
     #[test]
     fn series_start_with_the_right_hand_side_and_its_derivative() {
         check(&pendulum(2), true, "whole");
-        check(&pendulum(2), false, "interpreted");
+        check(&pendulum(2), false, "whole, interpreted");
         check(&pendulum(4), true, "orders");
         check(&pendulum(4), false, "interpreted");
         check(CHAIN, true, "whole");
-        check(CHAIN, false, "interpreted");
+        check(CHAIN, false, "whole, interpreted");
+    }
+
+    /// A Lagrangian with most of the elementary functions, in M and in f.
+    const FUNCTIONS: &str = r#"
+coordinates = ["x", "y"]
+lagrangian = "x'^2*(2 + sin(y)^2)/2 + y'^2*(3 + exp(x/4))/2 + x'*y'*atan(x*y)/4 - log(2 + x^2) - sqrt(1 + y^2) - tanh(x)*cosh(y)/10 + t*x/10 - abs(x - y)^1.5/7"
+"#;
+
+    /// One trajectory's series is the same to the last bit whether the
+    /// interpreter or native code computed it, so a run that switches from
+    /// one to the other when the code is ready gives the same rows whenever
+    /// that happens.
+    #[test]
+    fn interpreted_and_native_series_of_one_trajectory_are_the_same_bits() {
+        for text in [pendulum(2), pendulum(3), CHAIN.to_string(), FUNCTIONS.to_string()] {
+            let d = Derivation::new(Model::parse(&text, &[]).unwrap()).unwrap();
+            let dynamics = Dynamics::new(&d);
+            let dim = 2 * dynamics.n_coords();
+            let p = 13;
+            let mut interpreted = dynamics.lagrange_series_with::<1>(p, false);
+            let mut native = dynamics.lagrange_series_with::<1>(p, true);
+            assert_eq!((interpreted.code(), native.code()), ("whole, interpreted", "whole"), "{text}");
+            for point in 0..5 {
+                let y: Vec<[f64; 1]> =
+                    (0..dim).map(|i| [0.3 * (i + point) as f64 - 0.7 + 0.11 * point as f64]).collect();
+                let t = [0.1 * point as f64];
+                let (mut a, mut b) = (vec![[0.0]; dim * (p + 1)], vec![[0.0]; dim * (p + 1)]);
+                interpreted.expand(t, &y, &mut a).unwrap();
+                native.expand(t, &y, &mut b).unwrap();
+                for (k, (a, b)) in a.iter().zip(&b).enumerate() {
+                    assert_eq!(
+                        a[0].to_bits(),
+                        b[0].to_bits(),
+                        "{text}: coefficient {k} at point {point}: {a:?} vs {b:?}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

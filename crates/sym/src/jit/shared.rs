@@ -123,6 +123,101 @@ where
     Ok(parts)
 }
 
+/// The two threads' results in [`compile_shared_then`]: the second to
+/// finish hands both to `publish`.
+struct Handover<P> {
+    parts: Mutex<Vec<Part>>,
+    error: Mutex<Option<JitError>>,
+    finished: AtomicUsize,
+    publish: Mutex<Option<P>>,
+}
+
+impl<P: FnOnce(Result<Vec<Part>, JitError>)> Handover<P> {
+    /// Adds one thread's result; the second calls `publish` with both.
+    fn hand(&self, result: Result<Option<Part>, JitError>) {
+        match result {
+            Ok(Some(part)) => self.parts.lock().unwrap_or_else(PoisonError::into_inner).push(part),
+            Ok(None) => {}
+            Err(e) => {
+                self.error.lock().unwrap_or_else(PoisonError::into_inner).get_or_insert(e);
+            }
+        }
+        if self.finished.fetch_add(1, Ordering::AcqRel) == 1 {
+            let parts = std::mem::take(&mut *self.parts.lock().unwrap_or_else(PoisonError::into_inner));
+            let error = self.error.lock().unwrap_or_else(PoisonError::into_inner).take();
+            if let Some(publish) = self.publish.lock().unwrap_or_else(PoisonError::into_inner).take() {
+                publish(error.map_or(Ok(parts), Err));
+            }
+        }
+    }
+}
+
+/// Hands an error over for the helper of [`compile_shared_then`] if it
+/// unwinds before it handed its result.
+struct HandOnUnwind<'a, P: FnOnce(Result<Vec<Part>, JitError>)> {
+    handover: &'a Handover<P>,
+    handed: bool,
+}
+
+impl<P: FnOnce(Result<Vec<Part>, JitError>)> Drop for HandOnUnwind<'_, P> {
+    fn drop(&mut self) {
+        if !self.handed {
+            self.handover.hand(Err(JitError::Codegen { message: "compiler thread panicked".into() }));
+        }
+    }
+}
+
+/// [`compile_shared`] for a caller that has other work to do meanwhile: the
+/// two threads share the functions as there, but when none is left to take
+/// the caller returns at once instead of waiting for the helper's last one,
+/// and whichever thread finishes last hands the finalized modules to
+/// `publish` (the caller itself when the helper never started). `publish`
+/// is called exactly once, also with an error.
+pub(crate) fn compile_shared_then<D, P>(count: usize, codegen: Codegen, define: D, publish: P)
+where
+    D: Fn(&mut JITModule, usize) -> Result<FuncId, JitError> + Send + Sync + 'static,
+    P: FnOnce(Result<Vec<Part>, JitError>) + Send + 'static,
+{
+    let shared = Arc::new(Shared {
+        next: AtomicUsize::new(0),
+        helper: AtomicUsize::new(IDLE),
+        slot: Mutex::new(None),
+        count,
+        codegen,
+        define,
+    });
+    let handover = Arc::new(Handover {
+        parts: Mutex::new(Vec::with_capacity(2)),
+        error: Mutex::new(None),
+        finished: AtomicUsize::new(0),
+        publish: Mutex::new(Some(publish)),
+    });
+    if count > 1 {
+        let theirs = Arc::clone(&shared);
+        let their_handover = Arc::clone(&handover);
+        let spawned = std::thread::Builder::new().name("lagrange-jit".into()).spawn(move || {
+            if theirs.helper.compare_exchange(IDLE, WORKING, Ordering::AcqRel, Ordering::Acquire).is_err() {
+                return;
+            }
+            let mut guard = HandOnUnwind { handover: &their_handover, handed: false };
+            let result = work(&theirs);
+            guard.handed = true;
+            their_handover.hand(result);
+        });
+        if spawned.is_err() {
+            // No thread to be had: this thread does all the work, and hands it alone.
+            shared.helper.store(CLOSED, Ordering::Release);
+            handover.finished.store(1, Ordering::Release);
+        }
+    }
+    let mine = work(&shared);
+    if shared.helper.compare_exchange(IDLE, CLOSED, Ordering::AcqRel, Ordering::Acquire).is_ok() {
+        // The helper never started (or could not): this thread has it all.
+        handover.finished.store(1, Ordering::Release);
+    }
+    handover.hand(mine);
+}
+
 /// Takes and compiles functions until none is left; `None` if it took none.
 fn work<D>(shared: &Shared<D>) -> Result<Option<Part>, JitError>
 where
