@@ -82,7 +82,9 @@ impl Method {
     pub fn description(self) -> &'static str {
         match self {
             Method::Dopri5 => "Dormand-Prince 5(4), adaptive explicit Runge-Kutta (general purpose)",
-            Method::Dop853 => "Dormand-Prince 8(5,3), adaptive explicit Runge-Kutta (tight tolerances)",
+            Method::Dop853 => {
+                "Dormand-Prince 8(5,3), adaptive explicit Runge-Kutta (the default with constraints or abs)"
+            }
             Method::Verlet => "Stormer-Verlet, symplectic, order 2, fixed step (separable H)",
             Method::Yoshida4 => "Yoshida triple-jump composition, symplectic, order 4, fixed step (separable H)",
             Method::KahanLi6 => "Kahan-Li 9-stage composition, symplectic, order 6, fixed step (separable H)",
@@ -91,7 +93,7 @@ impl Method {
             Method::Gauss4 => "Gauss-Legendre 2 stages, symplectic, order 4, fixed step",
             Method::Gauss6 => "Gauss-Legendre 3 stages, symplectic, order 6, fixed step",
             Method::Radau5 => "Radau IIA 3 stages, order 5, adaptive, implicit (stiff problems)",
-            Method::Taylor => "Taylor series, order from rtol (13 at 1e-10), adaptive (tight tolerances, ensembles)",
+            Method::Taylor => "Taylor series, order from rtol (13 at 1e-10), adaptive (the default)",
         }
     }
 
