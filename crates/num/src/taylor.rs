@@ -140,8 +140,9 @@ impl<S: OdeSystem> Taylor<S> {
     /// The step `h` from `t`, or the part of it that the look-ahead confirms:
     /// at `t + j·spacing` inside the step, the equations' rate F(t, y(θ)) must
     /// match the series' derivative y'(θ) to within what truncation explains,
-    /// `10·p·(atol + rtol·|y_i|)/θ` (the derivative of a remainder of size
-    /// `atol + rtol·|y_i|` at θ), or the step ends at the last point that did
+    /// `10·p·(atol + rtol·|y_i|)/θ + rtol·|F_i|` (the derivative of a remainder
+    /// of size `atol + rtol·|y_i|` at θ, and the rate's own relative
+    /// tolerance), or the step ends at the last point that did
     /// (or half-way to the first point, where the next expansion sees more).
     fn look_ahead(&mut self, t: f64, h: f64) -> Option<f64> {
         let spacing = self.look_ahead.filter(|&d| h > d)?;
@@ -167,7 +168,10 @@ impl<S: OdeSystem> Taylor<S> {
             // ahead) confirm nothing either: the events and the next
             // expansions meet what is there.
             let confirmed = self.system.rhs(t + theta, y, f).is_ok() && {
-                let bound = |i: usize| 10.0 * p as f64 * (self.atol + self.rtol * y[i].abs()) / theta;
+                // Truncation's share, and the rate's own relative tolerance
+                // (so that round-off in a large rate is not taken for a defect).
+                let bound =
+                    |i: usize| 10.0 * p as f64 * (self.atol + self.rtol * y[i].abs()) / theta + self.rtol * f[i].abs();
                 // A NaN defect fails too.
                 (0..n).all(|i| (f[i] - rate[i]).abs() <= bound(i))
             };
@@ -322,5 +326,52 @@ mod tests {
     fn a_system_without_series_is_refused() {
         let err = Taylor::new(NoSeries, 0.0, &[0.0], &Config::default()).unwrap_err();
         assert!(matches!(err, SolveError::RequiresTaylorSeries { .. }));
+    }
+
+    /// `y' = bump(t)`, a narrow bump at t = 0.5 whose series, taken where the
+    /// bump is still ~0, is that of a constant: the series cannot see it coming.
+    #[derive(Debug)]
+    struct HiddenBump;
+
+    impl OdeSystem for HiddenBump {
+        fn dim(&self) -> usize {
+            1
+        }
+        fn rhs(&mut self, t: f64, _y: &[f64], dy: &mut [f64]) -> Result<(), RhsError> {
+            dy[0] = (-((t - 0.5) / 0.01).powi(2)).exp();
+            Ok(())
+        }
+        fn taylor_series(&mut self, t: f64, y: &[f64], _order: usize, s: &mut [f64]) -> Option<Result<(), RhsError>> {
+            s.fill(0.0);
+            s[0] = y[0];
+            if (t - 0.5).abs() < 0.05 {
+                // Near the bump the series sees it: its rate there.
+                let mut rate = [0.0];
+                self.rhs(t, y, &mut rate).ok()?;
+                s[1] = rate[0];
+            }
+            Some(Ok(()))
+        }
+    }
+
+    #[test]
+    fn the_look_ahead_stops_a_step_before_what_its_series_cannot_see() {
+        let run = |look_ahead: Option<f64>| {
+            let config = Config { rtol: 1e-10, atol: 1e-10, look_ahead, ..Config::default() };
+            let mut s = Taylor::new(HiddenBump, 0.0, &[0.0], &config).unwrap();
+            s.set_stop_time(1.0).unwrap();
+            let mut ends = Vec::new();
+            while s.step().unwrap() == StepOutcome::Stepped {
+                ends.push(s.t());
+            }
+            (ends, s.statistics())
+        };
+        // Without: one step over the whole run.
+        let (ends, _) = run(None);
+        assert!(ends.is_empty(), "{ends:?}");
+        // With: the steps stop short of the bump, and the next series sees it.
+        let (ends, stats) = run(Some(0.01));
+        assert!(ends.iter().any(|&t| (t - 0.5).abs() < 0.05), "{ends:?}");
+        assert!(stats.look_ahead_evaluations > 0 && stats.rhs_evaluations == stats.steps, "{stats:?}");
     }
 }
