@@ -118,9 +118,12 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     let mut bodies = mech::BodyRecorder::new(&derivation);
     let mut body_values = vec![0.0; bodies.as_ref().map_or(0, |b| b.columns().len())];
     let constraint_cols = mech::constraint_columns(&derivation);
-    // The header is written first, so that a run stopped before its first row
-    // leaves a CSV that reads as one without rows.
-    let mut csv = match &opts.out {
+    // The file is opened and locked before the run (one that cannot be written
+    // is bad input), but cut and given its header only at the first row, or at
+    // the end of a run that had none: a run refused before it starts (exit 2)
+    // leaves the file as it was, and a run stopped before its first row leaves
+    // a CSV that reads as one without rows.
+    let mut pending = match &opts.out {
         Some(p) => {
             let mut cols = vec!["t".to_string()];
             cols.extend(names.iter().cloned());
@@ -131,17 +134,14 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
             if with_events {
                 cols.push("event".into());
             }
-            let _held = interrupt::gate();
+            let created = !p.exists();
             let file = crate::files::open_locked(p)
                 .map_err(|e| Failure::input(p, format!("cannot create the CSV file: {e}")))?;
-            let header = format!("{}\n", cols.join(","));
-            Some(
-                RowWriter::start(file, 0, header.as_bytes())
-                    .map_err(|e| Failure::run(format!("cannot write {}: {e}", p.display())))?,
-            )
+            Some(PendingCsv { file, header: format!("{}\n", cols.join(",")), created, path: p.clone() })
         }
         None => None,
     };
+    let mut csv: Option<RowWriter> = None;
     let mut line: Vec<u8> = Vec::with_capacity(256);
     let mut crossings_seen = 0usize;
     let mut csv_error: Option<std::io::Error> = None;
@@ -160,6 +160,15 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
         if let Some(signal) = interrupt::received() {
             stopped_by = Some(signal);
             return ControlFlow::Break(());
+        }
+        if let Some(p) = pending.take() {
+            match p.start() {
+                Ok(w) => csv = Some(w),
+                Err(e) => {
+                    csv_error = Some(e);
+                    return ControlFlow::Break(());
+                }
+            }
         }
         if let Some(w) = csv.as_mut() {
             let r = (|| -> std::io::Result<()> {
@@ -202,6 +211,16 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     });
     if let Some(pb) = &progress {
         pb.finish_and_clear();
+    }
+    if let Some(p) = pending.take() {
+        if matches!(&result, Err(e) if !matches!(e, RunError::Failed { .. })) {
+            p.discard();
+        } else {
+            match p.start() {
+                Ok(w) => csv = Some(w),
+                Err(e) => csv_error = Some(e),
+            }
+        }
     }
     if let Some(mut w) = csv {
         if let Err(e) = w.flush() {
@@ -257,6 +276,33 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     match failure {
         Some(message) => Err(Failure::run(format!("{message}{}", keeps("the rows up to there")))),
         None => Ok(()),
+    }
+}
+
+/// The CSV file of a run before its first row: opened and locked, not yet cut.
+struct PendingCsv {
+    file: std::fs::File,
+    header: String,
+    /// Whether this run created the file (it did not exist before).
+    created: bool,
+    path: std::path::PathBuf,
+}
+
+impl PendingCsv {
+    /// Cuts the file and writes the header, under the interrupt gate, so that
+    /// a signal finds the file as it was or with its header whole.
+    fn start(self) -> std::io::Result<RowWriter> {
+        let _held = interrupt::gate();
+        RowWriter::start(self.file, 0, self.header.as_bytes())
+    }
+
+    /// Leaves the file as it was: removed if this run created it.
+    fn discard(self) {
+        let PendingCsv { file, created, path, .. } = self;
+        drop(file);
+        if created {
+            let _ = std::fs::remove_file(path);
+        }
     }
 }
 

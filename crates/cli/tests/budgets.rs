@@ -169,3 +169,17 @@ fn stop_event_is_accurate(summary: &Value, out: &TempFile) {
     let reference = stopped_at_the_bottom(&["--method", "dop853", "--rtol", "1e-13"]);
     close(summary["t_final"].as_f64().unwrap(), reference["t_final"].as_f64().unwrap(), 1e-10);
 }
+
+#[test]
+fn a_run_refused_before_it_starts_leaves_its_output_as_it_was() {
+    // Exit 2 means nothing was computed: an existing --out keeps its content,
+    // and no file is left where there was none.
+    let refused = ["simulate", "examples/pendulum.toml", "--until", "1e12", "--method", "kahanli8", "--out"];
+    let kept = TempFile::new("refused-kept", "csv");
+    std::fs::write(kept.path(), "an earlier run's rows\n").unwrap();
+    expect(&[&refused[..], &[kept.path()]].concat(), 2, &["kahanli8 would take"], &[]);
+    assert_eq!(std::fs::read_to_string(kept.path()).unwrap(), "an earlier run's rows\n");
+    let fresh = TempFile::new("refused-fresh", "csv");
+    expect(&[&refused[..], &[fresh.path()]].concat(), 2, &["kahanli8 would take"], &[]);
+    assert!(!std::path::Path::new(fresh.path()).exists(), "no file where there was none");
+}
