@@ -119,29 +119,38 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     let mut body_values = vec![0.0; bodies.as_ref().map_or(0, |b| b.columns().len())];
     let constraint_cols = mech::constraint_columns(&derivation);
     // The file is opened and locked before the run (one that cannot be written
-    // is bad input), but cut and given its header only at the first row, or at
-    // the end of a run that had none: a run refused before it starts (exit 2)
-    // leaves the file as it was, and a run stopped before its first row leaves
-    // a CSV that reads as one without rows.
-    let mut pending = match &opts.out {
-        Some(p) => {
-            let mut cols = vec!["t".to_string()];
-            cols.extend(names.iter().cloned());
-            cols.extend(names.iter().map(|c| format!("{c}'")));
-            cols.extend(inv_names.iter().cloned());
-            cols.extend(bodies.iter().flat_map(|b| b.columns().iter().cloned()));
-            cols.extend(constraint_cols.iter().cloned());
-            if with_events {
-                cols.push("event".into());
-            }
-            let created = !p.exists();
-            let file = crate::files::open_locked(p)
-                .map_err(|e| Failure::input(p, format!("cannot create the CSV file: {e}")))?;
-            Some(PendingCsv { file, header: format!("{}\n", cols.join(",")), created, path: p.clone() })
-        }
-        None => None,
-    };
+    // is bad input). A new file gets its header at once, so that a run stopped
+    // before its first row, even by SIGKILL, leaves a CSV that reads as one
+    // without rows. An existing file is cut and given its header only at the
+    // first row, or at the end of a run that had none: a run refused before it
+    // starts (exit 2) leaves it as it was, and removes a file it created.
+    let mut pending: Option<PendingCsv> = None;
     let mut csv: Option<RowWriter> = None;
+    let mut created: Option<&Path> = None;
+    if let Some(p) = &opts.out {
+        let mut cols = vec!["t".to_string()];
+        cols.extend(names.iter().cloned());
+        cols.extend(names.iter().map(|c| format!("{c}'")));
+        cols.extend(inv_names.iter().cloned());
+        cols.extend(bodies.iter().flat_map(|b| b.columns().iter().cloned()));
+        cols.extend(constraint_cols.iter().cloned());
+        if with_events {
+            cols.push("event".into());
+        }
+        let header = format!("{}\n", cols.join(","));
+        let new = !p.exists();
+        // A signal finds a new file absent or with its header whole.
+        let _held = interrupt::gate();
+        let file =
+            crate::files::open_locked(p).map_err(|e| Failure::input(p, format!("cannot create the CSV file: {e}")))?;
+        if new {
+            created = Some(p);
+            let writer = RowWriter::start(file, 0, header.as_bytes());
+            csv = Some(writer.map_err(|e| Failure::run(format!("cannot write {}: {e}", p.display())))?);
+        } else {
+            pending = Some(PendingCsv { file, header });
+        }
+    }
     let mut line: Vec<u8> = Vec::with_capacity(256);
     let mut crossings_seen = 0usize;
     let mut csv_error: Option<std::io::Error> = None;
@@ -212,14 +221,17 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     if let Some(pb) = &progress {
         pb.finish_and_clear();
     }
-    if let Some(p) = pending.take() {
-        if matches!(&result, Err(e) if !matches!(e, RunError::Failed { .. })) {
-            p.discard();
-        } else {
-            match p.start() {
-                Ok(w) => csv = Some(w),
-                Err(e) => csv_error = Some(e),
-            }
+    if matches!(&result, Err(e) if !matches!(e, RunError::Failed { .. })) {
+        // Refused before it started: the file as it was, or none.
+        drop(pending.take());
+        if let Some(path) = created {
+            drop(csv.take());
+            let _ = std::fs::remove_file(path);
+        }
+    } else if let Some(p) = pending.take() {
+        match p.start() {
+            Ok(w) => csv = Some(w),
+            Err(e) => csv_error = Some(e),
         }
     }
     if let Some(mut w) = csv {
@@ -283,9 +295,6 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
 struct PendingCsv {
     file: std::fs::File,
     header: String,
-    /// Whether this run created the file (it did not exist before).
-    created: bool,
-    path: std::path::PathBuf,
 }
 
 impl PendingCsv {
@@ -294,15 +303,6 @@ impl PendingCsv {
     fn start(self) -> std::io::Result<RowWriter> {
         let _held = interrupt::gate();
         RowWriter::start(self.file, 0, self.header.as_bytes())
-    }
-
-    /// Leaves the file as it was: removed if this run created it.
-    fn discard(self) {
-        let PendingCsv { file, created, path, .. } = self;
-        drop(file);
-        if created {
-            let _ = std::fs::remove_file(path);
-        }
     }
 }
 
