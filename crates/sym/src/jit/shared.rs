@@ -44,20 +44,56 @@ struct Shared<D> {
     define: D,
 }
 
-/// Fills the helper's slot with an error if the helper unwinds before it
-/// reported, so that the caller never spins forever.
-struct Report<'a, D> {
-    shared: &'a Shared<D>,
-    reported: bool,
+impl<D> Shared<D>
+where
+    D: Fn(&mut JITModule, usize) -> Result<FuncId, JitError> + Send + Sync + 'static,
+{
+    fn new(count: usize, codegen: Codegen, define: D) -> Arc<Shared<D>> {
+        Arc::new(Shared {
+            next: AtomicUsize::new(0),
+            helper: AtomicUsize::new(IDLE),
+            slot: Mutex::new(None),
+            count,
+            codegen,
+            define,
+        })
+    }
+
+    /// Starts the helper (when there is more than one function): once
+    /// scheduled, unless the caller has closed the work, it takes functions
+    /// as [`work`] does and gives its result to `finish`, or an error if it
+    /// unwinds first. When no thread can be had, the work is closed and
+    /// `false` returned: the caller does it all.
+    fn spawn_helper(self: &Arc<Self>, finish: impl FnOnce(Result<Option<Part>, JitError>) + Send + 'static) -> bool {
+        if self.count <= 1 {
+            return true;
+        }
+        let theirs = Arc::clone(self);
+        let spawned = std::thread::Builder::new().name("lagrange-jit".into()).spawn(move || {
+            if theirs.helper.compare_exchange(IDLE, WORKING, Ordering::AcqRel, Ordering::Acquire).is_err() {
+                return;
+            }
+            let mut guard = OnUnwind(Some(finish));
+            let result = work(&theirs);
+            if let Some(finish) = guard.0.take() {
+                finish(result);
+            }
+        });
+        if spawned.is_err() {
+            self.helper.store(CLOSED, Ordering::Release);
+        }
+        spawned.is_ok()
+    }
 }
 
-impl<D> Drop for Report<'_, D> {
+/// Gives the helper's `finish` an error if the helper unwinds before it gave
+/// its result, so that the caller never waits forever.
+struct OnUnwind<F: FnOnce(Result<Option<Part>, JitError>)>(Option<F>);
+
+impl<F: FnOnce(Result<Option<Part>, JitError>)> Drop for OnUnwind<F> {
     fn drop(&mut self) {
-        if !self.reported {
-            let mut slot = self.shared.slot.lock().unwrap_or_else(PoisonError::into_inner);
-            *slot = Some(Err(JitError::Codegen { message: "compiler thread panicked".into() }));
-            drop(slot);
-            self.shared.helper.store(DONE, Ordering::Release);
+        if let Some(finish) = self.0.take() {
+            finish(Err(JitError::Codegen { message: "compiler thread panicked".into() }));
         }
     }
 }
@@ -71,31 +107,13 @@ pub(crate) fn compile_shared<D>(count: usize, codegen: Codegen, define: D) -> Re
 where
     D: Fn(&mut JITModule, usize) -> Result<FuncId, JitError> + Send + Sync + 'static,
 {
-    let shared = Arc::new(Shared {
-        next: AtomicUsize::new(0),
-        helper: AtomicUsize::new(IDLE),
-        slot: Mutex::new(None),
-        count,
-        codegen,
-        define,
+    let shared = Shared::new(count, codegen, define);
+    let theirs = Arc::clone(&shared);
+    // Where no thread can be had, this thread does all the work below.
+    shared.spawn_helper(move |result| {
+        *theirs.slot.lock().unwrap_or_else(PoisonError::into_inner) = Some(result);
+        theirs.helper.store(DONE, Ordering::Release);
     });
-    if count > 1 {
-        let theirs = Arc::clone(&shared);
-        let spawned = std::thread::Builder::new().name("lagrange-jit".into()).spawn(move || {
-            if theirs.helper.compare_exchange(IDLE, WORKING, Ordering::AcqRel, Ordering::Acquire).is_err() {
-                return;
-            }
-            let mut report = Report { shared: &theirs, reported: false };
-            let result = work(&theirs);
-            *theirs.slot.lock().unwrap_or_else(PoisonError::into_inner) = Some(result);
-            report.reported = true;
-            theirs.helper.store(DONE, Ordering::Release);
-        });
-        if spawned.is_err() {
-            // No thread to be had: this thread does all the work.
-            shared.helper.store(CLOSED, Ordering::Release);
-        }
-    }
     let mine = work(&shared);
     let mut parts = Vec::with_capacity(2);
     if shared.helper.compare_exchange(IDLE, CLOSED, Ordering::AcqRel, Ordering::Acquire).is_err() {
@@ -152,21 +170,6 @@ impl<P: FnOnce(Result<Vec<Part>, JitError>)> Handover<P> {
     }
 }
 
-/// Hands an error over for the helper of [`compile_shared_then`] if it
-/// unwinds before it handed its result.
-struct HandOnUnwind<'a, P: FnOnce(Result<Vec<Part>, JitError>)> {
-    handover: &'a Handover<P>,
-    handed: bool,
-}
-
-impl<P: FnOnce(Result<Vec<Part>, JitError>)> Drop for HandOnUnwind<'_, P> {
-    fn drop(&mut self) {
-        if !self.handed {
-            self.handover.hand(Err(JitError::Codegen { message: "compiler thread panicked".into() }));
-        }
-    }
-}
-
 /// [`compile_shared`] for a caller that has other work to do meanwhile: the
 /// two threads share the functions as there, but when none is left to take
 /// the caller returns at once instead of waiting for the helper's last one,
@@ -178,37 +181,17 @@ where
     D: Fn(&mut JITModule, usize) -> Result<FuncId, JitError> + Send + Sync + 'static,
     P: FnOnce(Result<Vec<Part>, JitError>) + Send + 'static,
 {
-    let shared = Arc::new(Shared {
-        next: AtomicUsize::new(0),
-        helper: AtomicUsize::new(IDLE),
-        slot: Mutex::new(None),
-        count,
-        codegen,
-        define,
-    });
+    let shared = Shared::new(count, codegen, define);
     let handover = Arc::new(Handover {
         parts: Mutex::new(Vec::with_capacity(2)),
         error: Mutex::new(None),
         finished: AtomicUsize::new(0),
         publish: Mutex::new(Some(publish)),
     });
-    if count > 1 {
-        let theirs = Arc::clone(&shared);
-        let their_handover = Arc::clone(&handover);
-        let spawned = std::thread::Builder::new().name("lagrange-jit".into()).spawn(move || {
-            if theirs.helper.compare_exchange(IDLE, WORKING, Ordering::AcqRel, Ordering::Acquire).is_err() {
-                return;
-            }
-            let mut guard = HandOnUnwind { handover: &their_handover, handed: false };
-            let result = work(&theirs);
-            guard.handed = true;
-            their_handover.hand(result);
-        });
-        if spawned.is_err() {
-            // No thread to be had: this thread does all the work, and hands it alone.
-            shared.helper.store(CLOSED, Ordering::Release);
-            handover.finished.store(1, Ordering::Release);
-        }
+    let their_handover = Arc::clone(&handover);
+    if !shared.spawn_helper(move |result| their_handover.hand(result)) {
+        // No thread to be had: this thread does all the work, and hands it alone.
+        handover.finished.store(1, Ordering::Release);
     }
     let mine = work(&shared);
     if shared.helper.compare_exchange(IDLE, CLOSED, Ordering::AcqRel, Ordering::Acquire).is_ok() {
