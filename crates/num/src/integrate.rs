@@ -45,7 +45,19 @@ pub enum Direction {
 type EventFn<'a> = Box<dyn FnMut(f64, &[f64]) -> f64 + 'a>;
 
 /// Probes per run for events in long steps, at least (see [`Event`]).
-pub const PROBES_PER_RUN: usize = 1000;
+const PROBES_PER_RUN: usize = 1000;
+
+/// The spacing of the grid on which long steps are probed over `span` with
+/// `output`: that of the samples, at most a thousandth of the span. Events
+/// are looked for on it (see [`Event`]), and it suits the Taylor method's
+/// look-ahead ([`crate::Config::look_ahead`]) too.
+pub fn probe_spacing(span: f64, output: Output) -> f64 {
+    let intervals = match output {
+        Output::Samples(n) => n.saturating_sub(1).max(PROBES_PER_RUN),
+        Output::EveryStep => PROBES_PER_RUN,
+    };
+    span / intervals as f64
+}
 
 impl Direction {
     /// Whether the change of g from `ga` to `gb` is a crossing this direction counts.
@@ -268,11 +280,7 @@ fn drive_lazily<V: Solver + ?Sized>(
         }
     };
     // The grid on which long steps are probed for events (see [`Event`]).
-    let probe_spacing = (t_end - t0)
-        / match output {
-            Output::Samples(n) => (n - 1).max(PROBES_PER_RUN),
-            Output::EveryStep => PROBES_PER_RUN,
-        } as f64;
+    let probe_spacing = probe_spacing(t_end - t0, output);
     let mut probes: Vec<f64> = Vec::new();
     let mut brackets: Vec<(f64, f64, f64, f64)> = Vec::new();
     let stopped = |flow: ControlFlow<()>| flow.is_break();

@@ -79,8 +79,8 @@ pub use dopri5::Dopri5;
 pub use error::{LinalgError, NewtonError, QuadratureError, RhsError, SolveError};
 pub use gauss::{Gauss, Subdivisions};
 pub use integrate::{
-    integrate, integrate_projected, integrate_to, Direction, Event, Observation, ObservationKind, Output, Projection,
-    StopReason, Summary, FORESIGHT_MARGIN, PROBES_PER_RUN,
+    integrate, integrate_projected, integrate_to, probe_spacing, Direction, Event, Observation, ObservationKind,
+    Output, Projection, StopReason, Summary, FORESIGHT_MARGIN,
 };
 pub use linalg::{LinearSolver, DEFAULT_PIVOT_RATIO};
 pub use method::Method;

@@ -10,7 +10,7 @@ use super::{choose_method, RowBuffer, RunConfig, RunError, RunFailure, Start, St
 use crate::derive::Derivation;
 use crate::error::ModelError;
 use crate::probe;
-use num::{integrate, Config, Method, Output, RhsError, SolveError, Solver, PROBES_PER_RUN};
+use num::{integrate, probe_spacing, Config, Method, Output, RhsError, SolveError, Solver};
 use std::ops::ControlFlow;
 
 /// A run of a model without constraints.
@@ -145,17 +145,12 @@ impl Plain {
 }
 
 /// The Taylor method's look-ahead spacing ([`num::Config::look_ahead`]): the
-/// spacing of the rows, at most a thousandth of the run, as for the event
-/// probes. Its steps come from the series' last terms, which see nothing of a
-/// feature the series does not reach yet (a narrow barrier ahead whose force
-/// is still ~0); the Runge–Kutta methods evaluate the equations inside each
-/// step and need none.
+/// event probes' grid ([`num::probe_spacing`]). Its steps come from the
+/// series' last terms, which see nothing of a feature the series does not
+/// reach yet (a narrow barrier ahead whose force is still ~0); the
+/// Runge–Kutta methods evaluate the equations inside each step and need none.
 fn look_ahead(method: Method, config: &RunConfig) -> Option<f64> {
-    let rows = match config.output {
-        Output::Samples(k) => k.max(2) - 1,
-        Output::EveryStep => 1,
-    };
-    (method == Method::Taylor).then(|| config.until / rows.max(PROBES_PER_RUN) as f64)
+    (method == Method::Taylor).then(|| probe_spacing(config.until, config.output))
 }
 
 impl Stepping for Plain {
