@@ -11,7 +11,6 @@ mod decimal;
 mod diagnostics;
 mod extremal;
 mod files;
-mod format;
 mod inertia;
 mod interrupt;
 mod modes;
@@ -255,8 +254,8 @@ fn derive(path: &Path, format: Format, set: &[(String, f64)]) -> Result<(), Fail
             s.push('\n');
             s
         }
-        Format::Text => format::text(&derivation),
-        Format::Latex => format::latex(&derivation),
+        Format::Text => view::derive::text(&derivation),
+        Format::Latex => view::derive::latex(&derivation),
     };
     write_stdout(&text)
 }

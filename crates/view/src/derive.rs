@@ -502,3 +502,71 @@ impl Latex<'_> {
 fn comment_text(text: &str) -> String {
     text.chars().map(|c| if c.is_control() { ' ' } else { c }).collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::{latex, text};
+
+    /// A pendulum: one coordinate, no cyclic one, H the energy.
+    const PENDULUM: &str = r#"
+name = "pendulum"
+coordinates = ["th"]
+gravity = "g"
+[parameters]
+m = 2.0
+g = 9.81
+[[particles]]
+mass = "m"
+position = ["sin(th)", "-cos(th)"]
+"#;
+
+    /// A free particle in the plane in polar coordinates: th is cyclic.
+    const FREE: &str = r#"
+name = "free particle"
+coordinates = ["r", "th"]
+[[particles]]
+mass = "1"
+position = ["r*cos(th)", "r*sin(th)"]
+"#;
+
+    fn derive(text: &str) -> mech::Derivation {
+        mech::Derivation::new(mech::Model::parse(text, &[]).expect("the model parses")).expect("it derives")
+    }
+
+    #[track_caller]
+    fn check_contains(output: &str, expect: &[&str]) {
+        for line in expect {
+            assert!(output.contains(line), "{line:?} is missing from\n{output}");
+        }
+    }
+
+    #[test]
+    fn text_reads_like_the_notes() {
+        let out = text(&derive(PENDULUM));
+        assert!(out.starts_with("pendulum\n1 degree of freedom: th\nparameters: m = 2, g = 9.81\n"), "{out}");
+        check_contains(
+            &out,
+            &[
+                "generalized momenta p_q = ∂L/∂q'",
+                "  p_th = m*th'",
+                "cyclic coordinates\n  none: L depends on every coordinate",
+                "  H is the energy:",
+                "Hamilton's equations",
+            ],
+        );
+        let out = text(&derive(FREE));
+        check_contains(&out, &["2 degrees of freedom: r, th", "  th: ∂L/∂th = 0, so p_th = ", "is conserved"]);
+    }
+
+    #[test]
+    fn latex_gives_the_equations_in_blocks() {
+        let out = latex(&derive(PENDULUM));
+        assert!(out.starts_with("% pendulum (lagrange derive --format latex)\n\\begin{align*}\n"), "{out}");
+        assert_eq!(out.matches("\\begin{align*}").count(), 2, "main and Hamilton blocks: {out}");
+        assert_eq!(out.matches("\\begin{align*}").count(), out.matches("\\end{align*}").count());
+        check_contains(&out, &["% equation of motion for $\\theta$", "H &= "]);
+        // A line break in the model's name would end the comment and run the rest as LaTeX.
+        let out = latex(&derive(&PENDULUM.replace("name = \"pendulum\"", "name = \"a\\n\\\\input{x}\"")));
+        assert!(out.starts_with("% a \\input{x} (lagrange derive --format latex)\n"), "{out}");
+    }
+}

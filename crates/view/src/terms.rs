@@ -1,0 +1,19 @@
+//! How a front end spells what a user can ask for. A few sentences of the
+//! text outputs point the reader at a setting ("the step was given (--dt)",
+//! "see --format json"); the CLI names its flags there, the Python package
+//! its arguments. [`Terms`] carries those words, so that view names neither.
+
+/// The words a front end uses for the settings the text outputs mention.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Terms {
+    /// The fixed step of a run (the CLI's `--dt`).
+    pub step: &'static str,
+    /// The start of the search for an equilibrium, instead of the model's
+    /// `[initial]` (the CLI's `--at`).
+    pub start_at: &'static str,
+    /// The output that lists every number of an analysis (the CLI's
+    /// `--format json`).
+    pub full_output: &'static str,
+    /// The animation of the normal modes (the CLI's `--animate`).
+    pub animation: &'static str,
+}
