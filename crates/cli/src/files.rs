@@ -2,7 +2,8 @@
 //! (a FIFO or a device such as /dev/zero would block or never end), and never
 //! more than a limit, checked while reading rather than after. Streamed outputs
 //! are locked while written, so two runs cannot interleave their rows in one
-//! file, and no output may replace an input of the same command.
+//! file, and no output may replace an input of the same command. Figures are
+//! drawn by `view` and written whole.
 
 use std::fs::{File, OpenOptions, TryLockError};
 use std::io::Read;
@@ -12,6 +13,13 @@ use std::path::Path;
 /// of the largest allowed sweep at a few hundred bytes a row that fits in memory
 /// comfortably, far below what exhausts it.
 pub const MAX_CSV_BYTES: u64 = 1 << 30;
+
+/// Writes a figure that `view` drew (or could not draw) to `path`; `what`
+/// names it in the messages ("the plot", "the heat map").
+pub fn write_figure(path: &Path, what: &str, svg: Result<String, view::DrawError>) -> Result<(), String> {
+    let svg = svg.map_err(|err| format!("cannot draw {what} {}: {err}", path.display()))?;
+    std::fs::write(path, svg).map_err(|err| format!("cannot write {what} {}: {err}", path.display()))
+}
 
 /// Why a file could not be read.
 #[derive(Debug)]

@@ -16,7 +16,6 @@ mod interrupt;
 mod modes;
 mod orbit;
 mod output;
-mod plot;
 mod simulate;
 mod stream;
 mod sweep;
@@ -135,6 +134,10 @@ enum Format {
     /// JSON (`lagrange.derive/1`).
     Json,
 }
+
+/// How the text outputs name this program's flags.
+pub(crate) const TERMS: view::Terms =
+    view::Terms { step: "--dt", start_at: "--at", full_output: "--format json", animation: "--animate" };
 
 fn parse_set(s: &str) -> Result<(String, f64), String> {
     let (name, value) = s.split_once('=').ok_or_else(|| format!("expected NAME=VALUE, found '{s}'"))?;

@@ -4,17 +4,16 @@
 //! The run itself is `mech::simulate`; this module parses the options, writes
 //! the CSV row by row (constant memory; flushed even when the run fails, whole
 //! to its last row whatever stops it: `stream.rs`), keeps a bounded, decimated
-//! copy for the plot, and shows progress on a terminal. SIGINT or SIGTERM stop
-//! the run between two rows (`interrupt.rs`): the summary says where, and the
-//! exit code is 130 or 143.
+//! copy for the plot (`view::plot::PlotKeeper`), and shows progress on a
+//! terminal. The summary and the figure are drawn by `view::simulate` and
+//! `view::plot`. SIGINT or SIGTERM stop the run between two rows
+//! (`interrupt.rs`): the summary says where, and the exit code is 130 or 143.
 
 use crate::diagnostics::Failure;
 use crate::interrupt::{self, Signal};
-use crate::plot::{self, PlotData, Series};
 use crate::stream::RowWriter;
-use mech::{Derivation, RunConfig, RunError, RunReport, StopCondition};
+use mech::{Derivation, RunConfig, RunError, StopCondition};
 use num::{Method, Output};
-use serde_json::json;
 use std::io::{IsTerminal, Write};
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
@@ -38,9 +37,6 @@ pub struct Options {
     pub stop_when: Vec<String>,
     pub crossing: Vec<String>,
 }
-
-/// The most points kept for the plot; beyond it every other point is dropped.
-const MAX_PLOT_POINTS: usize = 8192;
 
 /// Lists the methods, one line each.
 pub fn list_methods() -> String {
@@ -154,7 +150,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     let mut line: Vec<u8> = Vec::with_capacity(256);
     let mut crossings_seen = 0usize;
     let mut csv_error: Option<std::io::Error> = None;
-    let mut plot_data = PlotKeeper::new(n);
+    let mut plot_data = view::plot::PlotKeeper::new(n);
     let progress = progress_bar(until);
     // The time of the last row handed over (written, with --out), and the
     // signal that stopped the run before the next one.
@@ -255,16 +251,21 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
         }
         Err(e) => return Err(input_failure(path, &source, e)),
     };
-    let interrupted = stopped_by.map(|signal| Interrupted { signal, t: last_row });
+    let interrupted =
+        stopped_by.map(|signal| view::simulate::Interrupted { signal: signal.name().into(), t: last_row });
 
     if let Some(plot_path) = &opts.plot {
         let data = plot_data.into_plot(&derivation.model().name, &report, &names, &inv_names);
-        plot::write_svg(plot_path, &data).map_err(Failure::run)?;
+        crate::files::write_figure(plot_path, "the plot", view::plot::svg(&data)).map_err(Failure::run)?;
     }
     let mut text = if opts.summary_json {
-        summary_json(&report, &names, Timing { derive_seconds: derived, setup_seconds: first_row }, interrupted)
+        let timing = view::simulate::Timing { derive_seconds: derived, setup_seconds: first_row };
+        let value = view::simulate::summary_json(&report, &names, &timing, interrupted.as_ref(), &crate::TERMS);
+        let mut s = serde_json::to_string_pretty(&value).unwrap_or_default();
+        s.push('\n');
+        s
     } else {
-        summary_text(&report, &names, &derivation, interrupted)
+        view::simulate::summary_text(&report, &names, &derivation, interrupted.as_ref(), &crate::TERMS)
     };
     if !opts.summary_json && !opts.crossing.is_empty() {
         text.push_str(&format!(
@@ -278,8 +279,8 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
         eprintln!("warning: {w}");
     }
     let keeps = |what: &str| opts.out.as_ref().map_or(String::new(), |p| format!(" ({} keeps {what})", p.display()));
-    if let Some(Interrupted { signal, t }) = interrupted {
-        let at = t.map_or("before the first row".to_string(), |t| format!("at t = {t}"));
+    if let Some(signal) = stopped_by {
+        let at = last_row.map_or("before the first row".to_string(), |t| format!("at t = {t}"));
         return Err(Failure::Interrupted {
             signal,
             message: format!("interrupted by {} {at}{}", signal.name(), keeps("every row up to there, each whole")),
@@ -345,266 +346,4 @@ fn progress_bar(until: f64) -> Option<indicatif::ProgressBar> {
     );
     pb.set_message(format!("{until}"));
     Some(pb)
-}
-
-/// A run that a signal stopped: which, and the time of the last row handed
-/// over (None when it came before the first).
-#[derive(Clone, Copy)]
-struct Interrupted {
-    signal: Signal,
-    t: Option<f64>,
-}
-
-/// Where the time before the integration went, for the JSON summary.
-struct Timing {
-    /// Reading, parsing and deriving the model.
-    derive_seconds: f64,
-    /// From reading the model file to the first row (None when no row came).
-    setup_seconds: Option<f64>,
-}
-
-fn summary_json(r: &RunReport, names: &[String], timing: Timing, interrupted: Option<Interrupted>) -> String {
-    let mut fin = serde_json::Map::new();
-    for (i, name) in names.iter().enumerate() {
-        fin.insert(name.clone(), json!(r.final_q[i]));
-        fin.insert(format!("{name}'"), json!(r.final_qd[i]));
-    }
-    let mut inv = serde_json::Map::new();
-    for a in &r.invariants {
-        inv.insert(
-            a.name.clone(),
-            json!({
-                "initial": a.initial,
-                "final": a.final_value,
-                "max_abs_drift": a.max_abs_drift,
-                "max_rel_drift": a.max_rel_drift,
-                "conserved": a.conserved,
-            }),
-        );
-    }
-    let v = json!({
-        "format": "lagrange.simulate/1",
-        "method": r.method.name(),
-        "form": r.form.name(),
-        "dt": r.dt,
-        "rtol": r.rtol,
-        "atol": r.atol,
-        "steps": r.steps,
-        "rejected_steps": r.rejected,
-        "rhs_evaluations": r.rhs_evaluations,
-        "look_ahead_evaluations": r.look_ahead_evaluations,
-        "t_final": r.t_final,
-        "stopped_by": r.stopped_by,
-        "failure": r.failure,
-        "failure_reason": r.failure_reason,
-        "pilot_rhs_evaluations": r.pilot_rhs_evaluations,
-        "tolerance_controls": tolerance_controls(r),
-        "final": fin,
-        "invariants": inv,
-        "warnings": r.warnings,
-        "wall_seconds": r.wall_seconds,
-        "derive_seconds": timing.derive_seconds,
-        "setup_seconds": timing.setup_seconds,
-        "interrupted": interrupted.map(|i| json!({"signal": i.signal.name(), "t": i.t})),
-    });
-    let mut v = v;
-    if !r.constraints.is_empty() {
-        let mut cs = serde_json::Map::new();
-        for c in &r.constraints {
-            cs.insert(
-                c.name.clone(),
-                json!({
-                    "kind": c.kind.name(),
-                    "max_abs_residual": c.max_abs_residual,
-                    "max_abs_velocity_residual": c.max_abs_velocity_residual,
-                    "final_lambda": c.final_lambda,
-                    "max_force": c.max_force,
-                }),
-            );
-        }
-        v["constraints"] = serde_json::Value::Object(cs);
-        v["stabilization"] = json!("projection after every step (positions by Gauss-Newton, then velocities)");
-    }
-    let mut s = serde_json::to_string_pretty(&v).unwrap_or_default();
-    s.push('\n');
-    s
-}
-
-/// What the run's tolerance controlled: the method's sentence, or nothing
-/// when the user gave the fixed step.
-fn tolerance_controls(r: &RunReport) -> &'static str {
-    if r.step_given {
-        "nothing: the step was given (--dt)"
-    } else {
-        r.method.tolerance_controls()
-    }
-}
-
-fn summary_text(r: &RunReport, names: &[String], d: &Derivation, interrupted: Option<Interrupted>) -> String {
-    let mut s = String::new();
-    s.push_str(&format!("{}\n", d.model().name));
-    let step = match r.dt {
-        Some(h) => format!("fixed step {h:.3e}"),
-        None => format!("rtol {:.0e}, atol {:.0e}", r.rtol, r.atol),
-    };
-    s.push_str(&format!(
-        "method {} ({}, {}), state [q, {}]\n",
-        r.method.name(),
-        r.method.description(),
-        step,
-        if r.form.name() == "lagrange" { "q'" } else { "p" }
-    ));
-    s.push_str(&format!("tolerance controls {}\n", tolerance_controls(r)));
-    // The Taylor method's work unit is one expansion of the series per step.
-    let evaluations = if r.method == num::Method::Taylor {
-        format!("Taylor expansions of order {}", num::taylor_order(r.rtol))
-    } else {
-        "right-hand-side evaluations".to_string()
-    };
-    s.push_str(&format!(
-        "{} steps ({} rejected), {} {evaluations}{}, {:.3} s\n",
-        r.steps,
-        r.rejected,
-        r.rhs_evaluations,
-        if r.pilot_rhs_evaluations > 0 {
-            format!(" (+{} choosing the step)", r.pilot_rhs_evaluations)
-        } else if r.look_ahead_evaluations > 0 {
-            format!(" (+{} right-hand sides looking ahead)", r.look_ahead_evaluations)
-        } else {
-            String::new()
-        },
-        r.wall_seconds
-    ));
-    match (&r.failure, &r.stopped_by) {
-        _ if interrupted.is_some() => {
-            let Interrupted { signal, t } = interrupted.expect("matched");
-            match t {
-                Some(t) => s.push_str(&format!("interrupted at t = {t} ({})\n", signal.name())),
-                None => s.push_str(&format!("interrupted before the first row ({})\n", signal.name())),
-            }
-        }
-        (Some(_), _) => s.push_str(&format!("FAILED after t = {} (see the error below)\n", r.t_final)),
-        (None, Some(why)) => s.push_str(&format!("stopped at t = {} ({why})\n", r.t_final)),
-        (None, None) => s.push_str(&format!("reached t = {}\n", r.t_final)),
-    }
-    s.push_str("final state:");
-    for (i, name) in names.iter().enumerate() {
-        s.push_str(&format!("  {name} = {:.10}  {name}' = {:.10}", r.final_q[i], r.final_qd[i]));
-    }
-    s.push('\n');
-    if !r.invariants.is_empty() {
-        s.push_str("invariants          initial              final                max abs drift  max rel drift\n");
-        for a in &r.invariants {
-            s.push_str(&format!(
-                "  {:<8}{} {:>20.12e} {:>20.12e} {:>14.3e} {:>14.3e}\n",
-                a.name,
-                if a.conserved { "*" } else { " " },
-                a.initial,
-                a.final_value,
-                a.max_abs_drift,
-                a.max_rel_drift
-            ));
-        }
-        s.push_str("  (* conserved according to the derivation)\n");
-    }
-    if !r.constraints.is_empty() {
-        s.push_str("constraints (the state is projected onto them after every step)\n");
-        s.push_str("  name        kind        max |residual|  max |residual'|      max |Aᵀλ|        final λ\n");
-        for c in &r.constraints {
-            let vel = if c.kind == mech::ConstraintKind::Holonomic {
-                format!("{:>15.3e}", c.max_abs_velocity_residual)
-            } else {
-                format!("{:>15}", "-")
-            };
-            s.push_str(&format!(
-                "  {:<10}  {:<10} {:>15.3e}  {} {:>14.6e} {:>14.6e}\n",
-                c.name,
-                c.kind.name(),
-                c.max_abs_residual,
-                vel,
-                c.max_force,
-                c.final_lambda
-            ));
-        }
-    }
-    s
-}
-
-/// A bounded, decimated copy of the run for the plot: constant memory however
-/// long the run.
-struct PlotKeeper {
-    n: usize,
-    stride: usize,
-    seen: usize,
-    t: Vec<f64>,
-    q: Vec<Vec<f64>>,
-    qd: Vec<Vec<f64>>,
-    inv: Vec<Vec<f64>>,
-}
-
-impl PlotKeeper {
-    fn new(n: usize) -> PlotKeeper {
-        PlotKeeper {
-            n,
-            stride: 1,
-            seen: 0,
-            t: Vec::new(),
-            q: vec![Vec::new(); n],
-            qd: vec![Vec::new(); n],
-            inv: Vec::new(),
-        }
-    }
-
-    fn push(&mut self, t: f64, q: &[f64], qd: &[f64], inv: &[f64]) {
-        if self.inv.is_empty() {
-            self.inv = vec![Vec::new(); inv.len()];
-        }
-        self.seen += 1;
-        if !(self.seen - 1).is_multiple_of(self.stride) {
-            return;
-        }
-        self.t.push(t);
-        for i in 0..self.n {
-            self.q[i].push(q[i]);
-            self.qd[i].push(qd[i]);
-        }
-        for (k, v) in inv.iter().enumerate() {
-            self.inv[k].push(*v);
-        }
-        if self.t.len() >= MAX_PLOT_POINTS {
-            let halve = |v: &mut Vec<f64>| {
-                let kept: Vec<f64> = v.iter().step_by(2).copied().collect();
-                *v = kept;
-            };
-            halve(&mut self.t);
-            self.q.iter_mut().chain(self.qd.iter_mut()).chain(self.inv.iter_mut()).for_each(halve);
-            self.stride *= 2;
-        }
-    }
-
-    fn into_plot(self, title: &str, r: &RunReport, names: &[String], inv_names: &[String]) -> PlotData {
-        let series = |vals: Vec<Vec<f64>>, suffix: &str| -> Vec<Series> {
-            vals.into_iter()
-                .zip(names)
-                .map(|(values, name)| Series { name: format!("{name}{suffix}"), values })
-                .collect()
-        };
-        let step = match r.dt {
-            Some(h) => format!("dt {h:.2e}"),
-            None => format!("rtol {:.0e}", r.rtol),
-        };
-        PlotData {
-            title: title.to_string(),
-            subtitle: format!("{}, {}, {} steps", r.method.name(), step, r.steps),
-            time: self.t,
-            coordinates: series(self.q, ""),
-            velocities: series(self.qd, "'"),
-            invariants: self
-                .inv
-                .into_iter()
-                .zip(inv_names)
-                .map(|(values, name)| Series { name: name.clone(), values })
-                .collect(),
-        }
-    }
 }

@@ -4,8 +4,9 @@
 //! Two forms: `lagrange sweep MODEL --until T --grid SPEC [...]` runs a sweep (or
 //! the shard `--shard i/n` of one), and `lagrange sweep --merge OUT.csv
 //! SHARD.csv...` joins the shards' CSV files into the whole sweep's. Both may
-//! draw `--heatmap FILE.svg`. The computation is `mech::Sweep`; this module
-//! parses options, shows progress on a terminal and does the IO.
+//! draw `--heatmap FILE.svg`. The computation is `mech::Sweep` and the map is
+//! drawn by `view::heatmap`; this module parses options, shows progress on a
+//! terminal and does the IO.
 //!
 //! Rows stream to `--out` (or stdout) in grid order as they finish, whole
 //! (`stream.rs`); the heat map and the counts are gathered as they pass. A
@@ -14,19 +15,18 @@
 //! an output (`resume.rs`): it checks that the file is this sweep's, keeps its
 //! whole rows, and appends the rest.
 
-mod heatmap;
 mod resume;
 
 use crate::diagnostics::Failure;
 use crate::interrupt;
 use crate::stream::RowWriter;
-use heatmap::HeatMap;
 use mech::{Grid, Shard, SweepConfig, SweepError, SweepTable, TableRow};
 use num::Method;
 use std::io::IsTerminal;
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+use view::heatmap::{HeatMap, HeatMapError, MAX_CELLS};
 
 /// Options of `sweep`.
 #[derive(clap::Args)]
@@ -138,7 +138,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     })?;
     let header = sweep.header();
     let mut map = match &args.heatmap {
-        Some(_) => Some(HeatMap::new(header, &args.color).map_err(Failure::usage)?),
+        Some(_) => Some(HeatMap::new(header, &args.color).map_err(heatmap_usage)?),
         None => None,
     };
 
@@ -205,7 +205,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let complete = result.map_err(usage)?;
     let seconds = start.elapsed().as_secs_f64();
     if let (Some(svg), Some(map)) = (&args.heatmap, &map) {
-        map.write_svg(svg).map_err(Failure::run)?;
+        crate::files::write_figure(svg, "the heat map", map.svg()).map_err(Failure::run)?;
     }
     let kept = |what: &str| match &args.out {
         Some(out) => format!(
@@ -301,6 +301,22 @@ fn usage(e: SweepError) -> Failure {
     }
 }
 
+/// A heat map that cannot be drawn, in the CLI's terms (exit 2).
+fn heatmap_usage(e: HeatMapError) -> Failure {
+    Failure::usage(match e {
+        HeatMapError::NotTwoDimensional { axes } => format!(
+            "--heatmap needs a 2-D grid (two axes, as in --grid \"a=-3:3:100,b=-3:3:100\"); this one has {axes}; the CSV has every run"
+        ),
+        HeatMapError::TooManyCells { first, second } => format!(
+            "--heatmap draws at most {MAX_CELLS} cells, and this grid has {first} × {second} = {}; the CSV has every run (draw a coarser grid, or plot the CSV)",
+            first * second
+        ),
+        HeatMapError::UnknownColor { color, known } => {
+            format!("--color '{color}' is not available; choose one of {}", known.join(", "))
+        }
+    })
+}
+
 /// `sweep --merge OUT.csv SHARD.csv...`.
 fn merge(args: &Args, out: &Path) -> Result<(), Failure> {
     let shards: Vec<&Path> = args.files.iter().map(PathBuf::as_path).collect();
@@ -316,7 +332,7 @@ fn merge(args: &Args, out: &Path) -> Result<(), Failure> {
     let table = mech::merge(&shards).map_err(|e| Failure::usage(e.to_string()))?;
     let map = match &args.heatmap {
         Some(_) => {
-            let mut map = HeatMap::new(&table.header, &args.color).map_err(Failure::usage)?;
+            let mut map = HeatMap::new(&table.header, &args.color).map_err(heatmap_usage)?;
             table.rows.iter().for_each(|row| map.add(row));
             Some(map)
         }
@@ -324,7 +340,7 @@ fn merge(args: &Args, out: &Path) -> Result<(), Failure> {
     };
     write_csv(&table, out)?;
     if let (Some(svg), Some(map)) = (&args.heatmap, &map) {
-        map.write_svg(svg).map_err(Failure::run)?;
+        crate::files::write_figure(svg, "the heat map", map.svg()).map_err(Failure::run)?;
     }
     eprintln!("merged {} shards: {} runs into {}", shards.len(), table.rows.len(), out.display());
     Ok(())

@@ -30,8 +30,13 @@
 //! ```
 
 pub mod derive;
+mod error;
+pub mod heatmap;
 mod number;
+pub mod plot;
+pub mod simulate;
 mod terms;
 
+pub use error::DrawError;
 pub use number::human;
 pub use terms::Terms;

@@ -4,7 +4,8 @@
 //!
 //! Enter at [`HeatMap::new`] (before running), [`HeatMap::add`] per row as
 //! the sweep streams (one `f32` per cell: at most [`MAX_CELLS`]), and
-//! [`HeatMap::write_svg`]. Colours are
+//! [`HeatMap::svg`] for the SVG text. A map that cannot be drawn is a
+//! [`HeatMapError`] with its facts, which the front end words. Colours are
 //! viridis (perceptually uniform, legible in grey and to colour-blind readers);
 //! the range spans the 0.5th to 99.5th percentile so that a few outliers do not
 //! wash out the map, and the bar's ends say when values were clipped. The drift
@@ -12,11 +13,11 @@
 //! in a row are drawn as one rectangle, which keeps a 200×200 map's file small.
 
 use crate::plot::{nice_step, pos, px, superscript, text_style, FONT};
+use crate::DrawError;
 use mech::{Axis, SweepHeader, TableRow};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::error::Error;
-use std::path::Path;
 
 const WIDTH: u32 = 960;
 const HEIGHT: u32 = 860;
@@ -42,7 +43,7 @@ const VIRIDIS: [(u8, u8, u8); 11] = [
 /// an SVG of more cells than a screen has pixels would show nothing more.
 pub const MAX_CELLS: usize = 1_000_000;
 
-/// The column a `--color` names: `lyapunov`, `drift`, a final coordinate or velocity (`a`, `a'`), or any column.
+/// The column a colour names: `lyapunov`, `drift`, a final coordinate or velocity (`a`, `a'`), or any column.
 fn column_of(color: &str) -> String {
     match color {
         "lyapunov" | "energy_drift" | "t_final" => color.to_string(),
@@ -50,6 +51,30 @@ fn column_of(color: &str) -> String {
         c if c.starts_with("final_") => c.to_string(),
         c => format!("final_{c}"),
     }
+}
+
+/// Why a sweep has no heat map, found before any run.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum HeatMapError {
+    /// The grid does not have two axes.
+    NotTwoDimensional {
+        /// How many axes it has.
+        axes: usize,
+    },
+    /// The grid has more than [`MAX_CELLS`] cells.
+    TooManyCells {
+        /// The points along the first axis.
+        first: usize,
+        /// The points along the second axis.
+        second: usize,
+    },
+    /// The colour names no column of the sweep.
+    UnknownColor {
+        /// The colour asked for.
+        color: String,
+        /// The colours that could be drawn, in the order of the columns.
+        known: Vec<String>,
+    },
 }
 
 /// What a heat map draws, gathered row by row as a sweep streams: one value
@@ -74,20 +99,14 @@ impl HeatMap {
     /// An empty map for the sweep of `header`, coloured by `color`; refused
     /// before any run when the grid is not 2-D, has more than [`MAX_CELLS`]
     /// cells, or the colour is not a column.
-    pub fn new(header: &SweepHeader, color: &str) -> Result<HeatMap, String> {
+    pub fn new(header: &SweepHeader, color: &str) -> Result<HeatMap, HeatMapError> {
         let axes = header.axes().unwrap_or_default();
         let [ax, ay] = axes.as_slice() else {
-            return Err(format!(
-                "--heatmap needs a 2-D grid (two axes, as in --grid \"a=-3:3:100,b=-3:3:100\"); this one has {}; the CSV has every run",
-                axes.len()
-            ));
+            return Err(HeatMapError::NotTwoDimensional { axes: axes.len() });
         };
         let cells = ax.count * ay.count;
         if cells > MAX_CELLS {
-            return Err(format!(
-                "--heatmap draws at most {MAX_CELLS} cells, and this grid has {} × {} = {cells}; the CSV has every run (draw a coarser grid, or plot the CSV)",
-                ax.count, ay.count
-            ));
+            return Err(HeatMapError::TooManyCells { first: ax.count, second: ay.count });
         }
         let column = column_of(color);
         let lyapunov_off = header.meta("lyapunov") == Some("off");
@@ -98,7 +117,7 @@ impl HeatMap {
                 known.insert(0, "lyapunov".into());
             }
             known.extend(header.columns.iter().filter_map(|c| c.strip_prefix("final_").map(str::to_string)));
-            format!("--color '{color}' is not available; choose one of {}", known.join(", "))
+            HeatMapError::UnknownColor { color: color.to_string(), known }
         })?;
         Ok(HeatMap {
             ax: ax.clone(),
@@ -128,11 +147,10 @@ impl HeatMap {
         }
     }
 
-    /// Draws the map to `path`; cells without a row (a sweep interrupted, a
+    /// The map as SVG text; cells without a row (a sweep interrupted, a
     /// shard) are grey like failed runs.
-    pub fn write_svg(&self, path: &Path) -> Result<(), String> {
-        let svg = self.render().map_err(|e| format!("cannot draw the heat map {}: {e}", path.display()))?;
-        std::fs::write(path, svg).map_err(|e| format!("cannot write the heat map {}: {e}", path.display()))
+    pub fn svg(&self) -> Result<String, DrawError> {
+        Ok(self.render()?)
     }
 }
 
@@ -357,5 +375,53 @@ mod tests {
         let s = Scale::new(&[-12.0, -10.0, f32::NAN], true);
         assert_eq!(s.fraction(-12.0), Some(0.0));
         assert_eq!(s.fraction(f32::NAN), None);
+    }
+
+    /// A 3 × 2 sweep of a pendulum, as `lagrange sweep` writes it; the last run failed.
+    const SWEEP: &str = "\
+# lagrange sweep; model=planar pendulum; grid=ph=0.1:1.0:3,ph'=0.0:1.0:2; runs=6; until=1.0; method=taylor; rtol=1e-10; atol=1e-12; parameters=m=1.0 l=1.0 g=9.81; lyapunov=d0 1e-8 every 1.0
+run,ph,ph',t_final,final_ph,final_ph',energy_drift,lyapunov,failure
+0,0.1,0.0,1.0,-0.0999934383401109,-0.0035849840375417018,7.279411955722609e-16,0.022172785392801885,
+1,0.1,1.0,1.0,-0.08978841133859768,-1.0094471658261608,2.800435746395526e-14,0.0443541636596117,
+2,0.55,0.0,1.0,-0.5487218108104958,-0.11443041862337466,7.752596657617844e-14,0.2562022880062934,
+3,0.55,1.0,1.0,-0.5184136485490644,-1.1469632760590738,1.1216220078986836e-13,0.28641924955143216,
+4,1.0,0.0,1.0,-0.9800669929332254,-0.5718037207195228,2.9056512135391636e-13,0.6261815773309477,
+5,1.0,1.0,0.5,NaN,NaN,NaN,NaN,step size underflow
+";
+
+    fn table() -> mech::SweepTable {
+        mech::SweepTable::parse(SWEEP, "sweep.csv").expect("the sweep's CSV reads back")
+    }
+
+    #[test]
+    fn a_map_of_a_sweep() {
+        let table = table();
+        let mut map = HeatMap::new(&table.header, "lyapunov").unwrap();
+        table.rows.iter().for_each(|row| map.add(row));
+        let svg = map.svg().unwrap();
+        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"), "not an SVG: {}", &svg[..80]);
+        crate::plot::tests::assert_balanced(&svg);
+        for text in ["planar pendulum: largest Lyapunov exponent λ", "3 × 2 runs to t = 1, taylor", "grey: 1 failed"]
+        {
+            assert!(svg.contains(text), "the map lacks {text:?}");
+        }
+        let drift = HeatMap::new(&table.header, "drift").unwrap().svg().unwrap();
+        assert!(drift.contains("relative drift of H") && drift.contains("grey: 6 failed or missing"));
+    }
+
+    #[test]
+    fn maps_that_cannot_be_drawn() {
+        let table = table();
+        let unknown = HeatMap::new(&table.header, "x").err();
+        let known = ["lyapunov", "drift", "ph", "ph'"].map(String::from).to_vec();
+        assert_eq!(unknown, Some(HeatMapError::UnknownColor { color: "x".into(), known }));
+        let line = SWEEP.replace("grid=ph=0.1:1.0:3,ph'=0.0:1.0:2", "grid=ph=0.1:1.0:6");
+        let one_axis = mech::SweepTable::parse(&line, "sweep.csv").unwrap();
+        let err = HeatMap::new(&one_axis.header, "lyapunov").err();
+        assert_eq!(err, Some(HeatMapError::NotTwoDimensional { axes: 1 }));
+        let huge =
+            SWEEP.replace("grid=ph=0.1:1.0:3,ph'=0.0:1.0:2; runs=6", "grid=ph=0:1:2000,ph'=0:1:1000; runs=2000000");
+        let huge = mech::SweepTable::parse(&huge, "sweep.csv").map(|t| HeatMap::new(&t.header, "lyapunov").err());
+        assert_eq!(huge.ok().flatten(), Some(HeatMapError::TooManyCells { first: 2000, second: 1000 }));
     }
 }

@@ -1,6 +1,8 @@
-//! The figure of a simulated run, written as one SVG for `lagrange simulate --plot`.
+//! The figure of a simulated run as SVG text (what `lagrange simulate --plot`
+//! writes, and what the Python package shows for a run).
 //!
-//! Enter at [`write_svg`] with a [`PlotData`]. The figure has a title and subtitle on top and three panels:
+//! Enter at [`svg`] with a [`PlotData`], or gather one as a run streams with
+//! [`PlotKeeper`]. The figure has a title and subtitle on top and three panels:
 //! the coordinates against time (upper left), the drift of every conserved quantity against time (lower left,
 //! sharing the time axis) and phase portraits q' against q (right column; one per coordinate when there are at
 //! most three, else of the first coordinate only).
@@ -9,11 +11,15 @@
 //! nonzero axis range, at most [`MAX_SERIES`] series are drawn per panel, and long runs are decimated to about
 //! [`MAX_POINTS`] points per curve by keeping the extremes of each bucket, so spikes survive and files stay small.
 
+mod keeper;
+
+pub use keeper::PlotKeeper;
+
+use crate::DrawError;
 use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::error::Error;
-use std::path::Path;
 
 /// A named sequence of samples, one per entry of [`PlotData::time`].
 pub struct Series {
@@ -23,7 +29,7 @@ pub struct Series {
     pub values: Vec<f64>,
 }
 
-/// Everything [`write_svg`] draws: a run of a model sampled at common times.
+/// Everything [`svg`] draws: a run of a model sampled at common times.
 pub struct PlotData {
     /// The figure's title, normally the model name.
     pub title: String,
@@ -92,15 +98,11 @@ fn bold_style(size: u32, anchor: (HPos, VPos)) -> TextStyle<'static> {
     TextStyle::from((FONT, px(size)).into_font().style(FontStyle::Bold)).color(&INK).pos(Pos::new(anchor.0, anchor.1))
 }
 
-/// Draws `data` as an SVG figure at `path`.
-///
-/// Errors are messages naming `path`: the figure could not be drawn or the file not written.
-pub fn write_svg(path: &Path, data: &PlotData) -> Result<(), String> {
-    let svg = render(data).map_err(|err| format!("cannot draw the plot {}: {err}", path.display()))?;
-    std::fs::write(path, svg).map_err(|err| format!("cannot write the plot {}: {err}", path.display()))
+/// The whole figure as SVG text.
+pub fn svg(data: &PlotData) -> Result<String, DrawError> {
+    Ok(render(data)?)
 }
 
-/// The whole figure as SVG text.
 fn render(data: &PlotData) -> Result<String, Box<dyn Error>> {
     let mut svg = String::new();
     {
@@ -667,8 +669,39 @@ fn segments(x: &[f64], y: &[f64], indices: &[usize]) -> Vec<Vec<(f64, f64)>> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+
+    /// Fails unless `svg` is one `<svg>` element whose tags open and close in
+    /// order (XML-ish: no attribute or entity is checked).
+    #[track_caller]
+    pub(crate) fn assert_balanced(svg: &str) {
+        let mut open: Vec<&str> = Vec::new();
+        let mut roots = 0;
+        let mut rest = svg;
+        while let Some(start) = rest.find('<') {
+            let end = start + rest[start..].find('>').expect("every tag is closed by '>'");
+            let tag = &rest[start + 1..end];
+            rest = &rest[end + 1..];
+            if tag.starts_with('?') || tag.starts_with('!') {
+                continue;
+            }
+            if let Some(name) = tag.strip_prefix('/') {
+                assert_eq!(open.pop(), Some(name.trim()), "</{name}> closes another element");
+            } else {
+                let name = tag.split(|c: char| c.is_whitespace() || c == '/').next().unwrap_or("");
+                if open.is_empty() {
+                    assert_eq!(name, "svg", "the root element is <svg>");
+                    roots += 1;
+                }
+                if !tag.ends_with('/') {
+                    open.push(name);
+                }
+            }
+        }
+        assert!(open.is_empty(), "unclosed elements: {open:?}");
+        assert_eq!(roots, 1, "one root element");
+    }
 
     fn series(name: &str, values: Vec<f64>) -> Series {
         Series { name: name.to_string(), values }
@@ -697,18 +730,14 @@ mod tests {
     }
 
     #[track_caller]
-    fn check_svg(data: &PlotData, file: &str, expect: &[&str]) -> String {
-        let dir = std::env::temp_dir().join(format!("lagrange-plot-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join(file);
-        write_svg(&path, data).unwrap();
-        let svg = std::fs::read_to_string(&path).unwrap();
+    fn check_svg(data: &PlotData, name: &str, expect: &[&str]) -> String {
+        let svg = svg(data).unwrap();
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"), "not an SVG: {}", &svg[..80]);
-        assert!(!svg.contains("NaN"), "non-finite coordinates in {}", path.display());
+        assert!(!svg.contains("NaN"), "non-finite coordinates in {name}");
+        assert_balanced(&svg);
         for text in expect {
-            assert!(svg.contains(text), "{file} lacks {text:?}");
+            assert!(svg.contains(text), "{name} lacks {text:?}");
         }
-        std::fs::remove_file(&path).unwrap();
         svg
     }
 
@@ -717,7 +746,16 @@ mod tests {
         let svg = check_svg(
             &pendulum_like(2001),
             "pendulum.svg",
-            &["planar double pendulum", "dop853, rtol 1e-10", "Phase portrait of a", "energy", "p_z (abs.)"],
+            &[
+                "planar double pendulum",
+                "dop853, rtol 1e-10",
+                "\na\n</text>",
+                "\nb\n</text>",
+                "Phase portrait of a",
+                "Phase portrait of b",
+                "energy",
+                "p_z (abs.)",
+            ],
         );
         assert!(svg.contains("×10⁻"), "drift ticks are not scientific");
     }
