@@ -31,11 +31,16 @@
 
 pub mod derive;
 mod error;
+pub mod extremal;
 pub mod heatmap;
+pub mod inertia;
+pub mod modes;
 mod number;
+pub mod orbit;
 pub mod plot;
 pub mod simulate;
 mod terms;
+pub mod top;
 
 pub use error::DrawError;
 pub use number::human;

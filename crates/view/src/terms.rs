@@ -17,3 +17,12 @@ pub struct Terms {
     /// The animation of the normal modes (the CLI's `--animate`).
     pub animation: &'static str,
 }
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::Terms;
+
+    /// Words no flag of the CLI uses, so that a test sees where they land.
+    pub(crate) const OTHER: Terms =
+        Terms { step: "dt=", start_at: "at=", full_output: "the report", animation: "animate()" };
+}
