@@ -1,6 +1,6 @@
 //! The `lagrange` command-line program: argument parsing, reading files,
 //! rendering diagnostics and writing results. Everything it prints is computed
-//! by the `mech` library; this crate only does IO.
+//! by the `mech` library and worded or drawn by `view`; this crate only does IO.
 //!
 //! Exit codes: 0 done; 2 bad input (file, expression, model, arguments), with a
 //! message naming file, line and column; 1 a run that failed midway; 130 and
