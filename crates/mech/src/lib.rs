@@ -98,7 +98,7 @@ pub use orbit::{Kepler, Orbit, OrbitError, OrbitKind, OrbitReport};
 pub use report::{BodyReport, ConstraintReport, DeriveReport, HamiltonEquations, NamedExpr, Ordered};
 pub use run::body::BodyRecorder;
 pub use run::constrained::{constraint_columns, ConstraintAudit};
-pub use run::dynamics::{invariants_of, Form, Invariant};
+pub use run::dynamics::{invariants_of, Dynamics, Form, Invariant, System};
 pub use run::{
     approx, simulate, Audit, BudgetAdvice, BudgetStage, Row, RunConfig, RunError, RunFailure, RunReport, StepBudget,
     StopCondition, TimeScale, MAX_SAMPLES, STEPS_PER_TIME_SCALE,

@@ -1,0 +1,246 @@
+"""A mechanical system: read from a model file, from TOML text, or built in
+Python, derived once, then simulated and analysed."""
+
+from __future__ import annotations
+
+import os
+from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Union
+
+from . import _native, toml_writer
+from .analyses import Report
+from .derivation import Derivation
+from .errors import Interrupted, RunError
+from .run import Run
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+class Model:
+    """A model of a mechanical system, derived.
+
+    Build it from a file (:func:`lagrange.load`), from TOML text
+    (:meth:`Model.from_toml`), or from Python values, where every expression
+    may be a string of the expression language or a SymPy expression::
+
+        th = sympy.physics.mechanics.dynamicsymbols("th")
+        m, l, g = sympy.symbols("m l g")
+        model = lagrange.Model(
+            coordinates=[th],
+            parameters={m: 1.0, l: 1.0, g: 9.81},
+            particles=[{"mass": m, "position": [l * sympy.sin(th), -l * sympy.cos(th)]}],
+            gravity=g,
+            initial={"th": 0.5, "th'": 0.0},
+        )
+
+    Keyword arguments mirror the model file (DESIGN.md, "Model files"):
+    ``name``, ``coordinates``, ``parameters``, ``gravity``, ``lagrangian``,
+    ``kinetic``, ``potential``, ``dissipation``, ``forces`` (coordinate →
+    generalized force), ``initial`` (``"th"``/``"th'"`` → value),
+    ``particles``, ``bodies`` and ``constraints`` (lists of dicts with the
+    file's keys). ``set`` overrides parameter values; ``folder`` is where body
+    files the model names are read from. Bad input raises
+    :class:`lagrange.ModelError` pointing into the model's text
+    (``model.source``).
+    """
+
+    def __init__(
+        self,
+        coordinates: Optional[Sequence[Any]] = None,
+        *,
+        name: str = "model",
+        parameters: Optional[Mapping[Any, Any]] = None,
+        particles: Optional[Sequence[Mapping[str, Any]]] = None,
+        gravity: Any = None,
+        lagrangian: Any = None,
+        kinetic: Any = None,
+        potential: Any = None,
+        dissipation: Any = None,
+        forces: Optional[Mapping[Any, Any]] = None,
+        initial: Optional[Mapping[Any, Any]] = None,
+        bodies: Optional[Sequence[Mapping[str, Any]]] = None,
+        constraints: Optional[Sequence[Mapping[str, Any]]] = None,
+        set: Optional[Mapping[str, float]] = None,
+        folder: Optional[PathLike] = None,
+    ) -> None:
+        if coordinates is None:
+            raise TypeError("Model() needs coordinates=[...] (or use lagrange.load / Model.from_toml)")
+        text = toml_writer.model(
+            name_=name,
+            coordinates=coordinates,
+            parameters=parameters or {},
+            top={"gravity": gravity, "lagrangian": lagrangian, "kinetic": kinetic, "potential": potential,
+                 "dissipation": dissipation},
+            tables={"forces": forces or {}, "initial": initial or {}},
+            arrays={"particles": particles or [], "bodies": bodies or [], "constraints": constraints or []},
+        )
+        self._init(_native.from_toml(text, "<model>", _floats(set), _folder(folder)), set, folder)
+
+    def _init(self, native: Any, set: Optional[Mapping[str, float]], folder: Optional[PathLike]) -> None:
+        self._native = native
+        self._set = _floats(set)
+        self._folder = _folder(folder)
+        self._derivation: Optional[Derivation] = None
+
+    @classmethod
+    def _wrap(cls, native: Any, set: Optional[Mapping[str, float]], folder: Optional[PathLike]) -> "Model":
+        model = cls.__new__(cls)
+        model._init(native, set, folder)
+        return model
+
+    @classmethod
+    def from_toml(
+        cls,
+        text: str,
+        set: Optional[Mapping[str, float]] = None,
+        name: str = "<string>",
+        folder: Optional[PathLike] = None,
+    ) -> "Model":
+        """A model from the text of a model file. ``name`` names it in error
+        messages; body files are read from ``folder`` (default: the current one)."""
+        return cls._wrap(_native.from_toml(text, name, _floats(set), _folder(folder)), set, folder)
+
+    # --- what the model is --------------------------------------------------
+    @property
+    def name(self) -> str:
+        """The model's name."""
+        return self._native.name
+
+    @property
+    def coordinates(self) -> List[str]:
+        """The generalized coordinates, in order."""
+        return self._native.coordinates
+
+    @property
+    def parameters(self) -> Dict[str, float]:
+        """The parameters' values (after ``set``)."""
+        return dict(self._native.parameters)
+
+    @property
+    def initial(self) -> Dict[str, float]:
+        """The initial state of ``[initial]``: ``{"th": .., "th'": ..}``."""
+        q, qd = self._native.initial()
+        out = dict(zip(self.coordinates, q))
+        out.update({f"{c}'": v for c, v in zip(self.coordinates, qd)})
+        return out
+
+    @property
+    def source(self) -> str:
+        """The model file's text (for a model built in Python, the TOML written for it)."""
+        return self._native.source
+
+    @property
+    def file(self) -> str:
+        """The file the model was read from (``<string>``/``<model>`` otherwise)."""
+        return self._native.file
+
+    def with_parameters(self, **values: float) -> "Model":
+        """The same model with some parameters set to other values."""
+        merged = {**self._set, **{k: float(v) for k, v in values.items()}}
+        return Model._wrap(_native.from_toml(self.source, self.file, merged, self._folder), merged, self._folder)
+
+    def __repr__(self) -> str:
+        return f"<Model {self.name!r}: coordinates {', '.join(self.coordinates)}>"
+
+    # --- derivation ---------------------------------------------------------
+    def derive(self) -> Derivation:
+        """The equations of motion, momenta, Hamiltonian, cyclic coordinates,
+        conserved quantities and the verdicts, as ``lagrange derive`` gives them."""
+        if self._derivation is None:
+            self._derivation = Derivation(self)
+        return self._derivation
+
+    # --- motion -------------------------------------------------------------
+    def simulate(
+        self,
+        until: float,
+        method: Optional[str] = None,
+        rtol: Optional[float] = None,
+        atol: Optional[float] = None,
+        dt: Optional[float] = None,
+        samples: Optional[int] = None,
+        every_step: bool = False,
+        stop_when: Union[str, Iterable[str], None] = None,
+        crossing: Union[str, Iterable[str], None] = None,
+    ) -> Run:
+        """Integrates the motion from ``[initial]`` to ``until``, as ``lagrange
+        simulate`` does (the same default method, tolerances and audit).
+
+        ``method``: one of :func:`lagrange.methods` (default: chosen for the
+        model); ``rtol``/``atol``: tolerances (default 1e-9 and 1e-12, atol
+        rtol/1000 when only rtol is given); ``dt``: a fixed step (symplectic
+        methods); ``samples``: rows at equal spacing (default 1001), or
+        ``every_step``; ``stop_when``: conditions that end the run
+        (``"x < 0"``); ``crossing``: conditions whose crossings are recorded
+        as extra rows (``run.events``).
+
+        The GIL is released while it runs. Ctrl-C stops it between rows and
+        raises :class:`lagrange.Interrupted` (a KeyboardInterrupt) holding the
+        rows so far; a run that fails midway raises :class:`lagrange.RunError`
+        holding them too.
+        """
+        raw = self._native.simulate({
+            "until": float(until),
+            "method": method,
+            "rtol": None if rtol is None else float(rtol),
+            "atol": None if atol is None else float(atol),
+            "dt": None if dt is None else float(dt),
+            "samples": samples,
+            "every_step": bool(every_step),
+            "stop_when": _strings(stop_when),
+            "crossing": _strings(crossing),
+        })
+        run = Run(self, raw)
+        if raw["interrupt"] is not None:
+            at = f"t = {run.t[-1]}" if len(run) else "before the first row"
+            raise Interrupted(f"interrupted at {at}; the exception's .run keeps every row up to there", run) from raw["interrupt"]
+        if run.failure is not None:
+            raise RunError(run.failure, float(run.summary["t_final"]), run)
+        return run
+
+    def rhs(self) -> Any:
+        """The compiled right-hand side ``f(t, y) -> dy/dt`` with ``y = [q, q']``,
+        for ``scipy.integrate.solve_ivp`` or any integrator of your own."""
+        return self._native.rhs()
+
+    # --- analyses -------------------------------------------------------------
+    def modes(self, at: Optional[Mapping[str, float]] = None, allow_unstable: bool = False) -> Report:
+        """Normal modes about the equilibrium nearest ``[initial]`` (or ``at``):
+        ``lagrange.modes/1`` (frequencies, modes, T, U, equilibrium, stable)."""
+        return Report(*self._native.modes(_floats(at) or None, allow_unstable))
+
+    def orbit(self) -> Report:
+        """The orbit of a central-force model: ``lagrange.orbit/1``."""
+        return Report(*self._native.orbit())
+
+    def top(self) -> Report:
+        """The symmetric top's constants, nutation and precession: ``lagrange.top/1``."""
+        return Report(*self._native.top())
+
+    def sweep(self, until: float, grid: Any, **options: Any) -> Any:
+        """A grid of runs: see :func:`lagrange.sweep`."""
+        from .sweep import sweep
+
+        return sweep(self, until=until, grid=grid, **options)
+
+
+def load(path: PathLike, set: Optional[Mapping[str, float]] = None) -> Model:
+    """Reads and derives a model file; ``set`` overrides parameters
+    (``set={"g": 1.62}``). Body files it names are read from its folder."""
+    folder = os.path.dirname(os.fspath(path)) or "."
+    return Model._wrap(_native.load(os.fspath(path), _floats(set)), set, folder)
+
+
+def _floats(values: Optional[Mapping[str, float]]) -> Dict[str, float]:
+    return {str(k): float(v) for k, v in (values or {}).items()}
+
+
+def _folder(folder: Optional[PathLike]) -> Optional[str]:
+    return None if folder is None else os.fspath(folder)
+
+
+def _strings(value: Union[str, Iterable[str], None]) -> List[str]:
+    if value is None:
+        return []
+    if isinstance(value, str):
+        return [value]
+    return [str(v) for v in value]

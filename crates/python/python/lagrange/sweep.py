@@ -1,0 +1,154 @@
+"""Sweeps: a grid of runs, here or on a Dask cluster.
+
+``lagrange.sweep(model, until=20, grid={"a": (-3.1, 3.1, 100)})`` runs the
+grid on this machine's cores. With ``client=`` (a ``dask.distributed.Client``)
+the grid is cut into shards, the CLI's ``--shard i/n``, which the cluster's
+workers run; their tables are merged into the one a single process computes,
+bit for bit.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from . import _native
+from .errors import Interrupted
+
+Axis = Tuple[float, float, int]
+
+
+class Table:
+    """A sweep's table: one row per run of the grid, in run order.
+
+    ``columns`` (the numeric columns: the grid's names, ``t_final``,
+    ``final_<q>``, ``final_<q>'``, ``energy_drift``, ``lyapunov``), ``data``
+    (runs × columns), ``runs`` (run indices), ``failures`` (per row, empty
+    when the run did not fail), ``meta`` (provenance), ``csv`` (the CLI's
+    file). ``table["lyapunov"]`` is a column; ``to_pandas()`` a DataFrame.
+    """
+
+    def __init__(self, csv: str, name: str = "sweep") -> None:
+        raw = _native.table(csv, name)
+        self.csv = csv
+        self.meta: Dict[str, str] = dict(raw["meta"])
+        self.columns: List[str] = list(raw["columns"])
+        self.runs = np.array(raw["runs"], dtype=np.int64)
+        self.data = np.frombuffer(raw["data"], dtype="<f8").reshape(len(self.runs), len(self.columns))
+        self.data.flags.writeable = False
+        self.failures: List[str] = list(raw["failures"])
+
+    def __len__(self) -> int:
+        return len(self.runs)
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        try:
+            return self.data[:, self.columns.index(name)]
+        except ValueError:
+            raise KeyError(f"no column {name!r}; columns: {', '.join(self.columns)}") from None
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Table):
+            return NotImplemented
+        return (self.columns == other.columns and np.array_equal(self.runs, other.runs)
+                and np.array_equal(self.data, other.data, equal_nan=True) and self.failures == other.failures)
+
+    def grid(self) -> Dict[str, np.ndarray]:
+        """The grid's values per run, by axis name."""
+        return {k: self[k] for k in self.columns[: self.columns.index("t_final")]}
+
+    def to_pandas(self) -> Any:
+        """The table as a ``pandas.DataFrame`` indexed by run."""
+        import pandas as pd
+
+        frame = pd.DataFrame(np.array(self.data), columns=self.columns, index=pd.Index(self.runs, name="run"))
+        frame["failure"] = self.failures
+        return frame
+
+    def __repr__(self) -> str:
+        return f"<Table of {len(self)} runs: {self.meta.get('model', '')!s}, grid {self.meta.get('grid', '')}>"
+
+
+def grid_spec(grid: Union[str, Mapping[str, Union[Axis, Sequence[float]]]]) -> str:
+    """The CLI's ``--grid`` text of a grid given as ``{"a": (start, stop, count)}``."""
+    if isinstance(grid, str):
+        return grid
+    parts = []
+    for name, axis in grid.items():
+        if len(axis) != 3:
+            raise ValueError(f"grid[{name!r}]: expected (start, stop, count), not {axis!r}")
+        start, stop, count = axis
+        if int(count) != count:
+            raise ValueError(f"grid[{name!r}]: the count must be a whole number, not {count!r}")
+        parts.append(f"{name}={float(start)!r}:{float(stop)!r}:{int(count)}")
+    return ",".join(parts)
+
+
+def _options(until: float, grid: str, method: Optional[str], rtol: Optional[float], atol: Optional[float],
+             lyapunov: bool, threads: Optional[int], shard: Optional[Tuple[int, int]]) -> Dict[str, Any]:
+    return {"grid": grid, "until": float(until), "method": method, "rtol": rtol, "atol": atol,
+            "lyapunov": bool(lyapunov), "shard": shard, "threads": threads}
+
+
+def _run_shard(source: str, file: str, set: Dict[str, float], folder: Optional[str], options: Dict[str, Any]) -> str:
+    """One shard on a worker: the model is derived there from its text."""
+    native = _native.from_toml(source, file, set, folder)
+    out = native.sweep(options)
+    if out["interrupt"] is not None:
+        raise out["interrupt"]
+    return out["csv"]
+
+
+def sweep(
+    model: Any,
+    until: float,
+    grid: Union[str, Mapping[str, Union[Axis, Sequence[float]]]],
+    *,
+    method: Optional[str] = None,
+    rtol: Optional[float] = None,
+    atol: Optional[float] = None,
+    lyapunov: bool = True,
+    threads: Optional[int] = None,
+    shard: Optional[Tuple[int, int]] = None,
+    client: Any = None,
+    shards: Optional[int] = None,
+) -> Table:
+    """Runs ``model`` from every point of ``grid`` to ``until``, as ``lagrange
+    sweep`` does: the final state, the drift of the energy and (unless
+    ``lyapunov=False``) the largest Lyapunov exponent per run.
+
+    ``grid``: ``{"a": (start, stop, count), ...}`` over initial coordinates
+    (``"a"``), velocities (``"a'"``) and parameters; the first axis varies
+    slowest. ``shard=(i, n)``: only runs i, i+n, i+2n, ... (the CLI's
+    ``--shard i/n``). ``threads``: worker threads here (default: one per core).
+
+    ``client``: a ``dask.distributed.Client``. The grid is cut into
+    ``shards`` parts (default: one per worker), each run on a worker with all
+    its cores, and the tables merged; the result equals a one-process sweep's.
+    Files a model names (body files) must be readable at the same path on the
+    workers.
+
+    Ctrl-C stops a local sweep and raises :class:`lagrange.Interrupted` holding
+    the runs finished so far, in grid order.
+    """
+    spec = grid_spec(grid)
+    if client is None:
+        out = model._native.sweep(_options(until, spec, method, rtol, atol, lyapunov, threads, shard))
+        table = Table(out["csv"])
+        if out["interrupt"] is not None:
+            raise Interrupted(f"interrupted after {len(table)} runs; the exception's .run keeps them", table) from out["interrupt"]
+        return table
+    if shard is not None:
+        raise ValueError("give either shard= (one part, here) or client= (every part, on the cluster)")
+    n = shards if shards is not None else max(1, len(client.scheduler_info().get("workers", {})))
+    if n < 1:
+        raise ValueError(f"shards must be at least 1, not {n}")
+    futures = [
+        client.submit(_run_shard, model.source, model.file, model._set, model._folder,
+                      _options(until, spec, method, rtol, atol, lyapunov, threads, (i, n)), pure=False)
+        for i in range(n)
+    ]
+    texts = client.gather(futures)
+    merged = _native.merge([(f"shard {i}/{n}", text) for i, text in enumerate(texts)])
+    return Table(merged)

@@ -1,0 +1,241 @@
+//! `Model.simulate`: one run, its rows kept in memory as one table of f64
+//! (the CSV's columns), with the GIL released while it integrates.
+//!
+//! Ctrl-C: between rows, at most every 20 ms, the run takes the GIL back for
+//! a moment to let Python run its signal handlers. When one raises (a
+//! KeyboardInterrupt), the run stops there and hands back the rows it has,
+//! with the exception, for the Python side to raise with the partial run.
+
+use crate::errors::{self, guarded};
+use crate::model::Derived;
+use mech::{BudgetAdvice, RunConfig, RunError, StepBudget, StopCondition};
+use num::{Method, Output};
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict};
+use std::ops::ControlFlow;
+use std::time::{Duration, Instant};
+
+/// How often a run looks for a pending signal.
+const SIGNAL_POLL: Duration = Duration::from_millis(20);
+
+/// The options of `simulate`, as Python passes them.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct Options {
+    until: f64,
+    method: Option<String>,
+    rtol: Option<f64>,
+    atol: Option<f64>,
+    dt: Option<f64>,
+    samples: Option<usize>,
+    every_step: bool,
+    stop_when: Vec<String>,
+    crossing: Vec<String>,
+}
+
+impl Derived {
+    fn config(&self, py: Python<'_>, o: &Options) -> PyResult<RunConfig> {
+        let usage = |message: String| errors::plain_error(py, "simulate", &message, None);
+        let method = match &o.method {
+            None => None,
+            Some(name) => Some(name.parse::<Method>().map_err(|e| usage(format!("method: {e}")))?),
+        };
+        for (name, v) in [("rtol", o.rtol), ("atol", o.atol), ("dt", o.dt)] {
+            if let Some(v) = v {
+                if !(v.is_finite() && v > 0.0) {
+                    return Err(usage(format!("{name} must be a positive number, not {v}")));
+                }
+            }
+        }
+        let conditions = |texts: &[String], what: &str| -> PyResult<Vec<StopCondition>> {
+            texts
+                .iter()
+                .map(|text| {
+                    StopCondition::parse(&self.d, text, what).map_err(|e| errors::expression_error(py, what, text, &e))
+                })
+                .collect()
+        };
+        let defaults = RunConfig::default();
+        let rtol = o.rtol.unwrap_or(defaults.rtol);
+        let output = match (o.every_step, o.samples) {
+            (true, _) => Output::EveryStep,
+            (false, Some(n)) if n < 2 => return Err(usage("samples needs at least 2 rows (both ends)".into())),
+            (false, Some(n)) => Output::Samples(n),
+            (false, None) => defaults.output,
+        };
+        let config = RunConfig {
+            until: o.until,
+            method,
+            rtol,
+            atol: o.atol.unwrap_or(if o.rtol.is_some() { rtol * 1e-3 } else { defaults.atol }),
+            dt: o.dt,
+            output,
+            stop_when: conditions(&o.stop_when, "stop_when")?,
+            crossings: conditions(&o.crossing, "crossing")?,
+            max_steps: defaults.max_steps,
+        };
+        config.check().map_err(|e| self.refused(py, e))?;
+        Ok(config)
+    }
+
+    /// A run that could not start, in the Python API's terms.
+    fn refused(&self, py: Python<'_>, e: RunError) -> PyErr {
+        let usage =
+            |message: String, help: Option<String>| errors::plain_error(py, "simulate", &message, help.as_deref());
+        match e {
+            RunError::Until { until } => usage(format!("until must be a positive time, not {until}"), None),
+            RunError::TooManySamples { samples, max } => {
+                usage(format!("samples={samples} is more rows than a run keeps ({max} at most)"), None)
+            }
+            RunError::TooManySteps { dt, steps, max } => usage(
+                format!("dt={dt:e} would take {steps:.3e} steps to reach the end time; a run takes at most {max}"),
+                None,
+            ),
+            RunError::StepOverSamples { dt, spacing } => usage(
+                format!("dt={dt:e} is longer than the spacing of the samples, {spacing:e}"),
+                Some("give a shorter dt, more samples, or every_step=True".into()),
+            ),
+            RunError::StepNotApplicable { method } => usage(
+                format!("dt applies only to fixed-step methods, and {} chooses its own step", method.name()),
+                Some("set its tolerance with rtol, or choose a fixed-step method (verlet, yoshida4, kahanli6, kahanli8, gauss2, gauss4, gauss6)".into()),
+            ),
+            RunError::StepBudget(b) => usage(b.what_happened(), Some(advice(&b))),
+            RunError::Input(e) => self.error(py, &e),
+            RunError::Failed { message, .. } => usage(message, None),
+        }
+    }
+}
+
+/// The plot of a run, as `simulate --plot` draws it: kept decimated (at most
+/// a few thousand points) and drawn on demand.
+#[pyclass(module = "lagrange._native", frozen)]
+pub struct Plot {
+    data: view::plot::PlotData,
+}
+
+#[pymethods]
+impl Plot {
+    /// The plot as SVG text.
+    fn svg(&self) -> PyResult<String> {
+        view::plot::svg(&self.data)
+            .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(format!("cannot draw the plot: {e}")))
+    }
+}
+
+/// What would let a run fit its step budget, naming the keyword arguments.
+pub fn advice(b: &StepBudget) -> String {
+    let reach = mech::approx(b.reach);
+    match b.advice() {
+        BudgetAdvice::ShorterRun => {
+            format!("any method follows such motion step by step: give a shorter until (at most about {reach})")
+        }
+        BudgetAdvice::ImplicitMethod => format!(
+            "a decay that much faster than the run is stiff: method=\"radau5\" (implicit) steps over it; or give a shorter until (at most about {reach})"
+        ),
+        BudgetAdvice::HigherOrder => format!(
+            "the step is set by the tolerance on a method of order {}: one of higher order takes far fewer steps; or give a looser rtol, or a shorter until (at most about {reach})",
+            b.method.order()
+        ),
+        BudgetAdvice::LooserTolerance => {
+            format!("give a looser rtol (fewer steps for the same motion), or a shorter until (at most about {reach})")
+        }
+    }
+}
+
+#[pymethods]
+impl Derived {
+    /// Integrates the motion. Returns a dict: `columns` (names), `data`
+    /// (row-major f64 bytes), `rows`, `events` (row index, condition),
+    /// `summary` (the `lagrange.simulate/1` JSON text), `failure` (message or
+    /// None) and `interrupt` (the exception a signal handler raised, or None).
+    fn simulate<'py>(&self, py: Python<'py>, options: Options) -> PyResult<Bound<'py, PyDict>> {
+        guarded("simulate", || self.simulate_inner(py, options))
+    }
+}
+
+impl Derived {
+    fn simulate_inner<'py>(&self, py: Python<'py>, options: Options) -> PyResult<Bound<'py, PyDict>> {
+        let started = Instant::now();
+        let config = self.config(py, &options)?;
+        let d = &self.d;
+        let names: Vec<String> = d.coordinate_names().iter().map(|s| s.to_string()).collect();
+        let inv_names: Vec<String> = mech::invariants_of(d).into_iter().map(|i| i.name).collect();
+        let mut bodies = mech::BodyRecorder::new(d);
+        let constraint_cols = mech::constraint_columns(d);
+        let mut columns = vec!["t".to_string()];
+        columns.extend(names.iter().cloned());
+        columns.extend(names.iter().map(|c| format!("{c}'")));
+        columns.extend(inv_names.iter().cloned());
+        columns.extend(bodies.iter().flat_map(|b| b.columns().iter().cloned()));
+        columns.extend(constraint_cols.iter().cloned());
+        let width = columns.len();
+        let mut body_values = vec![0.0; bodies.as_ref().map_or(0, |b| b.columns().len())];
+
+        let mut data: Vec<f64> = Vec::new();
+        let mut events: Vec<(usize, String)> = Vec::new();
+        let mut interrupt: Option<PyErr> = None;
+        let mut first_row: Option<f64> = None;
+        let mut plot = view::plot::PlotKeeper::new(names.len());
+        let result = py.detach(|| {
+            let mut polled = Instant::now();
+            mech::simulate(d, &config, |row| {
+                first_row.get_or_insert_with(|| started.elapsed().as_secs_f64());
+                if polled.elapsed() >= SIGNAL_POLL {
+                    polled = Instant::now();
+                    if let Err(e) = Python::attach(|py| py.check_signals()) {
+                        interrupt = Some(e);
+                        return ControlFlow::Break(());
+                    }
+                }
+                if let Some(label) = row.event {
+                    events.push((data.len() / width, label.to_string()));
+                }
+                if row.event.is_none() {
+                    plot.push(row.t, row.q, row.qd, row.invariants);
+                }
+                data.push(row.t);
+                if let Some(b) = bodies.as_mut() {
+                    b.eval(row.t, row.q, row.qd, &mut body_values);
+                }
+                data.extend(
+                    row.q.iter().chain(row.qd).chain(row.invariants).chain(&body_values).chain(row.constraints),
+                );
+                ControlFlow::Continue(())
+            })
+        });
+        let (report, failure) = match result {
+            Ok(r) => (r, None),
+            Err(RunError::Failed { message, mut report }) => {
+                if let Some(mech::RunFailure::StepBudget(b)) = &report.failure_reason {
+                    report.failure = Some(format!("{}; {}", b.what_happened(), advice(b)));
+                }
+                let message = report.failure.clone().unwrap_or(message);
+                (*report, Some(message))
+            }
+            Err(e) => return Err(self.refused(py, e)),
+        };
+        let interrupted = interrupt.as_ref().map(|_| view::simulate::Interrupted {
+            signal: "SIGINT".into(),
+            t: (data.len() >= width).then(|| data[data.len() - width]),
+        });
+        // The model was derived when it was loaded, not as part of this call.
+        let timing = view::simulate::Timing { derive_seconds: 0.0, setup_seconds: first_row };
+        let summary = view::simulate::summary_json(&report, &names, &timing, interrupted.as_ref(), &crate::TERMS);
+        let text = view::simulate::summary_text(&report, &names, d, interrupted.as_ref(), &crate::TERMS);
+        let plot = Plot { data: plot.into_plot(&d.model().name, &report, &names, &inv_names) };
+
+        let out = PyDict::new(py);
+        out.set_item("columns", columns)?;
+        out.set_item("rows", data.len() / width)?;
+        let bytes: Vec<u8> = data.iter().flat_map(|v| v.to_le_bytes()).collect();
+        out.set_item("data", PyBytes::new(py, &bytes))?;
+        out.set_item("events", events)?;
+        out.set_item("summary", summary.to_string())?;
+        out.set_item("summary_text", text)?;
+        out.set_item("failure", failure)?;
+        out.set_item("warnings", report.warnings.clone())?;
+        out.set_item("interrupt", interrupt.map(|e| e.into_value(py)))?;
+        out.set_item("plot", Bound::new(py, plot)?)?;
+        Ok(out)
+    }
+}

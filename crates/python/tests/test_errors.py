@@ -1,0 +1,95 @@
+"""Bad input raises lagrange.ModelError with file, line, column and the caret
+snippet; a failed run raises RunError with its rows; nothing panics."""
+
+from __future__ import annotations
+
+import pytest
+
+import lagrange
+from conftest import EXAMPLES
+
+BAD = """name = "bad"
+coordinates = ["x"]
+lagrangian = "m*x'^2/2 - k*x^"
+
+[parameters]
+m = 1.0
+k = 1.0
+"""
+
+
+def test_model_error_points_into_the_text():
+    with pytest.raises(lagrange.ModelError) as info:
+        lagrange.Model.from_toml(BAD, name="spring.toml")
+    e = info.value
+    assert e.file == "spring.toml"
+    assert e.line == 3
+    assert e.column is not None and e.column > len('lagrangian = "')
+    assert "lagrangian = \"m*x'^2/2 - k*x^\"" in e.snippet
+    assert "^" in e.snippet.splitlines()[-1]
+    assert str(e).startswith(f"spring.toml:3:{e.column}: ")
+    assert isinstance(e, ValueError) and isinstance(e, lagrange.LagrangeError)
+
+
+def test_missing_file():
+    with pytest.raises(lagrange.ModelError, match="cannot read the file"):
+        lagrange.load(EXAMPLES / "no_such_model.toml")
+
+
+def test_unknown_parameter_override():
+    with pytest.raises(lagrange.ModelError) as info:
+        lagrange.load(EXAMPLES / "pendulum.toml", set={"nope": 1.0})
+    assert "nope" in str(info.value)
+
+
+def test_bad_options():
+    model = lagrange.load(EXAMPLES / "pendulum.toml")
+    with pytest.raises(lagrange.ModelError, match="method"):
+        model.simulate(until=1, method="euler")
+    with pytest.raises(lagrange.ModelError, match="until must be a positive time"):
+        model.simulate(until=-1)
+    with pytest.raises(lagrange.ModelError, match="rtol must be a positive number"):
+        model.simulate(until=1, rtol=0)
+    with pytest.raises(lagrange.ModelError, match="samples"):
+        model.simulate(until=1, samples=1)
+    with pytest.raises(lagrange.ModelError) as info:
+        model.simulate(until=1, stop_when="ph <")
+    assert info.value.file == "stop_when"
+    with pytest.raises(lagrange.ModelError):
+        model.simulate(until=1, method="dop853", dt=0.01)
+
+
+def test_bad_expression():
+    with pytest.raises(lagrange.ModelError) as info:
+        lagrange.expression("sin(x")
+    assert info.value.file == "expression" and info.value.column is not None
+
+
+def test_a_failed_run_keeps_its_rows():
+    # x'' = x^2 from x = 1 blows up at t = √6·... < 3: the run fails midway.
+    model = lagrange.Model(
+        coordinates=["x"],
+        parameters={"m": 1.0},
+        lagrangian="m*x'^2/2 + x^3/3",
+        initial={"x": 1.0, "x'": 0.0},
+    )
+    with pytest.raises(lagrange.RunError) as info:
+        model.simulate(until=10)
+    e = info.value
+    assert e.t is not None and 0 < e.t < 10
+    assert e.run is not None and len(e.run) > 1
+    assert e.run.t[-1] <= e.t
+
+
+def test_analysis_refusals_name_the_model():
+    with pytest.raises(lagrange.ModelError) as info:
+        lagrange.load(EXAMPLES / "double_pendulum.toml").orbit()
+    assert info.value.file.endswith("double_pendulum.toml")
+    with pytest.raises(lagrange.ModelError):
+        lagrange.load(EXAMPLES / "constraints" / "pendulum_cartesian.toml").rhs()
+
+
+def test_hostile_text_does_not_panic():
+    for text in ["", "coordinates = 3", "coordinates = [\"x\"]\nlagrangian = \"x'^\"", "\x00\xff", "[[particles]]\nmass = 1e400"]:
+        with pytest.raises(lagrange.ModelError):
+            lagrange.Model.from_toml(text)
