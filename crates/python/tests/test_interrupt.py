@@ -46,3 +46,22 @@ def test_ctrl_c_stops_a_sweep_and_keeps_the_finished_runs():
     assert isinstance(table, lagrange.Table)
     assert len(table) < 400
     assert list(table.runs) == list(range(len(table)))
+
+
+def test_the_gil_is_released_while_a_run_integrates():
+    # A run on another thread; this thread counts while it goes. Were the GIL
+    # held for the whole run, the count would stay near zero until it ended.
+    model = lagrange.load(EXAMPLES / "chain50.toml")
+    done = threading.Event()
+
+    def work():
+        model.simulate(until=1000)
+        done.set()
+
+    thread = threading.Thread(target=work)
+    thread.start()
+    count = 0
+    while not done.is_set():
+        count += 1
+    thread.join()
+    assert count > 100_000, f"this thread ran only {count} loop iterations during the run"
