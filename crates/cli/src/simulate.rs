@@ -100,6 +100,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
         stop_when,
         crossings,
         max_steps: defaults.max_steps,
+        initial: Vec::new(),
     };
 
     // Bad settings are reported before any file is created.

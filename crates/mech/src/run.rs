@@ -116,6 +116,9 @@ pub struct RunConfig {
     pub crossings: Vec<StopCondition>,
     /// The most steps the run may take: its step budget.
     pub max_steps: usize,
+    /// Values that replace `[initial]`'s, by name: a coordinate (`a`) or a
+    /// velocity (`a'`). Empty: the model's initial state as it is.
+    pub initial: Vec<(String, f64)>,
 }
 
 impl Default for RunConfig {
@@ -134,6 +137,7 @@ impl Default for RunConfig {
             // The solvers' default, 10^7: a long symplectic run fits, a stalled
             // adaptive one stops within seconds.
             max_steps: num::Config::default().max_steps,
+            initial: Vec::new(),
         }
     }
 }
@@ -519,7 +523,8 @@ pub fn simulate(
 ) -> Result<RunReport, RunError> {
     let start = Instant::now();
     config.check()?;
-    let (q0, qd0) = d.model.initial_state().map_err(RunError::Input)?;
+    let (mut q0, mut qd0) = d.model.initial_state().map_err(RunError::Input)?;
+    override_initial(d, &config.initial, &mut q0, &mut qd0)?;
     // Rigid bodies: a terminal event before the Euler angles' gimbal singularity.
     let guards = body::gimbal_guards(d, config.rtol);
     if let Some(g) = guards.iter().find(|g| g.violated(&q0)) {
@@ -545,6 +550,32 @@ pub fn simulate(
         let (stepping, begin) = constrained::Constrained::start(d, &dynamics, config, &q0, &qd0)?;
         drive(d, config, &dynamics, stepping, begin, &guards, start, on_row)
     }
+}
+
+/// Replaces values of the initial state by the caller's (`RunConfig::initial`).
+fn override_initial(d: &Derivation, given: &[(String, f64)], q: &mut [f64], qd: &mut [f64]) -> Result<(), RunError> {
+    for (name, value) in given {
+        let base = name.strip_suffix('\'').unwrap_or(name);
+        let Some(k) = d.model.coordinates.iter().position(|c| c.name == base) else {
+            let setting = crate::Setting::Start { name: name.clone() };
+            let known = d.coordinate_names().join(", ");
+            let message = format!("'{base}' is not a coordinate of the model (coordinates: {known})");
+            return Err(RunError::Input(ModelError::setting(setting, message)));
+        };
+        if !value.is_finite() {
+            let setting = crate::Setting::Start { name: name.clone() };
+            return Err(RunError::Input(ModelError::setting(
+                setting,
+                format!("the initial value must be finite, not {value}"),
+            )));
+        }
+        if base.len() == name.len() {
+            q[k] = *value;
+        } else {
+            qd[k] = *value;
+        }
+    }
+    Ok(())
 }
 
 /// The one run driver: events, rows, audit and report around a [`Stepping`].

@@ -27,6 +27,23 @@ fn a_small_swing_returns_after_one_period() {
 }
 
 #[test]
+fn initial_values_given_with_the_run_replace_the_models() {
+    let d = derive(PENDULUM);
+    let initial = vec![("th".to_string(), 0.02), ("th'".to_string(), -0.5)];
+    let (_, rows) = run(&d, &RunConfig { until: 0.1, initial, ..RunConfig::default() });
+    let (t, q, qd, _) = &rows[0];
+    assert_eq!((*t, q[0], qd[0]), (0.0, 0.02, -0.5));
+    let unknown = vec![("x'".to_string(), 1.0)];
+    let e = mech::simulate(&d, &RunConfig { initial: unknown, ..RunConfig::default() }, |_| {
+        std::ops::ControlFlow::Continue(())
+    })
+    .unwrap_err();
+    let RunError::Input(e) = e else { panic!("{e}") };
+    assert_eq!(e.setting, Some(mech::Setting::Start { name: "x'".into() }));
+    assert!(e.message.contains("'x' is not a coordinate"), "{}", e.message);
+}
+
+#[test]
 fn a_stop_condition_ends_the_run_where_it_crosses() {
     let d = derive(PENDULUM);
     let stop = StopCondition::parse(&d, "th < 0", "the stop condition").unwrap();

@@ -31,6 +31,7 @@ pub struct Options {
     every_step: bool,
     stop_when: Vec<String>,
     crossing: Vec<String>,
+    initial: Vec<(String, f64)>,
 }
 
 impl Derived {
@@ -73,6 +74,7 @@ impl Derived {
             stop_when: conditions(&o.stop_when, "stop_when")?,
             crossings: conditions(&o.crossing, "crossing")?,
             max_steps: defaults.max_steps,
+            initial: o.initial.clone(),
         };
         config.check().map_err(|e| self.refused(py, e))?;
         Ok(config)
@@ -100,6 +102,9 @@ impl Derived {
                 Some("set its tolerance with rtol, or choose a fixed-step method (verlet, yoshida4, kahanli6, kahanli8, gauss2, gauss4, gauss6)".into()),
             ),
             RunError::StepBudget(b) => usage(b.what_happened(), Some(advice(&b))),
+            RunError::Input(mech::ModelError { setting: Some(mech::Setting::Start { name }), message, .. }) => {
+                usage(format!("initial[{name:?}]: {message}"), None)
+            }
             RunError::Input(e) => self.error(py, &e),
             RunError::Failed { message, .. } => usage(message, None),
         }

@@ -97,3 +97,12 @@ def test_svg_plot_of_a_run():
     svg = run._repr_svg_()
     assert svg.lstrip().startswith("<svg") and svg.rstrip().endswith("</svg>")
     assert "planar double pendulum" in svg
+
+
+def test_initial_values_replaced_for_one_run():
+    model = lagrange.load(EXAMPLES / "pendulum.toml")
+    run = model.simulate(until=1, samples=3, initial={"ph": 0.2, "ph_dot": 0.1})
+    assert run.q[0, 0] == 0.2 and run.qd[0, 0] == 0.1
+    assert model.initial["ph"] == 1.0
+    with pytest.raises(lagrange.ModelError, match=r'initial\["x"\]: .x. is not a coordinate'):
+        model.simulate(until=1, initial={"x": 1.0})

@@ -27,7 +27,7 @@ from .errors import Interrupted, LagrangeError, ModelError, RunError
 from .expr import Expr, Matrix
 from .model import Model, PathLike, load
 from .run import Run
-from .sweep import Table, sweep
+from .sweeps import Table, sweep
 
 __version__: str = _native.VERSION
 

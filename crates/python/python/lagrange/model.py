@@ -9,6 +9,7 @@ from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Union
 from . import _native, toml_writer
 from .analyses import Report
 from .derivation import Derivation
+from .expr import _name
 from .errors import Interrupted, RunError
 from .run import Run
 
@@ -161,6 +162,7 @@ class Model:
         every_step: bool = False,
         stop_when: Union[str, Iterable[str], None] = None,
         crossing: Union[str, Iterable[str], None] = None,
+        initial: Optional[Mapping[str, float]] = None,
     ) -> Run:
         """Integrates the motion from ``[initial]`` to ``until``, as ``lagrange
         simulate`` does (the same default method, tolerances and audit).
@@ -171,7 +173,9 @@ class Model:
         methods); ``samples``: rows at equal spacing (default 1001), or
         ``every_step``; ``stop_when``: conditions that end the run
         (``"x < 0"``); ``crossing``: conditions whose crossings are recorded
-        as extra rows (``run.events``).
+        as extra rows (``run.events``); ``initial``: values that replace
+        ``[initial]``'s for this run (``{"a": 1.0, "a'": 0.0}``, or ``a_dot=``
+        spelled as a key).
 
         The GIL is released while it runs. Ctrl-C stops it between rows and
         raises :class:`lagrange.Interrupted` (a KeyboardInterrupt) holding the
@@ -188,6 +192,7 @@ class Model:
             "every_step": bool(every_step),
             "stop_when": _strings(stop_when),
             "crossing": _strings(crossing),
+            "initial": [(_name(k), float(v)) for k, v in (initial or {}).items()],
         })
         run = Run(self, raw)
         if raw["interrupt"] is not None:
@@ -218,7 +223,7 @@ class Model:
 
     def sweep(self, until: float, grid: Any, **options: Any) -> Any:
         """A grid of runs: see :func:`lagrange.sweep`."""
-        from .sweep import sweep
+        from .sweeps import sweep
 
         return sweep(self, until=until, grid=grid, **options)
 
