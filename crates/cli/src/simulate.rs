@@ -114,7 +114,6 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     // Rigid bodies: ω and L per body as extra columns.
     let mut bodies = mech::BodyRecorder::new(&derivation);
     let mut body_values = vec![0.0; bodies.as_ref().map_or(0, |b| b.columns().len())];
-    let constraint_cols = mech::constraint_columns(&derivation);
     // The file is opened and locked before the run (one that cannot be written
     // is bad input). A new file gets its header at once, so that a run stopped
     // before its first row, even by SIGKILL, leaves a CSV that reads as one
@@ -125,12 +124,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     let mut csv: Option<RowWriter> = None;
     let mut created: Option<&Path> = None;
     if let Some(p) = &opts.out {
-        let mut cols = vec!["t".to_string()];
-        cols.extend(names.iter().cloned());
-        cols.extend(names.iter().map(|c| format!("{c}'")));
-        cols.extend(inv_names.iter().cloned());
-        cols.extend(bodies.iter().flat_map(|b| b.columns().iter().cloned()));
-        cols.extend(constraint_cols.iter().cloned());
+        let mut cols = mech::row_columns(&derivation);
         if with_events {
             cols.push("event".into());
         }

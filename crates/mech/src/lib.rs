@@ -100,8 +100,8 @@ pub use run::body::BodyRecorder;
 pub use run::constrained::{constraint_columns, ConstraintAudit};
 pub use run::dynamics::{invariants_of, Dynamics, Form, Invariant, System};
 pub use run::{
-    approx, simulate, Audit, BudgetAdvice, BudgetStage, Row, RunConfig, RunError, RunFailure, RunReport, StepBudget,
-    StopCondition, TimeScale, MAX_SAMPLES, STEPS_PER_TIME_SCALE,
+    approx, row_columns, simulate, Audit, BudgetAdvice, BudgetStage, Row, RunConfig, RunError, RunFailure, RunReport,
+    StepBudget, StopCondition, TimeScale, MAX_SAMPLES, STEPS_PER_TIME_SCALE,
 };
 pub use source::MAX_FILE_BYTES;
 pub use sweep::{

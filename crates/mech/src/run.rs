@@ -552,6 +552,21 @@ pub fn simulate(
     }
 }
 
+/// The names of a run's values, in the order of its CSV file: `t`, the
+/// coordinates, the velocities (`q'`), the invariants audited along the run,
+/// the rigid bodies' ω and L ([`body::BodyRecorder`]), and the constraints'
+/// columns ([`crate::constraint_columns`]).
+pub fn row_columns(d: &Derivation) -> Vec<String> {
+    let names = d.coordinate_names();
+    let mut cols = vec!["t".to_string()];
+    cols.extend(names.iter().map(|c| c.to_string()));
+    cols.extend(names.iter().map(|c| format!("{c}'")));
+    cols.extend(dynamics::invariants_of(d).into_iter().map(|i| i.name));
+    cols.extend(body::column_names(&d.bodies));
+    cols.extend(constrained::constraint_columns(d));
+    cols
+}
+
 /// Replaces values of the initial state by the caller's (`RunConfig::initial`).
 fn override_initial(d: &Derivation, given: &[(String, f64)], q: &mut [f64], qd: &mut [f64]) -> Result<(), RunError> {
     for (name, value) in given {

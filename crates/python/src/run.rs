@@ -166,13 +166,7 @@ impl Derived {
         let names: Vec<String> = d.coordinate_names().iter().map(|s| s.to_string()).collect();
         let inv_names: Vec<String> = mech::invariants_of(d).into_iter().map(|i| i.name).collect();
         let mut bodies = mech::BodyRecorder::new(d);
-        let constraint_cols = mech::constraint_columns(d);
-        let mut columns = vec!["t".to_string()];
-        columns.extend(names.iter().cloned());
-        columns.extend(names.iter().map(|c| format!("{c}'")));
-        columns.extend(inv_names.iter().cloned());
-        columns.extend(bodies.iter().flat_map(|b| b.columns().iter().cloned()));
-        columns.extend(constraint_cols.iter().cloned());
+        let columns = mech::row_columns(d);
         let width = columns.len();
         let mut body_values = vec![0.0; bodies.as_ref().map_or(0, |b| b.columns().len())];
 
