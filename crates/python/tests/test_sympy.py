@@ -85,7 +85,8 @@ def test_latex_has_dots_for_velocities():
     assert d.momenta["ph"]._repr_latex_() == r"$l^{2} m \dot{\phi}$"
     assert r"\ddot{\phi}" in d.equations["ph"].latex()
     whole = d._repr_latex_()
-    assert whole.startswith("$$") and r"\begin{align*}" in whole and "%" not in whole
+    assert whole.startswith("$$\\begin{aligned}") and whole.endswith("\\end{aligned}$$") and "%" not in whole
+    assert whole.count("$$") == 2 * whole.count(r"\begin{aligned}")
 
 
 def test_evaluation_broadcasts():

@@ -95,10 +95,12 @@ class Derivation:
         return self.model._native.latex()
 
     def _repr_latex_(self) -> str:
-        # Comments (the CLI's first line, the labels of equations) are dropped:
-        # not every notebook renderer reads them.
+        # Each `align*` block as `$$\begin{aligned}...$$`, which MathJax and
+        # KaTeX both typeset; comments (the CLI's first line, the labels of
+        # equations) are dropped: not every notebook renderer reads them.
         lines = [re.sub(r"(?<!\\)%.*$", "", line).rstrip() for line in self.latex().splitlines()]
-        return "$$" + "\n".join(line for line in lines if line) + "$$"
+        text = "\n".join(line for line in lines if line)
+        return text.replace("\\begin{align*}", "$$\\begin{aligned}").replace("\\end{align*}", "\\end{aligned}$$")
 
     def _repr_pretty_(self, p: Any, cycle: bool) -> None:
         p.text(str(self))
