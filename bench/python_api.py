@@ -386,7 +386,8 @@ def report(records: list[dict]) -> str:
 
     machine = find("machine") or {}
     versions = find("versions") or {}
-    text = [f"Started {machine.get('started', '?')} (`{machine.get('command', '?')}`) on {machine.get('cpu', '?')}, "
+    text = [f"Started {machine.get('started', '?')} (`{machine.get('command', '?')}`, commit {machine.get('commit', '?')}) "
+            f"on {machine.get('cpu', '?')}, "
             f"{machine.get('nproc', '?')} cores; Python {versions.get('python', '?')}, lagrange "
             f"{versions.get('lagrange', '?')}, SymPy {versions.get('sympy', '?')}, SciPy {versions.get('scipy', '?')}, "
             f"numpy {versions.get('numpy', '?')}. Ratios are SymPy + SciPy / lagrange (> 1: lagrange is faster).\n"]
@@ -404,6 +405,9 @@ def report(records: list[dict]) -> str:
         if io and it:
             text.append(f"| of which the imports alone, wall | {fmt_s(io['wall_s'])} | {fmt_s(it['wall_s'])} "
                         f"| {ratio('import', 'wall')} |")
+            work_ours, work_theirs = ours["wall_s"] - io["wall_s"], theirs["wall_s"] - it["wall_s"]
+            work_ratio = f"{work_theirs / work_ours:.0f}×" if work_ours > 0 else "n/a (within the noise)"
+            text.append(f"| the rest (whole call − imports), wall | {fmt_s(work_ours)} | {fmt_s(work_theirs)} | {work_ratio} |")
         text.append(f"| method, steps | {ours['method']}, {ours['steps']:,} | DOP853, {theirs['steps']:,} "
                     f"({theirs['nfev']:,} RHS calls) | |")
         acc = {r["tool"]: r for r in records if r.get("record") == "accuracy"}
