@@ -469,8 +469,10 @@ def report(records: list[dict]) -> str:
         text.append("| right-hand side | one call (CPU) | lambdify / this |")
         text.append("| --- | ---: | ---: |")
         lam = calls.get(("chain50", "lambdify"))
+        labels = {"lagrange_rhs": "`model.rhs()`", "lambdify": "lambdified SymPy M, f + `numpy.linalg.solve`",
+                  "hand": "hand-written Python (vectorised numpy)"}
         for r in chain:
-            text.append(f"| {r['rhs']} | {fmt_us(r['us'])} | {lam['us'] / r['us']:.1f}× |")
+            text.append(f"| {labels.get(r['rhs'], r['rhs'])} | {fmt_us(r['us'])} | {lam['us'] / r['us']:.1f}× |")
         if setup:
             text.append("")
             text.append(f"SymPy's derivation + lambdify of the chain took {fmt_s(setup['derive_lambdify_s'])}.")
