@@ -81,18 +81,33 @@ def log(message: str) -> None:
 
 # ------------------------------------------------------------------ the whole calls (what a user writes)
 
-OURS_CALL = f"""
+# Each call is written as its user writes it, in three parts: the imports, the derivation
+# (ours: reading and deriving the model; SymPy's: LagrangesMethod and lambdify) and the
+# integration. The child clocks the last two itself (time.perf_counter between them), so the
+# table can show where the whole process's time goes; the bare imports run alone too.
+OURS_IMPORTS = """
 import lagrange
-run = lagrange.load({MODEL!r}).simulate(until={UNTIL!r}, rtol={RTOL!r})
 """
 
-SCIPY_CALL = f"""
+OURS_DERIVE = f"""
+model = lagrange.load({MODEL!r})
+"""
+
+OURS_SOLVE = f"""
+run = model.simulate(until={UNTIL!r}, rtol={RTOL!r})
+"""
+
+SCIPY_IMPORTS = """
 import sys
 sys.path.insert(0, ANCHORS)
 import bench_common as bc
 import numpy as np
+import sympy
+import sympy.physics.mechanics
 from scipy.integrate import solve_ivp
+"""
 
+SCIPY_DERIVE = """
 lagrangian, q, params = bc.pendulum_lagrangian(2)
 _, mass, forcing = bc.derive(lagrangian, q)  # LagrangesMethod: M q'' = f
 mass_fn, forcing_fn = bc.lambdify_mass_forcing(mass, forcing, q, params)
@@ -102,28 +117,34 @@ values = [1.0, 1.0, 1.0, 1.0, 9.81]
 def rhs(t, y):
     acc = np.linalg.solve(mass_fn(y[:2], y[2:], values), forcing_fn(y[:2], y[2:], values).ravel())
     return np.concatenate((y[2:], acc))
+"""
 
-
+SCIPY_SOLVE = f"""
 sol = solve_ivp(rhs, (0.0, {UNTIL!r}), {Y0!r}, method="DOP853", rtol={RTOL!r}, atol={ATOL!r},
                 t_eval=np.linspace(0.0, {UNTIL!r}, {SAMPLES}))
 """
 
 # What each call prints after the timed work, for the accuracy check: the state at the
-# check rows. It is part of the timed process, and as small for both.
+# check rows, and its own clock. It is part of the timed process, and as small for both.
 OURS_PRINT = f"""
 import json
 print(json.dumps({{"states": {{t: run.y[i].tolist() for t, i in {CHECK_ROWS!r}.items()}}, "rows": len(run),
-                  "method": run.summary["method"], "steps": run.summary.get("steps")}}))
+                  "method": run.summary["method"], "steps": run.summary.get("steps"),
+                  "derive_s": _derived - _start, "solve_s": _solved - _derived}}))
 """
 
 SCIPY_PRINT = f"""
 import json
 print(json.dumps({{"states": {{t: sol.y[:, i].tolist() for t, i in {CHECK_ROWS!r}.items()}}, "rows": sol.t.size,
-                  "method": "DOP853", "steps": sol.t.size - 1, "nfev": sol.nfev}}))
+                  "method": "DOP853", "steps": sol.t.size - 1, "nfev": sol.nfev,
+                  "derive_s": _derived - _start, "solve_s": _solved - _derived}}))
 """
 
-IMPORT_OURS = "import lagrange\n"
-IMPORT_SCIPY = "import sympy\nimport sympy.physics.mechanics\nimport scipy.integrate\n"
+
+def whole_call(imports: str, derive: str, solve: str, printing: str) -> str:
+    """The user's script with the child's own clock between its parts."""
+    return ("import time as _time\n" + imports + "_start = _time.perf_counter()\n" + derive
+            + "_derived = _time.perf_counter()\n" + solve + "_solved = _time.perf_counter()\n" + printing)
 
 
 def run_process(python: str, code: str, anchors: Path, timeout: float) -> dict:
@@ -164,14 +185,17 @@ class ChildClock:
 
 
 def measure_whole_calls(python: str, anchors: Path, repeats: int, timeout: float) -> list[dict]:
-    """The four fresh-process cases, in turn (A B C D A B C D ...), `repeats` timed runs each
+    """The four fresh-process cases in turn (A B C D, B C D A, ...), `repeats` timed runs each
     after one untimed warm-up of each (file cache, the extension loaded once from disk)."""
-    cases = [("whole", "lagrange", OURS_CALL + OURS_PRINT), ("whole", "sympy_scipy", SCIPY_CALL + SCIPY_PRINT),
-             ("import", "lagrange", IMPORT_OURS), ("import", "sympy_scipy", IMPORT_SCIPY)]
+    cases = [("whole", "lagrange", whole_call(OURS_IMPORTS, OURS_DERIVE, OURS_SOLVE, OURS_PRINT)),
+             ("whole", "sympy_scipy", whole_call(SCIPY_IMPORTS, SCIPY_DERIVE, SCIPY_SOLVE, SCIPY_PRINT)),
+             ("import", "lagrange", OURS_IMPORTS), ("import", "sympy_scipy", SCIPY_IMPORTS)]
     samples: dict[tuple[str, str], list[dict]] = {(kind, tool): [] for kind, tool, _ in cases}
     clock = ChildClock()
     for round_ in range(repeats + 1):
-        for kind, tool, code in cases:
+        # Each round starts one case later, so that no case always follows the same one
+        # (a process right after SymPy's 2-second one meets a warmer or a busier machine).
+        for kind, tool, code in cases[round_ % len(cases):] + cases[:round_ % len(cases)]:
             clock.lap()
             result = run_process(python, code, anchors, timeout)
             result["cpu_s"] = clock.lap()
@@ -188,8 +212,11 @@ def measure_whole_calls(python: str, anchors: Path, repeats: int, timeout: float
         record = {"bench": BENCH, "record": kind, "tool": tool, "wall_s": statistics.median(walls),
                   "cpu_s": statistics.median(cpus), "wall_samples": walls, "cpu_samples": cpus}
         if kind == "whole":
-            printed = json.loads(runs[-1]["stdout"].strip().splitlines()[-1])
-            record.update(until=UNTIL, rtol=RTOL, atol=ATOL, **printed)
+            printed = [json.loads(r["stdout"].strip().splitlines()[-1]) for r in runs]
+            derive = [p.pop("derive_s") for p in printed]
+            solve = [p.pop("solve_s") for p in printed]
+            record.update(until=UNTIL, rtol=RTOL, atol=ATOL, derive_s=statistics.median(derive),
+                          solve_s=statistics.median(solve), derive_samples=derive, solve_samples=solve, **printed[-1])
         records.append(record)
     return records
 
@@ -367,6 +394,8 @@ def ratio_records(records: list[dict]) -> list[dict]:
 def fmt_s(seconds) -> str:
     if seconds is None:
         return "n/a"
+    if seconds < 0.01:
+        return f"{seconds * 1e3:.2f} ms"
     return f"{seconds * 1e3:.0f} ms" if seconds < 1 else f"{seconds:.2f} s"
 
 
@@ -405,9 +434,11 @@ def report(records: list[dict]) -> str:
         if io and it:
             text.append(f"| of which the imports alone, wall | {fmt_s(io['wall_s'])} | {fmt_s(it['wall_s'])} "
                         f"| {ratio('import', 'wall')} |")
-            work_ours, work_theirs = ours["wall_s"] - io["wall_s"], theirs["wall_s"] - it["wall_s"]
-            work_ratio = f"{work_theirs / work_ours:.0f}×" if work_ours > 0 else "n/a (within the noise)"
-            text.append(f"| the rest (whole call − imports), wall | {fmt_s(work_ours)} | {fmt_s(work_theirs)} | {work_ratio} |")
+        if "derive_s" in ours and "derive_s" in theirs:
+            text.append(f"| in the process: derivation (load / LagrangesMethod + lambdify) | {fmt_s(ours['derive_s'])} "
+                        f"| {fmt_s(theirs['derive_s'])} | {theirs['derive_s'] / ours['derive_s']:.0f}× |")
+            text.append(f"| in the process: integration (simulate / solve_ivp), {SAMPLES} rows | {fmt_s(ours['solve_s'])} "
+                        f"| {fmt_s(theirs['solve_s'])} | {theirs['solve_s'] / ours['solve_s']:.0f}× |")
         text.append(f"| method, steps | {ours['method']}, {ours['steps']:,} | DOP853, {theirs['steps']:,} "
                     f"({theirs['nfev']:,} RHS calls) | |")
         acc = {r["tool"]: r for r in records if r.get("record") == "accuracy"}
