@@ -5,14 +5,21 @@
 //! `mech::System`, native once Cranelift has compiled it), called once per
 //! evaluation. A model with constraints has no such function without its
 //! multipliers, and is refused.
+//!
+//! `solve_ivp` passes y as a float64 numpy array. Read element by element
+//! through the sequence protocol, each component becomes a numpy scalar
+//! first, which costs more than the compiled function itself; such an array
+//! is read from its bytes in one copy instead (anything else, a list, a
+//! tuple, another dtype, goes the general way).
 
 use crate::errors;
 use crate::model::Derived;
 use mech::{Form, System};
 use num::OdeSystem;
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::intern;
 use pyo3::prelude::*;
-use pyo3::types::PyList;
+use pyo3::types::{PyBytes, PyList};
 use std::sync::Mutex;
 
 /// The right-hand side of a model's equations of motion as a Python callable.
@@ -22,6 +29,9 @@ pub struct Rhs {
     dim: usize,
     /// The model's name, for messages.
     name: String,
+    /// numpy's array type and its native float64 dtype, for the fast read of y
+    /// (None if numpy cannot be imported: then every y goes the general way).
+    numpy: Option<(Py<PyAny>, Py<PyAny>)>,
 }
 
 #[pymethods]
@@ -34,14 +44,19 @@ impl Derived {
         }
         let system = py.detach(|| mech::Dynamics::new(&self.d).system(Form::Lagrange));
         let dim = 2 * self.d.coordinate_names().len();
-        Ok(Rhs { system: Mutex::new(system), dim, name: self.d.model().name.clone() })
+        let numpy = py.import("numpy").and_then(|np| {
+            let float64 = np.getattr("dtype")?.call1(("float64",))?;
+            Ok((np.getattr("ndarray")?.unbind(), float64.unbind()))
+        });
+        Ok(Rhs { system: Mutex::new(system), dim, name: self.d.model().name.clone(), numpy: numpy.ok() })
     }
 }
 
 #[pymethods]
 impl Rhs {
     /// `f(t, y)`: dy/dt as a list, y = [q..., q'...] in the model's order.
-    fn __call__<'py>(&self, py: Python<'py>, t: f64, y: Vec<f64>) -> PyResult<Bound<'py, PyList>> {
+    fn __call__<'py>(&self, py: Python<'py>, t: f64, y: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyList>> {
+        let y = self.state(y)?;
         if y.len() != self.dim {
             return Err(PyValueError::new_err(format!(
                 "y has {} components; {} has {} ([q, q'])",
@@ -71,5 +86,33 @@ impl Rhs {
 
     fn __repr__(&self) -> String {
         format!("<compiled right-hand side of {}: y = [q, q'], {} components>", self.name, self.dim)
+    }
+}
+
+impl Rhs {
+    /// y as floats: a one-dimensional float64 numpy array from its bytes,
+    /// anything else through the sequence protocol.
+    fn state(&self, y: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
+        let py = y.py();
+        if let Some((ndarray, float64)) = &self.numpy {
+            if y.get_type().is(ndarray.bind(py))
+                && y.getattr(intern!(py, "dtype"))?.is(float64.bind(py))
+                && y.getattr(intern!(py, "ndim"))?.extract::<usize>()? == 1
+            {
+                let bytes = y.call_method0(intern!(py, "tobytes"))?;
+                let bytes = bytes.cast::<PyBytes>()?.as_bytes();
+                return Ok(bytes
+                    .chunks_exact(8)
+                    .map(|c| {
+                        let mut word = [0u8; 8];
+                        word.copy_from_slice(c);
+                        f64::from_ne_bytes(word)
+                    })
+                    .collect());
+            }
+        }
+        y.extract().map_err(|e: PyErr| {
+            PyTypeError::new_err(format!("y must be a sequence of floats ([q, q']): {}", e.value(py)))
+        })
     }
 }
