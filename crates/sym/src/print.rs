@@ -293,6 +293,8 @@ fn fraction<'a>(pool: &'a Pool, coeff: Number, factors: &'a [ExprId]) -> Fractio
 const APPLY: &str = "<mo>&#x2061;</mo>";
 /// MathML's minus sign (U+2212, not the hyphen).
 const MINUS: &str = "<mo>&#x2212;</mo>";
+/// MathML's invisible times with a thin space around it, between a word and its neighbour.
+const SPACED_TIMES: &str = "<mo lspace=\"0.17em\" rspace=\"0.17em\">&#x2062;</mo>";
 
 struct Printer<'a> {
     pool: &'a Pool,
@@ -529,7 +531,8 @@ impl Printer<'_> {
     /// Factors side by side: `a*b` in text; juxtaposed when typeset, with a
     /// centred dot before a factor that starts with a digit (so `2 \cdot 3^{x}`
     /// does not read as `23^x`). MathML joins the others with an invisible
-    /// times and makes the product one `<mrow>`.
+    /// times, spaced when a word meets a neighbour (`lA lB`, not `lAlB`),
+    /// and makes the product one `<mrow>`.
     fn join_factors(&self, parts: &[String]) -> String {
         let (plain, dot) = match self.mode {
             PrintMode::Text => return parts.join("*"),
@@ -539,7 +542,13 @@ impl Printer<'_> {
         let mut out = String::new();
         for (i, part) in parts.iter().enumerate() {
             if i > 0 {
-                out.push_str(if self.starts_with_digit(part) { dot } else { plain });
+                out.push_str(if self.starts_with_digit(part) {
+                    dot
+                } else if self.mode == PrintMode::MathMl && (starts_with_word(part) || ends_with_word(&parts[i - 1])) {
+                    SPACED_TIMES
+                } else {
+                    plain
+                });
             }
             out.push_str(part);
         }
@@ -553,15 +562,7 @@ impl Printer<'_> {
     /// Whether typeset text shows a digit first: `2`, `3^{x}`, `<msup><mn>3</mn>…`.
     fn starts_with_digit(&self, part: &str) -> bool {
         match self.mode {
-            PrintMode::MathMl => {
-                let mut rest = part;
-                while let Some(inner) =
-                    ["<mrow>", "<msup>", "<msub>", "<msubsup>"].iter().find_map(|tag| rest.strip_prefix(tag))
-                {
-                    rest = inner;
-                }
-                rest.starts_with("<mn>")
-            }
+            PrintMode::MathMl => first_leaf(part).starts_with("<mn>"),
             _ => part.starts_with(|c: char| c.is_ascii_digit()),
         }
     }
@@ -616,6 +617,32 @@ impl Printer<'_> {
     }
 }
 
+/// MathML from the first element that is seen first: past the opening tags
+/// of rows, and of powers and subscripts, which show their base first.
+fn first_leaf(part: &str) -> &str {
+    let mut rest = part;
+    while let Some(inner) = ["<mrow>", "<msup>", "<msub>", "<msubsup>"].iter().find_map(|tag| rest.strip_prefix(tag)) {
+        rest = inner;
+    }
+    rest
+}
+
+/// Whether MathML shows a word of several letters first: `<mi>lA</mi>`,
+/// `<msup><mi>lA</mi>…`, or a function's name.
+fn starts_with_word(part: &str) -> bool {
+    first_leaf(part).strip_prefix("<mi>").and_then(|r| r.split_once("</mi>")).is_some_and(|(word, _)| is_word(word))
+}
+
+/// Whether MathML shows a word of several letters last: `<mi>lA</mi>` alone.
+fn ends_with_word(part: &str) -> bool {
+    part.strip_prefix("<mi>").and_then(|r| r.strip_suffix("</mi>")).is_some_and(is_word)
+}
+
+/// Whether the text of an `<mi>` is a word, several letters set upright.
+fn is_word(text: &str) -> bool {
+    text.chars().count() > 1 && !text.contains('<')
+}
+
 // ---- names and numbers, typeset ----------------------------------------------------
 
 /// A symbol in LaTeX: `\dot{\theta}_{1}` for `th1'`.
@@ -633,13 +660,18 @@ fn tex_symbol(pool: &Pool, s: Symbol) -> String {
     }
 }
 
-/// A symbol in MathML, one element: `th1'` is θ with a dot accent, subscript 1.
+/// A symbol in MathML, one element: `th1'` is θ with a dot over it, subscript 1.
+///
+/// The dot is an `<mover>` without `accent="true"`: an accent is placed by
+/// the font's OpenType MATH table, and without a math font Chromium draws it
+/// inside the letter (a θ with its dot hidden), while an over-script sits
+/// above the letter in every font.
 fn mathml_symbol(pool: &Pool, s: Symbol) -> String {
     let (base, sub) = mathml_name(pool.name_str(s.name));
     let base = match s.order {
         0 => base,
-        1 => format!("<mover accent=\"true\">{base}<mo>˙</mo></mover>"),
-        2 => format!("<mover accent=\"true\">{base}<mo>¨</mo></mover>"),
+        1 => format!("<mover>{base}<mo>˙</mo></mover>"),
+        2 => format!("<mover>{base}<mo>¨</mo></mover>"),
         n => format!("<msup>{base}<mrow><mo>(</mo><mn>{n}</mn><mo>)</mo></mrow></msup>"),
     };
     match sub {
@@ -925,8 +957,8 @@ mod tests {
         check_mathml("(x + y)/z", "<mfrac><mrow><mi>x</mi><mo>+</mo><mi>y</mi></mrow><mi>z</mi></mfrac>");
         check_mathml("x - 1/2", "<mrow><mi>x</mi><mo>&#x2212;</mo><mfrac><mn>1</mn><mn>2</mn></mfrac></mrow>");
         // A power of a velocity: the dot accent is the base.
-        check_mathml("q'^2", "<msup><mover accent=\"true\"><mi>q</mi><mo>˙</mo></mover><mn>2</mn></msup>");
-        check_mathml("th1''", "<msub><mover accent=\"true\"><mi>θ</mi><mo>¨</mo></mover><mn>1</mn></msub>");
+        check_mathml("q'^2", "<msup><mover><mi>q</mi><mo>˙</mo></mover><mn>2</mn></msup>");
+        check_mathml("th1''", "<msub><mover><mi>θ</mi><mo>¨</mo></mover><mn>1</mn></msub>");
         // A subscripted base takes its exponent above the subscript.
         check_mathml("th1^2", "<msubsup><mi>θ</mi><mn>1</mn><mn>2</mn></msubsup>");
         // A function of a Greek name, and its power written on the function.
@@ -945,8 +977,15 @@ mod tests {
              <mrow><mn>2</mn><mo>&#x2062;</mo><mi>m</mi></mrow></mfrac>",
         );
         check_mathml("p_th1", "<msub><mi>p</mi><msub><mi>θ</mi><mn>1</mn></msub></msub>");
-        check_mathml("-g*sin(q)/l", "<mrow><mo>&#x2212;</mo><mfrac><mrow><mi>g</mi><mo>&#x2062;</mo>\
-             <mrow><mi>sin</mi><mo>&#x2061;</mo><mrow><mo>(</mo><mi>q</mi><mo>)</mo></mrow></mrow></mrow><mi>l</mi></mfrac></mrow>");
+        // A function's name is a word, spaced from its neighbours as LaTeX spaces `\sin`.
+        check_mathml(
+            "-g*sin(q)/l",
+            &format!(
+                "<mrow><mo>&#x2212;</mo><mfrac><mrow><mi>g</mi>{SPACED_TIMES}<mrow><mi>sin</mi><mo>&#x2061;</mo>\
+                 <mrow><mo>(</mo><mi>q</mi><mo>)</mo></mrow></mrow></mrow><mi>l</mi></mfrac></mrow>"
+            ),
+        );
+        check_mathml("lA*lB*m", &format!("<mrow><mi>lA</mi>{SPACED_TIMES}<mi>lB</mi>{SPACED_TIMES}<mi>m</mi></mrow>"));
         check_mathml("1/sqrt(x)", "<mfrac><mn>1</mn><msqrt><mi>x</mi></msqrt></mfrac>");
         check_mathml("x^(1/3)", "<mroot><mi>x</mi><mn>3</mn></mroot>");
         check_mathml("pi*r^2", "<mrow><mi>π</mi><mo>&#x2062;</mo><msup><mi>r</mi><mn>2</mn></msup></mrow>");
@@ -957,7 +996,7 @@ mod tests {
         );
         check_mathml("exp(-x)", "<msup><mi>e</mi><mrow><mo>&#x2212;</mo><mi>x</mi></mrow></msup>");
         check_mathml("1.5e-7", "<mrow><mn>1.5</mn><mo>&#x22C5;</mo><msup><mn>10</mn><mrow><mo>&#x2212;</mo><mn>7</mn></mrow></msup></mrow>");
-        check_mathml("Omega*size", "<mrow><mi mathvariant=\"normal\">Ω</mi><mo>&#x2062;</mo><mi>size</mi></mrow>");
+        check_mathml("Omega*x", "<mrow><mi mathvariant=\"normal\">Ω</mi><mo>&#x2062;</mo><mi>x</mi></mrow>");
         // Names built by code are escaped.
         let mut pool = Pool::default();
         let odd = pool.symbol("a<b&c");
