@@ -2,7 +2,7 @@
 //!
 //! Expressions live in a [`Pool`], a hash-consed DAG: each distinct subexpression
 //! is stored once and named by an [`ExprId`]. The pool parses the expression
-//! language, prints it back (text that parses to the same expression, and LaTeX),
+//! language, prints it back (text that parses to the same expression, LaTeX and MathML),
 //! differentiates, substitutes, simplifies, and evaluates many expressions at once
 //! over their shared subexpressions with a [`Tape`], which [`Compiled`] turns into
 //! native code.

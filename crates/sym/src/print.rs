@@ -1,9 +1,11 @@
 //! The printer: one walk over an expression, written in the expression
-//! language (text that parses back to the same id) or in LaTeX.
+//! language (text that parses back to the same id), in LaTeX, or in
+//! presentation MathML.
 //!
 //! Enter with [`Pool::print`] and a preset of [`PrintOptions`]
-//! ([`PrintOptions::text`], [`PrintOptions::latex`]), or the shorthands
-//! [`Pool::display`] and [`Pool::latex`]; each returns a value that implements
+//! ([`PrintOptions::text`], [`PrintOptions::latex`], [`PrintOptions::mathml`]),
+//! or the shorthands [`Pool::display`], [`Pool::latex`] and [`Pool::mathml`];
+//! each returns a value that implements
 //! [`std::fmt::Display`], so `pool.display(e).to_string()` or
 //! `format!("{}", pool.latex(e))`.
 //!
@@ -15,8 +17,11 @@
 //! operator, and the parent adds the parentheses that precedence requires, and
 //! no more. The notation decides only the tokens (names, numbers, functions,
 //! parentheses, how factors join, how a fraction and an exponent are written)
-//! and the forms only LaTeX has (`\sqrt[3]{x}`, `\sin^{2}{\left(q \right)}`,
-//! no parentheses inside `\frac`).
+//! and the forms only the typeset notations have (`\sqrt[3]{x}`,
+//! `\sin^{2}{\left(q \right)}`, no parentheses inside `\frac`). MathML
+//! follows LaTeX's every decision; each of its pieces is one element (a
+//! composite one an `<mrow>`), so a piece can always be the base or the
+//! exponent of an `<msup>` or a part of an `<mfrac>`.
 //!
 //! The text is checked by a property test: parsing it gives back the same
 //! [`ExprId`]. Symbols whose names are not names of the language (a symbol
@@ -41,6 +46,11 @@ pub enum PrintMode {
     /// LaTeX math (no surrounding `$`): `\frac`, `\sqrt`, `\dot{\theta}` for a
     /// first derivative, Greek letters for Greek names.
     Latex,
+    /// Presentation MathML without the surrounding `<math>` element, with
+    /// LaTeX's layout: `<mfrac>`, `<msqrt>`, `<msup>`, a dot accent for a
+    /// first derivative, Greek letters for Greek names; `<`, `>` and `&` in
+    /// names escaped.
+    MathMl,
 }
 
 impl PrintOptions {
@@ -52,6 +62,11 @@ impl PrintOptions {
     /// LaTeX math.
     pub fn latex() -> PrintOptions {
         PrintOptions { mode: PrintMode::Latex }
+    }
+
+    /// Presentation MathML, to go inside a `<math>` element.
+    pub fn mathml() -> PrintOptions {
+        PrintOptions { mode: PrintMode::MathMl }
     }
 
     /// The notation written.
@@ -90,6 +105,12 @@ impl Pool {
     /// The expression as LaTeX math ([`PrintOptions::latex`]).
     pub fn latex(&self, id: ExprId) -> Printed<'_> {
         self.print(id, PrintOptions::latex())
+    }
+
+    /// The expression as presentation MathML ([`PrintOptions::mathml`]), one
+    /// element to put inside `<math>`.
+    pub fn mathml(&self, id: ExprId) -> Printed<'_> {
+        self.print(id, PrintOptions::mathml())
     }
 }
 
@@ -268,6 +289,13 @@ fn fraction<'a>(pool: &'a Pool, coeff: Number, factors: &'a [ExprId]) -> Fractio
 
 // ---- the walk -------------------------------------------------------------------
 
+/// MathML's invisible function application, between `sin` and `(q)`.
+const APPLY: &str = "<mo>&#x2061;</mo>";
+/// MathML's minus sign (U+2212, not the hyphen).
+const MINUS: &str = "<mo>&#x2212;</mo>";
+/// MathML's invisible times with a thin space around it, between a word and its neighbour.
+const SPACED_TIMES: &str = "<mo lspace=\"0.17em\" rspace=\"0.17em\">&#x2062;</mo>";
+
 struct Printer<'a> {
     pool: &'a Pool,
     mode: PrintMode,
@@ -278,7 +306,7 @@ impl Printer<'_> {
         let pool = self.pool;
         match pool.node(id) {
             Node::Num(n) => self.num(*n),
-            Node::Pi => Piece::new(self.pick("pi", "\\pi"), Prec::Atom),
+            Node::Pi => Piece::new(self.pick("pi", "\\pi", "<mi>π</mi>"), Prec::Atom),
             Node::Sym(s) => Piece::new(self.symbol(*s), Prec::Atom),
             Node::Func(f, a) => self.func(*f, *a, None),
             Node::Atan2(y, x) => {
@@ -286,6 +314,9 @@ impl Printer<'_> {
                 let text = match self.mode {
                     PrintMode::Text => format!("atan2({y}, {x})"),
                     PrintMode::Latex => format!("\\operatorname{{atan2}}{{\\left({y}, {x} \\right)}}"),
+                    PrintMode::MathMl => {
+                        format!("<mrow><mi>atan2</mi>{APPLY}<mrow><mo>(</mo>{y}<mo>,</mo>{x}<mo>)</mo></mrow></mrow>")
+                    }
                 };
                 Piece::new(text, Prec::Atom)
             }
@@ -301,64 +332,96 @@ impl Printer<'_> {
         }
     }
 
-    /// The token of this notation: `text` in the expression language, `latex` in LaTeX.
-    fn pick(&self, text: &'static str, latex: &'static str) -> &'static str {
+    /// The token of this notation.
+    fn pick(&self, text: &'static str, latex: &'static str, mathml: &'static str) -> &'static str {
         match self.mode {
             PrintMode::Text => text,
             PrintMode::Latex => latex,
+            PrintMode::MathMl => mathml,
+        }
+    }
+
+    /// Pieces written next to each other, made one element in MathML (an `<mrow>`).
+    fn group(&self, text: String) -> String {
+        match self.mode {
+            PrintMode::MathMl => format!("<mrow>{text}</mrow>"),
+            _ => text,
+        }
+    }
+
+    /// Digits: an `<mn>` in MathML.
+    fn digits(&self, text: &str) -> String {
+        match self.mode {
+            PrintMode::MathMl => format!("<mn>{text}</mn>"),
+            _ => text.to_string(),
         }
     }
 
     /// `p` in parentheses when it binds more loosely than `min`.
     fn paren(&self, p: Piece, min: Prec) -> String {
         if p.prec < min {
-            format!("{}{}{}", self.pick("(", "\\left("), p.text, self.pick(")", "\\right)"))
+            let open = self.pick("(", "\\left(", "<mrow><mo>(</mo>");
+            let close = self.pick(")", "\\right)", "<mo>)</mo></mrow>");
+            format!("{open}{}{close}", p.text)
         } else {
             p.text
         }
     }
 
     /// Whether a fraction bar groups its parts, so that a lone numerator or
-    /// denominator needs no parentheses (LaTeX's `\frac`, not the text's `/`).
+    /// denominator needs no parentheses (LaTeX's `\frac` and MathML's
+    /// `<mfrac>`, not the text's `/`).
     fn bar_groups(&self) -> bool {
-        self.mode == PrintMode::Latex
+        self.mode != PrintMode::Text
     }
 
     fn symbol(&self, s: Symbol) -> String {
         match self.mode {
             PrintMode::Text => self.pool.symbol_text(s),
             PrintMode::Latex => tex_symbol(self.pool, s),
+            PrintMode::MathMl => mathml_symbol(self.pool, s),
         }
     }
 
-    /// `f(a)`, or in LaTeX `f^{n}(a)` when `power` is given (`\sin^{2}{\left(q \right)}`).
+    /// `f(a)`, or typeset `f^{n}(a)` when `power` is given (`\sin^{2}{\left(q \right)}`).
     fn func(&self, f: Func, a: ExprId, power: Option<&str>) -> Piece {
         let arg = self.expr(a).text;
-        if self.mode == PrintMode::Text {
-            return Piece::new(format!("{}({arg})", f.name()), Prec::Atom);
-        }
-        let name = match f {
-            Func::Exp => return Piece::new(format!("e^{{{arg}}}"), Prec::Power),
-            Func::Abs => return Piece::new(format!("\\left|{arg}\\right|"), Prec::Atom),
-            Func::Sin => "\\sin",
-            Func::Cos => "\\cos",
-            Func::Tan => "\\tan",
-            Func::Asin => "\\arcsin",
-            Func::Acos => "\\arccos",
-            Func::Atan => "\\arctan",
-            Func::Sinh => "\\sinh",
-            Func::Cosh => "\\cosh",
-            Func::Tanh => "\\tanh",
-            Func::Log => "\\log",
+        let name = match (f, self.mode) {
+            (_, PrintMode::Text) => return Piece::new(format!("{}({arg})", f.name()), Prec::Atom),
+            (Func::Exp, PrintMode::Latex) => return Piece::new(format!("e^{{{arg}}}"), Prec::Power),
+            (Func::Exp, PrintMode::MathMl) => return Piece::new(format!("<msup><mi>e</mi>{arg}</msup>"), Prec::Power),
+            (Func::Abs, PrintMode::Latex) => return Piece::new(format!("\\left|{arg}\\right|"), Prec::Atom),
+            (Func::Abs, PrintMode::MathMl) => {
+                return Piece::new(format!("<mrow><mo>|</mo>{arg}<mo>|</mo></mrow>"), Prec::Atom);
+            }
+            (Func::Sin, _) => "sin",
+            (Func::Cos, _) => "cos",
+            (Func::Tan, _) => "tan",
+            (Func::Asin, _) => "arcsin",
+            (Func::Acos, _) => "arccos",
+            (Func::Atan, _) => "arctan",
+            (Func::Sinh, _) => "sinh",
+            (Func::Cosh, _) => "cosh",
+            (Func::Tanh, _) => "tanh",
+            (Func::Log, _) => "log",
         };
-        let power = power.map(|p| format!("^{{{p}}}")).unwrap_or_default();
-        Piece::new(format!("{name}{power}{{\\left({arg} \\right)}}"), Prec::Atom)
+        let text = if self.mode == PrintMode::Latex {
+            let power = power.map(|p| format!("^{{{p}}}")).unwrap_or_default();
+            format!("\\{name}{power}{{\\left({arg} \\right)}}")
+        } else {
+            let name = match power {
+                Some(p) => format!("<msup><mi>{name}</mi>{p}</msup>"),
+                None => format!("<mi>{name}</mi>"),
+            };
+            format!("<mrow>{name}{APPLY}<mrow><mo>(</mo>{arg}<mo>)</mo></mrow></mrow>")
+        };
+        Piece::new(text, Prec::Atom)
     }
 
     fn num(&self, n: Number) -> Piece {
         let a = self.num_abs(abs(n));
         if n.is_negative() {
-            Piece::new(format!("-{}", a.text), Prec::Neg)
+            Piece::new(self.group(format!("{}{}", self.pick("-", "-", MINUS), a.text)), Prec::Neg)
         } else {
             a
         }
@@ -367,13 +430,18 @@ impl Printer<'_> {
     /// A number that is not negative.
     fn num_abs(&self, n: Number) -> Piece {
         match (n, self.mode) {
-            (Number::Rational(r), _) if r.is_integer() => Piece::new(r.to_string(), Prec::Atom),
+            (Number::Rational(r), _) if r.is_integer() => Piece::new(self.digits(&r.to_string()), Prec::Atom),
             (Number::Rational(r), PrintMode::Text) => Piece::new(r.to_string(), Prec::Product),
             (Number::Rational(r), PrintMode::Latex) => {
                 Piece::new(format!("\\frac{{{}}}{{{}}}", r.numer().unsigned_abs(), r.denom()), Prec::Product)
             }
+            (Number::Rational(r), PrintMode::MathMl) => Piece::new(
+                format!("<mfrac><mn>{}</mn><mn>{}</mn></mfrac>", r.numer().unsigned_abs(), r.denom()),
+                Prec::Product,
+            ),
             (Number::Float(_), PrintMode::Text) => Piece::new(n.to_string(), Prec::Atom),
             (Number::Float(_), PrintMode::Latex) => tex_float(&n.to_string()),
+            (Number::Float(_), PrintMode::MathMl) => mathml_float(&n.to_string()),
         }
     }
 
@@ -383,9 +451,9 @@ impl Printer<'_> {
             let neg = negated(self.pool, t);
             out.push_str(match (i, neg.is_some()) {
                 (0, false) => "",
-                (0, true) => self.pick("-", "- "),
-                (_, false) => " + ",
-                (_, true) => " - ",
+                (0, true) => self.pick("-", "- ", MINUS),
+                (_, false) => self.pick(" + ", " + ", "<mo>+</mo>"),
+                (_, true) => self.pick(" - ", " - ", MINUS),
             });
             if let Some((c, fs)) = neg {
                 out.push_str(&self.paren(self.product(false, c, fs), Prec::Product));
@@ -393,14 +461,14 @@ impl Printer<'_> {
                 out.push_str(&self.paren(self.expr(t), Prec::Neg));
             }
         }
-        Piece::new(out, Prec::Sum)
+        Piece::new(self.group(out), Prec::Sum)
     }
 
     /// `±coeff * factors`, with the factors that have negative exponents below a bar.
     fn product(&self, negative: bool, coeff: Number, factors: &[ExprId]) -> Piece {
         if negative {
-            let p = self.product(false, coeff, factors);
-            return Piece::new(format!("{}{}", self.pick("-", "- "), self.paren(p, Prec::Product)), Prec::Neg);
+            let p = self.paren(self.product(false, coeff, factors), Prec::Product);
+            return Piece::new(self.group(format!("{}{p}", self.pick("-", "- ", MINUS))), Prec::Neg);
         }
         if factors.is_empty() {
             return self.num_abs(coeff);
@@ -413,7 +481,7 @@ impl Printer<'_> {
         if let Some(x) = fr.float {
             above.push(self.num_abs(Number::float(x)).text);
         } else if fr.p != 1 {
-            above.push(fr.p.to_string());
+            above.push(self.digits(&fr.p.to_string()));
         }
         let lone_above = self.bar_groups() && above.is_empty() && fr.above.len() == 1 && !fr.below.is_empty();
         for &f in &fr.above {
@@ -422,14 +490,14 @@ impl Printer<'_> {
         }
         let mut below: Vec<String> = Vec::new();
         if fr.q != 1 {
-            below.push(fr.q.to_string());
+            below.push(self.digits(&fr.q.to_string()));
         }
         let lone_below = self.bar_groups() && fr.below.len() == 1 && fr.q == 1;
         for &(b, e) in &fr.below {
             let p = self.power(b, e);
             below.push(if lone_below { p.text } else { self.paren(p, Prec::Power) });
         }
-        let above = if above.is_empty() { "1".to_string() } else { self.join_factors(&above) };
+        let above = if above.is_empty() { self.digits("1") } else { self.join_factors(&above) };
         if below.is_empty() {
             return Piece::new(above, Prec::Product);
         }
@@ -446,68 +514,136 @@ impl Printer<'_> {
                     _ => format!("{above}/({})", below.join("*")),
                 }
             }
-            PrintMode::Latex => {
+            PrintMode::Latex | PrintMode::MathMl => {
                 let below = match below.len() {
                     1 => below.swap_remove(0),
                     _ => self.join_factors(&below),
                 };
-                format!("\\frac{{{above}}}{{{below}}}")
+                match self.mode {
+                    PrintMode::Latex => format!("\\frac{{{above}}}{{{below}}}"),
+                    _ => format!("<mfrac>{above}{below}</mfrac>"),
+                }
             }
         };
         Piece::new(text, Prec::Product)
     }
 
-    /// Factors side by side: `a*b` in text; juxtaposed in LaTeX, with `\cdot`
-    /// before a factor that starts with a digit (so `2 \cdot 3^{x}` does not
-    /// read as `23^x`).
+    /// Factors side by side: `a*b` in text; juxtaposed when typeset, with a
+    /// centred dot before a factor that starts with a digit (so `2 \cdot 3^{x}`
+    /// does not read as `23^x`). MathML joins the others with an invisible
+    /// times, spaced when a word meets a neighbour (`lA lB`, not `lAlB`),
+    /// and makes the product one `<mrow>`.
     fn join_factors(&self, parts: &[String]) -> String {
-        if self.mode == PrintMode::Text {
-            return parts.join("*");
-        }
+        let (plain, dot) = match self.mode {
+            PrintMode::Text => return parts.join("*"),
+            PrintMode::Latex => (" ", " \\cdot "),
+            PrintMode::MathMl => ("<mo>&#x2062;</mo>", "<mo>&#x22C5;</mo>"),
+        };
         let mut out = String::new();
         for (i, part) in parts.iter().enumerate() {
             if i > 0 {
-                let digit = part.starts_with(|c: char| c.is_ascii_digit());
-                out.push_str(if digit { " \\cdot " } else { " " });
+                out.push_str(if self.starts_with_digit(part) {
+                    dot
+                } else if self.mode == PrintMode::MathMl && (starts_with_word(part) || ends_with_word(&parts[i - 1])) {
+                    SPACED_TIMES
+                } else {
+                    plain
+                });
             }
             out.push_str(part);
         }
-        out
+        if parts.len() > 1 {
+            self.group(out)
+        } else {
+            out
+        }
+    }
+
+    /// Whether typeset text shows a digit first: `2`, `3^{x}`, `<msup><mn>3</mn>…`.
+    fn starts_with_digit(&self, part: &str) -> bool {
+        match self.mode {
+            PrintMode::MathMl => first_leaf(part).starts_with("<mn>"),
+            _ => part.starts_with(|c: char| c.is_ascii_digit()),
+        }
     }
 
     /// `base ^ exp` for an exponent that prints without a leading minus
     /// (or a negative one on a numeric base, as `2^(-300)`).
     fn power(&self, base: ExprId, exp: Exp<'_>) -> Piece {
-        let latex = self.mode == PrintMode::Latex;
+        let typeset = self.mode != PrintMode::Text;
         let n = exp_number(self.pool, exp);
         if is_rational(n, 1, 1) {
             return self.expr(base);
         }
         if is_rational(n, 1, 2) {
             let b = self.expr(base).text;
-            return Piece::new(if latex { format!("\\sqrt{{{b}}}") } else { format!("sqrt({b})") }, Prec::Atom);
+            let text = match self.mode {
+                PrintMode::Text => format!("sqrt({b})"),
+                PrintMode::Latex => format!("\\sqrt{{{b}}}"),
+                PrintMode::MathMl => format!("<msqrt>{b}</msqrt>"),
+            };
+            return Piece::new(text, Prec::Atom);
         }
-        if let (true, Some(k)) = (latex, root_index(n)) {
-            return Piece::new(format!("\\sqrt[{k}]{{{}}}", self.expr(base).text), Prec::Atom);
+        if let (true, Some(k)) = (typeset, root_index(n)) {
+            let b = self.expr(base).text;
+            let text = match self.mode {
+                PrintMode::Latex => format!("\\sqrt[{k}]{{{b}}}"),
+                _ => format!("<mroot>{b}<mn>{k}</mn></mroot>"),
+            };
+            return Piece::new(text, Prec::Atom);
         }
         let e = match exp {
             Exp::Id(e) => self.expr(e),
             Exp::Num(n) => self.num(n),
             Exp::Mul(c, fs) => self.product(false, c, fs),
         };
-        // In LaTeX sin(q)^2 reads as \sin^{2}(q) when the exponent is a positive integer.
-        if let (true, Node::Func(f, a), Some(Number::Rational(r))) = (latex, self.pool.node(base), n) {
+        // Typeset, sin(q)^2 reads as \sin^{2}(q) when the exponent is a positive integer.
+        if let (true, Node::Func(f, a), Some(Number::Rational(r))) = (typeset, self.pool.node(base), n) {
             if r.is_integer() && !r.is_negative() && !matches!(f, Func::Exp | Func::Abs) {
                 return self.func(*f, *a, Some(&e.text));
             }
         }
         let b = self.paren(self.expr(base), Prec::Atom);
-        let e = if latex { format!("{{{}}}", e.text) } else { self.paren(e, Prec::Power) };
-        Piece::new(format!("{b}^{e}"), Prec::Power)
+        let text = match self.mode {
+            PrintMode::Text => format!("{b}^{}", self.paren(e, Prec::Power)),
+            PrintMode::Latex => format!("{b}^{{{}}}", e.text),
+            // A subscripted base carries the exponent above its subscript: θ₁².
+            PrintMode::MathMl => match b.strip_prefix("<msub>").and_then(|b| b.strip_suffix("</msub>")) {
+                Some(base_and_sub) => format!("<msubsup>{base_and_sub}{}</msubsup>", e.text),
+                None => format!("<msup>{b}{}</msup>", e.text),
+            },
+        };
+        Piece::new(text, Prec::Power)
     }
 }
 
-// ---- LaTeX names and numbers -----------------------------------------------------
+/// MathML from the first element that is seen first: past the opening tags
+/// of rows, and of powers and subscripts, which show their base first.
+fn first_leaf(part: &str) -> &str {
+    let mut rest = part;
+    while let Some(inner) = ["<mrow>", "<msup>", "<msub>", "<msubsup>"].iter().find_map(|tag| rest.strip_prefix(tag)) {
+        rest = inner;
+    }
+    rest
+}
+
+/// Whether MathML shows a word of several letters first: `<mi>lA</mi>`,
+/// `<msup><mi>lA</mi>…`, or a function's name.
+fn starts_with_word(part: &str) -> bool {
+    first_leaf(part).strip_prefix("<mi>").and_then(|r| r.split_once("</mi>")).is_some_and(|(word, _)| is_word(word))
+}
+
+/// Whether MathML shows a word of several letters last: `<mi>lA</mi>` alone.
+fn ends_with_word(part: &str) -> bool {
+    part.strip_prefix("<mi>").and_then(|r| r.strip_suffix("</mi>")).is_some_and(is_word)
+}
+
+/// Whether the text of an `<mi>` is a word, several letters set upright.
+fn is_word(text: &str) -> bool {
+    text.chars().count() > 1 && !text.contains('<')
+}
+
+// ---- names and numbers, typeset ----------------------------------------------------
 
 /// A symbol in LaTeX: `\dot{\theta}_{1}` for `th1'`.
 fn tex_symbol(pool: &Pool, s: Symbol) -> String {
@@ -524,6 +660,26 @@ fn tex_symbol(pool: &Pool, s: Symbol) -> String {
     }
 }
 
+/// A symbol in MathML, one element: `th1'` is θ with a dot over it, subscript 1.
+///
+/// The dot is an `<mover>` without `accent="true"`: an accent is placed by
+/// the font's OpenType MATH table, and without a math font Chromium draws it
+/// inside the letter (a θ with its dot hidden), while an over-script sits
+/// above the letter in every font.
+fn mathml_symbol(pool: &Pool, s: Symbol) -> String {
+    let (base, sub) = mathml_name(pool.name_str(s.name));
+    let base = match s.order {
+        0 => base,
+        1 => format!("<mover>{base}<mo>˙</mo></mover>"),
+        2 => format!("<mover>{base}<mo>¨</mo></mover>"),
+        n => format!("<msup>{base}<mrow><mo>(</mo><mn>{n}</mn><mo>)</mo></mrow></msup>"),
+    };
+    match sub {
+        Some(sub) => format!("<msub>{base}{sub}</msub>"),
+        None => base,
+    }
+}
+
 /// A float in LaTeX: `1.5e-7` becomes `1.5 \cdot 10^{-7}`.
 fn tex_float(text: &str) -> Piece {
     match text.split_once('e') {
@@ -533,29 +689,77 @@ fn tex_float(text: &str) -> Piece {
     }
 }
 
-/// The LaTeX of a name, split into the base and an optional subscript:
-/// `th1` is `(\theta, 1)`, `p_th` is `(p, \theta)`, `omega` is `(\omega, None)`.
-fn tex_name(name: &str) -> (String, Option<String>) {
+/// A float in MathML, as LaTeX writes it: `1.5e-7` is 1.5 ⋅ 10⁻⁷; `inf` is ∞.
+fn mathml_float(text: &str) -> Piece {
+    let ten_to = |exp: &str| match exp.strip_prefix('-') {
+        Some(e) => format!("<msup><mn>10</mn><mrow>{MINUS}<mn>{e}</mn></mrow></msup>"),
+        None => format!("<msup><mn>10</mn><mn>{exp}</mn></msup>"),
+    };
+    match text.split_once('e') {
+        Some(("1", exp)) => Piece::new(ten_to(exp), Prec::Power),
+        Some((mantissa, exp)) => {
+            Piece::new(format!("<mrow><mn>{mantissa}</mn><mo>&#x22C5;</mo>{}</mrow>", ten_to(exp)), Prec::Product)
+        }
+        None if text == "inf" => Piece::new("<mi>∞</mi>", Prec::Atom),
+        None if text.starts_with(|c: char| c.is_ascii_digit()) => Piece::new(format!("<mn>{text}</mn>"), Prec::Atom),
+        None => Piece::new(format!("<mi>{}</mi>", escape_xml(text)), Prec::Atom),
+    }
+}
+
+/// The subscript a name carries.
+enum Subscript<'a> {
+    /// Trailing digits: `th1`.
+    Digits(&'a str),
+    /// A name after the first `_`: `p_th`, itself typeset as a name.
+    Name(&'a str),
+}
+
+/// A name split into its word and subscript, the same for every typeset
+/// notation: `th1` is `(th, 1)`, `p_th` is `(p, th)`, `omega` is `(omega, None)`.
+fn split_name(name: &str) -> (&str, Option<Subscript<'_>>) {
     if let Some((head, tail)) = name.split_once('_') {
         if !head.is_empty() && !tail.is_empty() {
-            let (b, s) = tex_name(tail);
-            let sub = match s {
-                Some(s) => format!("{b}_{{{s}}}"),
-                None => b,
-            };
-            return (tex_word(head), Some(sub));
+            return (head, Some(Subscript::Name(tail)));
         }
     }
     let stem = name.trim_end_matches(|c: char| c.is_ascii_digit());
     if !stem.is_empty() && stem.len() < name.len() {
-        return (tex_word(stem), Some(name[stem.len()..].to_string()));
+        return (stem, Some(Subscript::Digits(&name[stem.len()..])));
     }
-    (tex_word(name), None)
+    (name, None)
+}
+
+/// The LaTeX of a name, split into the base and an optional subscript:
+/// `th1` is `(\theta, 1)`, `p_th` is `(p, \theta)`, `omega` is `(\omega, None)`.
+fn tex_name(name: &str) -> (String, Option<String>) {
+    let (word, sub) = split_name(name);
+    let sub = sub.map(|sub| match sub {
+        Subscript::Digits(digits) => digits.to_string(),
+        Subscript::Name(name) => match tex_name(name) {
+            (b, Some(s)) => format!("{b}_{{{s}}}"),
+            (b, None) => b,
+        },
+    });
+    (tex_word(word), sub)
+}
+
+/// The MathML of a name, split into the base and an optional subscript, each
+/// one element: `th1` is `(<mi>θ</mi>, <mn>1</mn>)`.
+fn mathml_name(name: &str) -> (String, Option<String>) {
+    let (word, sub) = split_name(name);
+    let sub = sub.map(|sub| match sub {
+        Subscript::Digits(digits) => format!("<mn>{digits}</mn>"),
+        Subscript::Name(name) => match mathml_name(name) {
+            (b, Some(s)) => format!("<msub>{b}{s}</msub>"),
+            (b, None) => b,
+        },
+    });
+    (mathml_word(word), sub)
 }
 
 /// A name without subscript: a Greek letter, a single letter, or upright text.
 fn tex_word(word: &str) -> String {
-    if let Some(greek) = greek(word) {
+    if let Some((greek, _)) = greek(word) {
         return greek.to_string();
     }
     if word.chars().count() == 1 {
@@ -564,42 +768,70 @@ fn tex_word(word: &str) -> String {
     format!("\\mathrm{{{}}}", word.replace('_', "\\_"))
 }
 
-fn greek(word: &str) -> Option<&'static str> {
+/// A name without subscript in MathML: an `<mi>`, which sets a single letter
+/// in italics and a longer word upright, as LaTeX's `\mathrm` does. Capital
+/// Greek letters stay upright, as in LaTeX.
+fn mathml_word(word: &str) -> String {
+    match greek(word) {
+        Some((_, letter)) if letter.starts_with(char::is_uppercase) => {
+            format!("<mi mathvariant=\"normal\">{letter}</mi>")
+        }
+        Some((_, letter)) => format!("<mi>{letter}</mi>"),
+        None => format!("<mi>{}</mi>", escape_xml(word)),
+    }
+}
+
+/// Text inside a MathML element, with `&`, `<` and `>` escaped.
+fn escape_xml(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// A Greek name's letter in LaTeX and in Unicode.
+fn greek(word: &str) -> Option<(&'static str, &'static str)> {
     Some(match word {
-        "alpha" | "al" => "\\alpha",
-        "beta" | "be" => "\\beta",
-        "gamma" | "ga" => "\\gamma",
-        "delta" => "\\delta",
-        "epsilon" | "eps" => "\\epsilon",
-        "zeta" => "\\zeta",
-        "eta" => "\\eta",
-        "theta" | "th" => "\\theta",
-        "iota" => "\\iota",
-        "kappa" => "\\kappa",
-        "lambda" | "lam" => "\\lambda",
-        "mu" => "\\mu",
-        "nu" => "\\nu",
-        "xi" => "\\xi",
-        "pi" => "\\pi",
-        "rho" => "\\rho",
-        "sigma" => "\\sigma",
-        "tau" => "\\tau",
-        "upsilon" => "\\upsilon",
-        "phi" | "ph" => "\\phi",
-        "chi" => "\\chi",
-        "psi" => "\\psi",
-        "omega" | "om" => "\\omega",
-        "Gamma" => "\\Gamma",
-        "Delta" => "\\Delta",
-        "Theta" => "\\Theta",
-        "Lambda" => "\\Lambda",
-        "Xi" => "\\Xi",
-        "Pi" => "\\Pi",
-        "Sigma" => "\\Sigma",
-        "Upsilon" => "\\Upsilon",
-        "Phi" => "\\Phi",
-        "Psi" => "\\Psi",
-        "Omega" => "\\Omega",
+        "alpha" | "al" => ("\\alpha", "α"),
+        "beta" | "be" => ("\\beta", "β"),
+        "gamma" | "ga" => ("\\gamma", "γ"),
+        "delta" => ("\\delta", "δ"),
+        "epsilon" | "eps" => ("\\epsilon", "ε"),
+        "zeta" => ("\\zeta", "ζ"),
+        "eta" => ("\\eta", "η"),
+        "theta" | "th" => ("\\theta", "θ"),
+        "iota" => ("\\iota", "ι"),
+        "kappa" => ("\\kappa", "κ"),
+        "lambda" | "lam" => ("\\lambda", "λ"),
+        "mu" => ("\\mu", "μ"),
+        "nu" => ("\\nu", "ν"),
+        "xi" => ("\\xi", "ξ"),
+        "pi" => ("\\pi", "π"),
+        "rho" => ("\\rho", "ρ"),
+        "sigma" => ("\\sigma", "σ"),
+        "tau" => ("\\tau", "τ"),
+        "upsilon" => ("\\upsilon", "υ"),
+        "phi" | "ph" => ("\\phi", "φ"),
+        "chi" => ("\\chi", "χ"),
+        "psi" => ("\\psi", "ψ"),
+        "omega" | "om" => ("\\omega", "ω"),
+        "Gamma" => ("\\Gamma", "Γ"),
+        "Delta" => ("\\Delta", "Δ"),
+        "Theta" => ("\\Theta", "Θ"),
+        "Lambda" => ("\\Lambda", "Λ"),
+        "Xi" => ("\\Xi", "Ξ"),
+        "Pi" => ("\\Pi", "Π"),
+        "Sigma" => ("\\Sigma", "Σ"),
+        "Upsilon" => ("\\Upsilon", "Υ"),
+        "Phi" => ("\\Phi", "Φ"),
+        "Psi" => ("\\Psi", "Ψ"),
+        "Omega" => ("\\Omega", "Ω"),
         _ => return None,
     })
 }
@@ -626,6 +858,15 @@ mod tests {
         let e = pool.parse(input).unwrap_or_else(|err| panic!("{input:?}: {err}"));
         assert_eq!(pool.print(e, PrintOptions::latex()).to_string(), expect, "{input:?}");
         assert_eq!(pool.latex(e).to_string(), expect, "{input:?}");
+    }
+
+    /// Parses `input` and prints it as MathML.
+    #[track_caller]
+    fn check_mathml(input: &str, expect: &str) {
+        let mut pool = Pool::default();
+        let e = pool.parse(input).unwrap_or_else(|err| panic!("{input:?}: {err}"));
+        assert_eq!(pool.print(e, PrintOptions::mathml()).to_string(), expect, "{input:?}");
+        assert_eq!(pool.mathml(e).to_string(), expect, "{input:?}");
     }
 
     #[test]
@@ -708,5 +949,57 @@ mod tests {
         check_latex("pi*r^2", "\\pi r^{2}");
         check_latex("(-1)^n", "\\left(-1\\right)^{n}");
         check_latex("x - 1/2", "x - \\frac{1}{2}");
+    }
+
+    #[test]
+    fn mathml() {
+        // A fraction, with LaTeX's grouping: no parentheses inside the bar.
+        check_mathml("(x + y)/z", "<mfrac><mrow><mi>x</mi><mo>+</mo><mi>y</mi></mrow><mi>z</mi></mfrac>");
+        check_mathml("x - 1/2", "<mrow><mi>x</mi><mo>&#x2212;</mo><mfrac><mn>1</mn><mn>2</mn></mfrac></mrow>");
+        // A power of a velocity: the dot accent is the base.
+        check_mathml("q'^2", "<msup><mover><mi>q</mi><mo>˙</mo></mover><mn>2</mn></msup>");
+        check_mathml("th1''", "<msub><mover><mi>θ</mi><mo>¨</mo></mover><mn>1</mn></msub>");
+        // A subscripted base takes its exponent above the subscript.
+        check_mathml("th1^2", "<msubsup><mi>θ</mi><mn>1</mn><mn>2</mn></msubsup>");
+        // A function of a Greek name, and its power written on the function.
+        check_mathml(
+            "sin(ph)",
+            "<mrow><mi>sin</mi><mo>&#x2061;</mo><mrow><mo>(</mo><mi>φ</mi><mo>)</mo></mrow></mrow>",
+        );
+        check_mathml(
+            "cos(th)^2",
+            "<mrow><msup><mi>cos</mi><mn>2</mn></msup><mo>&#x2061;</mo><mrow><mo>(</mo><mi>θ</mi><mo>)</mo></mrow></mrow>",
+        );
+        // A subscripted momentum, squared, over a product.
+        check_mathml(
+            "p_th^2/(2*m)",
+            "<mfrac><msubsup><mi>p</mi><mi>θ</mi><mn>2</mn></msubsup>\
+             <mrow><mn>2</mn><mo>&#x2062;</mo><mi>m</mi></mrow></mfrac>",
+        );
+        check_mathml("p_th1", "<msub><mi>p</mi><msub><mi>θ</mi><mn>1</mn></msub></msub>");
+        // A function's name is a word, spaced from its neighbours as LaTeX spaces `\sin`.
+        check_mathml(
+            "-g*sin(q)/l",
+            &format!(
+                "<mrow><mo>&#x2212;</mo><mfrac><mrow><mi>g</mi>{SPACED_TIMES}<mrow><mi>sin</mi><mo>&#x2061;</mo>\
+                 <mrow><mo>(</mo><mi>q</mi><mo>)</mo></mrow></mrow></mrow><mi>l</mi></mfrac></mrow>"
+            ),
+        );
+        check_mathml("lA*lB*m", &format!("<mrow><mi>lA</mi>{SPACED_TIMES}<mi>lB</mi>{SPACED_TIMES}<mi>m</mi></mrow>"));
+        check_mathml("1/sqrt(x)", "<mfrac><mn>1</mn><msqrt><mi>x</mi></msqrt></mfrac>");
+        check_mathml("x^(1/3)", "<mroot><mi>x</mi><mn>3</mn></mroot>");
+        check_mathml("pi*r^2", "<mrow><mi>π</mi><mo>&#x2062;</mo><msup><mi>r</mi><mn>2</mn></msup></mrow>");
+        check_mathml("2*3^x", "<mrow><mn>2</mn><mo>&#x22C5;</mo><msup><mn>3</mn><mi>x</mi></msup></mrow>");
+        check_mathml(
+            "(a + b)^2",
+            "<msup><mrow><mo>(</mo><mrow><mi>a</mi><mo>+</mo><mi>b</mi></mrow><mo>)</mo></mrow><mn>2</mn></msup>",
+        );
+        check_mathml("exp(-x)", "<msup><mi>e</mi><mrow><mo>&#x2212;</mo><mi>x</mi></mrow></msup>");
+        check_mathml("1.5e-7", "<mrow><mn>1.5</mn><mo>&#x22C5;</mo><msup><mn>10</mn><mrow><mo>&#x2212;</mo><mn>7</mn></mrow></msup></mrow>");
+        check_mathml("Omega*x", "<mrow><mi mathvariant=\"normal\">Ω</mi><mo>&#x2062;</mo><mi>x</mi></mrow>");
+        // Names built by code are escaped.
+        let mut pool = Pool::default();
+        let odd = pool.symbol("a<b&c");
+        assert_eq!(pool.mathml(odd).to_string(), "<mi>a&lt;b&amp;c</mi>");
     }
 }

@@ -5,7 +5,7 @@
 //! printing then parsing is the identity on ids; `diff` matches a central finite
 //! difference of `eval`; `simplify`, `together` and `together_trig` keep the
 //! value; what `is_identically_zero` proves is 0 at every point; a [`Tape`] of several roots
-//! agrees with `eval` of each; and the parser returns `Ok` or `Err`, never panics,
+//! agrees with `eval` of each; MathML is well-formed XML; and the parser returns `Ok` or `Err`, never panics,
 //! on any text. The runner is seeded, so every run tries the same cases.
 
 use proptest::prelude::*;
@@ -44,6 +44,24 @@ fn close(a: f64, b: f64, rel: f64, scale: f64) -> bool {
     (a.is_nan() && b.is_nan()) || a == b || (a - b).abs() <= rel * scale.max(1.0)
 }
 
+/// Whether the MathML of `e` is one element of well-formed XML, every
+/// `<msup>`, `<msub>`, `<mfrac>` and `<mroot>` with the two children MathML
+/// requires (three for `<msubsup>`).
+fn well_formed_mathml(pool: &Pool, e: ExprId) -> bool {
+    let xml = format!("<math>{}</math>", pool.mathml(e));
+    let Ok(doc) = roxmltree::Document::parse(&xml) else {
+        return false;
+    };
+    let elements = |n: roxmltree::Node| n.children().filter(|c| c.is_element()).count();
+    let math = doc.root_element();
+    elements(math) == 1
+        && math.descendants().filter(|n| n.is_element()).all(|n| match n.tag_name().name() {
+            "msup" | "msub" | "mfrac" | "mroot" | "mover" => elements(n) == 2,
+            "msubsup" => elements(n) == 3,
+            _ => true,
+        })
+}
+
 proptest! {
     #![proptest_config(config())]
 
@@ -77,6 +95,20 @@ proptest! {
         let back = pool.parse_with(&text, &unlimited);
         prop_assert_eq!(back.as_ref().ok(), Some(&e), "{:?} printed as {} parsed to {:?} ({})",
             g, text, back, back.as_ref().map(|b| pool.display(*b).to_string()).unwrap_or_default());
+    }
+
+    #[test]
+    fn mathml_is_well_formed(g in expr()) {
+        let mut pool = Pool::default();
+        let e = build(&mut pool, &g);
+        prop_assert!(well_formed_mathml(&pool, e), "{:?} printed as {}", g, pool.mathml(e));
+    }
+
+    #[test]
+    fn mathml_is_well_formed_at_the_edges(g in tree(extreme_leaf())) {
+        let mut pool = Pool::default();
+        let e = build(&mut pool, &g);
+        prop_assert!(well_formed_mathml(&pool, e), "{:?} printed as {}", g, pool.mathml(e));
     }
 
     #[test]

@@ -1,10 +1,12 @@
-//! The human formats of `derive`: text that reads like the lecture notes, and
-//! LaTeX. (JSON is the `mech::DeriveReport` serialized as it is.)
+//! The human formats of `derive`: text that reads like the lecture notes,
+//! LaTeX, and MathML in HTML for the report. (JSON is the `mech::DeriveReport`
+//! serialized as it is.)
 //!
-//! Enter with [`text`] or [`latex`]. One walk over the derivation ([`layout`])
-//! decides what is shown and in which order, as a sequence of [`Item`]s; the
-//! two renderings ([`Text`], [`Latex`]) write each item their way, or not at
-//! all: LaTeX gives the equations, the text also the verdicts and their reasons.
+//! Enter with [`text`], [`latex`] or [`mathml`]. One walk over the derivation
+//! ([`layout`]) decides what is shown and in which order, as a sequence of
+//! [`Item`]s; the three renderings ([`Text`], [`Latex`], [`MathMl`]) write each
+//! item their way, or not at all: LaTeX gives the equations, the text and the
+//! MathML also the verdicts and their reasons.
 
 use mech::{BodyMotion, Constraint, Derivation};
 use std::fmt::Write;
@@ -21,6 +23,23 @@ pub fn text(d: &Derivation) -> String {
 pub fn latex(d: &Derivation) -> String {
     let q = d.q().iter().map(|&q| d.pool().latex(q).to_string()).collect();
     let mut r = Latex { d, q, o: String::new(), blocks: Default::default() };
+    layout(d, &mut |item| r.item(item));
+    r.finish()
+}
+
+/// The derivation as an HTML fragment, `<section class="derivation">`: a
+/// heading (`<h3>`) per section, each group of equations one
+/// `<math display="block">` table, and the verdicts and their reasons as
+/// paragraphs. It holds no entity but XML's, so it is also well-formed XML.
+pub fn mathml(d: &Derivation) -> String {
+    let q = d.q().iter().map(|&q| d.pool().mathml(q).to_string()).collect();
+    let mut r = MathMl {
+        d,
+        names: d.coordinate_names(),
+        q,
+        o: String::from("<section class=\"derivation\">\n"),
+        rows: Vec::new(),
+    };
     layout(d, &mut |item| r.item(item));
     r.finish()
 }
@@ -224,22 +243,7 @@ impl Text<'_> {
             }
             Item::MassMatrixForm => self.mass_matrix_form(&mut o),
             Item::Constraint(c) => {
-                let tags = [
-                    Some(c.kind.name()),
-                    Some(match c.rheonomic {
-                        Some(true) => "rheonomic",
-                        Some(false) => "scleronomic",
-                        None => "time dependence undecided",
-                    }),
-                    match (c.kind, c.integrable) {
-                        (mech::ConstraintKind::Velocity, Some(true)) => Some("integrable"),
-                        (mech::ConstraintKind::Velocity, Some(false)) => Some("not integrable"),
-                        (mech::ConstraintKind::Velocity, None) => Some("integrability undecided"),
-                        _ => None,
-                    },
-                ];
-                let tags: Vec<&str> = tags.into_iter().flatten().collect();
-                let _ = writeln!(o, "  {}: {} = 0   ({})", c.name, self.s(c.expr), tags.join(", "));
+                let _ = writeln!(o, "  {}: {} = 0   ({})", c.name, self.s(c.expr), constraint_tags(c).join(", "));
                 let row: Vec<String> = c.jacobian.iter().map(|&e| self.s(e)).collect();
                 let _ = writeln!(
                     o,
@@ -288,16 +292,11 @@ impl Text<'_> {
                 if let Some(e) = d.energy() {
                     let _ = writeln!(o, "  energy T + U = {}", self.s(e));
                 }
-                let verdict = match d.hamiltonian_is_energy() {
-                    Some(true) => "H is the energy",
-                    Some(false) => "H is not the energy",
-                    None => "whether H is the energy is not known",
-                };
-                let _ = writeln!(o, "  {verdict}:");
+                let _ = writeln!(o, "  {}:", energy_verdict(d));
                 for line in &d.verdicts().energy {
                     let _ = writeln!(o, "    {line}");
                 }
-                let _ = writeln!(o, "  H is {}conserved:", if d.hamiltonian_conserved() { "" } else { "not " });
+                let _ = writeln!(o, "  {}:", conservation_verdict(d));
                 for line in &d.verdicts().conservation {
                     let _ = writeln!(o, "    {line}");
                 }
@@ -366,7 +365,6 @@ impl Text<'_> {
     /// The cyclic coordinates, and whether their momenta are conserved.
     fn cyclic(&self, o: &mut String) {
         let (d, names) = (self.d, &self.names);
-        let pool = d.pool();
         let _ = writeln!(o, "\ncyclic coordinates");
         let undecided = &d.verdicts().cyclic;
         if d.cyclic().is_empty() && undecided.is_empty() {
@@ -377,7 +375,6 @@ impl Text<'_> {
             let _ = writeln!(o, "  none shown");
         }
         for &i in d.cyclic() {
-            let conserved = d.conserved().iter().any(|c| c.name == format!("p_{}", names[i]));
             let _ = writeln!(
                 o,
                 "  {}: ∂L/∂{} = 0, so p_{} = {} {}",
@@ -385,22 +382,69 @@ impl Text<'_> {
                 names[i],
                 names[i],
                 self.s(d.momenta()[i]),
-                if conserved {
-                    "is conserved"
-                } else if d.constraints().list.iter().any(|c| !pool.is_zero(c.jacobian[i])) {
-                    "would be conserved, but a constraint force acts on it"
-                } else if undecided.iter().any(
-                    |r| matches!(r, mech::CyclicReason::MomentumUndecided { coordinate } if *coordinate == names[i])
-                ) {
-                    "would be conserved, but whether dissipation or a force acts on it is not known"
-                } else {
-                    "would be conserved, but dissipation or a force acts on it"
-                }
+                cyclic_momentum(d, names, i)
             );
         }
         for reason in undecided {
             let _ = writeln!(o, "  {reason}");
         }
+    }
+}
+
+/// The tags of a constraint: its kind, whether it depends on time, and for a
+/// velocity constraint whether it is integrable.
+fn constraint_tags(c: &Constraint) -> Vec<&'static str> {
+    let tags = [
+        Some(c.kind.name()),
+        Some(match c.rheonomic {
+            Some(true) => "rheonomic",
+            Some(false) => "scleronomic",
+            None => "time dependence undecided",
+        }),
+        match (c.kind, c.integrable) {
+            (mech::ConstraintKind::Velocity, Some(true)) => Some("integrable"),
+            (mech::ConstraintKind::Velocity, Some(false)) => Some("not integrable"),
+            (mech::ConstraintKind::Velocity, None) => Some("integrability undecided"),
+            _ => None,
+        },
+    ];
+    tags.into_iter().flatten().collect()
+}
+
+/// Whether H is the energy, as a sentence without its reasons.
+fn energy_verdict(d: &Derivation) -> &'static str {
+    match d.hamiltonian_is_energy() {
+        Some(true) => "H is the energy",
+        Some(false) => "H is not the energy",
+        None => "whether H is the energy is not known",
+    }
+}
+
+/// Whether H is conserved, as a sentence without its reasons.
+fn conservation_verdict(d: &Derivation) -> &'static str {
+    if d.hamiltonian_conserved() {
+        "H is conserved"
+    } else {
+        "H is not conserved"
+    }
+}
+
+/// What becomes of the momentum of cyclic coordinate `i`: conserved, or why not.
+fn cyclic_momentum(d: &Derivation, names: &[&str], i: usize) -> &'static str {
+    let pool = d.pool();
+    if d.conserved().iter().any(|c| c.name == format!("p_{}", names[i])) {
+        "is conserved"
+    } else if d.constraints().list.iter().any(|c| !pool.is_zero(c.jacobian[i])) {
+        "would be conserved, but a constraint force acts on it"
+    } else if d
+        .verdicts()
+        .cyclic
+        .iter()
+        .any(|r| matches!(r, mech::CyclicReason::MomentumUndecided { coordinate } if *coordinate == names[i]))
+    {
+        "would be conserved, but whether dissipation or a force acts on it is not known"
+    } else {
+        "would be conserved, but dissipation or a force acts on it"
     }
 }
 
@@ -496,6 +540,412 @@ impl Latex<'_> {
     }
 }
 
+/// The MathML rendering: an HTML fragment with a heading per section, the
+/// equations as `<mtable>` rows in block `<math>` elements (as LaTeX's
+/// `align*`), and, as the text says them, the verdicts and their reasons in
+/// paragraphs. Rows gather until prose follows, then go down as one table.
+struct MathMl<'a> {
+    d: &'a Derivation,
+    /// The coordinates' names, for the sentences shared with the text.
+    names: Vec<&'a str>,
+    /// Each coordinate in MathML.
+    q: Vec<String>,
+    o: String,
+    /// The rows not yet set.
+    rows: Vec<Row>,
+}
+
+/// One row of an equation table: cells alternately right- and left-aligned
+/// (`T`, `= …`, as `align*` pairs them), then an optional note.
+struct Row {
+    cells: Vec<String>,
+    note: Option<String>,
+}
+
+/// `∂top/∂bottom` in MathML.
+fn partial(top: &str, bottom: &str) -> String {
+    format!("<mfrac><mrow><mo>∂</mo>{top}</mrow><mrow><mo>∂</mo>{bottom}</mrow></mfrac>")
+}
+
+/// A dot over `base`: its time derivative.
+fn dotted(base: &str) -> String {
+    format!("<mover>{base}<mo>˙</mo></mover>")
+}
+
+/// A dot over a printed symbol: over its base when it has a subscript, so
+/// `p_θ` becomes ṗ_θ as `p_th'` prints.
+fn dotted_symbol(symbol: &str) -> String {
+    let base_and_sub = symbol.strip_prefix("<msub><mi>").and_then(|rest| rest.split_once("</mi>"));
+    match base_and_sub {
+        Some((base, sub)) => format!("<msub>{}{sub}", dotted(&format!("<mi>{base}</mi>"))),
+        None => dotted(symbol),
+    }
+}
+
+/// A MathML identifier with a subscript.
+fn sub(base: &str, subscript: &str) -> String {
+    format!("<msub><mi>{base}</mi>{subscript}</msub>")
+}
+
+/// `(items)`, comma separated: a tuple or a row vector.
+fn tuple(items: &[String]) -> String {
+    format!("<mrow><mo>(</mo>{}<mo>)</mo></mrow>", items.join("<mo>,</mo>"))
+}
+
+/// Plain text, escaped for HTML and MathML.
+fn escape(text: &str) -> String {
+    text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+}
+
+/// Inline math.
+fn inline(math: &str) -> String {
+    format!("<math>{math}</math>")
+}
+
+const EQUALS: &str = "<mo>=</mo>";
+const MINUS: &str = "<mo>&#x2212;</mo>";
+
+impl MathMl<'_> {
+    fn m(&self, e: ExprId) -> String {
+        self.d.pool().mathml(e).to_string()
+    }
+
+    /// `lhs = rhs` as a row, with a note in words (and math).
+    fn row(&mut self, lhs: String, rhs: String, note: Option<String>) {
+        self.rows.push(Row { cells: vec![lhs, format!("{EQUALS}{rhs}")], note });
+    }
+
+    /// A note at the end of a row: words, then math.
+    fn note(words: &str, math: &str) -> Option<String> {
+        Some(format!("<mtext>{}&#xA0;</mtext>{math}", escape(words)))
+    }
+
+    /// Sets the gathered rows as one table.
+    fn flush(&mut self) {
+        if self.rows.is_empty() {
+            return;
+        }
+        self.o.push_str("<math display=\"block\"><mtable>");
+        for row in std::mem::take(&mut self.rows) {
+            self.o.push_str("<mtr>");
+            for (k, cell) in row.cells.iter().enumerate() {
+                let align = if k % 2 == 0 { "right" } else { "left" };
+                let _ = write!(self.o, "<mtd columnalign=\"{align}\" style=\"text-align: {align}\">{cell}</mtd>");
+            }
+            if let Some(note) = row.note {
+                let _ = write!(
+                    self.o,
+                    "<mtd columnalign=\"left\" style=\"text-align: left; padding-left: 2em; white-space: nowrap\">{note}</mtd>"
+                );
+            }
+            self.o.push_str("</mtr>");
+        }
+        self.o.push_str("</mtable></math>\n");
+    }
+
+    /// A paragraph of HTML, after the rows before it.
+    fn para(&mut self, html: &str) {
+        self.flush();
+        let _ = writeln!(self.o, "<p>{html}</p>");
+    }
+
+    /// A list of reasons, each plain text.
+    fn reasons<T: std::fmt::Display>(&mut self, reasons: &[T]) {
+        if reasons.is_empty() {
+            return;
+        }
+        self.flush();
+        self.o.push_str("<ul>");
+        for r in reasons {
+            let _ = write!(self.o, "<li>{}</li>", escape(&r.to_string()));
+        }
+        self.o.push_str("</ul>\n");
+    }
+
+    fn heading(&mut self, html: &str) {
+        self.flush();
+        let _ = writeln!(self.o, "<h3>{html}</h3>");
+    }
+
+    fn item(&mut self, item: Item<'_>) {
+        let d = self.d;
+        let pool = d.pool();
+        match item {
+            Item::Title => {
+                let (n, qs) = (self.q.len(), self.q.iter().map(|q| inline(q)).collect::<Vec<_>>().join(", "));
+                let name = format!("<strong>{}</strong>", escape(&d.model().name));
+                if d.constraints().is_empty() {
+                    self.para(&format!("{name}: {n} degree{} of freedom: {qs}", plural(n)));
+                } else {
+                    let (k, m) = (d.constraints().degrees_of_freedom, d.constraints().list.len());
+                    self.para(&format!(
+                        "{name}: {n} coordinate{}: {qs}; {m} constraint{}: {k} degree{} of freedom",
+                        plural(n),
+                        plural(m),
+                        plural(k)
+                    ));
+                }
+                if !d.model().parameters.is_empty() {
+                    let ps: Vec<String> =
+                        d.model().parameters.iter().map(|p| escape(&format!("{} = {}", p.name, p.value))).collect();
+                    self.para(&format!("Parameters: {}", ps.join(", ")));
+                }
+                self.heading("Lagrangian");
+            }
+            Item::Define(what, e) => {
+                let (name, words) = match what {
+                    Defined::Kinetic => ("T", "kinetic energy"),
+                    Defined::Potential => ("U", "potential"),
+                    Defined::Lagrangian => ("L", "Lagrangian"),
+                    Defined::Dissipation => ("R", "dissipation"),
+                };
+                self.row(format!("<mi>{name}</mi>"), self.m(e), Self::note(words, ""));
+            }
+            Item::Force(i, f) => {
+                self.row(sub("Q", &self.q[i]), self.m(f), Self::note("generalized force", ""));
+            }
+            Item::Body(b) => {
+                self.para(&format!("Rigid body ‘{}’ (body frame, notes A.5)", escape(&b.name)));
+                for k in 0..3 {
+                    let note = if k == 0 { Self::note("angular velocity", "") } else { None };
+                    self.row(sub("ω", &format!("<mn>{}</mn>", k + 1)), self.m(b.omega[k]), note);
+                }
+                for k in 0..3 {
+                    let note = if k == 0 { Self::note("angular momentum", "") } else { None };
+                    self.row(sub("L", &format!("<mn>{}</mn>", k + 1)), self.m(b.angular_momentum[k]), note);
+                }
+            }
+            Item::Heading(section) => self.section(section),
+            Item::Momentum(i, p) => self.row(self.m(d.p()[i]), self.m(p), None),
+            Item::Equation(i, e) | Item::MultiplierEquation(i, e) => {
+                self.row("<mn>0</mn>".into(), self.m(e), Self::note("for", &self.q[i]));
+            }
+            Item::MassMatrixForm => self.mass_matrix_form(),
+            Item::Constraint(c) => {
+                let words = format!("{} ({})", c.name, constraint_tags(c).join(", "));
+                self.row("<mn>0</mn>".into(), self.m(c.expr), Self::note(&words, ""));
+                let row: Vec<String> = c.jacobian.iter().map(|&e| self.m(e)).collect();
+                let mut a = format!("A row: {}", inline(&tuple(&row)));
+                if !pool.is_zero(c.time_term) {
+                    let _ = write!(
+                        a,
+                        ", {}",
+                        inline(&format!("{}{EQUALS}{}", sub("a", "<mi>t</mi>"), self.m(c.time_term)))
+                    );
+                }
+                self.para(&a);
+                for line in &c.explanation {
+                    self.para(&escape(line));
+                }
+            }
+            Item::ConstraintNotes => {
+                for line in &d.constraints().explanation {
+                    self.para(&escape(line));
+                }
+            }
+            Item::ConstraintForces => self.constraint_forces(),
+            Item::Cyclic => self.cyclic(),
+            Item::Hamiltonian(Some(h)) => self.row("<mi>H</mi>".into(), self.m(h), None),
+            Item::Hamiltonian(None) => {
+                self.para("Not in closed form; the energy function is");
+                let qd = dotted("<mi>q</mi>");
+                let h = format!("<mi>h</mi>{}", tuple(&["<mi>q</mi>".into(), qd, "<mi>t</mi>".into()]));
+                self.row(h, self.m(d.energy_function()), None);
+                self.reasons(&d.verdicts().hamiltonian);
+            }
+            Item::Verdicts => {
+                if let Some(e) = d.energy() {
+                    self.row("<mi>T</mi><mo>+</mo><mi>U</mi>".into(), self.m(e), Self::note("energy", ""));
+                }
+                self.para(&format!("{}:", energy_verdict(d)));
+                self.reasons(&d.verdicts().energy);
+                self.para(&format!("{}:", conservation_verdict(d)));
+                self.reasons(&d.verdicts().conservation);
+            }
+            Item::HamiltonEquation(i, dq, dp) => {
+                let (qd, pd) = (self.m(d.qd()[i]), dotted_symbol(&self.m(d.p()[i])));
+                let cells =
+                    vec![qd, format!("{EQUALS}{}<mo>,</mo>", self.m(dq)), pd, format!("{EQUALS}{}", self.m(dp))];
+                self.rows.push(Row { cells, note: None });
+            }
+        }
+    }
+
+    fn section(&mut self, section: Section) {
+        let d = self.d;
+        let pool = d.pool();
+        let forced = d.forces().iter().any(|f| !pool.is_zero(*f));
+        let dissipative = d.dissipation().is_some();
+        let (q, qd, l) = ("<mi>q</mi>", dotted("<mi>q</mi>"), "<mi>L</mi>");
+        match section {
+            Section::Momenta => self.heading(&format!(
+                "Generalized momenta {}",
+                inline(&format!("{}{EQUALS}{}", sub("p", q), partial(l, &qd)))
+            )),
+            Section::Equations => {
+                let mut lhs = format!(
+                    "<mfrac><mi>d</mi><mrow><mi>d</mi><mi>t</mi></mrow></mfrac>{}{MINUS}{}",
+                    partial(l, &qd),
+                    partial(l, q)
+                );
+                if dissipative {
+                    let _ = write!(lhs, "<mo>+</mo>{}", partial("<mi>R</mi>", &qd));
+                }
+                if forced {
+                    let _ = write!(lhs, "{MINUS}<mi>Q</mi>");
+                }
+                self.heading(&format!("Euler–Lagrange equations {}", inline(&format!("{lhs}{EQUALS}<mn>0</mn>"))));
+            }
+            Section::Constraints => {
+                self.heading("Constraints");
+                self.para(&format!(
+                    "{} for {}; the velocity coefficients for {}",
+                    inline(&format!("<mi>A</mi>{EQUALS}{}", partial("<mi>f</mi>", q))),
+                    inline(&format!("<mi>f</mi><mo>(</mo>{q}<mo>,</mo><mi>t</mi><mo>)</mo>{EQUALS}<mn>0</mn>")),
+                    inline(&format!(
+                        "<mi>a</mi><mo>(</mo>{q}<mo>,</mo><mi>t</mi><mo>)</mo><mo>&#x22C5;</mo>{qd}<mo>+</mo>{}{EQUALS}<mn>0</mn>",
+                        sub("a", "<mi>t</mi>")
+                    ))
+                ));
+            }
+            Section::Multipliers => {
+                let lambdas: Vec<String> = d.constraints().list.iter().map(|c| self.m(c.multiplier)).collect();
+                self.heading(&format!(
+                    "Equations with multipliers {}, {}",
+                    inline(&format!(
+                        "<mi>M</mi>{}{EQUALS}<mi>f</mi><mo>+</mo><msup><mi>A</mi><mi>T</mi></msup><mi>λ</mi>",
+                        dotted_twice(q)
+                    )),
+                    inline(&format!("<mi>λ</mi>{EQUALS}{}", tuple(&lambdas)))
+                ));
+            }
+            Section::Hamiltonian => self.heading(&format!(
+                "Hamiltonian {}, in (q, p, t)",
+                inline(&format!("<mi>H</mi>{EQUALS}<mo>∑</mo>{qd}<mi>p</mi>{MINUS}{l}"))
+            )),
+            Section::Hamilton => {
+                let h = "<mi>H</mi>";
+                let mut pd = format!("{MINUS}{}", partial(h, q));
+                if dissipative || forced {
+                    let _ = write!(pd, "{MINUS}{}<mo>+</mo><mi>Q</mi>", partial("<mi>R</mi>", &qd));
+                }
+                self.heading(&format!(
+                    "Hamilton’s equations {}, {}",
+                    inline(&format!("{qd}{EQUALS}{}", partial(h, "<mi>p</mi>"))),
+                    // In its own row the minus is a sign, not a binary operator.
+                    inline(&format!("{}{EQUALS}<mrow>{pd}</mrow>", dotted("<mi>p</mi>")))
+                ));
+            }
+        }
+    }
+
+    /// `M q̈ = f` with M, q̈ and f as matrices.
+    fn mass_matrix_form(&mut self) {
+        let d = self.d;
+        let (q, qd) = ("<mi>q</mi>", dotted("<mi>q</mi>"));
+        self.heading(&format!(
+            "In the form {}",
+            inline(&format!(
+                "<mi>M</mi><mo>(</mo>{q}<mo>,</mo><mi>t</mi><mo>)</mo>{}{EQUALS}<mi>f</mi><mo>(</mo>{q}<mo>,</mo>{qd}<mo>,</mo><mi>t</mi><mo>)</mo>",
+                dotted_twice(q)
+            ))
+        ));
+        let cells: Vec<Vec<String>> =
+            d.mass_matrix().iter().map(|row| row.iter().map(|&e| self.m(e)).collect()).collect();
+        let qdd: Vec<Vec<String>> = d.qdd().iter().map(|&e| vec![self.m(e)]).collect();
+        let f: Vec<Vec<String>> = d.forcing().iter().map(|&e| vec![self.m(e)]).collect();
+        self.row(format!("{}{}", matrix(&cells), matrix(&qdd)), matrix(&f), None);
+    }
+
+    fn constraint_forces(&mut self) {
+        let d = self.d;
+        let set = d.constraints();
+        self.para(&format!(
+            "With the constraints differentiated to {} (index reduction), {} and λ follow at each instant.",
+            inline(&format!("<mi>A</mi>{}{EQUALS}<mi>c</mi>", dotted_twice("<mi>q</mi>"))),
+            inline(&dotted_twice("<mi>q</mi>"))
+        ));
+        self.heading(&format!(
+            "Constraint forces {} (generalized)",
+            inline(&format!("<mi>Q</mi>{EQUALS}<msup><mi>A</mi><mi>T</mi></msup><mi>λ</mi>"))
+        ));
+        for (i, &f) in set.generalized_forces.iter().enumerate() {
+            self.row(sub("Q", &self.q[i]), self.m(f), None);
+        }
+        if let Some(parts) = &set.cartesian_forces {
+            self.para(&format!(
+                "Cartesian, on each particle ({} with {}):",
+                inline("<mi>F</mi>"),
+                inline(&format!(
+                    "<mi>Q</mi>{EQUALS}<msup><mrow><mo>(</mo>{}<mo>)</mo></mrow><mi>T</mi></msup><mi>F</mi>",
+                    partial("<mi>x</mi>", "<mi>q</mi>")
+                ))
+            ));
+            for (k, f) in parts.iter().enumerate() {
+                let comps: Vec<String> = f.iter().map(|&e| self.m(e)).collect();
+                self.row(
+                    sub("F", &format!("<mn>{}</mn>", k + 1)),
+                    tuple(&comps),
+                    Self::note("on particle", &format!("<mn>{}</mn>", k + 1)),
+                );
+            }
+        }
+    }
+
+    /// The cyclic coordinates and what becomes of their momenta, as the text says it.
+    fn cyclic(&mut self) {
+        let d = self.d;
+        self.heading("Cyclic coordinates");
+        let undecided = &d.verdicts().cyclic;
+        if d.cyclic().is_empty() && undecided.is_empty() {
+            self.para("None: L depends on every coordinate.");
+            return;
+        }
+        if d.cyclic().is_empty() {
+            self.para("None shown.");
+        }
+        for &i in d.cyclic() {
+            let q = &self.q[i];
+            let sentence = format!(
+                "{}: {}, so {} {}.",
+                inline(q),
+                inline(&format!("{}{EQUALS}<mn>0</mn>", partial("<mi>L</mi>", q))),
+                inline(&format!("{}{EQUALS}{}", self.m(d.p()[i]), self.m(d.momenta()[i]))),
+                cyclic_momentum(d, &self.names, i)
+            );
+            self.para(&sentence);
+        }
+        for reason in undecided {
+            self.para(&escape(&reason.to_string()));
+        }
+    }
+
+    fn finish(mut self) -> String {
+        self.flush();
+        self.o.push_str("</section>\n");
+        self.o
+    }
+}
+
+/// Two dots over `base`: its second time derivative.
+fn dotted_twice(base: &str) -> String {
+    format!("<mover>{base}<mo>¨</mo></mover>")
+}
+
+/// A matrix in square brackets, its entries centred.
+fn matrix(rows: &[Vec<String>]) -> String {
+    let mut o = String::from("<mrow><mo>[</mo><mtable>");
+    for row in rows {
+        o.push_str("<mtr>");
+        for cell in row {
+            let _ = write!(o, "<mtd>{cell}</mtd>");
+        }
+        o.push_str("</mtr>");
+    }
+    o.push_str("</mtable><mo>]</mo></mrow>");
+    o
+}
+
 /// User text inside a LaTeX comment: a line break would end the comment and
 /// turn the rest into live LaTeX (`\input{...}`), so every control character
 /// becomes a space.
@@ -505,7 +955,7 @@ fn comment_text(text: &str) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::{latex, text};
+    use super::{latex, mathml, text};
 
     /// A pendulum: one coordinate, no cyclic one, H the energy.
     const PENDULUM: &str = r#"
@@ -568,5 +1018,116 @@ position = ["r*cos(th)", "r*sin(th)"]
         // A line break in the model's name would end the comment and run the rest as LaTeX.
         let out = latex(&derive(&PENDULUM.replace("name = \"pendulum\"", "name = \"a\\n\\\\input{x}\"")));
         assert!(out.starts_with("% a \\input{x} (lagrange derive --format latex)\n"), "{out}");
+    }
+
+    /// The block `<math>` elements of a fragment, as text.
+    fn blocks(html: &str) -> Vec<&str> {
+        html.split("<math display=\"block\">").skip(1).map(|b| b.split("</math>").next().unwrap_or(b)).collect()
+    }
+
+    /// Checks that the fragment of `d` is well-formed, a section with no text
+    /// outside its children, and that every equation the derivation holds is
+    /// set in a block `<math>`.
+    #[track_caller]
+    fn check_mathml(d: &mech::Derivation) -> String {
+        let out = mathml(d);
+        let doc = roxmltree::Document::parse(&out).unwrap_or_else(|e| panic!("{e}: not well-formed:\n{out}"));
+        let section = doc.root_element();
+        assert_eq!((section.tag_name().name(), section.attribute("class")), ("section", Some("derivation")));
+        let blocks = blocks(&out);
+        let pool = d.pool();
+        let mut equations: Vec<sym::ExprId> = d.momenta().to_vec();
+        equations.extend(d.equations());
+        equations.extend(d.forcing());
+        equations.extend(d.hamiltonian());
+        equations.extend(d.constraints().list.iter().map(|c| c.expr));
+        equations.extend(d.hamilton().unwrap_or_default().iter().flat_map(|&(dq, dp)| [dq, dp]));
+        for e in equations {
+            let m = pool.mathml(e).to_string();
+            assert!(blocks.iter().any(|b| b.contains(&m)), "{} is in no block of\n{out}", pool.display(e));
+        }
+        out
+    }
+
+    #[test]
+    fn mathml_sets_the_equations_and_says_the_verdicts() {
+        let d = derive(PENDULUM);
+        let out = check_mathml(&d);
+        let doc = roxmltree::Document::parse(&out).expect("well-formed");
+        let headings: Vec<String> = doc
+            .descendants()
+            .filter(|n| n.has_tag_name("h3"))
+            .map(|h| h.children().find(|c| c.is_text()).and_then(|t| t.text()).unwrap_or_default().trim().to_string())
+            .collect();
+        assert_eq!(
+            headings,
+            [
+                "Lagrangian",
+                "Generalized momenta",
+                "Euler–Lagrange equations",
+                "In the form",
+                "Cyclic coordinates",
+                "Hamiltonian",
+                "Hamilton’s equations"
+            ]
+        );
+        // T, U, L; the momentum; the equation of motion; M q'' = f; H and T + U; Hamilton's equations.
+        assert_eq!(blocks(&out).len(), 6, "{out}");
+        check_contains(
+            &out,
+            &[
+                "<p><strong>pendulum</strong>: 1 degree of freedom: <math><mi>θ</mi></math></p>",
+                "<p>None: L depends on every coordinate.</p>",
+                "<p>H is the energy:</p>",
+                "<p>H is conserved:</p>",
+                "<mtext>for&#xA0;</mtext><mi>θ</mi>",
+            ],
+        );
+        for reason in d
+            .verdicts()
+            .energy
+            .iter()
+            .map(ToString::to_string)
+            .chain(d.verdicts().conservation.iter().map(ToString::to_string))
+        {
+            check_contains(
+                &out,
+                &[&format!("<li>{}</li>", reason.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;"))],
+            );
+        }
+
+        let out = check_mathml(&derive(FREE));
+        check_contains(&out, &["<p><math><mi>θ</mi></math>: <math>", "</math> is conserved.</p>"]);
+        // The model's name is text, not markup.
+        let out = check_mathml(&derive(&PENDULUM.replace("name = \"pendulum\"", "name = \"<b>&</b>\"")));
+        check_contains(&out, &["<strong>&lt;b&gt;&amp;&lt;/b&gt;</strong>"]);
+    }
+
+    #[test]
+    fn mathml_of_every_example_model_is_well_formed() {
+        let root = format!("{}/../../examples", env!("CARGO_MANIFEST_DIR"));
+        let mut seen = 0;
+        for dir in ["", "/tops", "/constraints"] {
+            let dir = format!("{root}{dir}");
+            let mut paths: Vec<_> = std::fs::read_dir(&dir)
+                .expect("the examples are there")
+                .map(|e| e.expect("a directory entry").path())
+                .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+                .collect();
+            paths.sort();
+            for path in paths {
+                let text = std::fs::read_to_string(&path).expect("readable");
+                if !text.lines().any(|l| l.starts_with("coordinates")) {
+                    continue; // a body file, which a model names
+                }
+                let read = |name: &str| std::fs::read_to_string(format!("{dir}/{name}")).map_err(|e| e.to_string());
+                let model = mech::Model::parse_with(&text, &[], &read)
+                    .unwrap_or_else(|e| panic!("{}: {}", path.display(), e.message));
+                let d = mech::Derivation::new(model).expect("it derives");
+                check_mathml(&d);
+                seen += 1;
+            }
+        }
+        assert!(seen >= 20, "only {seen} example models");
     }
 }

@@ -1,5 +1,5 @@
 //! `view`: how lagrange's results look. It turns what `mech` computes into the
-//! text people read, LaTeX, JSON values and SVG figures, so that every front
+//! text people read, LaTeX, MathML, JSON values and SVG figures, so that every front
 //! end shows a result the same way: the `lagrange` CLI, the Python package and
 //! the coming HTML report.
 //!
@@ -25,6 +25,7 @@
 //! let d = mech::Derivation::new(mech::Model::parse(text, &[])?)?;
 //! assert!(view::derive::text(&d).contains("p_th = th'"));
 //! assert!(view::derive::latex(&d).contains("\\begin{align*}"));
+//! assert!(view::derive::mathml(&d).contains("<math display=\"block\">"));
 //! assert_eq!(view::human(0.1 + 0.2), "0.3");
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
