@@ -16,6 +16,7 @@ mod interrupt;
 mod modes;
 mod orbit;
 mod output;
+mod report;
 mod simulate;
 mod stream;
 mod sweep;
@@ -113,6 +114,8 @@ enum Command {
     Top(top::Args),
     /// The extremal of a functional ∫ f(y, y', x) dx between fixed ends: Euler equation, path, value, second variation.
     Extremal(extremal::Args),
+    /// One HTML page that opens offline: the derivation typeset, the mechanism animated, plots, the audit and the analyses.
+    Report(report::Args),
 }
 
 /// Summary formats of `simulate`.
@@ -161,6 +164,7 @@ fn main() -> ExitCode {
         Command::Inertia(args) => inertia::run(&args),
         Command::Top(args) => top::run(&args),
         Command::Extremal(args) => extremal::run(&args),
+        Command::Report(args) => report::run(&args),
         Command::Simulate { list_methods: true, .. } => write_stdout(&simulate::list_methods()),
         Command::Simulate {
             model,

@@ -303,7 +303,7 @@ impl PendingCsv {
 }
 
 /// A run that could not start, in the CLI's terms (exit 2).
-fn input_failure(path: &Path, source: &str, e: RunError) -> Failure {
+pub(crate) fn input_failure(path: &Path, source: &str, e: RunError) -> Failure {
     match e {
         RunError::Until { until } => Failure::usage(format!("--until must be a positive time, not {until}")),
         RunError::TooManySamples { samples, max } => {

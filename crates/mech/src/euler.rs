@@ -65,8 +65,8 @@ pub fn angular_velocity(pool: &mut Pool, [_al, be, ga]: [ExprId; 3], [ald, bed, 
     [w1, w2, w3]
 }
 
-#[cfg(test)]
-/// The numeric rotation `D = D_γ·D_β·D_α` (fixed → body components).
+/// The numeric rotation `D = D_γ·D_β·D_α` (fixed → body components); its rows
+/// are the body axes in fixed-frame components.
 pub fn rotation_f64(al: f64, be: f64, ga: f64) -> [[f64; 3]; 3] {
     let (sa, ca) = al.sin_cos();
     let (sb, cb) = be.sin_cos();

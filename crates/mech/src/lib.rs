@@ -73,6 +73,8 @@ mod sweep;
 mod top;
 // Analyses built on other analyses.
 mod orbit;
+// The mechanism as a picture (for drawing it move).
+pub mod mechanism;
 // Test models shared by the unit tests and `tests/` (which includes the file).
 #[cfg(test)]
 mod test_models;
@@ -91,6 +93,7 @@ pub use extremal::{
     extremal, Candidate, Euler, EulerError, ExtremalConfig, ExtremalError, ExtremalReport, ExtremalSummary, Problem,
     SecondVariation, Start, EXTREMAL_FORMAT,
 };
+pub use mechanism::{Mechanism, Point, PointKind};
 pub use model::{Body, ConstraintKind, ConstraintSpec, Coordinate, InitialValue, Located, Model, Parameter, Particle};
 pub use modes::{normal_modes, Mode, ModeKind, Modes, ModesConfig, ModesError, ModesReport, SymbolicModes};
 pub use num::{Method, Output};

@@ -39,6 +39,7 @@ pub mod modes;
 mod number;
 pub mod orbit;
 pub mod plot;
+pub mod report;
 pub mod simulate;
 mod terms;
 pub mod top;

@@ -1,0 +1,104 @@
+//! `lagrange report`: run a model and write one self-contained HTML page that
+//! typesets its derivation, animates the mechanism, plots the run and shows
+//! the audit and the analyses that apply. The page is `view::report`'s; this
+//! module runs the model, keeps its rows and writes the file.
+
+use crate::diagnostics::Failure;
+use mech::{RunConfig, RunError};
+use num::{Method, Output};
+use std::ops::ControlFlow;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Options of `report`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The model file (TOML).
+    pub model: PathBuf,
+    /// End time of the run shown.
+    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
+    pub until: f64,
+    /// The HTML file to write.
+    #[arg(short = 'o', long = "out", value_name = "FILE.html", default_value = "report.html")]
+    pub out: PathBuf,
+    /// Rows of the run (evenly spaced, both ends included); long runs are decimated for display.
+    #[arg(long, default_value_t = 2001)]
+    pub samples: usize,
+    /// The integrator (see `lagrange simulate --list-methods`); default: chosen for the model.
+    #[arg(long)]
+    pub method: Option<String>,
+    /// Relative tolerance.
+    #[arg(long, allow_negative_numbers = true)]
+    pub rtol: Option<f64>,
+    /// Override a parameter: --set g=1.62 (repeatable).
+    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = crate::parse_set)]
+    pub set: Vec<(String, f64)>,
+}
+
+/// Runs the command.
+pub fn run(args: &Args) -> Result<(), Failure> {
+    crate::files::refuse_overwrite(&[&args.model], &[Some(args.out.as_path())]).map_err(Failure::usage)?;
+    let started = Instant::now();
+    let path = &args.model;
+    let (source, d) = crate::derive_file(path, &args.set)?;
+    let derived = started.elapsed().as_secs_f64();
+    let method = match &args.method {
+        None => None,
+        Some(name) => Some(name.parse::<Method>().map_err(|e| Failure::input(path, e.to_string()))?),
+    };
+    if let Some(r) = args.rtol {
+        if !(r.is_finite() && r > 0.0) {
+            return Err(Failure::usage(format!("--rtol must be a positive number, not {r}")));
+        }
+    }
+    if args.samples < 2 {
+        return Err(Failure::usage("--samples needs at least 2 rows (both ends)"));
+    }
+    let defaults = RunConfig::default();
+    let rtol = args.rtol.unwrap_or(defaults.rtol);
+    let config = RunConfig {
+        until: args.until,
+        method,
+        rtol,
+        atol: if args.rtol.is_some() { rtol * 1e-3 } else { defaults.atol },
+        output: Output::Samples(args.samples),
+        ..defaults
+    };
+    config.check().map_err(|e| crate::simulate::input_failure(path, &source, e))?;
+
+    let mut rows = view::report::Recorder::new();
+    let mut first_row = None;
+    let result = mech::simulate(&d, &config, |row| {
+        first_row.get_or_insert_with(|| started.elapsed().as_secs_f64());
+        rows.push(row);
+        ControlFlow::Continue(())
+    });
+    let (report, failure) = match result {
+        Ok(r) => (r, None),
+        Err(RunError::Failed { message, report }) => {
+            let message = report.failure.clone().unwrap_or(message);
+            (*report, Some(message))
+        }
+        Err(e) => return Err(crate::simulate::input_failure(path, &source, e)),
+    };
+    let names: Vec<String> = d.coordinate_names().iter().map(|s| s.to_string()).collect();
+    let timing = view::simulate::Timing { derive_seconds: derived, setup_seconds: first_row };
+    let summary = view::simulate::summary_json(&report, &names, &timing, None, &crate::TERMS);
+    let data = rows.data(&d, args.until, summary, view::derive::mathml(&d));
+    let page = view::report::page(&data);
+    std::fs::write(&args.out, &page)
+        .map_err(|e| Failure::run(format!("cannot write the report {}: {e}", args.out.display())))?;
+    let shown = data["time"].as_array().map_or(0, Vec::len);
+    crate::write_stdout(&format!(
+        "{}: {} of {} rows shown, {:.0} kB\n",
+        args.out.display(),
+        shown,
+        rows.len(),
+        page.len() as f64 / 1000.0
+    ))?;
+    match failure {
+        // The page shows the rows up to the failure; the failure is the exit code's.
+        Some(message) => Err(Failure::run(format!("{message} ({} shows the rows up to there)", args.out.display()))),
+        None => Ok(()),
+    }
+}

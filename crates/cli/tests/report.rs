@@ -1,0 +1,133 @@
+//! `lagrange report`: every example model gives a page; the data it holds is
+//! the run's (rows as `simulate` writes them, positions as the model places
+//! its particles); long runs stay small; bad input is refused. The page's
+//! script is tested in a browser by `tests/browser/` (see `.ci/run`).
+
+mod common;
+
+use common::{ok, repo_root, run, scratch, Csv};
+use serde_json::Value;
+
+/// The `lagrange.report/1` data inlined in a page.
+fn data(page: &std::path::Path) -> Value {
+    let html = std::fs::read_to_string(page).expect("the page was written");
+    let start = html.find(r#"<script type="application/json" id="lagrange-data">"#).expect("the data element");
+    let rest = &html[start..];
+    let body = &rest[rest.find('>').unwrap() + 1..rest.find("</script>").unwrap()];
+    serde_json::from_str(&body.replace("<\\/", "</")).expect("the data is JSON")
+}
+
+fn numbers(v: &Value) -> Vec<f64> {
+    v.as_array().expect("an array").iter().map(|x| x.as_f64().expect("a number")).collect()
+}
+
+/// Every model file among the examples (not body or problem files).
+fn example_models() -> Vec<String> {
+    let root = repo_root();
+    let mut found = Vec::new();
+    for dir in ["examples", "examples/constraints", "examples/tops"] {
+        for entry in std::fs::read_dir(root.join(dir)).unwrap() {
+            let path = entry.unwrap().path();
+            let is_model = path.extension().is_some_and(|e| e == "toml")
+                && std::fs::read_to_string(&path).unwrap().lines().any(|l| l.starts_with("coordinates"));
+            if is_model {
+                found.push(format!("{dir}/{}", path.file_name().unwrap().to_str().unwrap()));
+            }
+        }
+    }
+    found.sort();
+    found
+}
+
+#[test]
+fn every_example_gives_a_page_with_its_run() {
+    let models = example_models();
+    assert!(models.len() >= 25, "{models:?}");
+    for model in models {
+        let page = scratch("report", &format!("{}.html", model.replace('/', "_")));
+        let r = ok(&["report", &model, "--until", "2", "--samples", "101", "-o", page.to_str().unwrap()]);
+        assert!(r.stdout.contains("101 of 101 rows shown"), "{}", r.describe());
+        let d = data(&page);
+        assert_eq!(d["format"], "lagrange.report/1", "{model}");
+        assert_eq!(numbers(&d["time"]).len(), 101, "{model}");
+        assert!(!d["points"].as_array().unwrap().is_empty(), "{model}: nothing to draw");
+        assert_eq!(d["summary"]["format"], "lagrange.simulate/1", "{model}");
+        assert!(d["derivation"].as_str().unwrap().contains("<math"), "{model}: no typeset derivation");
+    }
+}
+
+#[test]
+fn the_rows_are_the_runs_and_the_points_are_where_the_model_puts_them() {
+    let page = scratch("report", "double.html");
+    let csv = scratch("report", "double.csv");
+    let (page_s, csv_s) = (page.to_str().unwrap(), csv.to_str().unwrap());
+    ok(&["report", "examples/double_pendulum.toml", "--until", "3", "--samples", "301", "-o", page_s]);
+    ok(&["simulate", "examples/double_pendulum.toml", "--until", "3", "--samples", "301", "--out", csv_s]);
+    let d = data(&page);
+    let table = Csv::read(csv_s);
+    let (t, a, b) = (table.column("t"), table.column("a"), table.column("b"));
+    assert_eq!(numbers(&d["time"]), t);
+    assert_eq!(numbers(&d["coordinates"][0]["q"]), a);
+    assert_eq!(d["rods"], serde_json::json!([[-1, 0], [0, 1]]));
+    // lA = lB = 1: the bobs at (sin a, −cos a) and (sin a + sin b, −cos a − cos b).
+    let (x2, y2) = (numbers(&d["points"][1]["x"]), numbers(&d["points"][1]["y"]));
+    for k in 0..t.len() {
+        assert!((x2[k] - (a[k].sin() + b[k].sin())).abs() < 1e-12, "row {k}");
+        assert!((y2[k] + a[k].cos() + b[k].cos()).abs() < 1e-12, "row {k}");
+    }
+    let invariants = d["invariants"].as_array().unwrap();
+    assert_eq!(invariants[0]["name"], "H");
+    assert_eq!(invariants[0]["conserved"], true);
+}
+
+#[test]
+fn a_long_run_stays_under_two_megabytes_and_keeps_its_turning_points() {
+    let page = scratch("report", "long.html");
+    let r = ok(&[
+        "report",
+        "examples/pendulum.toml",
+        "--until",
+        "1000",
+        "--samples",
+        "100000",
+        "-o",
+        page.to_str().unwrap(),
+    ]);
+    let size = std::fs::metadata(&page).unwrap().len();
+    assert!(size < 2_000_000, "{size} bytes: {}", r.stdout);
+    let d = data(&page);
+    let qd = numbers(&d["coordinates"][0]["qd"]);
+    let turns = qd.windows(2).filter(|w| w[0].signum() != w[1].signum()).count();
+    // Period 2.0 s at ph = 1 rad with l = 1: a turning point a second, about 1000 in all.
+    assert!(turns > 900, "{turns} turning points shown");
+}
+
+#[test]
+fn a_top_has_its_body_axes_and_its_figure_axis_on_the_sphere() {
+    let page = scratch("report", "top.html");
+    ok(&["report", "examples/tops/heavy_top.toml", "--until", "2", "-o", page.to_str().unwrap()]);
+    let d = data(&page);
+    assert_eq!(d["dimension"], 3);
+    let axes = &d["bodies"][0]["axes"];
+    assert_eq!(axes.as_array().unwrap().len(), 3);
+    let top = &d["analyses"]["top"];
+    let (lo, hi) = (top["beta_min"].as_f64().unwrap(), top["beta_max"].as_f64().unwrap());
+    for z in numbers(&top["axis"]["z"]) {
+        let beta = z.clamp(-1.0, 1.0).acos();
+        assert!(beta >= lo - 1e-6 && beta <= hi + 1e-6, "β = {beta} outside [{lo}, {hi}]");
+    }
+}
+
+#[test]
+fn bad_input_is_refused_and_a_failed_run_still_writes_its_page() {
+    let page = scratch("report", "bad.html");
+    let p = page.to_str().unwrap();
+    let r = run(&["report", "crates/cli/tests/bad/unknown_name.toml", "-o", p]);
+    assert_eq!(r.code, Some(2), "{}", r.describe());
+    assert!(r.stderr.contains("unknown_name.toml:4:28"), "{}", r.describe());
+    let r = run(&["report", "examples/pendulum.toml", "--until", "-1", "-o", p]);
+    assert_eq!(r.code, Some(2), "{}", r.describe());
+    let r = run(&["report", "crates/cli/tests/bad_simulate/blow_up.toml", "--until", "5", "-o", p]);
+    assert_eq!(r.code, Some(1), "{}", r.describe());
+    assert!(data(&page)["time"].as_array().unwrap().len() > 1);
+}
