@@ -30,6 +30,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod angles;
 pub mod derive;
 mod error;
 pub mod extremal;

@@ -101,7 +101,7 @@ impl Recorder {
         let rows: Vec<&Row> = keep.iter().map(|&i| &self.rows[i]).collect();
 
         let column = |f: &dyn Fn(&Row) -> f64| -> Vec<f64> { rows.iter().map(|r| f(r)).collect() };
-        let angles = angle_coordinates(d);
+        let angles = crate::angles::angles(d);
         let coordinates: Vec<Value> = names
             .iter()
             .enumerate()
@@ -291,50 +291,6 @@ fn escape(s: &str) -> String {
     s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
 }
 
-/// Whether each coordinate is an angle, so that q and q + 2π are the same
-/// configuration: a rigid body's Euler angle, the angle of an orbit's plane
-/// polar coordinates, or a coordinate that the Lagrangian and the particles'
-/// positions contain, and only inside sin, cos and tan. A coordinate they do
-/// not contain at all (a cyclic x) is not one.
-fn angle_coordinates(d: &Derivation) -> Vec<bool> {
-    let pool = d.pool();
-    let model = d.model();
-    let names = d.coordinate_names();
-    let mut exprs = vec![d.lagrangian()];
-    exprs.extend(model.particles.iter().flat_map(|p| p.position.iter().copied()));
-    let orbit_angle = Orbit::new(d).ok().map(|o| o.names[1].clone());
-    names
-        .iter()
-        .enumerate()
-        .map(|(i, name)| {
-            if model.bodies.iter().any(|b| b.angles.contains(&i)) || orbit_angle.as_deref() == Some(*name) {
-                return true;
-            }
-            let mut seen = false;
-            exprs.iter().all(|&e| only_in_trig(pool, e, name, false, &mut seen)) && seen
-        })
-        .collect()
-}
-
-/// Whether coordinate `name` occurs in `e` only inside a trigonometric
-/// function; `seen` is set where it occurs at all.
-fn only_in_trig(pool: &sym::Pool, e: sym::ExprId, name: &str, inside: bool, seen: &mut bool) -> bool {
-    use sym::{Func, Node};
-    let all = |xs: &[sym::ExprId], inside: bool, seen: &mut bool| {
-        xs.iter().all(|&x| only_in_trig(pool, x, name, inside, seen))
-    };
-    match pool.node(e) {
-        Node::Sym(s) if s.order == 0 && pool.name_str(s.name) == name => {
-            *seen = true;
-            inside
-        }
-        Node::Sym(_) | Node::Num(_) | Node::Pi => true,
-        Node::Add(xs) | Node::Mul(xs) => all(xs, inside, seen),
-        Node::Pow(a, b) | Node::Atan2(a, b) => all(&[*a, *b], inside, seen),
-        Node::Func(f, a) => all(&[*a], inside || matches!(f, Func::Sin | Func::Cos | Func::Tan), seen),
-    }
-}
-
 /// The largest distance of a drawn point from the origin over the run.
 fn extent(frames: &[Vec<f64>], dim: usize) -> f64 {
     frames.iter().flat_map(|f| f.chunks(dim).map(|p| p.iter().map(|x| x * x).sum::<f64>().sqrt())).fold(0.0, f64::max)
@@ -507,7 +463,7 @@ th = 0.5
         let html = page(&data);
         assert!(html.contains("<title>a &lt;b&gt; {{data}}</title>"), "{html}");
         assert!(html.contains(r#""x":"<\/script>""#));
-        assert_eq!(html.matches("id=\"lagrange-data\"").count(), 1);
+        assert_eq!(html.matches(r#"<script type="application/json" id="lagrange-data">"#).count(), 1);
         assert!(!html.contains("<!--"));
         assert_eq!(fill("{{a}}{{b}}{{c}}", &[("a", "{{b}}"), ("b", "2")]), "{{b}}2{{c}}");
     }
