@@ -200,7 +200,7 @@
       }
       clock.lastFrame = now;
     }
-    render();
+    render(true);
     if (clock.playing) requestFrame();
   }
 
@@ -213,9 +213,11 @@
   /** 2-D: equal scale on both axes, fitted to a box [xmin, xmax] × [ymin, ymax]. */
   function view2D(box, width, height, margin) {
     let [x0, x1, y0, y1] = box;
+    // A direction with (almost) no extent, such as a row of masses on a line, gets a
+    // sliver of room, so that the other direction sets the scale.
     const size = Math.max(x1 - x0, y1 - y0, 1e-9);
-    if (x1 - x0 < size * 1e-6) [x0, x1] = [x0 - size / 2, x1 + size / 2];
-    if (y1 - y0 < size * 1e-6) [y0, y1] = [y0 - size / 2, y1 + size / 2];
+    if (x1 - x0 < size * 1e-3) [x0, x1] = [x0 - size * 1e-3, x1 + size * 1e-3];
+    if (y1 - y0 < size * 1e-3) [y0, y1] = [y0 - size * 1e-3, y1 + size * 1e-3];
     const scale = Math.min((width - 2 * margin) / (x1 - x0), (height - 2 * margin) / (y1 - y0));
     const cx = (x0 + x1) / 2;
     const cy = (y0 + y1) / 2;
@@ -1367,11 +1369,36 @@
   // ---------------------------------------------------------------------------------------
   // Drawing everything that follows the shown time.
 
-  function render() {
-    if (stage.context) drawStage();
-    for (const plot of plots) drawPlot(plot);
-    for (const view of analysisViews) if (view.context) view.draw();
+  /**
+   * Redraws the stage, the plots' markers and the analyses at the shown time. During
+   * playback (`onlyVisible`) pictures scrolled out of sight wait until they are seen again.
+   */
+  function render(onlyVisible = false) {
+    const wanted = (item) => !onlyVisible || item.visible !== false;
+    if (stage.context && wanted(stage)) drawStage();
+    for (const plot of plots) if (wanted(plot)) drawPlot(plot);
+    for (const view of analysisViews) if (view.context && wanted(view)) view.draw();
     updateControls();
+  }
+
+  /** Keeps `item.visible` up to date for a canvas, and draws the canvas when it comes into sight. */
+  const sightings = new Map();
+  const observer = 'IntersectionObserver' in window
+    ? new IntersectionObserver((entries) => {
+      let seen = false;
+      for (const entry of entries) {
+        const item = sightings.get(entry.target);
+        item.visible = entry.isIntersecting;
+        seen = seen || item.visible;
+      }
+      if (seen) render(true);
+    })
+    : null;
+
+  function watch(item, canvas) {
+    if (!observer) return;
+    sightings.set(canvas, item);
+    observer.observe(canvas);
   }
 
   /** Fits every canvas to its box again and redraws (on load and when the window resizes). */
@@ -1380,6 +1407,13 @@
     for (const plot of plots) layoutPlot(plot);
     for (const view of analysisViews) view.layout();
     render();
+  }
+
+  /** Starts watching which canvases are in sight (after they have their places on the page). */
+  function watchAll() {
+    watch(stage, stage.canvas);
+    for (const plot of plots) watch(plot, plot.canvas);
+    for (const view of analysisViews) watch(view, view.canvas);
   }
 
   // ---------------------------------------------------------------------------------------
@@ -1408,6 +1442,7 @@
     stage.bounds = mechanismBounds();
     makeTurnable(stage.canvas);
     if (!data.points.length) {
+      stage.canvas.parentElement.classList.add('empty');
       const empty = document.getElementById('mechanism-note');
       empty.hidden = false;
       empty.textContent = 'This model has no particles or bodies to draw; its motion is in the plots below.';
@@ -1417,6 +1452,7 @@
     setUpAudit();
     setUpAnalyses();
     layout();
+    watchAll();
 
     let resizing = null;
     window.addEventListener('resize', () => {
