@@ -543,6 +543,13 @@
     });
   }
 
+  /** A faint cross at the origin of a 2-D picture, when it is in the picture: the fixed reference. */
+  function drawOriginMark(context, at, width, height) {
+    if (at[0] < 0 || at[0] > width || at[1] < 0 || at[1] > height) return;
+    drawLine(context, [at[0] - 6, at[1]], [at[0] + 6, at[1]], '#9aa2b1', 1);
+    drawLine(context, [at[0], at[1] - 6], [at[0], at[1] + 6], '#9aa2b1', 1);
+  }
+
   function layoutStage() {
     const fitted = fitCanvas(stage.canvas);
     Object.assign(stage, fitted);
@@ -554,6 +561,7 @@
     const base = Math.min(16, Math.max(7, Math.min(width, height) / 30));
     const view = viewFor(stage.bounds, width, height, base + 24);
     if (data.dimension === 3) drawSpaceAxes(context, view, stage.bounds.radius * 0.85);
+    else drawOriginMark(context, view.project([0, 0, 0]), width, height);
     const at = locate(clock.t);
     const axes = axesAt(at);
     drawTrails(context, view, at, axes);
