@@ -38,8 +38,9 @@
       raw = { name: 'unreadable report data', derivation: '' };
     }
     const list = (value) => (Array.isArray(value) ? value : []);
+    const objects = (value) => list(value).filter((item) => item !== null && typeof item === 'object');
     const time = list(raw.time).map(Number);
-    const points = list(raw.points).map((p, i) => ({
+    const points = objects(raw.points).map((p, i) => ({
       name: typeof p.name === 'string' ? p.name : `point ${i + 1}`,
       kind: p.kind || 'particle',
       mass: Number.isFinite(p.mass) ? p.mass : 0,
@@ -56,15 +57,15 @@
       derivation: typeof raw.derivation === 'string' ? raw.derivation : '',
       until: Number.isFinite(raw.until) && raw.until > 0 ? raw.until : Math.max(lastTime, 0),
       time,
-      coordinates: list(raw.coordinates).map((c) => ({
+      coordinates: objects(raw.coordinates).map((c) => ({
         name: String(c.name), angle: c.angle === true, q: list(c.q), qd: list(c.qd),
       })),
-      invariants: list(raw.invariants).map((v) => ({
+      invariants: objects(raw.invariants).map((v) => ({
         name: String(v.name), conserved: v.conserved === true, values: list(v.values),
       })),
-      constraintForces: list(raw.constraint_forces).map((f) => ({ name: String(f.name), values: list(f.values) })),
+      constraintForces: objects(raw.constraint_forces).map((f) => ({ name: String(f.name), values: list(f.values) })),
       points,
-      bodies: list(raw.bodies)
+      bodies: objects(raw.bodies)
         .filter((b) => Number.isInteger(b.point) && b.point >= 0 && b.point < points.length && Array.isArray(b.axes))
         .map((b) => ({
           name: String(b.name), point: b.point, length: Number.isFinite(b.length) && b.length > 0 ? b.length : 1,
@@ -73,7 +74,7 @@
       rods: list(raw.rods).filter(validSegment),
       springs: list(raw.springs).filter(validSegment),
       summary: raw.summary && typeof raw.summary === 'object' ? raw.summary : {},
-      events: list(raw.events).filter((e) => e && Number.isFinite(e.t)),
+      events: objects(raw.events).filter((e) => e && Number.isFinite(e.t)),
       analyses: raw.analyses && typeof raw.analyses === 'object' ? raw.analyses : {},
     };
   }
