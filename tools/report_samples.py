@@ -177,12 +177,73 @@ def pendulum_cartesian(binary):
     return data
 
 
+def spherical_pendulum(binary):
+    """3-D: a particle on a rod, with an azimuth that runs far (wrapped in the plots)."""
+    until = 12.0
+    cols, summary = simulate(binary, "examples/spherical_pendulum.toml", until, 601)
+    data = base("spherical pendulum", 3, cols, summary, ["th", "ph"], {"th", "ph"}, until)
+    th, ph = cols["th"], cols["ph"]
+    data["points"] = [point(
+        "bob", "particle", 1.0,
+        [math.sin(a) * math.cos(b) for a, b in zip(th, ph)],
+        [math.sin(a) * math.sin(b) for a, b in zip(th, ph)],
+        [-math.cos(a) for a in th],
+    )]
+    data["rods"] = [[-1, 0]]
+    return data
+
+
+def triatomic(binary):
+    """Three masses on a line joined by springs; its modes include a drift (frequency 0)."""
+    until = 40.0
+    cols, summary = simulate(binary, "examples/triatomic.toml", until, 401)
+    names = ["q1", "q2", "q3"]
+    data = base("linear triatomic molecule", 2, cols, summary, names, set(), until)
+    masses = [16.0, 12.0, 16.0]
+    data["points"] = [
+        point(f"atom {i + 1}", "particle", masses[i], [i + v for v in cols[q]], [0.0] * len(cols[q]))
+        for i, q in enumerate(names)
+    ]
+    data["springs"] = [[0, 1], [1, 2]]
+    frequencies = [0.0, 0.2499999999999999, 0.47871355387816905]
+    shapes = [[0.15075567228888184, 0.1507556722888818, 0.15075567228888176],
+              [0.17677669529663684, 0.0, -0.1767766952966369],
+              [-0.09231861823449952, 0.24618298195866548, -0.09231861823449952]]
+    frames = []
+    for omega, v in zip(frequencies, shapes):
+        scale = 0.3 / max(abs(c) for c in v)
+        per_point = [{"x": [], "y": [], "z": None} for _ in names]
+        for f in range(64):
+            # a drift moves steadily one way; an oscillation goes once round its cycle
+            s = scale * (f / 63 if omega == 0 else math.cos(2 * math.pi * f / 64))
+            for i in range(3):
+                per_point[i]["x"].append(round(i + s * v[i], 9))
+                per_point[i]["y"].append(0.0)
+        frames.append(per_point)
+    data["analyses"]["modes"] = {
+        "frequencies": frequencies, "modes": shapes, "equilibrium": {q: 0.0 for q in names},
+        "coordinates": names, "points": frames,
+    }
+    return data
+
+
+def empty(_binary):
+    """The least a page can receive: no rows, no coordinates, nothing to draw."""
+    return {
+        "format": "lagrange.report/1", "name": "empty <run> & nothing else", "dimension": 2,
+        "derivation": "", "until": 0.0, "time": [], "coordinates": [], "invariants": [],
+        "constraint_forces": [], "points": [], "bodies": [], "rods": [], "springs": [],
+        "summary": {}, "events": [], "analyses": {},
+    }
+
+
 def main():
     binary = sys.argv[1] if len(sys.argv) > 1 else os.path.join(ROOT, "target/debug/lagrange")
     out_dir = sys.argv[2] if len(sys.argv) > 2 else os.path.join(ROOT, "crates/view/src/report/samples")
     os.makedirs(out_dir, exist_ok=True)
     for name, make in [("double_pendulum", double_pendulum), ("heavy_top", heavy_top),
-                       ("kepler", kepler), ("pendulum_cartesian", pendulum_cartesian)]:
+                       ("kepler", kepler), ("pendulum_cartesian", pendulum_cartesian),
+                       ("spherical_pendulum", spherical_pendulum), ("triatomic", triatomic), ("empty", empty)]:
         path = os.path.join(out_dir, name + ".json")
         with open(path, "w") as f:
             json.dump(make(binary), f, separators=(",", ":"))

@@ -59,37 +59,44 @@ test('there are report pages to test', () => {
 for (const file of pages) {
   test(`report page ${file}`, async () => {
     const context = await browser.newContext({ viewport: { width: 1200, height: 900 }, deviceScaleFactor: 1 });
-    const page = await context.newPage();
-    const problems = [];
-    page.on('console', (message) => {
-      if (message.type() === 'error' || message.type() === 'warning') {
-        problems.push(`console ${message.type()}: ${message.text()}`);
-      }
-    });
-    page.on('pageerror', (error) => problems.push(`page error: ${error.message}`));
-    page.on('request', (request) => {
-      const url = request.url();
-      if (!url.startsWith('file:') && !url.startsWith('data:')) problems.push(`request to ${url}`);
-    });
-
-    const path = join(folder, file);
-    await page.goto(pathToFileURL(path).href);
-    await page.waitForFunction(() => window.lagrangeReport !== undefined, null, { timeout: WAIT_MS });
-    const data = await page.evaluate(() => JSON.parse(document.getElementById('lagrange-data').textContent));
-    assert.equal(data.format, 'lagrange.report/1');
-    const api = await page.evaluate(() => Object.keys(window.lagrangeReport).sort());
-    assert.deepEqual(api, ['pause', 'play', 'positions', 'seek', 'time']);
-
-    await checkAnimationAdvances(page, data);
-    const shown = await checkSeek(page, data);
-    writeFileSync(join(folder, basename(file, '.html') + '.positions.json'), JSON.stringify(shown, null, 1) + '\n');
-    await page.evaluate((t) => window.lagrangeReport.seek(t), shown.time);
-    await page.screenshot({ path: join(folder, basename(file, '.html') + '.png'), fullPage: true });
-    await exercisePage(page, data);
-
-    assert.deepEqual(problems, [], `${file}: the page reported problems`);
-    await context.close();
+    try {
+      await checkPage(await context.newPage(), file);
+    } finally {
+      await context.close();
+    }
   });
+}
+
+/** All the checks of one page; `file` is its name in the folder. */
+async function checkPage(page, file) {
+  const problems = [];
+  page.on('console', (message) => {
+    if (message.type() === 'error' || message.type() === 'warning') {
+      problems.push(`console ${message.type()}: ${message.text()}`);
+    }
+  });
+  page.on('pageerror', (error) => problems.push(`page error: ${error.message}`));
+  page.on('request', (request) => {
+    const url = request.url();
+    if (!url.startsWith('file:') && !url.startsWith('data:')) problems.push(`request to ${url}`);
+  });
+
+  const path = join(folder, file);
+  await page.goto(pathToFileURL(path).href);
+  await page.waitForFunction(() => window.lagrangeReport !== undefined, null, { timeout: WAIT_MS });
+  const data = await page.evaluate(() => JSON.parse(document.getElementById('lagrange-data').textContent));
+  assert.equal(data.format, 'lagrange.report/1');
+  const api = await page.evaluate(() => Object.keys(window.lagrangeReport).sort());
+  assert.deepEqual(api, ['pause', 'play', 'positions', 'seek', 'time']);
+
+  await checkAnimationAdvances(page, data);
+  const shown = await checkSeek(page, data);
+  writeFileSync(join(folder, basename(file, '.html') + '.positions.json'), JSON.stringify(shown, null, 1) + '\n');
+  await page.evaluate((t) => window.lagrangeReport.seek(t), shown.time);
+  await page.screenshot({ path: join(folder, basename(file, '.html') + '.png'), fullPage: true });
+  await exercisePage(page, data);
+
+  assert.deepEqual(problems, [], `${file}: the page reported problems`);
 }
 
 /**
@@ -110,7 +117,9 @@ async function checkAnimationAdvances(page, data) {
     ? { x: box.x, y: box.y + 30, width: box.width, height: box.height - 30 }
     : { x: box.x, y: box.y, width: box.width, height: Math.min(box.height, 600) };
   const first = { time: await page.evaluate(() => window.lagrangeReport.time()), png: await page.screenshot({ clip }) };
-  await page.waitForFunction((t) => window.lagrangeReport.time() > t + 0.05, first.time, { timeout: WAIT_MS });
+  await page
+    .waitForFunction((t) => window.lagrangeReport.time() > t + 0.05, first.time, { timeout: WAIT_MS })
+    .catch(() => assert.fail(`the shown time stays at ${first.time} while playing`));
   const second = { time: await page.evaluate(() => window.lagrangeReport.time()), png: await page.screenshot({ clip }) };
   assert.notEqual(second.time, first.time, 'the shown time does not advance while playing');
   assert.ok(!first.png.equals(second.png), 'the picture does not change while playing');

@@ -38,8 +38,9 @@
       raw = { name: 'unreadable report data', derivation: '' };
     }
     const list = (value) => (Array.isArray(value) ? value : []);
+    const objects = (value) => list(value).filter((item) => item !== null && typeof item === 'object');
     const time = list(raw.time).map(Number);
-    const points = list(raw.points).map((p, i) => ({
+    const points = objects(raw.points).map((p, i) => ({
       name: typeof p.name === 'string' ? p.name : `point ${i + 1}`,
       kind: p.kind || 'particle',
       mass: Number.isFinite(p.mass) ? p.mass : 0,
@@ -56,15 +57,15 @@
       derivation: typeof raw.derivation === 'string' ? raw.derivation : '',
       until: Number.isFinite(raw.until) && raw.until > 0 ? raw.until : Math.max(lastTime, 0),
       time,
-      coordinates: list(raw.coordinates).map((c) => ({
+      coordinates: objects(raw.coordinates).map((c) => ({
         name: String(c.name), angle: c.angle === true, q: list(c.q), qd: list(c.qd),
       })),
-      invariants: list(raw.invariants).map((v) => ({
+      invariants: objects(raw.invariants).map((v) => ({
         name: String(v.name), conserved: v.conserved === true, values: list(v.values),
       })),
-      constraintForces: list(raw.constraint_forces).map((f) => ({ name: String(f.name), values: list(f.values) })),
+      constraintForces: objects(raw.constraint_forces).map((f) => ({ name: String(f.name), values: list(f.values) })),
       points,
-      bodies: list(raw.bodies)
+      bodies: objects(raw.bodies)
         .filter((b) => Number.isInteger(b.point) && b.point >= 0 && b.point < points.length && Array.isArray(b.axes))
         .map((b) => ({
           name: String(b.name), point: b.point, length: Number.isFinite(b.length) && b.length > 0 ? b.length : 1,
@@ -73,7 +74,7 @@
       rods: list(raw.rods).filter(validSegment),
       springs: list(raw.springs).filter(validSegment),
       summary: raw.summary && typeof raw.summary === 'object' ? raw.summary : {},
-      events: list(raw.events).filter((e) => e && Number.isFinite(e.t)),
+      events: objects(raw.events).filter((e) => e && Number.isFinite(e.t)),
       analyses: raw.analyses && typeof raw.analyses === 'object' ? raw.analyses : {},
     };
   }
@@ -200,7 +201,7 @@
       }
       clock.lastFrame = now;
     }
-    render();
+    render(true);
     if (clock.playing) requestFrame();
   }
 
@@ -213,9 +214,11 @@
   /** 2-D: equal scale on both axes, fitted to a box [xmin, xmax] × [ymin, ymax]. */
   function view2D(box, width, height, margin) {
     let [x0, x1, y0, y1] = box;
+    // A direction with (almost) no extent, such as a row of masses on a line, gets a
+    // sliver of room, so that the other direction sets the scale.
     const size = Math.max(x1 - x0, y1 - y0, 1e-9);
-    if (x1 - x0 < size * 1e-6) [x0, x1] = [x0 - size / 2, x1 + size / 2];
-    if (y1 - y0 < size * 1e-6) [y0, y1] = [y0 - size / 2, y1 + size / 2];
+    if (x1 - x0 < size * 1e-3) [x0, x1] = [x0 - size * 1e-3, x1 + size * 1e-3];
+    if (y1 - y0 < size * 1e-3) [y0, y1] = [y0 - size * 1e-3, y1 + size * 1e-3];
     const scale = Math.min((width - 2 * margin) / (x1 - x0), (height - 2 * margin) / (y1 - y0));
     const cx = (x0 + x1) / 2;
     const cy = (y0 + y1) / 2;
@@ -541,6 +544,13 @@
     });
   }
 
+  /** A faint cross at the origin of a 2-D picture, when it is in the picture: the fixed reference. */
+  function drawOriginMark(context, at, width, height) {
+    if (at[0] < 0 || at[0] > width || at[1] < 0 || at[1] > height) return;
+    drawLine(context, [at[0] - 6, at[1]], [at[0] + 6, at[1]], '#9aa2b1', 1);
+    drawLine(context, [at[0], at[1] - 6], [at[0], at[1] + 6], '#9aa2b1', 1);
+  }
+
   function layoutStage() {
     const fitted = fitCanvas(stage.canvas);
     Object.assign(stage, fitted);
@@ -552,6 +562,7 @@
     const base = Math.min(16, Math.max(7, Math.min(width, height) / 30));
     const view = viewFor(stage.bounds, width, height, base + 24);
     if (data.dimension === 3) drawSpaceAxes(context, view, stage.bounds.radius * 0.85);
+    else drawOriginMark(context, view.project([0, 0, 0]), width, height);
     const at = locate(clock.t);
     const axes = axesAt(at);
     drawTrails(context, view, at, axes);
@@ -1367,11 +1378,36 @@
   // ---------------------------------------------------------------------------------------
   // Drawing everything that follows the shown time.
 
-  function render() {
-    if (stage.context) drawStage();
-    for (const plot of plots) drawPlot(plot);
-    for (const view of analysisViews) if (view.context) view.draw();
+  /**
+   * Redraws the stage, the plots' markers and the analyses at the shown time. During
+   * playback (`onlyVisible`) pictures scrolled out of sight wait until they are seen again.
+   */
+  function render(onlyVisible = false) {
+    const wanted = (item) => !onlyVisible || item.visible !== false;
+    if (stage.context && wanted(stage)) drawStage();
+    for (const plot of plots) if (wanted(plot)) drawPlot(plot);
+    for (const view of analysisViews) if (view.context && wanted(view)) view.draw();
     updateControls();
+  }
+
+  /** Keeps `item.visible` up to date for a canvas, and draws the canvas when it comes into sight. */
+  const sightings = new Map();
+  const observer = 'IntersectionObserver' in window
+    ? new IntersectionObserver((entries) => {
+      let seen = false;
+      for (const entry of entries) {
+        const item = sightings.get(entry.target);
+        item.visible = entry.isIntersecting;
+        seen = seen || item.visible;
+      }
+      if (seen) render(true);
+    })
+    : null;
+
+  function watch(item, canvas) {
+    if (!observer) return;
+    sightings.set(canvas, item);
+    observer.observe(canvas);
   }
 
   /** Fits every canvas to its box again and redraws (on load and when the window resizes). */
@@ -1380,6 +1416,13 @@
     for (const plot of plots) layoutPlot(plot);
     for (const view of analysisViews) view.layout();
     render();
+  }
+
+  /** Starts watching which canvases are in sight (after they have their places on the page). */
+  function watchAll() {
+    watch(stage, stage.canvas);
+    for (const plot of plots) watch(plot, plot.canvas);
+    for (const view of analysisViews) watch(view, view.canvas);
   }
 
   // ---------------------------------------------------------------------------------------
@@ -1408,6 +1451,7 @@
     stage.bounds = mechanismBounds();
     makeTurnable(stage.canvas);
     if (!data.points.length) {
+      stage.canvas.parentElement.classList.add('empty');
       const empty = document.getElementById('mechanism-note');
       empty.hidden = false;
       empty.textContent = 'This model has no particles or bodies to draw; its motion is in the plots below.';
@@ -1417,6 +1461,7 @@
     setUpAudit();
     setUpAnalyses();
     layout();
+    watchAll();
 
     let resizing = null;
     window.addEventListener('resize', () => {
