@@ -318,7 +318,7 @@ fn modes(d: &Derivation, mech: &mut Mechanism, extent: f64) -> Option<Value> {
     let rest = place(mech, &modes.equilibrium);
     let animated = modes.modes.len().min(MAX_ANIMATED_MODES);
     let frames_per_mode = (MODE_NUMBERS / (animated * n_points * dim).max(1)).clamp(MIN_MODE_FRAMES, MODE_FRAMES);
-    let mut list = Vec::new();
+    let mut animations = Vec::new();
     for m in &modes.modes[..animated] {
         // How far the points move per unit amplitude along the shape.
         let eps = 1e-6;
@@ -343,18 +343,16 @@ fn modes(d: &Derivation, mech: &mut Mechanism, extent: f64) -> Option<Value> {
         let points: Vec<Value> = (0..n_points)
             .map(|p| json!({"x": coord(p, 0), "y": coord(p, 1), "z": if dim == 3 { json!(coord(p, 2)) } else { Value::Null }}))
             .collect();
-        list.push(json!({
-            "frequency": m.frequency.unwrap_or(0.0),
-            "drift": drift,
-            "shape": m.shape,
-            "points": points,
-        }));
+        animations.push(Value::Array(points));
     }
+    // As `lagrange.modes/1` has them (frequencies, shapes), and the frames of
+    // the animated modes: `points[mode][point]`.
     Some(json!({
         "coordinates": modes.coordinates,
         "equilibrium": modes.equilibrium,
         "frequencies": modes.modes.iter().map(|m| m.frequency.unwrap_or(0.0)).collect::<Vec<_>>(),
-        "modes": list,
+        "modes": modes.modes.iter().map(|m| m.shape.clone()).collect::<Vec<_>>(),
+        "points": animations,
     }))
 }
 

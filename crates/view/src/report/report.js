@@ -1147,7 +1147,16 @@
     const grid = document.createElement('div');
     grid.className = 'analysis-grid';
     holder.append(grid);
-    modes.frequencies.forEach((omega, k) => {
+    // Only the modes that come with frames are animated (the lowest ones of a
+    // large model); the others are listed below the grid.
+    const unanimated = modes.frequencies.slice(frames.length);
+    if (unanimated.length) {
+      const note = document.createElement('p');
+      note.className = 'note';
+      note.textContent = `Modes ${frames.length + 1} to ${modes.frequencies.length}, not animated: Ω = ${unanimated.map((w) => fmt(w)).join(', ')}.`;
+      holder.append(note);
+    }
+    modes.frequencies.slice(0, frames.length).forEach((omega, k) => {
       const pointFrames = Array.isArray(frames[k]) ? frames[k] : [];
       const drift = !(Math.abs(omega) > 1e-9);
       const period = drift ? DRIFT_MODE_SECONDS : TAU / omega;
