@@ -9,7 +9,7 @@
 //! - the paths of the particles in the plane, (x, y) at equal scale, when every point of the model is a particle
 //!   with a 2-D position (upper right);
 //! - phase portraits q' against q (right column, below the paths; one per coordinate when there are at most
-//!   three, else of the first coordinate only).
+//!   three, or two side by side below the paths, else of the first coordinate only).
 //!
 //! Angles (see [`crate::angles`]) are drawn wrapped to (−π, π], their lines broken where they wrap, so that a
 //! pendulum that goes over the top stays on the axis instead of running off to 68.
@@ -259,10 +259,13 @@ fn draw_drift(
     Ok(())
 }
 
-/// The phase portraits, stacked in a column, or side by side in a row when `in_row`.
+/// The phase portraits, stacked in a column (at most [`MAX_PHASE`]), or side by side in a row when `in_row` (at
+/// most two); beyond, of the first coordinate only.
 fn draw_phase(area: &Area, data: &PlotData, in_row: bool) -> DrawResult {
     let n_coords = data.coordinates.len().min(data.velocities.len());
-    let n_panels = if n_coords <= MAX_PHASE { n_coords } else { 1 };
+    // Side by side, three would be too narrow to read.
+    let most = if in_row { MAX_PHASE - 1 } else { MAX_PHASE };
+    let n_panels = if n_coords <= most { n_coords } else { 1 };
     if n_panels == 0 {
         return draw_message(area, "Phase portrait", "no coordinates");
     }
@@ -953,6 +956,20 @@ pub(crate) mod tests {
             ],
         );
         assert!(svg.contains("×10⁻"), "drift ticks are not scientific");
+
+        // With the bobs' paths, two phase portraits side by side below them; of three, the first alone.
+        let mut data = pendulum_like(2001);
+        let bob = |a: &[f64]| Path {
+            name: "particle 1".into(),
+            x: a.iter().map(|a| a.sin()).collect(),
+            y: a.iter().map(|a| -a.cos()).collect(),
+        };
+        data.paths = vec![bob(&data.coordinates[0].values)];
+        check_svg(&data, "paths.svg", &["Path in the plane", "particle 1", "start", "Phase of a", "Phase of b"]);
+        data.coordinates.push(series("c", data.time.clone()));
+        data.velocities.push(series("c'", vec![1.0; data.time.len()]));
+        let svg = check_svg(&data, "paths3.svg", &["Phase portrait of a (first of 3)"]);
+        assert!(!svg.contains("Phase of b"));
     }
 
     #[test]
