@@ -108,7 +108,6 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
 
     // Columns: t, coordinates, velocities, invariants.
     let names: Vec<String> = derivation.coordinate_names().iter().map(|s| s.to_string()).collect();
-    let n = names.len();
     let with_events = !opts.crossing.is_empty();
     let inv_names: Vec<String> = mech::invariants_of(&derivation).into_iter().map(|i| i.name).collect();
     // Rigid bodies: ω and L per body as extra columns.
@@ -145,7 +144,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     let mut line: Vec<u8> = Vec::with_capacity(256);
     let mut crossings_seen = 0usize;
     let mut csv_error: Option<std::io::Error> = None;
-    let mut plot_data = view::plot::PlotKeeper::new(n);
+    let mut plot_data = opts.plot.is_some().then(|| view::plot::PlotKeeper::of(&derivation));
     let progress = progress_bar(until);
     // The time of the last row handed over (written, with --out), and the
     // signal that stopped the run before the next one.
@@ -201,8 +200,8 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
         if row.event.is_some() {
             crossings_seen += 1;
         }
-        if opts.plot.is_some() && row.event.is_none() {
-            plot_data.push(row.t, row.q, row.qd, row.invariants);
+        if let Some(keeper) = plot_data.as_mut().filter(|_| row.event.is_none()) {
+            keeper.push(row.t, row.q, row.qd, row.invariants);
         }
         if let Some(pb) = &progress {
             pb.set_position((row.t / until * 1000.0) as u64);
@@ -249,8 +248,8 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     let interrupted =
         stopped_by.map(|signal| view::simulate::Interrupted { signal: signal.name().into(), t: last_row });
 
-    if let Some(plot_path) = &opts.plot {
-        let data = plot_data.into_plot(&derivation.model().name, &report, &names, &inv_names);
+    if let (Some(plot_path), Some(keeper)) = (&opts.plot, plot_data) {
+        let data = keeper.into_plot(&derivation.model().name, &report, &names, &inv_names);
         crate::files::write_figure(plot_path, "the plot", view::plot::svg(&data)).map_err(Failure::run)?;
     }
     let mut text = if opts.summary_json {

@@ -7,7 +7,9 @@ use mech::{Derivation, Orbit};
 /// configuration: a rigid body's Euler angle, the angle of an orbit's plane
 /// polar coordinates, or a coordinate that the Lagrangian and the particles'
 /// positions contain, and only inside sin, cos and tan. A coordinate they do
-/// not contain at all (a cyclic x) is not one.
+/// not contain at all (cyclic) is one when its own inertia ∂²L/∂q'² changes
+/// with the configuration, as an azimuth's does (the spherical pendulum's φ,
+/// m l² sin²θ); a cyclic x of constant inertia is not one.
 pub fn angles(d: &Derivation) -> Vec<bool> {
     let pool = d.pool();
     let model = d.model();
@@ -23,7 +25,14 @@ pub fn angles(d: &Derivation) -> Vec<bool> {
                 return true;
             }
             let mut seen = false;
-            exprs.iter().all(|&e| only_in_trig(pool, e, name, false, &mut seen)) && seen
+            let only_trig = exprs.iter().all(|&e| only_in_trig(pool, e, name, false, &mut seen));
+            if seen {
+                return only_trig;
+            }
+            let inertia = d.mass_matrix().get(i).and_then(|row| row.get(i));
+            inertia.is_some_and(|&m| {
+                pool.symbols(m).iter().any(|s| s.order == 0 && names.contains(&pool.name_str(s.name)))
+            })
         })
         .collect()
 }
@@ -44,5 +53,22 @@ fn only_in_trig(pool: &sym::Pool, e: sym::ExprId, name: &str, inside: bool, seen
         Node::Add(xs) | Node::Mul(xs) => all(xs, inside, seen),
         Node::Pow(a, b) | Node::Atan2(a, b) => all(&[*a, *b], inside, seen),
         Node::Func(f, a) => all(&[*a], inside || matches!(f, Func::Sin | Func::Cos | Func::Tan), seen),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn angles_of(text: &str) -> Vec<bool> {
+        angles(&Derivation::new(mech::Model::parse(text, &[]).unwrap()).unwrap())
+    }
+
+    #[test]
+    fn a_cyclic_azimuth_is_an_angle_and_a_cyclic_line_is_not() {
+        let spherical = "name = \"s\"\ncoordinates = [\"th\", \"ph\"]\nkinetic = \"m*l^2/2*(th'^2 + sin(th)^2*ph'^2)\"\npotential = \"-m*g*l*cos(th)\"\n[parameters]\nm = 1.0\nl = 1.0\ng = 9.81\n";
+        assert_eq!(angles_of(spherical), [true, true]);
+        let cart = "name = \"c\"\ncoordinates = [\"x\", \"a\"]\nkinetic = \"M/2*x'^2 + m/2*(x'^2 + 2*l*x'*a'*cos(a) + l^2*a'^2)\"\npotential = \"-m*g*l*cos(a)\"\n[parameters]\nM = 2.0\nm = 1.0\nl = 1.0\ng = 9.81\n";
+        assert_eq!(angles_of(cart), [false, true]);
     }
 }

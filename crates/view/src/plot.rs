@@ -2,10 +2,19 @@
 //! writes, and what the Python package shows for a run).
 //!
 //! Enter at [`svg`] with a [`PlotData`], or gather one as a run streams with
-//! [`PlotKeeper`]. The figure has a title and subtitle on top and three panels:
-//! the coordinates against time (upper left), the drift of every conserved quantity against time (lower left,
-//! sharing the time axis) and phase portraits q' against q (right column; one per coordinate when there are at
-//! most three, else of the first coordinate only).
+//! [`PlotKeeper`]. The figure has a title and subtitle on top and these panels:
+//! - the coordinates against time (upper left; the whole left column when nothing is conserved);
+//! - the drift of each quantity the derivation says is conserved, against time (lower left, sharing the time
+//!   axis), when there is one;
+//! - the paths of the particles in the plane, (x, y) at equal scale, when every point of the model is a particle
+//!   with a 2-D position (upper right);
+//! - phase portraits q' against q (right column, below the paths; one per coordinate when there are at most
+//!   three, or two side by side below the paths, else of the first coordinate only).
+//!
+//! Angles (see [`crate::angles`]) are drawn wrapped to (−π, π], their lines broken where they wrap, so that a
+//! pendulum that goes over the top stays on the axis instead of running off to 68.
+//!
+//! Legends sit in strips beside the plot areas, never on a curve.
 //!
 //! Nothing here trusts the data: non-finite samples are skipped (a line breaks at them), constant series get a
 //! nonzero axis range, at most [`MAX_SERIES`] series are drawn per panel, and long runs are decimated to about
@@ -20,6 +29,7 @@ use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::error::Error;
+use std::f64::consts::{PI, TAU};
 
 /// A named sequence of samples, one per entry of [`PlotData::time`].
 pub struct Series {
@@ -27,6 +37,18 @@ pub struct Series {
     pub name: String,
     /// The samples; non-finite ones are skipped when drawing.
     pub values: Vec<f64>,
+    /// Whether the samples are an angle, drawn wrapped to (−π, π].
+    pub angle: bool,
+}
+
+/// The path of one particle in the plane, one (x, y) per entry of [`PlotData::time`].
+pub struct Path {
+    /// The particle's name, such as `particle 1`.
+    pub name: String,
+    /// Its x positions.
+    pub x: Vec<f64>,
+    /// Its y positions.
+    pub y: Vec<f64>,
 }
 
 /// Everything [`svg`] draws: a run of a model sampled at common times.
@@ -42,7 +64,10 @@ pub struct PlotData {
     /// The generalized velocities q_i'(t), in the order of [`PlotData::coordinates`].
     pub velocities: Vec<Series>,
     /// Conserved quantities along the run, as absolute values; the figure shows their drift from the first sample.
+    /// None: no drift panel.
     pub invariants: Vec<Series>,
+    /// The particles' paths in the plane; none: no path panel.
+    pub paths: Vec<Path>,
 }
 
 /// Most curves drawn in one panel; further series are left out and the legend says so.
@@ -111,8 +136,9 @@ fn render(data: &PlotData) -> Result<String, Box<dyn Error>> {
         let (header, body) = root.split_vertically(px(96));
         draw_header(&header, data)?;
         let body = body.margin(0, px(10), px(10), px(14));
-        let (left, right) = body.split_horizontally(px(WIDTH * 60 / 100));
-        let (upper, lower) = left.split_vertically(body.dim_in_pixel().1 / 2);
+        // The paths of particles want room of their own: the time panels give some of theirs.
+        let left_share = if data.paths.is_empty() { 60 } else { 55 };
+        let (left, right) = body.split_horizontally(px(WIDTH * left_share / 100));
         // Both left panels plot against time: equal room for the y labels aligns their time axes.
         let time = Axis::of(&data.time, 8);
         let values = coordinate_axis(data);
@@ -122,12 +148,22 @@ fn render(data: &PlotData) -> Result<String, Box<dyn Error>> {
         let coordinate_label = |value: &f64| format_tick(*value, values.step);
         let drift_label = |value: &f64| scale.label(*value);
         let mut y_area = label_width(&root, &values.ticks, &coordinate_label)?;
-        if !drifts.is_empty() {
+        if drifts.is_empty() {
+            draw_coordinates(&left, data, &time, &values, y_area)?;
+        } else {
             y_area = y_area.max(label_width(&root, &scale.axis.ticks, &drift_label)?);
+            let (upper, lower) = left.split_vertically(body.dim_in_pixel().1 / 2);
+            draw_coordinates(&upper, data, &time, &values, y_area)?;
+            draw_drift(&lower, data, &time, &drifts, &scale, y_area)?;
         }
-        draw_coordinates(&upper, data, &time, &values, y_area)?;
-        draw_drift(&lower, data, &time, &drifts, &scale, y_area)?;
-        draw_phase(&right.margin(0, 0, px(24), 0), data)?;
+        let right = right.margin(0, 0, px(24), 0);
+        if data.paths.is_empty() {
+            draw_phase(&right, data, false)?;
+        } else {
+            let (upper, lower) = right.split_vertically(right.dim_in_pixel().1 * 55 / 100);
+            draw_paths(&upper, data)?;
+            draw_phase(&lower, data, true)?;
+        }
         root.present()?;
     }
     let big = format!("width=\"{}\" height=\"{}\"", px(WIDTH), px(HEIGHT));
@@ -150,7 +186,7 @@ fn coordinate_axis(data: &PlotData) -> Axis {
     let mut lo = f64::INFINITY;
     let mut hi = f64::NEG_INFINITY;
     for series in data.coordinates.iter().take(MAX_SERIES) {
-        let (a, b) = finite_range(&series.values);
+        let (a, b) = finite_range(&drawn(series));
         lo = lo.min(a);
         hi = hi.max(b);
     }
@@ -164,10 +200,11 @@ fn draw_coordinates(area: &Area, data: &PlotData, time: &Axis, values: &Axis, y_
         return draw_message(&chart_area, "Coordinates", "no samples");
     }
     let y_label = |value: &f64| format_tick(*value, values.step);
-    let mut chart = build_chart(&chart_area, "Coordinates", time, values, &y_label, y_area)?;
+    let caption = if shown.iter().any(wraps) { "Coordinates (angles wrapped to (−π, π])" } else { "Coordinates" };
+    let mut chart = build_chart(&chart_area, caption, time, values, &y_label, y_area)?;
     configure_mesh(&mut chart, time, "t", "q", &y_label)?;
     for (idx, series) in shown.iter().enumerate() {
-        draw_curves(&mut chart, &time_segments(&data.time, &series.values), PALETTE[idx], 2)?;
+        draw_curves(&mut chart, &time_segments(&data.time, series), PALETTE[idx], 2)?;
     }
     let entries: Vec<(String, RGBColor)> =
         shown.iter().enumerate().map(|(idx, series)| (series.name.clone(), PALETTE[idx])).collect();
@@ -185,9 +222,6 @@ fn draw_drift(
 ) -> DrawResult {
     let shown = &data.invariants[..drifts.len()];
     let (chart_area, legend_area) = area.split_horizontally(area.dim_in_pixel().0 - px(150));
-    if shown.is_empty() {
-        return draw_message(&chart_area, "Conserved quantities", "no conserved quantity");
-    }
     let n_relative = drifts.iter().filter(|drift| drift.relative).count();
     let y_desc = if n_relative == drifts.len() {
         "relative drift (I − I₀)/|I₀|"
@@ -207,7 +241,8 @@ fn draw_drift(
     let zero = [(time.lo, 0.0), (time.hi, 0.0)];
     chart.draw_series(LineSeries::new(zero, AXIS.stroke_width(px(1))))?;
     for (idx, drift) in drifts.iter().enumerate() {
-        let mapped: Vec<f64> = drift.values.iter().map(|&value| scale.map(value)).collect();
+        let mapped =
+            Series { name: String::new(), values: drift.values.iter().map(|&v| scale.map(v)).collect(), angle: false };
         draw_curves(&mut chart, &time_segments(&data.time, &mapped), PALETTE[idx], 2)?;
     }
     let entries: Vec<(String, RGBColor)> = shown
@@ -224,13 +259,18 @@ fn draw_drift(
     Ok(())
 }
 
-fn draw_phase(area: &Area, data: &PlotData) -> DrawResult {
+/// The phase portraits, stacked in a column (at most [`MAX_PHASE`]), or side by side in a row when `in_row` (at
+/// most two); beyond, of the first coordinate only.
+fn draw_phase(area: &Area, data: &PlotData, in_row: bool) -> DrawResult {
     let n_coords = data.coordinates.len().min(data.velocities.len());
-    let n_panels = if n_coords <= MAX_PHASE { n_coords } else { 1 };
+    // Side by side, three would be too narrow to read.
+    let most = if in_row { MAX_PHASE - 1 } else { MAX_PHASE };
+    let n_panels = if n_coords <= most { n_coords } else { 1 };
     if n_panels == 0 {
         return draw_message(area, "Phase portrait", "no coordinates");
     }
-    let panels = area.split_evenly((n_panels, 1));
+    let panels = area.split_evenly(if in_row { (1, n_panels) } else { (n_panels, 1) });
+    let crowded = in_row && n_panels > 1;
     for (coord_idx, panel) in panels.iter().enumerate() {
         let q = &data.coordinates[coord_idx];
         let v = &data.velocities[coord_idx];
@@ -238,27 +278,109 @@ fn draw_phase(area: &Area, data: &PlotData) -> DrawResult {
         let v_name = if v_name.is_empty() { format!("{q_name}'") } else { v_name };
         let caption = if data.coordinates.len() > n_panels {
             format!("Phase portrait of {q_name} (first of {})", data.coordinates.len())
+        } else if crowded {
+            format!("Phase of {q_name}")
         } else {
             format!("Phase portrait of {q_name}")
         };
-        let (x_lo, x_hi) = finite_range(&q.values);
+        let q_desc = if wraps(q) { format!("{q_name} (wrapped)") } else { q_name.clone() };
+        let (x_lo, x_hi) = finite_range(&drawn(q));
         let (y_lo, y_hi) = finite_range(&v.values);
-        let x_axis = Axis::new(x_lo, x_hi, 5);
-        let y_axis = Axis::new(y_lo, y_hi, if n_panels == 3 { 4 } else { 5 });
+        let x_axis = Axis::new(x_lo, x_hi, if crowded { 4 } else { 5 });
+        let y_axis = Axis::new(y_lo, y_hi, if n_panels == 3 && !in_row { 4 } else { 5 });
         let y_label = |value: &f64| format_tick(*value, y_axis.step);
         let mut chart = build_chart(panel, &caption, &x_axis, &y_axis, &y_label, 0)?;
-        configure_mesh(&mut chart, &x_axis, &q_name, &v_name, &y_label)?;
-        let segments = phase_segments(&q.values, &v.values);
+        configure_mesh(&mut chart, &x_axis, &q_desc, &v_name, &y_label)?;
+        let segments = phase_segments(q, v);
         draw_curves(&mut chart, &segments, PALETTE[coord_idx].mix(0.85), 1)?;
         if let Some(&start) = segments.first().and_then(|segment| segment.first()) {
-            let label = text_style(16, &INK, (HPos::Left, VPos::Bottom));
+            // The label on the side of the marker away from the frame, so that it stays inside the plot.
+            let (right, top) = (
+                (start.0 - x_axis.lo) / (x_axis.hi - x_axis.lo) > 0.8,
+                (start.1 - y_axis.lo) / (y_axis.hi - y_axis.lo) > 0.85,
+            );
+            let (h, dx) = if right { (HPos::Right, -7) } else { (HPos::Left, 7) };
+            let (v, dy) = if top { (VPos::Top, 5) } else { (VPos::Bottom, -5) };
             let marker = EmptyElement::at(start)
                 + Circle::new((0, 0), px(5), INK.filled())
-                + Text::new("start", (pos(7), pos(-5)), label);
+                + Text::new("start", (pos(dx), pos(dy)), text_style(16, &INK, (h, v)));
             chart.draw_series(std::iter::once(marker))?;
         }
     }
     Ok(())
+}
+
+/// The particles' paths in the plane at equal scale on both axes, each in its colour, each start marked; the
+/// legend in a strip to the right.
+fn draw_paths(area: &Area, data: &PlotData) -> DrawResult {
+    let shown = &data.paths[..data.paths.len().min(MAX_SERIES)];
+    let (chart_area, legend_area) = area.split_horizontally(area.dim_in_pixel().0 - px(120));
+    let caption = if shown.len() == 1 { "Path in the plane" } else { "Paths in the plane" };
+    let plot = chart_area.titled(caption, bold_style(23, (HPos::Center, VPos::Top)))?;
+    let (mut x_lo, mut x_hi, mut y_lo, mut y_hi) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    for path in shown {
+        let ((a, b), (c, d)) = (finite_range(&path.x), finite_range(&path.y));
+        (x_lo, x_hi, y_lo, y_hi) = (x_lo.min(a), x_hi.max(b), y_lo.min(c), y_hi.max(d));
+    }
+    let (width, height) = plot.dim_in_pixel();
+    // The y labels' width sets the plot's width, which sets the y range: twice settles it.
+    let mut y_area = px(46);
+    let mut axes = equal_scale((x_lo, x_hi), (y_lo, y_hi), (width, height), y_area);
+    for _ in 0..2 {
+        let y_label = |value: &f64| format_tick(*value, axes.1.step);
+        y_area = label_width(&plot, &axes.1.ticks, &y_label)? + px(46);
+        axes = equal_scale((x_lo, x_hi), (y_lo, y_hi), (width, height), y_area);
+    }
+    let (x_axis, y_axis) = axes;
+    let y_label = |value: &f64| format_tick(*value, y_axis.step);
+    let mut chart = ChartBuilder::on(&plot)
+        .margin(px(PATH_MARGIN))
+        .margin_right(px(PATH_MARGIN_RIGHT))
+        .x_label_area_size(px(PATH_X_LABELS))
+        .y_label_area_size(y_area)
+        .build_cartesian_2d(x_axis.coord(), y_axis.coord())?;
+    configure_mesh(&mut chart, &x_axis, "x", "y", &y_label)?;
+    let mut entries = Vec::new();
+    for (idx, path) in shown.iter().enumerate() {
+        let n = path.x.len().min(path.y.len());
+        let (x, y) = (&path.x[..n], &path.y[..n]);
+        let segments = segments(x, y, [false, false], &keep_extremes(&[x, y], n, MAX_POINTS));
+        draw_curves(&mut chart, &segments, PALETTE[idx].mix(0.9), 1)?;
+        if let Some(&start) = segments.first().and_then(|segment| segment.first()) {
+            let marker = EmptyElement::at(start)
+                + Circle::new((0, 0), px(6), INK.filled())
+                + Circle::new((0, 0), px(4), PALETTE[idx].filled());
+            chart.draw_series(std::iter::once(marker))?;
+        }
+        entries.push((path.name.clone(), PALETTE[idx]));
+    }
+    draw_legend(&legend_area, &entries, data.paths.len())?;
+    let y = pos(62) + pos(27) * entries.len() as i32 + if data.paths.len() > entries.len() { pos(27) } else { 0 };
+    legend_area.draw(&Circle::new((pos(17), y), px(6), INK.filled()))?;
+    legend_area.draw_text("start", &text_style(19, &INK, (HPos::Left, VPos::Center)), (pos(38), y))?;
+    Ok(())
+}
+
+/// The margins of the path panel's chart, and the height of its x labels, in figure pixels.
+const PATH_MARGIN: u32 = 6;
+const PATH_MARGIN_RIGHT: u32 = 18;
+const PATH_X_LABELS: u32 = 52;
+
+/// Axes over `x` and `y` (data ranges) at one scale, for a chart on an area of `size` whose y labels take
+/// `y_area`: the span that needs the larger scale sets it, and the other span grows about its middle.
+fn equal_scale(x: (f64, f64), y: (f64, f64), size: (u32, u32), y_area: u32) -> (Axis, Axis) {
+    let plot_width = size.0.saturating_sub(y_area + px(PATH_MARGIN + PATH_MARGIN_RIGHT)).max(1) as f64;
+    let plot_height = size.1.saturating_sub(px(2 * PATH_MARGIN + PATH_X_LABELS)).max(1) as f64;
+    let (x_axis, y_axis) = (Axis::new(x.0, x.1, 5), Axis::new(y.0, y.1, 5));
+    let per_pixel = ((x_axis.hi - x_axis.lo) / plot_width).max((y_axis.hi - y_axis.lo) / plot_height);
+    if !per_pixel.is_finite() || per_pixel <= 0.0 {
+        return (x_axis, y_axis);
+    }
+    let widen = |axis: &Axis, pixels: f64| {
+        let (middle, half) = (axis.lo / 2.0 + axis.hi / 2.0, per_pixel * pixels / 2.0);
+        Axis::exact(middle - half, middle + half, (pixels / f64::from(px(60))).round().max(2.0) as usize)
+    };
+    (widen(&x_axis, plot_width), widen(&y_axis, plot_height))
 }
 
 /// The width of the widest tick label, `label` of one of `ticks`.
@@ -423,6 +545,11 @@ impl Axis {
             let pad = 0.04 * hi - 0.04 * lo;
             ((lo - pad).max(-f64::MAX), (hi + pad).min(f64::MAX))
         };
+        Axis::exact(lo, hi, n_ticks)
+    }
+
+    /// An axis over exactly `lo..hi` (finite, `lo < hi`), with about `n_ticks` ticks.
+    fn exact(lo: f64, hi: f64, n_ticks: usize) -> Axis {
         // Divided before subtracting, so that a span beyond f64::MAX (±1e308 data) still gives a finite step.
         let step = nice_step(hi / n_ticks.max(1) as f64 - lo / n_ticks.max(1) as f64);
         let first = (lo / step).ceil() as i64;
@@ -606,18 +733,45 @@ impl DriftScale {
     }
 }
 
-/// The samples of `values` against `time` as lines, broken at non-finite samples and decimated.
-fn time_segments(time: &[f64], values: &[f64]) -> Vec<Vec<(f64, f64)>> {
-    let n = time.len().min(values.len());
-    let (time, values) = (&time[..n], &values[..n]);
-    segments(time, values, &keep_extremes(&[values], n, MAX_POINTS))
+/// The samples of `series` against `time` as lines, broken at non-finite samples (and where an angle wraps) and
+/// decimated.
+fn time_segments(time: &[f64], series: &Series) -> Vec<Vec<(f64, f64)>> {
+    let n = time.len().min(series.values.len());
+    let (time, values) = (&time[..n], &series.values[..n]);
+    let shown = drawn(series);
+    segments(time, values, [false, series.angle], &keep_extremes(&[&shown[..n]], n, MAX_POINTS))
 }
 
-/// The phase curve (q, q') as lines, broken at non-finite samples and decimated.
-fn phase_segments(q: &[f64], v: &[f64]) -> Vec<Vec<(f64, f64)>> {
-    let n = q.len().min(v.len());
-    let (q, v) = (&q[..n], &v[..n]);
-    segments(q, v, &keep_extremes(&[q, v], n, MAX_POINTS))
+/// The phase curve (q, q') as lines, broken at non-finite samples (and where q wraps) and decimated.
+fn phase_segments(q: &Series, v: &Series) -> Vec<Vec<(f64, f64)>> {
+    let n = q.values.len().min(v.values.len());
+    let shown = drawn(q);
+    let indices = keep_extremes(&[&shown[..n], &v.values[..n]], n, MAX_POINTS);
+    segments(&q.values[..n], &v.values[..n], [q.angle, false], &indices)
+}
+
+/// The values of `series` as drawn: an angle wrapped to (−π, π].
+fn drawn(series: &Series) -> Vec<f64> {
+    if series.angle {
+        series.values.iter().map(|&value| wrap(value)).collect()
+    } else {
+        series.values.clone()
+    }
+}
+
+/// Whether `series` is an angle that leaves (−π, π], so that wrapping changes its curve.
+fn wraps(series: &Series) -> bool {
+    series.angle && series.values.iter().any(|&value| value.is_finite() && turn(value) != 0.0)
+}
+
+/// `angle` wrapped to (−π, π].
+fn wrap(angle: f64) -> f64 {
+    angle - TAU * turn(angle)
+}
+
+/// Which turn `angle` is in: k for angles in (2πk − π, 2πk + π].
+fn turn(angle: f64) -> f64 {
+    ((angle - PI) / TAU).ceil()
 }
 
 /// The indices (ascending) to draw of `n` samples: all of them when there are at most `budget`, else the first and
@@ -650,22 +804,65 @@ fn keep_extremes(columns: &[&[f64]], n: usize, budget: usize) -> Vec<usize> {
     kept
 }
 
-/// The points `(x[idx], y[idx])` for `idx` in `indices`, split into runs of finite points.
-fn segments(x: &[f64], y: &[f64], indices: &[usize]) -> Vec<Vec<(f64, f64)>> {
+/// The points `(x[idx], y[idx])` for `idx` in `indices`, split into runs of finite points. The coordinates `wrap`
+/// marks are angles, drawn wrapped to (−π, π]: a run also ends where one of them wraps, drawn on to the edge it
+/// leaves by, and the next run starts at the opposite edge; it ends too where a wrapped coordinate jumps by more
+/// than π between kept samples, so that no line crosses the plot from edge to edge.
+fn segments(x: &[f64], y: &[f64], wrap_axis: [bool; 2], indices: &[usize]) -> Vec<Vec<(f64, f64)>> {
+    let shown = |value: f64, angle: bool| if angle { wrap(value) } else { value };
     let mut res = Vec::new();
-    let mut current = Vec::new();
+    let mut current: Vec<(f64, f64)> = Vec::new();
+    let mut previous: Option<([f64; 2], [f64; 2])> = None;
     for &idx in indices {
-        let point = (x[idx], y[idx]);
-        if point.0.is_finite() && point.1.is_finite() {
-            current.push(point);
-        } else if !current.is_empty() {
-            res.push(std::mem::take(&mut current));
+        let raw = [x[idx], y[idx]];
+        if !(raw[0].is_finite() && raw[1].is_finite()) {
+            if !current.is_empty() {
+                res.push(std::mem::take(&mut current));
+            }
+            previous = None;
+            continue;
         }
+        let point = [shown(raw[0], wrap_axis[0]), shown(raw[1], wrap_axis[1])];
+        if let Some((raw_before, before)) = previous {
+            let broken: Vec<usize> = (0..2)
+                .filter(|&a| wrap_axis[a] && (turn(raw_before[a]) != turn(raw[a]) || (point[a] - before[a]).abs() > PI))
+                .collect();
+            if !broken.is_empty() {
+                let edges = match broken[..] {
+                    [a] => edge_points(a, (raw_before, before), (raw, point)),
+                    _ => None,
+                };
+                if let Some((end, _)) = edges {
+                    current.push(end);
+                }
+                res.push(std::mem::take(&mut current));
+                if let Some((_, start)) = edges {
+                    current.push(start);
+                }
+            }
+        }
+        current.push((point[0], point[1]));
+        previous = Some((raw, point));
     }
     if !current.is_empty() {
         res.push(current);
     }
     res
+}
+
+/// Where a line from `from` to `to` (each as raw and drawn values) leaves the edge of axis `a`'s (−π, π] and
+/// comes back at the other edge, when it wraps once: the last point of one run and the first of the next.
+fn edge_points(a: usize, from: ([f64; 2], [f64; 2]), to: ([f64; 2], [f64; 2])) -> Option<((f64, f64), (f64, f64))> {
+    let (turn_from, turn_to) = (turn(from.0[a]), turn(to.0[a]));
+    if (turn_to - turn_from).abs() != 1.0 {
+        return None;
+    }
+    let (edge, boundary) = if turn_to > turn_from { (PI, PI + TAU * turn_from) } else { (-PI, -PI + TAU * turn_from) };
+    let fraction = ((boundary - from.0[a]) / (to.0[a] - from.0[a])).clamp(0.0, 1.0);
+    let o = 1 - a;
+    let other = from.1[o] + fraction * (to.1[o] - from.1[o]);
+    let at = |value: f64| if a == 0 { (value, other) } else { (other, value) };
+    fraction.is_finite().then(|| (at(edge), at(-edge)))
 }
 
 #[cfg(test)]
@@ -704,7 +901,7 @@ pub(crate) mod tests {
     }
 
     fn series(name: &str, values: Vec<f64>) -> Series {
-        Series { name: name.to_string(), values }
+        Series { name: name.to_string(), values, angle: false }
     }
 
     /// A double-pendulum-like run: two coupled oscillations, an energy with a tiny bounded wobble, a momentum.
@@ -726,6 +923,7 @@ pub(crate) mod tests {
             coordinates: vec![series("a", a), series("b", b)],
             velocities: vec![series("a'", a_dot), series("b'", b_dot)],
             invariants: vec![series("energy", energy), series("p_z", momentum)],
+            paths: vec![],
         }
     }
 
@@ -758,6 +956,20 @@ pub(crate) mod tests {
             ],
         );
         assert!(svg.contains("×10⁻"), "drift ticks are not scientific");
+
+        // With the bobs' paths, two phase portraits side by side below them; of three, the first alone.
+        let mut data = pendulum_like(2001);
+        let bob = |a: &[f64]| Path {
+            name: "particle 1".into(),
+            x: a.iter().map(|a| a.sin()).collect(),
+            y: a.iter().map(|a| -a.cos()).collect(),
+        };
+        data.paths = vec![bob(&data.coordinates[0].values)];
+        check_svg(&data, "paths.svg", &["Path in the plane", "particle 1", "start", "Phase of a", "Phase of b"]);
+        data.coordinates.push(series("c", data.time.clone()));
+        data.velocities.push(series("c'", vec![1.0; data.time.len()]));
+        let svg = check_svg(&data, "paths3.svg", &["Phase portrait of a (first of 3)"]);
+        assert!(!svg.contains("Phase of b"));
     }
 
     #[test]
@@ -769,12 +981,10 @@ pub(crate) mod tests {
             coordinates: vec![],
             velocities: vec![],
             invariants: vec![],
+            paths: vec![],
         };
-        check_svg(
-            &empty,
-            "empty.svg",
-            &["empty &amp; &lt;odd&gt;", "no samples", "no conserved quantity", "no coordinates"],
-        );
+        let svg = check_svg(&empty, "empty.svg", &["empty &amp; &lt;odd&gt;", "no samples", "no coordinates"]);
+        assert!(!svg.contains("Drift"), "a drift panel without conserved quantities");
 
         let single = PlotData {
             title: "one sample".to_string(),
@@ -783,6 +993,7 @@ pub(crate) mod tests {
             coordinates: vec![series("x", vec![1.0])],
             velocities: vec![series("x'", vec![0.0])],
             invariants: vec![series("E", vec![3.0])],
+            paths: vec![Path { name: "particle 1".into(), x: vec![1.0], y: vec![2.0] }],
         };
         check_svg(&single, "single.svg", &["one sample", "Phase portrait of x"]);
 
@@ -803,8 +1014,11 @@ pub(crate) mod tests {
             coordinates: (0..50).map(|idx| series(&format!("q{idx}"), (0..n).map(bad).collect())).collect(),
             velocities: vec![series("q0'", vec![2.0; n])],
             invariants: vec![series("E", vec![5.0; n]), series("L", vec![f64::NAN; 3])],
+            paths: (0..12)
+                .map(|idx| Path { name: format!("particle {idx}"), x: (0..n).map(bad).collect(), y: vec![1.0; n] })
+                .collect(),
         };
-        check_svg(&many, "many.svg", &["first 8 of 50", "Phase portrait of q0 (first of 50)"]);
+        check_svg(&many, "many.svg", &["first 8 of 50", "Phase portrait of q0 (first of 50)", "first 8 of 12"]);
 
         let huge = PlotData {
             title: "extremes".to_string(),
@@ -813,6 +1027,7 @@ pub(crate) mod tests {
             coordinates: vec![series("x", vec![-f64::MAX, 0.0, f64::MAX])],
             velocities: vec![series("x'", vec![5e-324, 0.0, 1e-323])],
             invariants: vec![series("E", vec![1.0, f64::MAX, -f64::MAX]), series("P", vec![0.0, 1e-300, 0.0])],
+            paths: vec![Path { name: "far".into(), x: vec![-f64::MAX, 0.0, f64::MAX], y: vec![0.0, 1e-300, f64::NAN] }],
         };
         check_svg(&huge, "huge.svg", &["extremes"]);
     }
@@ -827,7 +1042,54 @@ pub(crate) mod tests {
         assert!(kept.len() <= MAX_POINTS + 2, "{} points kept", kept.len());
         assert!(kept.contains(&31_337) && kept.contains(&70_000) && kept.contains(&(n - 1)));
         let time: Vec<f64> = (0..n).map(|idx| idx as f64).collect();
-        assert_eq!(time_segments(&time, &values).len(), 2);
+        assert_eq!(time_segments(&time, &series("x", values)).len(), 2);
+    }
+
+    /// An angle that swings and then goes over the top again and again, both ways, also decimated.
+    #[test]
+    fn wrapped_angles_have_no_jump_within_a_line() {
+        for n in [500, 3000, 50_000] {
+            let time: Vec<f64> = (0..n).map(|idx| 60.0 * idx as f64 / (n - 1) as f64).collect();
+            let spin: Vec<f64> = time.iter().map(|t| 1.1 * t + 2.5 * (0.4 * t).sin() - 0.02 * t * t).collect();
+            let rate: Vec<f64> = time.iter().map(|t| 1.1 + (0.4 * t).cos() - 0.04 * t).collect();
+            let (q, v) = (Series { angle: true, ..series("ph", spin.clone()) }, series("ph'", rate));
+            let (lines, phase) = (time_segments(&time, &q), phase_segments(&q, &v));
+            let jumps = |segments: &[Vec<(f64, f64)>], of: fn(&(f64, f64)) -> f64| {
+                segments
+                    .iter()
+                    .flat_map(|s| s.windows(2).map(move |w| (of(&w[1]) - of(&w[0])).abs()))
+                    .fold(0.0, f64::max)
+            };
+            assert!(jumps(&lines, |p| p.1) <= PI, "{n} samples: a jump of {} in a line", jumps(&lines, |p| p.1));
+            assert!(jumps(&phase, |p| p.0) <= PI, "{n} samples: a jump in a phase curve");
+            for (t, a) in lines.iter().flatten() {
+                assert!(-PI <= *a && *a <= PI, "{a} at t = {t} not wrapped");
+            }
+            // It crosses ±π many times: as many breaks, each line ending on the edge it leaves by.
+            let turns = spin.windows(2).filter(|w| turn(w[0]) != turn(w[1])).count();
+            assert!(turns > 5 && lines.len() == turns + 1, "{n}: {} lines for {turns} turns", lines.len());
+            for pair in lines.windows(2) {
+                let (end, start) = (pair[0].last().unwrap(), pair[1][0]);
+                assert!(end.1.abs() == PI && start.1 == -end.1 && end.0 == start.0, "{end:?} then {start:?}");
+            }
+            // Drawn unwrapped, the same data is one line.
+            assert_eq!(time_segments(&time, &series("ph", spin)).len(), 1);
+        }
+        assert_eq!((wrap(PI), wrap(-PI), wrap(3.0 * PI), wrap(7.0)), (PI, PI, PI, 7.0 - TAU));
+    }
+
+    /// Paths at equal scale: a unit of x is as long on the page as a unit of y.
+    #[test]
+    fn paths_are_drawn_at_equal_scale() {
+        let size = (px(500), px(380));
+        for (x, y) in [((-2.0, 2.0), (-2.0, 0.0)), ((0.0, 1.0), (-30.0, 30.0)), ((5.0, 5.0), (1.0, 1.0))] {
+            let (x_axis, y_axis) = equal_scale(x, y, size, px(60));
+            let width = f64::from(size.0 - px(60 + PATH_MARGIN + PATH_MARGIN_RIGHT));
+            let height = f64::from(size.1 - px(2 * PATH_MARGIN + PATH_X_LABELS));
+            let (sx, sy) = ((x_axis.hi - x_axis.lo) / width, (y_axis.hi - y_axis.lo) / height);
+            assert!((sx / sy - 1.0).abs() < 1e-9, "{x:?} {y:?}: scales {sx} and {sy}");
+            assert!(x_axis.lo <= x.0 && x.1 <= x_axis.hi && y_axis.lo <= y.0 && y.1 <= y_axis.hi);
+        }
     }
 
     #[test]
