@@ -174,7 +174,7 @@ impl Derived {
         let mut events: Vec<(usize, String)> = Vec::new();
         let mut interrupt: Option<PyErr> = None;
         let mut first_row: Option<f64> = None;
-        let mut plot = view::plot::PlotKeeper::new(names.len());
+        let mut plot = view::plot::PlotKeeper::of(d);
         let result = py.detach(|| {
             let mut polled = Instant::now();
             mech::simulate(d, &config, |row| {
