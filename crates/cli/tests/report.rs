@@ -100,6 +100,12 @@ fn a_long_run_stays_under_two_megabytes_and_keeps_its_turning_points() {
     let turns = qd.windows(2).filter(|w| w[0].signum() != w[1].signum()).count();
     // Period 2.0 s at ph = 1 rad with l = 1: a turning point a second, about 1000 in all.
     assert!(turns > 900, "{turns} turning points shown");
+    // Fifty masses and their fifty modes, 10⁵ rows.
+    let page = scratch("report", "long_chain.html");
+    let r =
+        ok(&["report", "examples/chain50.toml", "--until", "100", "--samples", "100000", "-o", page.to_str().unwrap()]);
+    let size = std::fs::metadata(&page).unwrap().len();
+    assert!(size < 2_000_000, "{size} bytes: {}", r.stdout);
 }
 
 #[test]

@@ -18,14 +18,14 @@ use serde_json::{json, Map, Value};
 /// most twice that with the rows that matter.
 const NUMBER_BUDGET: usize = 40_000;
 /// Rows kept at least and at most, before the rows that matter are added.
-const MIN_ROWS: usize = 200;
+const MIN_ROWS: usize = 120;
 const MAX_ROWS: usize = 4000;
 /// Frames of one period of a mode's animation, at most and at least: fewer
 /// where the modes are many and the points too (the numbers of all frames of
 /// all modes stay within `MODE_NUMBERS`).
 const MODE_FRAMES: usize = 64;
 const MIN_MODE_FRAMES: usize = 16;
-const MODE_NUMBERS: usize = 40_000;
+const MODE_NUMBERS: usize = 24_000;
 /// The most modes animated (the lowest frequencies; the data lists them all).
 const MAX_ANIMATED_MODES: usize = 12;
 
