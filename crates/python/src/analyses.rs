@@ -5,7 +5,7 @@
 //! `--animate`) as SVG text where the analysis has one.
 
 use crate::errors::{self, guarded, Place};
-use crate::model::Derived;
+use crate::model::{overrides, Derived};
 use mech::{ModeKind, ModesError, OrbitError, TopError};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
@@ -24,19 +24,13 @@ fn source(py: Python<'_>, path: Option<PathBuf>, text: Option<String>, what: &st
     match (path, text) {
         (Some(p), None) => {
             let name = p.display().to_string();
-            let text = std::fs::read_to_string(&p)
+            let text = crate::model::read_text(&p)
                 .map_err(|e| errors::plain_error(py, &name, &format!("cannot read the {what}: {e}"), None))?;
             Ok((name, text))
         }
         (None, Some(t)) => Ok(("<string>".into(), t)),
         _ => Err(errors::plain_error(py, what, &format!("give the {what} as a path or as text, not both"), None)),
     }
-}
-
-fn overrides(set: Option<HashMap<String, f64>>) -> Vec<(String, f64)> {
-    let mut v: Vec<(String, f64)> = set.unwrap_or_default().into_iter().collect();
-    v.sort_by(|a, b| a.0.cmp(&b.0));
-    v
 }
 
 impl Derived {

@@ -133,7 +133,6 @@ impl Derived {
             tape.eval(&row, &mut one);
             out[i] = one[0];
         }
-        let bytes: Vec<u8> = out.iter().flat_map(|v| v.to_le_bytes()).collect();
-        Ok(PyBytes::new(py, &bytes))
+        Ok(crate::f64_bytes(py, out))
     }
 }

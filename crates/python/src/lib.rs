@@ -18,11 +18,19 @@ mod expr;
 mod model;
 mod rhs;
 mod run;
+mod signals;
 mod sweep;
 
 /// How the text outputs name the settings a Python user gives.
 pub const TERMS: view::Terms =
     view::Terms { step: "dt", start_at: "at", full_output: "the report's fields", animation: "animate()" };
+
+/// Numbers as little-endian f64 bytes, which the Python side views with
+/// `numpy.frombuffer` without a copy.
+pub fn f64_bytes<'py>(py: Python<'py>, values: impl IntoIterator<Item = f64>) -> Bound<'py, pyo3::types::PyBytes> {
+    let bytes: Vec<u8> = values.into_iter().flat_map(f64::to_le_bytes).collect();
+    pyo3::types::PyBytes::new(py, &bytes)
+}
 
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -32,14 +32,14 @@ impl Derived {
 }
 
 /// Parameter overrides in the model's terms.
-fn overrides(set: Option<HashMap<String, f64>>) -> Vec<(String, f64)> {
+pub(crate) fn overrides(set: Option<HashMap<String, f64>>) -> Vec<(String, f64)> {
     let mut v: Vec<(String, f64)> = set.unwrap_or_default().into_iter().collect();
     v.sort_by(|a, b| a.0.cmp(&b.0));
     v
 }
 
 /// Reads a file the model names (a body file), at most the library's file size.
-fn read_text(path: &Path) -> Result<String, String> {
+pub(crate) fn read_text(path: &Path) -> Result<String, String> {
     let meta = std::fs::metadata(path).map_err(|e| format!("{}: {e}", path.display()))?;
     if meta.len() > mech::MAX_FILE_BYTES as u64 {
         return Err(format!("{}: larger than {} bytes", path.display(), mech::MAX_FILE_BYTES));

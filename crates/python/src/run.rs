@@ -8,15 +8,13 @@
 
 use crate::errors::{self, guarded};
 use crate::model::Derived;
+use crate::signals::Signals;
 use mech::{BudgetAdvice, RunConfig, RunError, StepBudget, StopCondition};
 use num::{Method, Output};
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyDict};
+use pyo3::types::PyDict;
 use std::ops::ControlFlow;
-use std::time::{Duration, Instant};
-
-/// How often a run looks for a pending signal.
-const SIGNAL_POLL: Duration = Duration::from_millis(20);
+use std::time::Instant;
 
 /// The options of `simulate`, as Python passes them.
 #[derive(FromPyObject)]
@@ -176,15 +174,12 @@ impl Derived {
         let mut first_row: Option<f64> = None;
         let mut plot = view::plot::PlotKeeper::of(d);
         let result = py.detach(|| {
-            let mut polled = Instant::now();
+            let mut signals = Signals::new();
             mech::simulate(d, &config, |row| {
                 first_row.get_or_insert_with(|| started.elapsed().as_secs_f64());
-                if polled.elapsed() >= SIGNAL_POLL {
-                    polled = Instant::now();
-                    if let Err(e) = Python::attach(|py| py.check_signals()) {
-                        interrupt = Some(e);
-                        return ControlFlow::Break(());
-                    }
+                if let Err(e) = signals.check() {
+                    interrupt = Some(e);
+                    return ControlFlow::Break(());
                 }
                 if let Some(label) = row.event {
                     events.push((data.len() / width, label.to_string()));
@@ -226,8 +221,7 @@ impl Derived {
         let out = PyDict::new(py);
         out.set_item("columns", columns)?;
         out.set_item("rows", data.len() / width)?;
-        let bytes: Vec<u8> = data.iter().flat_map(|v| v.to_le_bytes()).collect();
-        out.set_item("data", PyBytes::new(py, &bytes))?;
+        out.set_item("data", crate::f64_bytes(py, data))?;
         out.set_item("events", events)?;
         out.set_item("summary", summary.to_string())?;
         out.set_item("summary_text", text)?;

@@ -8,15 +8,12 @@
 
 use crate::errors::{self, guarded};
 use crate::model::Derived;
+use crate::signals::Signals;
 use mech::{Grid, Shard, Sweep, SweepConfig, SweepError, SweepTable};
 use num::Method;
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyDict};
+use pyo3::types::PyDict;
 use std::ops::ControlFlow;
-use std::time::{Duration, Instant};
-
-/// How often a sweep looks for a pending signal.
-const SIGNAL_POLL: Duration = Duration::from_millis(20);
 
 /// The options of a sweep, as Python passes them.
 #[derive(FromPyObject)]
@@ -92,15 +89,12 @@ impl Derived {
             let mut csv = sweep.header().to_csv();
             let mut interrupt: Option<PyErr> = None;
             let result = py.detach(|| {
-                let mut polled = Instant::now();
+                let mut signals = Signals::new();
                 sweep.run(0, &|| {}, &|| false, |row| {
                     row.write_csv(&mut csv);
-                    if polled.elapsed() >= SIGNAL_POLL {
-                        polled = Instant::now();
-                        if let Err(e) = Python::attach(|py| py.check_signals()) {
-                            interrupt = Some(e);
-                            return ControlFlow::Break(());
-                        }
+                    if let Err(e) = signals.check() {
+                        interrupt = Some(e);
+                        return ControlFlow::Break(());
                     }
                     ControlFlow::Continue(())
                 })
@@ -140,8 +134,7 @@ pub fn table<'py>(py: Python<'py>, csv: &str, name: &str) -> PyResult<Bound<'py,
         out.set_item("meta", table.header.meta.clone())?;
         out.set_item("columns", columns[1..columns.len() - 1].to_vec())?;
         out.set_item("runs", table.rows.iter().map(|r| r.run).collect::<Vec<_>>())?;
-        let bytes: Vec<u8> = table.rows.iter().flat_map(|r| r.values.iter().flat_map(|v| v.to_le_bytes())).collect();
-        out.set_item("data", PyBytes::new(py, &bytes))?;
+        out.set_item("data", crate::f64_bytes(py, table.rows.iter().flat_map(|r| r.values.iter().copied())))?;
         out.set_item("failures", table.rows.iter().map(|r| r.failure.clone()).collect::<Vec<_>>())?;
         Ok(out)
     })
