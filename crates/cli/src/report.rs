@@ -4,8 +4,7 @@
 //! module runs the model, keeps its rows and writes the file.
 
 use crate::diagnostics::Failure;
-use mech::{RunConfig, RunError};
-use num::{Method, Output};
+use mech::RunError;
 use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -42,28 +41,16 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let path = &args.model;
     let (source, d) = crate::derive_file(path, &args.set)?;
     let derived = started.elapsed().as_secs_f64();
-    let method = match &args.method {
-        None => None,
-        Some(name) => Some(name.parse::<Method>().map_err(|e| Failure::input(path, e.to_string()))?),
-    };
-    if let Some(r) = args.rtol {
-        if !(r.is_finite() && r > 0.0) {
-            return Err(Failure::usage(format!("--rtol must be a positive number, not {r}")));
-        }
-    }
-    if args.samples < 2 {
-        return Err(Failure::usage("--samples needs at least 2 rows (both ends)"));
-    }
-    let defaults = RunConfig::default();
-    let rtol = args.rtol.unwrap_or(defaults.rtol);
-    let config = RunConfig {
+    let settings = crate::simulate::RunSettings {
         until: args.until,
-        method,
-        rtol,
-        atol: if args.rtol.is_some() { rtol * 1e-3 } else { defaults.atol },
-        output: Output::Samples(args.samples),
-        ..defaults
+        method: args.method.as_deref(),
+        rtol: args.rtol,
+        atol: None,
+        dt: None,
+        samples: Some(args.samples),
+        every_step: false,
     };
+    let config = crate::simulate::run_config(path, &settings)?;
     config.check().map_err(|e| crate::simulate::input_failure(path, &source, e))?;
 
     let mut rows = view::report::Recorder::new();

@@ -60,48 +60,23 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     let derived = started.elapsed().as_secs_f64();
     let mut first_row: Option<f64> = None;
 
-    let method = match &opts.method {
-        None => None,
-        Some(name) => Some(name.parse::<Method>().map_err(|e| Failure::input(path, e.to_string()))?),
-    };
-    for (name, v) in [("--rtol", opts.rtol), ("--atol", opts.atol), ("--dt", opts.dt)] {
-        if let Some(v) = v {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(Failure::usage(format!("{name} must be a positive number, not {v}")));
-            }
-        }
-    }
     let Some(until) = opts.until else { return Err(Failure::usage("simulate needs --until T")) };
-    let mut stop_when = Vec::new();
-    for text in &opts.stop_when {
-        stop_when.push(parse_stop(&derivation, text, "--stop-when")?);
-    }
-    let mut crossings = Vec::new();
-    for text in &opts.crossing {
-        crossings.push(parse_stop(&derivation, text, "--crossing")?);
-    }
-    let defaults = RunConfig::default();
-    let rtol = opts.rtol.unwrap_or(defaults.rtol);
-    let config = RunConfig {
+    let settings = RunSettings {
         until,
-        method,
-        rtol,
-        atol: opts.atol.unwrap_or(if opts.rtol.is_some() { rtol * 1e-3 } else { defaults.atol }),
+        method: opts.method.as_deref(),
+        rtol: opts.rtol,
+        atol: opts.atol,
         dt: opts.dt,
-        output: if opts.every_step {
-            Output::EveryStep
-        } else {
-            match opts.samples {
-                Some(n) if n < 2 => return Err(Failure::usage("--samples needs at least 2 rows (both ends)")),
-                Some(n) => Output::Samples(n),
-                None => defaults.output,
-            }
-        },
-        stop_when,
-        crossings,
-        max_steps: defaults.max_steps,
-        initial: Vec::new(),
+        samples: opts.samples,
+        every_step: opts.every_step,
     };
+    let mut config = run_config(path, &settings)?;
+    for text in &opts.stop_when {
+        config.stop_when.push(parse_stop(&derivation, text, "--stop-when")?);
+    }
+    for text in &opts.crossing {
+        config.crossings.push(parse_stop(&derivation, text, "--crossing")?);
+    }
 
     // Bad settings are reported before any file is created.
     config.check().map_err(|e| input_failure(path, &source, e))?;
@@ -299,6 +274,50 @@ impl PendingCsv {
         let _held = interrupt::gate();
         RowWriter::start(self.file, 0, self.header.as_bytes())
     }
+}
+
+/// The run settings `simulate` and `report` take from the command line.
+pub(crate) struct RunSettings<'a> {
+    pub until: f64,
+    pub method: Option<&'a str>,
+    pub rtol: Option<f64>,
+    pub atol: Option<f64>,
+    pub dt: Option<f64>,
+    pub samples: Option<usize>,
+    pub every_step: bool,
+}
+
+/// The settings checked and made a run's configuration (no stop conditions):
+/// atol defaults to rtol/1000 when only --rtol is given.
+pub(crate) fn run_config(path: &Path, s: &RunSettings<'_>) -> Result<RunConfig, Failure> {
+    let method = match s.method {
+        None => None,
+        Some(name) => Some(name.parse::<Method>().map_err(|e| Failure::input(path, e.to_string()))?),
+    };
+    for (name, v) in [("--rtol", s.rtol), ("--atol", s.atol), ("--dt", s.dt)] {
+        if let Some(v) = v {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Failure::usage(format!("{name} must be a positive number, not {v}")));
+            }
+        }
+    }
+    let defaults = RunConfig::default();
+    let output = match (s.every_step, s.samples) {
+        (true, _) => Output::EveryStep,
+        (false, Some(n)) if n < 2 => return Err(Failure::usage("--samples needs at least 2 rows (both ends)")),
+        (false, Some(n)) => Output::Samples(n),
+        (false, None) => defaults.output,
+    };
+    let rtol = s.rtol.unwrap_or(defaults.rtol);
+    Ok(RunConfig {
+        until: s.until,
+        method,
+        rtol,
+        atol: s.atol.unwrap_or(if s.rtol.is_some() { rtol * 1e-3 } else { defaults.atol }),
+        dt: s.dt,
+        output,
+        ..defaults
+    })
 }
 
 /// A run that could not start, in the CLI's terms (exit 2).
