@@ -174,6 +174,8 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     };
 
     let n_runs = sweep.len();
+    // Compiled before the clock starts: the summary reports it apart.
+    let code = sweep.code();
     let progress = progress_bar(n_runs as u64, skip as u64);
     let start = Instant::now();
     let tick = || {
@@ -245,6 +247,9 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         config.rtol,
         tally.failed,
     );
+    if let Some(code) = code {
+        eprintln!("{code}");
+    }
     Ok(())
 }
 

@@ -102,6 +102,7 @@ pub use report::{BodyReport, ConstraintReport, DeriveReport, HamiltonEquations, 
 pub use run::body::BodyRecorder;
 pub use run::constrained::{constraint_columns, ConstraintAudit};
 pub use run::dynamics::{invariants_of, Dynamics, Form, Invariant, System};
+pub use run::series::SeriesCode;
 pub use run::{
     approx, row_columns, simulate, Audit, BudgetAdvice, BudgetStage, Row, RunConfig, RunError, RunFailure, RunReport,
     StepBudget, StopCondition, TimeScale, MAX_SAMPLES, STEPS_PER_TIME_SCALE,

@@ -67,11 +67,12 @@ use crate::run::body::GimbalGuard;
 use crate::run::choose_method;
 use crate::run::dynamics::{Dynamics, Form, System};
 use crate::run::ensemble::{propagate, Batch, LANES};
-use crate::run::series::LagrangeSeries;
+use crate::run::series::{LagrangeSeries, SeriesCode};
 use num::{integrate, integrate_to, Config, Method, Output, SolveError, Solver, StopReason};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::ops::ControlFlow;
+use std::sync::OnceLock;
 use std::thread;
 use sym::Lanes;
 
@@ -654,6 +655,8 @@ pub struct Sweep<'a> {
     /// Rigid bodies: one gimbal guard per body.
     guards: Vec<GimbalGuard>,
     header: SweepHeader,
+    /// The lock-step batches' series ([`Sweep::batched`]).
+    batched: OnceLock<Option<LagrangeSeries<LANES>>>,
 }
 
 impl<'a> Sweep<'a> {
@@ -681,7 +684,28 @@ impl<'a> Sweep<'a> {
         // there (as `simulate` does) instead of integrating garbage.
         let guards = crate::run::body::gimbal_guards(d, config.rtol);
         let header = header(d, grid, config, method, dynamics.coordinate_names());
-        Ok(Sweep { d, grid, config, dynamics, method, form, base, guards, header })
+        Ok(Sweep { d, grid, config, dynamics, method, form, base, guards, header, batched: OnceLock::new() })
+    }
+
+    /// The series of the lock-step batches, compiled on first use (None when
+    /// the runs go one at a time).
+    fn batched(&self) -> Option<&LagrangeSeries<LANES>> {
+        self.batched
+            .get_or_init(|| {
+                // The Taylor method on smooth Lagrange-form models runs batches of
+                // trajectories in lock step (`run/ensemble.rs`); its code is compiled once here.
+                (self.method == Method::Taylor && self.form == Form::Lagrange && self.guards.is_empty())
+                    .then(|| self.dynamics.lagrange_series::<LANES>(num::taylor_order(self.config.rtol)))
+            })
+            .as_ref()
+    }
+
+    /// Compiles the code the runs will use, if they share compiled code (the
+    /// Taylor method's lock-step batches), and says which and what it cost;
+    /// [`run`](Self::run) compiles it otherwise. The code does not change a
+    /// row: C, cranelift and the interpreter give the same numbers, bit for bit.
+    pub fn code(&self) -> Option<SeriesCode> {
+        self.batched().map(|s| s.made().clone())
     }
 
     /// The provenance and columns of the sweep's CSV.
@@ -742,11 +766,7 @@ impl<'a> Sweep<'a> {
         };
         let jobs_of = |job: usize, per_job: usize| job * per_job..((job + 1) * per_job).min(remaining);
 
-        // The Taylor method on smooth Lagrange-form models runs batches of
-        // trajectories in lock step (`run/ensemble.rs`); its code is compiled once here.
-        let batched = (self.method == Method::Taylor && self.form == Form::Lagrange && self.guards.is_empty())
-            .then(|| self.dynamics.lagrange_series::<LANES>(num::taylor_order(config.rtol)));
-        let end = if let Some(series) = &batched {
+        let end = if let Some(series) = self.batched() {
             // Jobs of up to 8 lanes' worth of runs (lanes take the next run as
             // theirs ends), at least 4 jobs per thread while there are runs enough.
             let slots = if config.lyapunov { LANES / 2 } else { LANES };

@@ -55,6 +55,7 @@ mod dopri5;
 mod error;
 mod gauss;
 mod integrate;
+pub mod lanes;
 mod linalg;
 mod method;
 mod newton;

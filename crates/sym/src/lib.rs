@@ -15,6 +15,7 @@
 //! assert_eq!(pool.display(p_q).to_string(), "l^2*m*q'");
 //! ```
 
+mod cc;
 mod diff;
 mod eval;
 mod expr;
@@ -25,12 +26,14 @@ mod print;
 mod rational;
 mod simplify;
 mod taylor;
+mod taylor_c;
 mod taylor_jit;
 
+pub use cc::{compiler as c_compiler, CBuild, CcError};
 pub use eval::{EvalError, Tape};
 pub use expr::{ExprId, Func, NameId, Node, Pool, Symbol};
 pub use jit::{Compiled, JitError};
 pub use number::{Number, Rational};
 pub use parse::{Limits, ParseError, ParseErrorKind, ParseOptions, Span};
 pub use print::{PrintMode, PrintOptions, Printed};
-pub use taylor::{ClosedFormInverse, Lanes, LinearSecondOrder, TaylorTape};
+pub use taylor::{ClosedFormInverse, Lanes, LinearSecondOrder, TaylorCode, TaylorTape};

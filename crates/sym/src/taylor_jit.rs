@@ -27,10 +27,12 @@
 // `NativeTaylor::new` and the call in `NativeTaylor::run`.
 #![allow(unsafe_code)]
 
+use crate::cc::{self, CBuild, CLibrary, CcError};
 use crate::expr::Func;
 use crate::jit::shared::{compile_shared, compile_shared_then, Part};
 use crate::jit::{codegen, define_function, offset, unary, Codegen, Imports, JitError, ATAN2, POWF};
 use crate::taylor::{TaylorTape, T};
+use crate::taylor_c;
 use cranelift_codegen::ir::{condcodes::FloatCC, types, AbiParam, InstBuilder, MemFlagsData, Signature, Value};
 use cranelift_frontend::FunctionBuilder;
 use cranelift_jit::JITModule;
@@ -46,6 +48,9 @@ type OrderFn = unsafe extern "C" fn(coef: *mut f64, series: *mut f64);
 pub(crate) struct NativeTaylor {
     /// Own the code the functions point into; taken only in `Drop`.
     modules: Mutex<Vec<JITModule>>,
+    /// Or the C library that holds it (`taylor_c.rs`); dropped after the
+    /// functions, as fields drop in order.
+    library: Option<CLibrary>,
     funcs: Vec<OrderFn>,
     /// The length of the coefficient buffer the functions address.
     len: usize,
@@ -785,7 +790,40 @@ impl NativeTaylor {
             modules.push(module);
         }
         let funcs = funcs.into_iter().map(|f| f.expect("compile_shared compiles every function")).collect();
-        NativeTaylor { modules: Mutex::new(modules), funcs, len, series_len }
+        NativeTaylor { modules: Mutex::new(modules), library: None, funcs, len, series_len }
+    }
+
+    /// The whole expansion of a second-order system, like
+    /// [`second_order`](Self::second_order), compiled by the system C
+    /// compiler at the machine's vector width (`cc.rs`, `taylor_c.rs`).
+    pub(crate) fn second_order_c<const L: usize>(
+        program: &[(u32, T)],
+        order: usize,
+        layout: &SecondOrderLayout,
+        buffer_len: usize,
+    ) -> Result<NativeTaylor, CcError> {
+        let source = taylor_c::second_order::<L>(program, order, layout, host_has_fma());
+        let series_len = (order + 1) * 2 * layout.n * L;
+        NativeTaylor::from_c(&source, buffer_len, series_len)
+    }
+
+    /// Every order of `tape`, like [`new`](Self::new), compiled by the system
+    /// C compiler.
+    pub(crate) fn orders_c<const L: usize>(tape: &TaylorTape<L>) -> Result<NativeTaylor, CcError> {
+        let source = taylor_c::orders(tape, host_has_fma());
+        NativeTaylor::from_c(&source, tape.buffer_len(), 0)
+    }
+
+    fn from_c(source: &taylor_c::CSource, len: usize, series_len: usize) -> Result<NativeTaylor, CcError> {
+        let files = std::thread::available_parallelism().map_or(1, |n| n.get()).min(4);
+        let library = cc::build(&source.files(files))?;
+        let funcs = (0..source.parts.len()).map(|i| library.get(&taylor_c::part_name(i))).collect::<Result<_, _>>()?;
+        Ok(NativeTaylor { modules: Mutex::new(Vec::new()), library: Some(library), funcs, len, series_len })
+    }
+
+    /// How the code was built: by the C compiler (and how), or by cranelift (None).
+    pub(crate) fn c_build(&self) -> Option<&CBuild> {
+        self.library.as_ref().map(|l| &l.build)
     }
 
     /// Runs the function of order `k` on the coefficient buffer (the tape's

@@ -11,6 +11,7 @@
 //! others go on.
 
 use crate::run::series::LagrangeSeries;
+use num::lanes::{self, Scan};
 use num::{taylor_advance, taylor_step, Config};
 use sym::Lanes;
 
@@ -77,23 +78,7 @@ pub(crate) fn propagate(
         // Per lane: the ratios of the last two orders to the state (component by
         // component, see `num::taylor_ratio`), and whether every coefficient is
         // finite (one pass over the series).
-        let floor = config.atol / config.rtol;
-        let ratio = |k: usize| {
-            let mut m = [0.0f64; LANES];
-            for (c, y) in scratch[k * dim..(k + 1) * dim].iter().zip(&scratch[..dim]) {
-                for l in 0..LANES {
-                    m[l] = m[l].max(c[l].abs() / y[l].abs().max(floor));
-                }
-            }
-            m
-        };
-        let mut finite = [true; LANES];
-        for c in scratch.iter() {
-            for l in 0..LANES {
-                finite[l] &= c[l].is_finite();
-            }
-        }
-        let (before_last, last) = (ratio(p - 1), ratio(p));
+        let Scan { before_last, last, finite } = lanes::scan(scratch, dim, p, config.atol / config.rtol);
         let mut h = [0.0; LANES];
         let mut lands_on_end = [false; LANES];
         for l in 0..LANES {
@@ -118,16 +103,7 @@ pub(crate) fn propagate(
             }
         }
         // Horner's rule on every lane (h = 0 leaves a lane where it is).
-        for i in 0..dim {
-            let mut acc = scratch[p * dim + i];
-            for k in (0..p).rev() {
-                let c = &scratch[k * dim + i];
-                for l in 0..LANES {
-                    acc[l] = acc[l] * h[l] + c[l];
-                }
-            }
-            batch.y[i] = acc;
-        }
+        lanes::horner(scratch, dim, p, &h, &mut batch.y);
         for l in 0..LANES {
             if h[l] > 0.0 {
                 batch.steps[l] += 1;

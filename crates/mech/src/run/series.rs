@@ -18,7 +18,8 @@
 
 use num::{LinearSolver, RhsError};
 use std::sync::Arc;
-use sym::{ClosedFormInverse, Lanes, LinearSecondOrder, Tape, TaylorTape};
+use std::time::Instant;
+use sym::{ClosedFormInverse, Lanes, LinearSecondOrder, Tape, TaylorCode, TaylorTape};
 
 /// Up to this many coordinates M[0]⁻¹ is formed explicitly.
 const EXPLICIT_INVERSE_MAX: usize = 6;
@@ -34,11 +35,58 @@ enum Inverse<const L: usize> {
     Lu(Vec<LinearSolver>),
 }
 
+/// Which code expands an ensemble's series, and what it cost to get
+/// ([`crate::Sweep::code`]): the numbers are the same whichever it is.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SeriesCode {
+    /// The code: the system C compiler's, cranelift's, or the interpreter.
+    pub code: TaylorCode,
+    /// Seconds spent compiling it (or finding it in the cache and loading it).
+    pub seconds: f64,
+    /// Why the system C compiler's code is not the one (None when it is, or
+    /// was not asked for).
+    pub not_c: Option<String>,
+    /// Trajectories per expansion.
+    pub lanes: usize,
+}
+
+impl std::fmt::Display for SeriesCode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let lanes = self.lanes;
+        match &self.code {
+            TaylorCode::C(b) if b.cached => write!(
+                f,
+                "the Taylor expansion for {lanes} lanes, compiled by {}, came from the cache ({}) in {:.3} s",
+                b.compiler.display(),
+                b.library.display(),
+                self.seconds
+            ),
+            TaylorCode::C(b) => write!(
+                f,
+                "the Taylor expansion for {lanes} lanes was compiled by {} in {:.2} s (cached in {} for the next run)",
+                b.compiler.display(),
+                self.seconds,
+                b.library.display()
+            ),
+            TaylorCode::Cranelift => {
+                write!(f, "the Taylor expansion for {lanes} lanes was compiled by cranelift in {:.2} s", self.seconds)
+            }
+            TaylorCode::Interpreted => write!(f, "the Taylor expansion for {lanes} lanes is interpreted"),
+        }?;
+        match &self.not_c {
+            Some(why) => write!(f, "; not by the C compiler: {why}"),
+            None => Ok(()),
+        }
+    }
+}
+
 /// The Taylor expansion of a Lagrange-form system. See the module documentation.
 #[derive(Debug, Clone)]
 pub(crate) struct LagrangeSeries<const L: usize> {
     n: usize,
     tape: TaylorTape<L>,
+    /// How the expansion was compiled.
+    made: SeriesCode,
     /// `(row, column)` of M's stored entries; the tape outputs them first, then f.
     entries: Arc<Vec<(usize, usize)>>,
     /// The stored entries of M that vary along a trajectory.
@@ -86,6 +134,8 @@ impl<const L: usize> LagrangeSeries<L> {
         } else {
             None
         };
+        let start = Instant::now();
+        let mut not_c = None;
         match closed_form {
             Some(inverse) => {
                 let system = LinearSecondOrder { dim: n, entries: &entries, inverse };
@@ -100,8 +150,17 @@ impl<const L: usize> LagrangeSeries<L> {
                         tape.clear_second_order();
                         let _ = tape.compile_native();
                     }
-                } else if !matches!(tape.compile_second_order(&system), Ok(true)) {
-                    let _ = tape.compile_native();
+                } else {
+                    // Many lanes: the system C compiler's code at the machine's
+                    // vector width, else cranelift's; too large for either, the
+                    // tape's orders.
+                    let c = tape.compile_second_order_c(&system);
+                    if let Err(e) = &c {
+                        not_c = Some(e.to_string());
+                    }
+                    if !matches!(c, Ok(true)) && !matches!(tape.compile_second_order(&system), Ok(true)) {
+                        let _ = tape.compile_native();
+                    }
                 }
             }
             None if native => {
@@ -109,6 +168,7 @@ impl<const L: usize> LagrangeSeries<L> {
             }
             None => {}
         }
+        let made = SeriesCode { code: tape.code(), seconds: start.elapsed().as_secs_f64(), not_c, lanes: L };
         let varying = (0..entries.len()).filter(|&e| !tape.output_is_constant(e)).collect();
         let input_at = (0..=2 * n).map(|i| tape.input_index(i)).collect();
         let output_at = (0..entries.len() + n).map(|i| tape.output_index(i)).collect();
@@ -122,6 +182,7 @@ impl<const L: usize> LagrangeSeries<L> {
         LagrangeSeries {
             n,
             tape,
+            made,
             entries,
             varying,
             input_at,
@@ -147,6 +208,11 @@ impl<const L: usize> LagrangeSeries<L> {
             (false, _, true) => "orders",
             (false, _, false) => "interpreted",
         }
+    }
+
+    /// How the expansion was compiled.
+    pub(crate) fn made(&self) -> &SeriesCode {
+        &self.made
     }
 
     /// The order of the expansion.

@@ -41,20 +41,20 @@ use cranelift_frontend::FunctionBuilder;
 pub(crate) const INLINE_MAX: f64 = 524_288.0 * std::f64::consts::FRAC_PI_2;
 
 /// 2/π (fdlibm `invpio2`).
-const INV_PIO2: f64 = f64::from_bits(0x3FE4_5F30_6DC9_C883);
+pub(crate) const INV_PIO2: f64 = f64::from_bits(0x3FE4_5F30_6DC9_C883);
 /// 1.5·2⁵²: adding and subtracting it rounds to an integer (|·| < 2⁵¹).
-const TO_INT: f64 = 6_755_399_441_055_744.0;
+pub(crate) const TO_INT: f64 = 6_755_399_441_055_744.0;
 /// π/2 = P1 + P2 + P3 + P3T to about 2⁻¹⁶⁰ (fdlibm `pio2_1`, `pio2_2`,
 /// `pio2_3`, `pio2_3t`); P1, P2, P3 have 31, 32 and 28 significant bits.
-const P1: f64 = f64::from_bits(0x3FF9_21FB_5440_0000);
-const P2: f64 = f64::from_bits(0x3DD0_B461_1A60_0000);
-const P3: f64 = f64::from_bits(0x3BA3_198A_2E00_0000);
-const P3T: f64 = f64::from_bits(0x397B_839A_2520_49C1);
+pub(crate) const P1: f64 = f64::from_bits(0x3FF9_21FB_5440_0000);
+pub(crate) const P2: f64 = f64::from_bits(0x3DD0_B461_1A60_0000);
+pub(crate) const P3: f64 = f64::from_bits(0x3BA3_198A_2E00_0000);
+pub(crate) const P3T: f64 = f64::from_bits(0x397B_839A_2520_49C1);
 
 // fdlibm's coefficients are quoted as published (21 digits).
 #[allow(clippy::excessive_precision)]
 /// `__kernel_sin`: sin(x) ≈ x + S1·x³ + … + S6·x¹³ on [−π/4, π/4].
-const S: [f64; 6] = [
+pub(crate) const S: [f64; 6] = [
     -1.666_666_666_666_663_243_48e-1,
     8.333_333_333_322_489_461_24e-3,
     -1.984_126_982_985_794_931_34e-4,
@@ -65,7 +65,7 @@ const S: [f64; 6] = [
 
 #[allow(clippy::excessive_precision)]
 /// `__kernel_cos`: cos(x) ≈ 1 − x²/2 + C1·x⁴ + … + C6·x¹⁴ on [−π/4, π/4].
-const C: [f64; 6] = [
+pub(crate) const C: [f64; 6] = [
     4.166_666_666_666_660_190_37e-2,
     -1.388_888_888_887_410_957_49e-3,
     2.480_158_728_947_672_941_78e-5,
@@ -75,9 +75,9 @@ const C: [f64; 6] = [
 ];
 
 /// `|x| < 0.3` in `__kernel_cos` (high word below 0x3FD33333): `qx = 0`.
-const COS_SMALL: f64 = f64::from_bits(0x3FD3_3333_0000_0000);
+pub(crate) const COS_SMALL: f64 = f64::from_bits(0x3FD3_3333_0000_0000);
 /// `|x| > 0.78125` in `__kernel_cos` (high word above 0x3FE90000): `qx = 0.28125`.
-const COS_LARGE: f64 = f64::from_bits(0x3FE9_0001_0000_0000);
+pub(crate) const COS_LARGE: f64 = f64::from_bits(0x3FE9_0001_0000_0000);
 
 /// Emits `(sin x, cos x)` for `|x| <` [`INLINE_MAX`] into the current block
 /// (straight-line code; the caller handles other `x`).
