@@ -4,7 +4,9 @@ the N-link pendulum and the spring chain, against SymPy and SymEngine), `simulat
 (model file to first step, one right-hand side, whole runs against SciPy's DOP853 and
 heyoka, and the chaos map), `default_method.py` (the default method against every other
 on six systems, the long horizon, and its robustness), `sweep_memory.py` (peak memory
-of sweeps of 10^4 and 10^6 runs against the 100 MB target) and `python_api.py` (the
+of sweeps of 10^4 and 10^6 runs against the 100 MB target), `ensemble.py` (the chaos
+map against heyoka's ensemble on one and two threads, the compile cold and warm) and
+`python_api.py` (the
 Python package against SymPy + SciPy: the whole call and `model.rhs()` in solve_ivp), one
 after the other on the same machine, each printing its tables and writing its JSON lines.
 
@@ -18,7 +20,7 @@ after the other on the same machine, each printing its tables and writing its JS
 Further options go to every script unchanged only where it knows them (`--no-install`,
 `--no-build` to all; `--binary` to all but python_api.py, which measures the installed
 package); each script has its own `--help`. Standard library only. Exits with the first
-non-zero exit code of the five (all always run).
+non-zero exit code of the six (all always run).
 """
 
 from __future__ import annotations
@@ -49,10 +51,12 @@ def main(argv=None) -> int:
         ["--repeats", "3", "--ensemble-grid", "0"] if args.quick else ["--repeats", "7"])
     default = [sys.executable, str(HERE / "default_method.py"), *shared] + (["--quick"] if args.quick else [])
     memory = [sys.executable, str(HERE / "sweep_memory.py"), *shared] + (["--sides", "100,300"] if args.quick else [])
+    ensemble = [sys.executable, str(HERE / "ensemble.py"), *shared] + (
+        ["--grid", "60", "--small", "40", "--repeats", "1"] if args.quick else [])
     python_flags = [flag for flag in shared if flag in ("--no-install", "--no-build")]
     python_api = [sys.executable, str(HERE / "python_api.py"), *python_flags, "--report"] + (["--quick"] if args.quick else [])
     status = 0
-    for command in (derive, simulate, default, memory, python_api):
+    for command in (derive, simulate, default, memory, ensemble, python_api):
         print(f"[all.py] {' '.join(command[1:])}", file=sys.stderr, flush=True)
         code = subprocess.run(command).returncode
         status = status or code
