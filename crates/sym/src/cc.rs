@@ -3,10 +3,10 @@
 //! source and machine, and loads it.
 //!
 //! Every machine that builds lagrange has a C compiler, since Rust links with
-//! one. Told `-march=native`, it vectorizes at the processor's full width,
-//! which cranelift cannot (128-bit vectors). Its cost is the compilation, a
-//! fraction of a second to a few seconds, which a large ensemble wins back
-//! many times and which the cache pays once per model and machine.
+//! one. Told `-march=native`, it writes vector code at the processor's full
+//! width, which cranelift cannot (128-bit vectors). Its cost is the
+//! compilation, a fraction of a second, which a large ensemble wins back many
+//! times and which the cache pays once per model and machine.
 //!
 //! Which compiler: `LAGRANGE_CC`, else `CC`, else `cc` on the `PATH`;
 //! `LAGRANGE_CC=off` turns the path off (the caller falls back to
@@ -22,7 +22,7 @@
 //! then renamed), so processes sharing the cache never see half a library.
 //!
 //! The flags keep the arithmetic the interpreter's: `-ffp-contract=off`
-//! (only the source's explicit `fma()` fuses), no fast-math.
+//! (only the source's explicit multiply-adds fuse), no fast-math.
 //! `-fno-math-errno` only lets `sqrt` be the instruction (it rounds
 //! correctly either way).
 
@@ -65,20 +65,11 @@ pub struct CBuild {
 }
 
 /// The flags every source is compiled with (before the output and input).
-const FLAGS: &[&str] = &[
-    "-O3",
-    "-march=native",
-    // x86-64: the full width of AVX-512 where there is one (compilers
-    // default to 256 bits there); one vector holds the eight lanes, which
-    // also halves the code the compiler works through.
-    #[cfg(target_arch = "x86_64")]
-    "-mprefer-vector-width=512",
-    "-ffp-contract=off",
-    "-fno-math-errno",
-    "-fopenmp-simd",
-    "-fno-semantic-interposition",
-    "-fPIC",
-];
+/// The source is written in vectors already (`taylor_c.rs`), so `-O1`
+/// serves: register allocation and common subexpressions are what the code
+/// needs, and `-O3` would take six times as long for the same speed.
+const FLAGS: &[&str] =
+    &["-O1", "-march=native", "-ffp-contract=off", "-fno-math-errno", "-fno-semantic-interposition", "-fPIC"];
 
 /// [`FLAGS`], then those of `LAGRANGE_CFLAGS` (split at white space).
 fn flags() -> Vec<String> {

@@ -1,23 +1,27 @@
 //! C source for a [`TaylorTape`]'s orders: the same functions as
-//! `taylor_jit.rs`, written for the system C compiler (`cc.rs`), which
-//! vectorizes them at the machine's full width.
+//! `taylor_jit.rs`, written for the system C compiler (`cc.rs`) in the
+//! machine's full vector width.
 //!
-//! Cranelift's vectors are 128 bits wide, two lanes per instruction; a C
-//! compiler told `-march=native` uses the widest the processor has (eight
-//! lanes per AVX-512 instruction). Each function here is the code of one
-//! order (with the coupling of a second-order expansion, as in
-//! `taylor_jit.rs`), written as loops over the lanes marked `omp simd`, so
-//! that the compiler turns one iteration into one vector instruction per
-//! operation and keeps the values of an order in registers.
+//! Cranelift's vectors are 128 bits wide, two lanes per instruction; the
+//! processor may have wider ones (four lanes per AVX2 instruction, eight per
+//! AVX-512 one). The source is written with GCC's vector extensions (which
+//! clang shares): every value is an `lg_v` of `LG_W` lanes, `LG_W` chosen by
+//! the preprocessor from what `-march=native` enables, and each order is one
+//! function over `LG_W` lanes, called for each group of `LG_W` of the `L`
+//! lanes. Written this way the compiler has nothing left to vectorize: it
+//! compiles the source at `-O1` (a sixth of the time `-O3` took on the same
+//! expansion written as `omp simd` loops over the lanes), and the code is as
+//! fast and as compact, one copy of each order's code for every lane group.
 //!
 //! The arithmetic is the interpreter's, operation for operation and in the same
 //! order: products are fused into multiply-adds exactly where the interpreter
-//! fuses them (`fma()`, where the host has FMA), every other operation is
+//! fuses them (`lg_vfma`, where the host has FMA), every other operation is
 //! rounded on its own (the source is compiled with contraction off), the
 //! elementary functions at order 0 are the C library's (the ones Rust's `f64`
-//! methods call), and sine and cosine are fdlibm's kernels as `jit/trig.rs`
-//! inlines them. So a run gives the same numbers, bit for bit, whichever of the
-//! interpreter, cranelift or the C compiler computed its steps.
+//! methods call, lane by lane), and sine and cosine are fdlibm's kernels as
+//! `jit/trig.rs` inlines them. So a run gives the same numbers, bit for bit,
+//! whichever of the interpreter, cranelift or the C compiler computed its
+//! steps.
 
 use crate::jit::trig;
 use crate::taylor::{TaylorTape, T};
@@ -109,62 +113,65 @@ fn lit(x: f64) -> String {
     }
 }
 
-/// Writes the source: one function at a time, one lane loop at a time, each
-/// value a `const double` temporary of the loop body.
+/// Writes the source: one function at a time, each value a `const lg_v`
+/// temporary (all `LG_W` lanes of a group at once), but for the library's
+/// functions, called lane by lane in a loop over the group.
 struct Writer {
     out: String,
     lanes: usize,
     stride: usize,
     fused: bool,
-    /// Temporaries made in the current loop body.
+    /// Temporaries made in the current function.
     temps: usize,
-    /// Whether a lane loop is open, and whether it is a vector loop.
-    open: Option<bool>,
+    /// Whether a loop over the lanes of the group is open.
+    scalar: bool,
     /// The functions written so far.
     parts: Vec<String>,
 }
 
 impl Writer {
     fn new(lanes: usize, stride: usize, fused: bool) -> Writer {
-        Writer { out: String::new(), lanes, stride, fused, temps: 0, open: None, parts: Vec::new() }
+        Writer { out: String::new(), lanes, stride, fused, temps: 0, scalar: false, parts: Vec::new() }
     }
 
     fn finish(mut self) -> CSource {
-        self.close();
-        CSource { prelude: prelude(), parts: self.parts }
+        self.vector();
+        CSource { prelude: prelude(self.lanes), parts: self.parts }
     }
 
+    /// Function `i`: `part{i}_w`, the order's code for one group of `LG_W`
+    /// lanes, and `part{i}`, which runs it on every group.
     fn function(&mut self, i: usize, body: impl FnOnce(&mut Writer)) {
         self.out.clear();
+        self.temps = 0;
+        let name = part_name(i);
         let _ = writeln!(
             self.out,
-            "\nLG_EXPORT void {}(double *restrict c, double *restrict s) {{\n    (void)s;",
-            part_name(i)
+            "\nstatic LG_NOINLINE void {name}_w(double *restrict c, double *restrict s) {{\n    (void)s;"
         );
         body(self);
-        self.close();
-        self.out.push_str("}\n");
+        self.vector();
+        let _ = writeln!(
+            self.out,
+            "}}\nLG_EXPORT void {name}(double *restrict c, double *restrict s) {{\n    \
+             for (int l = 0; l < LG_LANES; l += LG_W) {name}_w(c + l, s ? s + l : s);\n}}"
+        );
         self.parts.push(std::mem::take(&mut self.out));
     }
 
-    /// Opens a loop over the lanes (a vector loop unless `scalar`), or keeps
-    /// the open one when it is of the same kind.
-    fn lanes_loop(&mut self, vector: bool) {
-        if self.open == Some(vector) {
-            return;
+    /// Opens a loop over the lanes of the group, where there is none.
+    fn scalar(&mut self) {
+        if !self.scalar {
+            self.out.push_str("    for (int l = 0; l < LG_W; ++l) {\n");
+            self.scalar = true;
         }
-        self.close();
-        if vector {
-            self.out.push_str("    LG_SIMD\n");
-        }
-        let _ = writeln!(self.out, "    for (int l = 0; l < {}; ++l) {{", self.lanes);
-        self.open = Some(vector);
-        self.temps = 0;
     }
 
-    fn close(&mut self) {
-        if self.open.take().is_some() {
+    /// Closes the loop over the lanes, where one is open: back to vectors.
+    fn vector(&mut self) {
+        if self.scalar {
             self.out.push_str("    }\n");
+            self.scalar = false;
         }
     }
 
@@ -173,32 +180,55 @@ impl Writer {
         (slot as usize * self.stride + j) * self.lanes
     }
 
-    /// Where coefficient `j` of `slot` is, on lane `l`.
-    fn at(&self, slot: u32, j: usize) -> String {
-        format!("c[{}+l]", self.index(slot, j))
+    /// Coefficient `j` of `slot`: on lane `l` in a loop over the lanes, the
+    /// group's vector otherwise.
+    fn ld(&self, slot: u32, j: usize) -> String {
+        let i = self.index(slot, j);
+        if self.scalar {
+            format!("c[{i}+l]")
+        } else {
+            format!("LV({i})")
+        }
     }
 
-    fn ld(&self, slot: u32, j: usize) -> String {
-        self.at(slot, j)
+    /// The number `x` as a value of the current kind (a vector with every
+    /// lane `x`, outside a loop over the lanes).
+    fn splat(&self, x: &str) -> String {
+        if self.scalar {
+            x.to_string()
+        } else {
+            format!("LG_SPLAT({x})")
+        }
+    }
+
+    /// `-x`, by its sign bit.
+    fn neg(&self, x: &str) -> String {
+        if self.scalar {
+            format!("lg_neg({x})")
+        } else {
+            format!("lg_vneg({x})")
+        }
     }
 
     /// A new temporary holding `expr`.
     fn let_(&mut self, expr: impl AsRef<str>) -> String {
         let name = format!("t{}", self.temps);
         self.temps += 1;
-        let _ = writeln!(self.out, "        const double {name} = {};", expr.as_ref());
+        let (kind, indent) = if self.scalar { ("double", "        ") } else { ("lg_v", "    ") };
+        let _ = writeln!(self.out, "{indent}const {kind} {name} = {};", expr.as_ref());
         name
     }
 
     fn st(&mut self, slot: u32, j: usize, value: &str) {
-        let at = self.at(slot, j);
-        let _ = writeln!(self.out, "        {at} = {value};");
+        let at = self.ld(slot, j);
+        let indent = if self.scalar { "        " } else { "    " };
+        let _ = writeln!(self.out, "{indent}{at} = {value};");
     }
 
     /// `acc + x·y`, fused where the interpreter fuses (its `madd`).
     fn mul_add(&mut self, x: &str, y: &str, acc: &str) -> String {
         if self.fused {
-            self.let_(format!("fma({x}, {y}, {acc})"))
+            self.let_(format!("{}({x}, {y}, {acc})", self.fma()))
         } else {
             self.let_(format!("{acc} + {x} * {y}"))
         }
@@ -208,15 +238,25 @@ impl Writer {
     /// a multiply-add (fused where the interpreter fuses). `weighted`: the
     /// weight of term `j` is `j`.
     fn sum(&mut self, a: u32, b: u32, k: usize, js: std::ops::RangeInclusive<usize>, weighted: bool) -> String {
-        let fused = self.fused;
-        self.chain("0.0", a, b, k, js, move |x, y, acc, j| {
+        let fma = self.fused.then(|| self.fma());
+        let zero = self.splat("0.0");
+        self.chain(&zero, a, b, k, js, move |x, y, acc, j| {
             let x = if weighted { format!("{j} * {x}") } else { x.to_string() };
-            if fused {
-                format!("fma({x}, {y}, {acc})")
+            if let Some(fma) = fma {
+                format!("{fma}({x}, {y}, {acc})")
             } else {
                 format!("{acc} + {x} * {y}")
             }
         })
+    }
+
+    /// The fused multiply-add of the current kind of value.
+    fn fma(&self) -> &'static str {
+        if self.scalar {
+            "fma"
+        } else {
+            "lg_vfma"
+        }
     }
 
     /// `acc − Σ_{j ∈ js} a[j] · b[k−j]`, one rounding per operation.
@@ -255,7 +295,7 @@ impl Writer {
     }
 
     fn derived_pair(&mut self, du: u32, a: u32, b: u32, k: usize) -> (String, String) {
-        let (mut sa, mut sb) = ("0.0".to_string(), "0.0".to_string());
+        let (mut sa, mut sb) = (self.splat("0.0"), self.splat("0.0"));
         for j in 1..=k {
             let d = self.ld(du, j);
             let (x, y) = (self.ld(a, k - j), self.ld(b, k - j));
@@ -308,7 +348,11 @@ impl Writer {
         if matches!(op, T::CosOf | T::Aux) {
             return;
         }
-        self.lanes_loop(!Self::calls_library(op));
+        if Self::calls_library(op) {
+            self.scalar();
+        } else {
+            self.vector();
+        }
         let v = match op {
             T::CosOf | T::Aux => return,
             T::Add(a, b) | T::AddC(a, b) => self.let_(format!("{} + {}", self.ld(a, 0), self.ld(b, 0))),
@@ -319,35 +363,34 @@ impl Writer {
             T::Div(a, b) | T::DivVC(a, b) | T::DivCV(a, b) => {
                 self.let_(format!("{} / {}", self.ld(a, 0), self.ld(b, 0)))
             }
-            T::Neg(a) => self.let_(format!("lg_neg({})", self.ld(a, 0))),
+            T::Neg(a) => self.let_(self.neg(&self.ld(a, 0))),
             T::Square(a) => {
                 let x = self.let_(self.ld(a, 0));
                 self.let_(format!("{x} * {x}"))
             }
-            T::Sqrt(a) => self.let_(format!("sqrt({})", self.ld(a, 0))),
+            T::Sqrt(a) => self.let_(format!("lg_vsqrt({})", self.ld(a, 0))),
             T::PowC(a, e) => self.let_(format!("pow({}, {})", self.ld(a, 0), self.ld(e, 0))),
             T::Exp { u, .. } => self.let_(format!("exp({})", self.ld(u, 0))),
-            T::Deriv(_) => self.let_("0.0"),
+            T::Deriv(_) => self.let_(self.splat("0.0")),
             T::Log(a) => self.let_(format!("log({})", self.ld(a, 0))),
-            T::Abs(a) => self.let_(format!("fabs({})", self.ld(a, 0))),
+            T::Abs(a) => self.let_(format!("lg_vabs({})", self.ld(a, 0))),
             T::Sin { u, cos, .. } => {
                 let x = self.let_(self.ld(u, 0));
                 let (sn, cs) = (format!("t{}", self.temps), format!("t{}", self.temps + 1));
                 self.temps += 2;
-                let _ = writeln!(self.out, "        double {sn}, {cs};\n        lg_sin_cos({x}, &{sn}, &{cs});");
+                let _ = writeln!(self.out, "    lg_v {sn}, {cs};\n    lg_vsin_cos({x}, &{sn}, &{cs});");
                 self.st(w, 0, &sn);
                 self.st(cos, 0, &cs);
                 // Beyond the inline range (and for NaN), the library, as the
                 // interpreter calls it there.
-                self.close();
-                self.lanes_loop(false);
+                self.scalar();
                 let x = self.let_(self.ld(u, 0));
                 let _ = writeln!(
                     self.out,
                     "        if (!(fabs({x}) < {})) {{ {} = sin({x}); {} = cos({x}); }}",
                     lit(trig::INLINE_MAX),
-                    self.at(w, 0),
-                    self.at(cos, 0)
+                    self.ld(w, 0),
+                    self.ld(cos, 0)
                 );
                 return;
             }
@@ -400,7 +443,7 @@ impl Writer {
             T::CosOf | T::Aux => return,
             T::Add(a, b) => self.let_(format!("{} + {}", self.ld(a, k), self.ld(b, k))),
             T::Sub(a, b) => self.let_(format!("{} - {}", self.ld(a, k), self.ld(b, k))),
-            T::Neg(a) | T::SubCV(_, a) => self.let_(format!("lg_neg({})", self.ld(a, k))),
+            T::Neg(a) | T::SubCV(_, a) => self.let_(self.neg(&self.ld(a, k))),
             T::AddC(a, _) | T::SubVC(a, _) => self.let_(self.ld(a, k)),
             T::MulC(a, c) => self.let_(format!("{} * {}", self.ld(a, k), self.ld(c, 0))),
             T::DivVC(a, c) => self.let_(format!("{} / {}", self.ld(a, k), self.ld(c, 0))),
@@ -421,7 +464,7 @@ impl Writer {
                 self.let_(format!("{acc} / {}", self.ld(b, 0)))
             }
             T::DivCV(_, b) => {
-                let zero = self.let_("0.0");
+                let zero = self.let_(self.splat("0.0"));
                 let acc = self.sub_sum(zero, b, w, k, 1..=k);
                 self.let_(format!("{acc} / {}", self.ld(b, 0)))
             }
@@ -433,7 +476,7 @@ impl Writer {
             }
             T::PowC(a, e) => {
                 let alpha = self.let_(self.ld(e, 0));
-                let mut acc = self.let_("0.0");
+                let mut acc = self.let_(self.splat("0.0"));
                 for j in 0..k {
                     let ak = self.let_(format!("{alpha} * {}", lit((k - j) as f64)));
                     let coeff = self.let_(format!("{ak} - {}", lit(j as f64)));
@@ -453,7 +496,7 @@ impl Writer {
             }
             T::Sin { du, cos, .. } => {
                 let (sin, c) = self.derived_pair(du, cos, w, k);
-                let c = self.let_(format!("lg_neg({c})"));
+                let c = self.let_(self.neg(&c));
                 self.st(cos, k, &c);
                 sin
             }
@@ -472,7 +515,7 @@ impl Writer {
             }
             T::Asin { u, inner, root, sign } => {
                 let sq = self.self_product(u, k);
-                let i = self.let_(format!("lg_neg({sq})"));
+                let i = self.let_(self.neg(&sq));
                 self.st(inner, k, &i);
                 let acc = self.sub_sum(i, root, root, k, 1..=k - 1);
                 let den = self.let_(format!("2.0 * {}", self.ld(root, 0)));
@@ -486,7 +529,7 @@ impl Writer {
                 self.derivative_quotient(u, aux, w, k, 1.0)
             }
             T::Atan2 { y, x, aux } => {
-                let mut sq = self.let_("0.0");
+                let mut sq = self.let_(self.splat("0.0"));
                 for j in 0..=k {
                     let t = self.let_(format!("{} * {}", self.ld(x, j), self.ld(x, k - j)));
                     sq = self.let_(format!("{sq} + {t}"));
@@ -494,7 +537,7 @@ impl Writer {
                     sq = self.let_(format!("{sq} + {t}"));
                 }
                 self.st(aux, k, &sq);
-                let mut acc = self.let_("0.0");
+                let mut acc = self.let_(self.splat("0.0"));
                 for j in 0..k {
                     let p1 = self.let_(format!("{} * {}", self.ld(x, j), self.ld(y, k - j)));
                     let p2 = self.let_(format!("{} * {}", self.ld(y, j), self.ld(x, k - j)));
@@ -511,20 +554,20 @@ impl Writer {
             }
             T::Abs(a) => {
                 let (a0, ak) = (self.ld(a, 0), self.let_(self.ld(a, k)));
-                self.let_(format!("{a0} < 0.0 ? lg_neg({ak}) : {ak}"))
+                self.let_(format!("lg_vsel((lg_m)({a0} < LG_ZERO), lg_vneg({ak}), {ak})"))
             }
         };
         self.st(w, k, &v);
     }
 
-    /// Order `k` of every instruction: order 0 in vector loops but for the
-    /// library's functions, lane by lane; a higher order in one vector loop.
+    /// Order `k` of every instruction: in vectors, but for the library's
+    /// functions at order 0, lane by lane.
     fn orders(&mut self, program: &[(u32, T)], k: usize) {
         for &(w, op) in program {
             if k == 0 {
                 self.order_zero(w, op);
             } else {
-                self.lanes_loop(true);
+                self.vector();
                 self.order_k(w, op, k);
             }
         }
@@ -533,7 +576,7 @@ impl Writer {
     /// `A[0]⁻¹` into its slots, by reciprocals or the adjugate over the
     /// determinant, as `TaylorTape::invert_interpreted`.
     fn invert(&mut self, s: &SecondOrderLayout) {
-        self.lanes_loop(true);
+        self.vector();
         let n = s.n;
         if s.diagonal {
             for (e, &(i, _)) in s.entries.iter().enumerate() {
@@ -542,18 +585,18 @@ impl Writer {
             }
             return;
         }
-        let mut m = vec!["0.0".to_string(); n * n];
+        let mut m = vec![self.splat("0.0"); n * n];
         for (e, &(i, j)) in s.entries.iter().enumerate() {
             m[i * n + j] = self.let_(self.ld(s.matrix[e], 0));
         }
         let at = |i: usize, j: usize| m[i * n + j].clone();
-        let mut cof = vec!["0.0".to_string(); n * n];
+        let mut cof = vec![self.splat("0.0"); n * n];
         if n == 1 {
-            cof[0] = "1.0".into();
+            cof[0] = self.splat("1.0");
         } else if n == 2 {
             cof[0] = at(1, 1);
-            cof[1] = self.let_(format!("lg_neg({})", at(1, 0)));
-            cof[2] = self.let_(format!("lg_neg({})", at(0, 1)));
+            cof[1] = self.let_(self.neg(&at(1, 0)));
+            cof[2] = self.let_(self.neg(&at(0, 1)));
             cof[3] = at(0, 0);
         } else {
             for i in 0..3 {
@@ -583,7 +626,7 @@ impl Writer {
     /// Order `k` of y'' and order `k + 1` of y and y', into the slots and the
     /// caller's series, as `TaylorTape::couple_interpreted`.
     fn couple(&mut self, s: &SecondOrderLayout, k: usize) {
-        self.lanes_loop(true);
+        self.vector();
         let n = s.n;
         let mut rhs: Vec<String> = (0..n).map(|i| self.let_(self.ld(s.rhs[i], k))).collect();
         if k > 0 {
@@ -614,17 +657,17 @@ impl Writer {
             let next_q = self.let_(format!("{} * {scale}", self.ld(s.dy[i], k)));
             self.st(s.y[i], k + 1, &next_q);
             let lanes = self.lanes;
-            let _ = writeln!(self.out, "        s[{}+l] = {next_q};", (row + i) * lanes);
-            let _ = writeln!(self.out, "        s[{}+l] = {next_v};", (row + n + i) * lanes);
+            let _ = writeln!(self.out, "    SV({}) = {next_q};", (row + i) * lanes);
+            let _ = writeln!(self.out, "    SV({}) = {next_v};", (row + n + i) * lanes);
         }
     }
 }
 
-/// The head of every source: the export and vector-loop markers, and
-/// fdlibm's sine and cosine as `jit/trig.rs` computes them (its constants,
-/// its operations in its order).
-fn prelude() -> String {
-    let mut p = String::from(
+/// The head of every source: the vector type and its operations for the
+/// machine, and fdlibm's sine and cosine as `jit/trig.rs` computes them (its
+/// constants, its operations in its order) on vectors.
+fn prelude(lanes: usize) -> String {
+    let mut p = format!(
         "/* Generated by lagrange: the Taylor expansion of one model. */\n\
          #include <math.h>\n\
          #include <stdint.h>\n\
@@ -634,11 +677,54 @@ fn prelude() -> String {
          #else\n\
          #define LG_EXPORT __attribute__((visibility(\"default\")))\n\
          #endif\n\
-         #if defined(_OPENMP) || defined(__clang__) || defined(__GNUC__)\n\
-         #define LG_SIMD _Pragma(\"omp simd\")\n\
+         #define LG_NOINLINE __attribute__((noinline))\n\
+         #define LG_INLINE static inline __attribute__((always_inline))\n\
+         /* The lanes of a call, and the lanes of one vector: the widest the\n\
+         \x20  processor has that divides them. */\n\
+         #define LG_LANES {lanes}\n\
+         #if defined(__AVX512F__) && LG_LANES % 8 == 0\n\
+         #define LG_W 8\n\
+         #elif defined(__AVX__) && LG_LANES % 4 == 0\n\
+         #define LG_W 4\n\
          #else\n\
-         #define LG_SIMD\n\
-         #endif\n\n",
+         #define LG_W 2\n\
+         #endif\n\
+         typedef double lg_v __attribute__((vector_size(8 * LG_W), aligned(8), may_alias));\n\
+         typedef long long lg_m __attribute__((vector_size(8 * LG_W)));\n\
+         #define LV(i) (*(lg_v *)&c[i])\n\
+         #define SV(i) (*(lg_v *)&s[i])\n\
+         #define LG_ZERO ((lg_v){{0}})\n\
+         /* x on every lane (x - 0 is x, -0 and NaN included). */\n\
+         #define LG_SPLAT(x) ((x) - LG_ZERO)\n\
+         #define LG_SIGN ((long long)0x8000000000000000ULL)\n\
+         /* The fused multiply-add of every lane: one instruction where the\n\
+         \x20  compiler names it, the C library's fma() lane by lane otherwise. */\n\
+         #if defined(__clang__)\n\
+         #if __has_builtin(__builtin_elementwise_fma)\n\
+         #define lg_vfma(a, b, c) __builtin_elementwise_fma((a), (b), (c))\n\
+         #endif\n\
+         #elif defined(__GNUC__) && defined(__x86_64__)\n\
+         #if LG_W == 8\n\
+         #define lg_vfma(a, b, c) ((lg_v)__builtin_ia32_vfmaddpd512_mask((a), (b), (c), (unsigned char)-1, 4))\n\
+         #elif LG_W == 4 && defined(__FMA__)\n\
+         #define lg_vfma(a, b, c) ((lg_v)__builtin_ia32_vfmaddpd256((a), (b), (c)))\n\
+         #elif LG_W == 2 && defined(__FMA__)\n\
+         #define lg_vfma(a, b, c) ((lg_v)__builtin_ia32_vfmaddpd((a), (b), (c)))\n\
+         #endif\n\
+         #endif\n\
+         #ifndef lg_vfma\n\
+         LG_INLINE lg_v lg_vfma(lg_v a, lg_v b, lg_v c) {{ lg_v r; for (int i = 0; i < LG_W; ++i) r[i] = fma(a[i], b[i], c[i]); return r; }}\n\
+         #endif\n\
+         static inline double lg_bits(uint64_t b) {{ double x; memcpy(&x, &b, 8); return x; }}\n\
+         static inline uint64_t lg_to_bits(double x) {{ uint64_t b; memcpy(&b, &x, 8); return b; }}\n\
+         /* -x by its sign bit: a C compiler may fold `-fma(a, b, c)` into\n\
+         \x20  `-(a*b) - c`, which differs where the sum is an exact zero. */\n\
+         static inline double lg_neg(double x) {{ return lg_bits(lg_to_bits(x) ^ 0x8000000000000000ULL); }}\n\
+         LG_INLINE lg_v lg_vneg(lg_v x) {{ return (lg_v)((lg_m)x ^ LG_SIGN); }}\n\
+         LG_INLINE lg_v lg_vabs(lg_v x) {{ return (lg_v)((lg_m)x & ~LG_SIGN); }}\n\
+         /* m ? a : b, lane by lane (m: all ones or all zeros). */\n\
+         LG_INLINE lg_v lg_vsel(lg_m m, lg_v a, lg_v b) {{ return (lg_v)(((lg_m)a & m) | ((lg_m)b & ~m)); }}\n\
+         LG_INLINE lg_v lg_vsqrt(lg_v x) {{ lg_v r; for (int i = 0; i < LG_W; ++i) r[i] = sqrt(x[i]); return r; }}\n"
     );
     let poly = |z: &str, coefficients: &[f64]| -> String {
         // Estrin's scheme, paired as `trig::polynomial`.
@@ -665,39 +751,35 @@ fn prelude() -> String {
     };
     let _ = write!(
         p,
-        "static inline double lg_bits(uint64_t b) {{ double x; memcpy(&x, &b, 8); return x; }}\n\
-         static inline uint64_t lg_to_bits(double x) {{ uint64_t b; memcpy(&b, &x, 8); return b; }}\n\
-         /* -x by its sign bit: a C compiler may fold `-fma(a, b, c)` into\n\
-         \x20  `-(a*b) - c`, which differs where the sum is an exact zero. */\n\
-         static inline double lg_neg(double x) {{ return lg_bits(lg_to_bits(x) ^ 0x8000000000000000ULL); }}\n\
-         /* sin and cos for |x| < 2^19 pi/2 (jit/trig.rs). */\n\
-         static inline void lg_sin_cos(double x, double *sin_out, double *cos_out) {{\n\
-         \x20   const double shifted = x * {inv} + {to_int};\n\
-         \x20   const double n = shifted - {to_int};\n\
-         \x20   const uint64_t quadrant = lg_to_bits(shifted);\n\
-         \x20   const double r1 = x - n * {p1};\n\
-         \x20   const double w2 = n * {p2}, w3 = n * {p3};\n\
-         \x20   const double hi = w2 + w3;\n\
-         \x20   const double lo = w3 - (hi - w2);\n\
-         \x20   const double y0 = r1 - hi;\n\
-         \x20   const double a_part = y0 + hi;\n\
-         \x20   const double c_part = a_part - y0;\n\
-         \x20   const double e = (r1 - a_part) + (c_part - hi);\n\
-         \x20   const double y1 = e - (lo + n * {p3t});\n\
-         \x20   const double z = y0 * y0;\n\
-         \x20   const double v = z * y0;\n\
-         \x20   const double rs = {poly_s};\n\
-         \x20   const double u = y1 * 0.5 - v * rs;\n\
-         \x20   const double s = y0 - ((z * u - y1) - v * {s0});\n\
-         \x20   const double rc = z * {poly_c};\n\
-         \x20   const double ax = fabs(y0);\n\
-         \x20   const double quarter = lg_bits((uint64_t)((int64_t)(lg_to_bits(ax) & 0xFFFFFFFF00000000ULL) - 0x0020000000000000LL));\n\
-         \x20   const double qx = ax < {small} ? 0.0 : (ax >= {large} ? 0.28125 : quarter);\n\
-         \x20   const double c = (1.0 - qx) - ((z * 0.5 - qx) - (z * rc - y0 * y1));\n\
-         \x20   const double sin_abs = (quadrant & 1) ? c : s;\n\
-         \x20   const double cos_abs = (quadrant & 1) ? s : c;\n\
-         \x20   *sin_out = (quadrant & 2) ? lg_neg(sin_abs) : sin_abs;\n\
-         \x20   *cos_out = ((quadrant + 1) & 2) ? lg_neg(cos_abs) : cos_abs;\n\
+        "/* sin and cos for |x| < 2^19 pi/2 (jit/trig.rs), lane by lane. */\n\
+         LG_INLINE void lg_vsin_cos(lg_v x, lg_v *sin_out, lg_v *cos_out) {{\n\
+         \x20   const lg_v shifted = x * {inv} + {to_int};\n\
+         \x20   const lg_v n = shifted - {to_int};\n\
+         \x20   const lg_m quadrant = (lg_m)shifted;\n\
+         \x20   const lg_v r1 = x - n * {p1};\n\
+         \x20   const lg_v w2 = n * {p2}, w3 = n * {p3};\n\
+         \x20   const lg_v hi = w2 + w3;\n\
+         \x20   const lg_v lo = w3 - (hi - w2);\n\
+         \x20   const lg_v y0 = r1 - hi;\n\
+         \x20   const lg_v a_part = y0 + hi;\n\
+         \x20   const lg_v c_part = a_part - y0;\n\
+         \x20   const lg_v e = (r1 - a_part) + (c_part - hi);\n\
+         \x20   const lg_v y1 = e - (lo + n * {p3t});\n\
+         \x20   const lg_v z = y0 * y0;\n\
+         \x20   const lg_v v = z * y0;\n\
+         \x20   const lg_v rs = {poly_s};\n\
+         \x20   const lg_v u = y1 * 0.5 - v * rs;\n\
+         \x20   const lg_v s = y0 - ((z * u - y1) - v * {s0});\n\
+         \x20   const lg_v rc = z * {poly_c};\n\
+         \x20   const lg_v ax = lg_vabs(y0);\n\
+         \x20   const lg_v quarter = (lg_v)(((lg_m)ax & (long long)0xFFFFFFFF00000000ULL) - 0x0020000000000000LL);\n\
+         \x20   const lg_v qx = lg_vsel((lg_m)(ax < {small}), LG_ZERO, lg_vsel((lg_m)(ax >= {large}), LG_SPLAT(0.28125), quarter));\n\
+         \x20   const lg_v c = (1.0 - qx) - ((z * 0.5 - qx) - (z * rc - y0 * y1));\n\
+         \x20   const lg_m odd = (lg_m)((quadrant & 1) != 0);\n\
+         \x20   const lg_v sin_abs = lg_vsel(odd, c, s);\n\
+         \x20   const lg_v cos_abs = lg_vsel(odd, s, c);\n\
+         \x20   *sin_out = lg_vsel((lg_m)((quadrant & 2) != 0), lg_vneg(sin_abs), sin_abs);\n\
+         \x20   *cos_out = lg_vsel((lg_m)(((quadrant + 1) & 2) != 0), lg_vneg(cos_abs), cos_abs);\n\
          }}\n",
         inv = lit(trig::INV_PIO2),
         to_int = lit(trig::TO_INT),
@@ -731,11 +813,10 @@ mod tests {
     #[test]
     fn a_product_is_one_fused_sum_per_term() {
         let mut w = Writer::new(4, 3, true);
-        w.lanes_loop(true);
         let v = w.sum(0, 1, 2, 0..=2, false);
         assert_eq!(v, "t2");
-        assert!(w.out.contains("fma(c[0+l], c[20+l], 0.0)"), "{}", w.out);
-        assert!(w.out.contains("fma(c[4+l], c[16+l], t0)"), "{}", w.out);
-        assert!(w.out.contains("fma(c[8+l], c[12+l], t1)"), "{}", w.out);
+        assert!(w.out.contains("lg_vfma(LV(0), LV(20), LG_SPLAT(0.0))"), "{}", w.out);
+        assert!(w.out.contains("lg_vfma(LV(4), LV(16), t0)"), "{}", w.out);
+        assert!(w.out.contains("lg_vfma(LV(8), LV(12), t1)"), "{}", w.out);
     }
 }
