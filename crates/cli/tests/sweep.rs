@@ -149,3 +149,31 @@ fn bad_grids_and_requests_exit_2() {
         assert!(err.contains(expect), "{extra:?}: {err}");
     }
 }
+
+/// Runs whose series is not finite fail alone: x'' = −(3/2)·sqrt(x) has no
+/// real rate below x = 0 and an infinite one at x = 0, and the lanes beside
+/// them go on to give the rows they give on their own.
+#[test]
+fn a_run_whose_series_is_not_finite_fails_alone() {
+    let model = scratch("sweep-test", "root.toml");
+    std::fs::write(
+        &model,
+        "name = \"falling root\"\ncoordinates = [\"x\"]\nlagrangian = \"x'^2/2 - x^(3/2)\"\n\
+         [initial]\nx = 1.0\n\"x'\" = 0.0\n",
+    )
+    .unwrap();
+    let model = model.to_str().unwrap();
+    let (mixed, alone) = (scratch("sweep-test", "root-mixed.csv"), scratch("sweep-test", "root-alone.csv"));
+    ok(&["sweep", model, "--until", "0.5", "--grid", "x=-1:1:5", "--no-lyapunov", "--out", mixed.to_str().unwrap()]);
+    ok(&["sweep", model, "--until", "0.5", "--grid", "x=1:1:1", "--no-lyapunov", "--out", alone.to_str().unwrap()]);
+    let mixed = text(&mixed);
+    let rows: Vec<&str> = mixed.lines().skip(2).collect();
+    assert_eq!(rows.len(), 5, "{mixed}");
+    for row in &rows[..3] {
+        assert!(row.ends_with("right-hand side failed at t = 0: the Taylor series is not finite"), "{row}");
+    }
+    assert!(rows[3].starts_with("3,0.5,0.5,") && rows[3].ends_with(','), "{}", rows[3]);
+    let alone = text(&alone);
+    let alone = alone.lines().nth(2).unwrap();
+    assert_eq!(rows[4].split_once(',').unwrap().1, alone.split_once(',').unwrap().1);
+}

@@ -2,9 +2,12 @@
 //! (`[f64; L]` per coefficient), compiled for the widest vectors the
 //! processor has.
 //!
-//! A Taylor step of an ensemble reads its whole series twice: once for the
-//! sizes of the last two orders and whether every coefficient is finite
-//! ([`scan`]), once to sum it by Horner's rule ([`horner`]). On a lane
+//! A Taylor step of an ensemble reads the sizes of the last two orders of its
+//! series ([`ratios`]) and sums the whole series by Horner's rule
+//! ([`horner`]). Whether every coefficient is finite ([`finite`]) needs a
+//! pass over the series only where the state or the ratios say something is
+//! off: a non-finite coefficient makes the Horner sum non-finite (a positive
+//! step carries an infinity or a NaN through every later order). On a lane
 //! array of 8 these loops are one AVX-512 instruction per operation, four
 //! with the baseline x86-64 target (SSE2), so the functions here are compiled
 //! for AVX-512 and AVX2 as well and choose at run time. The arithmetic is
@@ -16,33 +19,27 @@
 // below checks the feature first.
 #![allow(unsafe_code)]
 
-/// What a step needs to know of a series, per lane.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Scan<const L: usize> {
-    /// `max_i |y_i[p−1]| / max(|y_i|, floor)` (see [`crate::taylor_ratio`]).
-    pub before_last: [f64; L],
-    /// The same for order `p`.
-    pub last: [f64; L],
-    /// Whether every coefficient of the lane is finite.
-    pub finite: [bool; L],
-}
-
 /// The sizes of orders `p − 1` and `p` of `series` (order-major: order `k`
-/// of component `i` at `k·dim + i`) relative to its order 0, and whether every
-/// coefficient is finite, lane by lane.
-pub fn scan<const L: usize>(series: &[[f64; L]], dim: usize, p: usize, floor: f64) -> Scan<L> {
+/// of component `i` at `k·dim + i`) relative to its order 0, lane by lane:
+/// `max_i |y_i[k]| / max(|y_i|, floor)` (see [`crate::taylor_ratio`]).
+pub fn ratios<const L: usize>(series: &[[f64; L]], dim: usize, p: usize, floor: f64) -> ([f64; L], [f64; L]) {
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx512f") {
             // SAFETY: the processor has AVX-512F, the one feature enabled.
-            return unsafe { scan_avx512(series, dim, p, floor) };
+            return unsafe { ratios_avx512(series, dim, p, floor) };
         }
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the processor has AVX2, the one feature enabled.
-            return unsafe { scan_avx2(series, dim, p, floor) };
+            return unsafe { ratios_avx2(series, dim, p, floor) };
         }
     }
-    scan_lanes(series, dim, p, floor)
+    ratios_lanes(series, dim, p, floor)
+}
+
+/// Whether every coefficient of orders `0..=p` of lane `lane` is finite.
+pub fn finite<const L: usize>(series: &[[f64; L]], dim: usize, p: usize, lane: usize) -> bool {
+    series[..(p + 1) * dim].iter().all(|c| c[lane].is_finite())
 }
 
 /// `y_i = Σ_k series[k·dim + i] h^k` lane by lane, by Horner's rule
@@ -51,11 +48,11 @@ pub fn horner<const L: usize>(series: &[[f64; L]], dim: usize, p: usize, h: &[f6
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: as in `scan`.
+            // SAFETY: as in `ratios`.
             return unsafe { horner_avx512(series, dim, p, h, y) };
         }
         if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: as in `scan`.
+            // SAFETY: as in `ratios`.
             return unsafe { horner_avx2(series, dim, p, h, y) };
         }
     }
@@ -64,14 +61,14 @@ pub fn horner<const L: usize>(series: &[[f64; L]], dim: usize, p: usize, h: &[f6
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-fn scan_avx512<const L: usize>(series: &[[f64; L]], dim: usize, p: usize, floor: f64) -> Scan<L> {
-    scan_lanes(series, dim, p, floor)
+fn ratios_avx512<const L: usize>(series: &[[f64; L]], dim: usize, p: usize, floor: f64) -> ([f64; L], [f64; L]) {
+    ratios_lanes(series, dim, p, floor)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn scan_avx2<const L: usize>(series: &[[f64; L]], dim: usize, p: usize, floor: f64) -> Scan<L> {
-    scan_lanes(series, dim, p, floor)
+fn ratios_avx2<const L: usize>(series: &[[f64; L]], dim: usize, p: usize, floor: f64) -> ([f64; L], [f64; L]) {
+    ratios_lanes(series, dim, p, floor)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -87,35 +84,8 @@ fn horner_avx2<const L: usize>(series: &[[f64; L]], dim: usize, p: usize, h: &[f
 }
 
 #[inline(always)]
-fn scan_lanes<const L: usize>(series: &[[f64; L]], dim: usize, p: usize, floor: f64) -> Scan<L> {
-    // c − c is 0 for a finite c and NaN otherwise; the sum of them is 0
-    // exactly when every coefficient is finite. Four sums, so that their
-    // additions overlap instead of waiting for one another.
-    // `c − c` on purpose: zero exactly when c is finite.
-    #[allow(clippy::eq_op)]
-    let nan_of = |c: f64| c - c;
-    let all = &series[..(p + 1) * dim];
-    let (mut s0, mut s1, mut s2, mut s3) = ([0.0f64; L], [0.0f64; L], [0.0f64; L], [0.0f64; L]);
-    let mut quads = all.chunks_exact(4);
-    for q in &mut quads {
-        for l in 0..L {
-            s0[l] += nan_of(q[0][l]);
-            s1[l] += nan_of(q[1][l]);
-            s2[l] += nan_of(q[2][l]);
-            s3[l] += nan_of(q[3][l]);
-        }
-    }
-    for c in quads.remainder() {
-        for l in 0..L {
-            s0[l] += nan_of(c[l]);
-        }
-    }
-    let nan: [f64; L] = std::array::from_fn(|l| s0[l] + s1[l] + s2[l] + s3[l]);
-    Scan {
-        before_last: ratio(series, dim, p - 1, floor),
-        last: ratio(series, dim, p, floor),
-        finite: std::array::from_fn(|l| nan[l] == 0.0),
-    }
+fn ratios_lanes<const L: usize>(series: &[[f64; L]], dim: usize, p: usize, floor: f64) -> ([f64; L], [f64; L]) {
+    (ratio(series, dim, p - 1, floor), ratio(series, dim, p, floor))
 }
 
 /// `max_i |series[k·dim + i]| / max(|series[i]|, floor)` lane by lane.
@@ -159,7 +129,13 @@ mod tests {
         horner(&series, dim, p, &h, &mut a);
         horner_lanes(&series, dim, p, &h, &mut b);
         assert_eq!(a, b);
-        assert_eq!(scan(&series, dim, p, 1e-3), scan_lanes(&series, dim, p, 1e-3));
+        assert_eq!(ratios(&series, dim, p, 1e-3), ratios_lanes(&series, dim, p, 1e-3));
+        let lane = |l: usize, k: usize| -> f64 {
+            (0..dim).map(|i| series[k * dim + i][l].abs() / series[i][l].abs().max(1e-3)).fold(0.0, f64::max)
+        };
+        let (before_last, last) = ratios(&series, dim, p, 1e-3);
+        assert_eq!(before_last[5], lane(5, p - 1));
+        assert_eq!(last[7], lane(7, p));
         // One lane's Horner sum is the sum of its series.
         let want: f64 = (0..=p).map(|k| series[k * dim + 1][2] * h[2].powi(k as i32)).sum();
         assert!((a[1][2] - want).abs() < 1e-15);
@@ -170,8 +146,8 @@ mod tests {
         let mut series = vec![[1.0; 4]; 6];
         series[4][1] = f64::INFINITY;
         series[5][3] = f64::NAN;
-        let s = scan(&series, 2, 2, 1e-3);
-        assert_eq!(s.finite, [true, false, true, false]);
-        assert_eq!(s.last[0], 1.0);
+        let finite: Vec<bool> = (0..4).map(|l| finite(&series, 2, 2, l)).collect();
+        assert_eq!(finite, [true, false, true, false]);
+        assert_eq!(ratios(&series, 2, 2, 1e-3).1[0], 1.0);
     }
 }

@@ -3,15 +3,15 @@
 //!
 //! Each lane is an independent trajectory with its own time, step (the step
 //! rule of [`num::Taylor`], per lane) and end time; one expansion of the
-//! [`LagrangeSeries`] serves all lanes, and its native code handles two lanes
-//! per instruction. [`propagate`] returns as soon as a lane reaches its end
+//! [`LagrangeSeries`] serves all lanes, and its native code handles as many
+//! lanes per instruction as the processor's vectors hold (two with cranelift). [`propagate`] returns as soon as a lane reaches its end
 //! time, so that the caller can give the lane its next segment or its next
 //! trajectory; a lane at its end time idles (step 0) until then, and a lane
 //! whose expansion stops being finite is frozen with its failure while the
 //! others go on.
 
 use crate::run::series::LagrangeSeries;
-use num::lanes::{self, Scan};
+use num::lanes;
 use num::{taylor_advance, taylor_step, Config};
 use sym::Lanes;
 
@@ -63,31 +63,38 @@ pub(crate) fn propagate(
 ) {
     let p = series.order();
     let dim = batch.y.len();
-    scratch.resize(dim * (p + 1), [0.0; LANES]);
+    let len = dim * (p + 1);
+    // The series, then the state before the step (to go back to).
+    scratch.resize(len + dim, [0.0; LANES]);
     let live_lanes = |batch: &Batch| -> [bool; LANES] {
         std::array::from_fn(|l| batch.failure[l].is_none() && batch.t[l] < t_end[l])
     };
+    let not_finite = |t: f64| format!("right-hand side failed at t = {t}: the Taylor series is not finite");
     let mut live = live_lanes(batch);
     while live.contains(&true) {
-        if let Err(e) = series.expand(batch.t, &batch.y, scratch) {
+        let (coefficients, before) = scratch.split_at_mut(len);
+        if let Err(e) = series.expand(batch.t, &batch.y, coefficients) {
             for l in (0..LANES).filter(|&l| live[l]) {
                 batch.failure[l] = Some(format!("right-hand side failed at t = {}: {e}", batch.t[l]));
             }
             return;
         }
         // Per lane: the ratios of the last two orders to the state (component by
-        // component, see `num::taylor_ratio`), and whether every coefficient is
-        // finite (one pass over the series).
-        let Scan { before_last, last, finite } = lanes::scan(scratch, dim, p, config.atol / config.rtol);
+        // component, see `num::taylor_ratio`).
+        let (before_last, last) = lanes::ratios(coefficients, dim, p, config.atol / config.rtol);
         let mut h = [0.0; LANES];
         let mut lands_on_end = [false; LANES];
         for l in 0..LANES {
             if !live[l] {
                 continue;
             }
-            if !finite[l] {
-                batch.failure[l] =
-                    Some(format!("right-hand side failed at t = {}: the Taylor series is not finite", batch.t[l]));
+            // Whether every coefficient is finite is read only where the
+            // ratios are not, or before the last step allowed; a non-finite
+            // coefficient elsewhere shows in the state after the step, which
+            // is then undone below.
+            let suspect = !(before_last[l].is_finite() && last[l].is_finite()) || batch.steps[l] >= config.max_steps;
+            if suspect && !lanes::finite(coefficients, dim, p, l) {
+                batch.failure[l] = Some(not_finite(batch.t[l]));
                 continue;
             }
             if batch.steps[l] >= config.max_steps {
@@ -102,17 +109,29 @@ pub(crate) fn propagate(
                 Err(step) => batch.failure[l] = Some(format!("step size {step:e} too small at t = {}", batch.t[l])),
             }
         }
-        // Horner's rule on every lane (h = 0 leaves a lane where it is).
-        lanes::horner(scratch, dim, p, &h, &mut batch.y);
+        // Horner's rule on every lane; a lane that does not step (h = 0) keeps
+        // its state, as does one whose series turns out not to be finite.
+        before.copy_from_slice(&batch.y);
+        lanes::horner(coefficients, dim, p, &h, &mut batch.y);
         for l in 0..LANES {
-            if h[l] > 0.0 {
+            let keep = h[l] == 0.0
+                || (batch.y.iter().any(|c| !c[l].is_finite()) && {
+                    let finite = lanes::finite(coefficients, dim, p, l);
+                    batch.failure[l] = Some(if finite {
+                        let t = if lands_on_end[l] { t_end[l] } else { batch.t[l] + h[l] };
+                        format!("the state became non-finite at t = {t}")
+                    } else {
+                        not_finite(batch.t[l])
+                    });
+                    !finite
+                });
+            if keep {
+                for (y, old) in batch.y.iter_mut().zip(before.iter()) {
+                    y[l] = old[l];
+                }
+            } else {
                 batch.steps[l] += 1;
                 batch.t[l] = if lands_on_end[l] { t_end[l] } else { batch.t[l] + h[l] };
-            }
-        }
-        for l in 0..LANES {
-            if h[l] > 0.0 && batch.y.iter().any(|c| !c[l].is_finite()) {
-                batch.failure[l] = Some(format!("the state became non-finite at t = {}", batch.t[l]));
             }
         }
         let after = live_lanes(batch);
