@@ -106,8 +106,15 @@ pub fn model(rng: &mut Rng) -> String {
 
     if style == 3 {
         let p = |rng: &mut Rng| rng.pick(&names.parameters).to_string();
-        let (i1, i3) = (p(rng), p(rng));
-        let i2 = if rng.chance(0.5) { i1.clone() } else { p(rng) };
+        // Principal moments from second moments a, b, c ≥ 0 of the mass
+        // (I1 = b + c, I2 = a + c, I3 = a + b), so that each is at most the
+        // sum of the other two, as a rigid body's are; a = b for a symmetric one.
+        let (a, b, c) = (p(rng), p(rng), p(rng));
+        let (i1, i2, i3) = if rng.chance(0.5) {
+            (format!("{b} + {c}"), format!("{b} + {c}"), format!("2*{b}"))
+        } else {
+            (format!("{b} + {c}"), format!("{a} + {c}"), format!("{a} + {b}"))
+        };
         let position = if rng.chance(0.7) {
             "\"0\", \"0\", \"0\"".to_string()
         } else {

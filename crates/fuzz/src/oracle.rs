@@ -117,9 +117,19 @@ impl Oracle {
                     let speed2 = pool_ref.add(&speed2);
                     let half = pool_ref.rational(1, 2);
                     kinetic.push(pool_ref.mul(&[half, part.mass, speed2]));
-                    if let Some(g) = &model.gravity {
-                        let height = part.position[part.position.len() - 1];
-                        potential.push(pool_ref.mul(&[part.mass, g.expr, height]));
+                    match &model.gravity {
+                        Some(mech::Gravity::Down(g)) => {
+                            let height = part.position[part.position.len() - 1];
+                            potential.push(pool_ref.mul(&[part.mass, g.expr, height]));
+                        }
+                        Some(mech::Gravity::Field { components, .. }) => {
+                            // U = −m g·r, every component written out.
+                            for (g, &x) in components.iter().zip(&part.position) {
+                                let minus = pool_ref.neg(part.mass);
+                                potential.push(pool_ref.mul(&[minus, g.expr, x]));
+                            }
+                        }
+                        None => {}
                     }
                     potential.extend(part.potential);
                 }

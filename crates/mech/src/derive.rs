@@ -439,8 +439,7 @@ fn energies(pool: &mut Pool, model: &Model, s: &Symbols, is_var: &dyn Fn(Symbol)
         let mut u_terms = Vec::new();
         for part in &model.particles {
             if let Some(g) = &model.gravity {
-                let height = part.position[part.position.len() - 1];
-                u_terms.push(pool.mul(&[part.mass, g.expr, height]));
+                u_terms.push(g.potential(pool, part.mass, &part.position));
             }
             if let Some(u) = part.potential {
                 u_terms.push(u);
@@ -449,8 +448,7 @@ fn energies(pool: &mut Pool, model: &Model, s: &Symbols, is_var: &dyn Fn(Symbol)
         // Rigid bodies' T is small and quadratic in the rates: it joins `kinetic`.
         let mut k_terms = Vec::new();
         for body in &model.bodies {
-            let g = model.gravity.as_ref().map(|g| g.expr);
-            let terms = body::terms(pool, body, q, qd, t, g);
+            let terms = body::terms(pool, body, q, qd, t, model.gravity.as_ref());
             k_terms.push(terms.kinetic);
             u_terms.extend(terms.potential);
             bodies.push(body::motion(pool, body, &terms, is_var));
@@ -624,15 +622,38 @@ fn check_regular(pool: &mut Pool, model: &Model, mass_matrix: &[Vec<ExprId>]) ->
     if !singular {
         return Ok(());
     }
-    let span = model
-        .lagrangian
-        .as_ref()
-        .or(model.kinetic.as_ref())
-        .map(|l| l.span.clone())
-        .or_else(|| model.particles.first().map(|p| p.span.clone()));
-    let message = "the mass matrix ∂²L/∂q'∂q' is singular: the equations of motion do not determine every acceleration";
-    let help = "each coordinate needs its own kinetic energy; a coordinate whose velocity never appears, or two that only appear as one combination, leave the motion undetermined";
-    Err(ModelError { message: message.into(), span, help: Some(help.into()), setting: None, within: None })
+    // Coordinates whose row of M is zero: no inertia at all (a thin rod's
+    // spin about its own axis, a coordinate that never moves anything).
+    let idle: Vec<usize> = (0..mass_matrix.len())
+        .filter(|&i| mass_matrix[i].iter().all(|&m| probe::decide_zero(pool, m) == Decision::Zero))
+        .collect();
+    let names: Vec<String> = idle.iter().map(|&i| format!("'{}'", model.coordinates[i].name)).collect();
+    let body = model.bodies.iter().find(|b| b.angles.iter().any(|a| idle.contains(a)));
+    let span = body.map(|b| b.span.clone()).or_else(|| {
+        model
+            .lagrangian
+            .as_ref()
+            .or(model.kinetic.as_ref())
+            .map(|l| l.span.clone())
+            .or_else(|| model.particles.first().map(|p| p.span.clone()))
+            .or_else(|| model.bodies.first().map(|b| b.span.clone()))
+    });
+    let message = match names.as_slice() {
+        [] => "the mass matrix ∂²L/∂q'∂q' is singular: the equations of motion do not determine every acceleration"
+            .to_string(),
+        [one] => format!(
+            "the mass matrix ∂²L/∂q'∂q' is singular: the coordinate {one} has no inertia (its velocity does not appear in T), so the equations of motion do not determine its acceleration"
+        ),
+        many => format!(
+            "the mass matrix ∂²L/∂q'∂q' is singular: the coordinates {} have no inertia (their velocities do not appear in T), so the equations of motion do not determine their accelerations",
+            many.join(", ")
+        ),
+    };
+    let help = match body {
+        Some(_) => "a body with a zero principal moment (a thin rod about its axis) has no inertia for a spin about that axis: leave that angle out of the coordinates, or give the body its moment",
+        None => "each coordinate needs its own kinetic energy; a coordinate whose velocity never appears, or two that only appear as one combination, leave the motion undetermined",
+    };
+    Err(ModelError { message, span, help: Some(help.into()), setting: None, within: None })
 }
 
 /// Cyclic coordinates (∂L/∂q proven to be 0) and the momenta that are

@@ -94,7 +94,9 @@ pub use extremal::{
     SecondVariation, Start, EXTREMAL_FORMAT,
 };
 pub use mechanism::{Mechanism, Point, PointKind};
-pub use model::{Body, ConstraintKind, ConstraintSpec, Coordinate, InitialValue, Located, Model, Parameter, Particle};
+pub use model::{
+    Body, ConstraintKind, ConstraintSpec, Coordinate, Gravity, InitialValue, Located, Model, Parameter, Particle,
+};
 pub use modes::{normal_modes, Mode, ModeKind, Modes, ModesConfig, ModesError, ModesReport, SymbolicModes};
 pub use num::{Method, Output};
 pub use orbit::{Kepler, Orbit, OrbitError, OrbitKind, OrbitReport};

@@ -19,10 +19,12 @@ use toml::Spanned;
 
 pub(crate) mod body;
 pub(crate) mod constraint;
+pub(crate) mod gravity;
 
 pub use crate::source::Parameter;
 pub use body::Body;
 pub use constraint::{ConstraintKind, ConstraintSpec};
+pub use gravity::Gravity;
 
 /// A generalized coordinate.
 #[derive(Debug, Clone)]
@@ -79,8 +81,8 @@ pub struct Model {
     pub parameters: Vec<Parameter>,
     /// Point masses.
     pub particles: Vec<Particle>,
-    /// Uniform gravity along −y (2-D positions) or −z (3-D).
-    pub gravity: Option<Located>,
+    /// Uniform gravity: along −y (2-D positions) or −z (3-D), or a field vector.
+    pub gravity: Option<Gravity>,
     /// `lagrangian = "..."`.
     pub lagrangian: Option<Located>,
     /// `kinetic = "..."`.
@@ -104,7 +106,7 @@ pub struct Model {
 struct RawModel {
     name: Option<String>,
     coordinates: Option<Spanned<Vec<Spanned<String>>>>,
-    gravity: Option<Spanned<NumOrText>>,
+    gravity: Option<Spanned<gravity::RawGravity>>,
     lagrangian: Option<Spanned<String>>,
     kinetic: Option<Spanned<String>>,
     potential: Option<Spanned<String>>,
@@ -404,7 +406,7 @@ impl Model {
         }
 
         // What the system is made of.
-        let gravity = raw.gravity.as_ref().map(|g| r.num_or_expr(g, Scope::Parameters, "gravity")).transpose()?;
+        let gravity = raw.gravity.as_ref().map(|g| gravity::read(&mut r, g)).transpose()?;
         let mut particles = Vec::new();
         for p in &raw.particles {
             let mass = r.num_or_expr(&p.get_ref().mass, Scope::Parameters, "the particle's mass")?.expr;
@@ -426,23 +428,39 @@ impl Model {
                 .map(|u| r.potential(u, "the particle's potential"))
                 .transpose()?
                 .map(|l| l.expr);
-            if gravity.is_some() && position.len() == 1 {
-                return Err(ModelError::at(
-                    pos.span(),
-                    "gravity needs a vertical axis: give 2-D (x, y) or 3-D (x, y, z) positions",
-                ));
+            match gravity.as_ref().map(Gravity::dimension) {
+                Some(None) if position.len() == 1 => {
+                    return Err(ModelError::at(
+                        pos.span(),
+                        "gravity needs a vertical axis: give 2-D (x, y) or 3-D (x, y, z) positions",
+                    )
+                    .with_help("or give the field vector, e.g. gravity = [\"g\", \"0\"] along +x"));
+                }
+                Some(Some(n)) if position.len() != n => {
+                    return Err(ModelError::at(
+                        pos.span(),
+                        format!("the gravity vector has {n} components, so positions have {n}, not {}", position.len()),
+                    ));
+                }
+                _ => {}
             }
             particles.push(Particle { mass, position, potential, span: p.span() });
         }
         let bodies = body::read_all(&mut r, &raw.bodies)?;
-        if let (Some(_), Some(b), Some(p)) =
-            (&gravity, raw.bodies.first(), particles.iter().find(|p| p.position.len() != 3))
-        {
-            let _ = b;
-            return Err(ModelError::at(
-                p.span.clone(),
-                "with [[bodies]], gravity acts along −z: give the particles 3-D (x, y, z) positions",
-            ));
+        if let (Some(g), Some(b)) = (&gravity, raw.bodies.first()) {
+            if g.dimension().is_some_and(|n| n != 3) {
+                return Err(ModelError::at(
+                    g.span(),
+                    "with [[bodies]], the gravity vector has 3 components (bodies move in 3-D)",
+                ));
+            }
+            if let Some(p) = particles.iter().find(|p| p.position.len() != 3) {
+                let _ = b;
+                return Err(ModelError::at(
+                    p.span.clone(),
+                    "with [[bodies]], gravity acts in 3-D: give the particles 3-D (x, y, z) positions",
+                ));
+            }
         }
         let lagrangian = raw.lagrangian.as_ref().map(|l| r.expr(l, Scope::State, "the Lagrangian")).transpose()?;
         let kinetic = raw.kinetic.as_ref().map(|l| r.expr(l, Scope::State, "the kinetic energy")).transpose()?;

@@ -253,8 +253,15 @@ impl Top {
         let (i, i3) = (inertia[0][0], inertia[2][2]);
         let mass = value(body.mass)?;
         let c = [value(body.center_of_mass[0])?, value(body.center_of_mass[1])?, value(body.center_of_mass[2])?];
-        let g = match &model.gravity {
-            Some(g) => value(g.expr)?,
+        let g = match model.gravity.as_ref().map(|g| (g.span(), g.down_z(&model.pool))) {
+            Some((_, Some((g, sign)))) => sign * value(g)?,
+            Some((span, None)) => {
+                return Err(TopError::at(
+                    span,
+                    "a top's gravity points along −z of the fixed frame; this gravity vector does not",
+                    "give gravity = \"g\" or [\"0\", \"0\", \"-g\"], and the top's axes as the notes draw them",
+                ))
+            }
             None => 0.0,
         };
         if c[0] != 0.0 || c[1] != 0.0 {

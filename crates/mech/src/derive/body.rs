@@ -3,7 +3,7 @@
 //! (q, q', t). See [`crate::model::body`] for the formulas and the reading.
 
 use crate::euler;
-use crate::model::Body;
+use crate::model::{Body, Gravity};
 use sym::{ExprId, Pool, Symbol};
 
 /// What a body contributes to a derivation, as expressions in (q, q', t).
@@ -11,7 +11,7 @@ use sym::{ExprId, Pool, Symbol};
 pub struct BodyTerms {
     /// Its kinetic energy.
     pub kinetic: ExprId,
-    /// M g z_cm, when the model has gravity.
+    /// M g z_cm (or −M g·r_cm for a field vector), when the model has gravity.
     pub potential: Option<ExprId>,
     /// Body-frame angular velocity (ω₁, ω₂, ω₃).
     pub omega: [ExprId; 3],
@@ -37,7 +37,7 @@ pub fn terms(
     q: &[ExprId],
     qd: &[ExprId],
     t: ExprId,
-    gravity: Option<ExprId>,
+    gravity: Option<&Gravity>,
 ) -> BodyTerms {
     let [a, b, c] = body.angles;
     let omega = euler::angular_velocity(pool, [q[a], q[b], q[c]], [qd[a], qd[b], qd[c]]);
@@ -107,13 +107,25 @@ pub fn terms(
     }
     let kinetic = pool.add(&t_terms);
     let potential = gravity.map(|g| {
-        // z_cm = x_ref,3 + Σ_k D_k3 c_k (the third component of Dᵀc).
-        let mut z = vec![body.position[2]];
-        for k in 0..3 {
-            z.push(pool.mul2(d[k][2], body.center_of_mass[k]));
+        // r_cm,i = x_ref,i + Σ_k D_ki c_k (the components of x_ref + Dᵀc); a
+        // field's zero components are left out.
+        let mut r_cm = Vec::with_capacity(3);
+        for i in 0..3 {
+            let wanted = match g {
+                Gravity::Down(_) => i == 2,
+                Gravity::Field { components, .. } => !pool.is_zero(components[i].expr),
+            };
+            if !wanted {
+                r_cm.push(pool.zero());
+                continue;
+            }
+            let mut x = vec![body.position[i]];
+            for k in 0..3 {
+                x.push(pool.mul2(d[k][i], body.center_of_mass[k]));
+            }
+            r_cm.push(pool.add(&x));
         }
-        let z = pool.add(&z);
-        pool.mul(&[body.mass, g, z])
+        g.potential(pool, body.mass, &r_cm)
     });
     BodyTerms { kinetic, potential, omega, angular_momentum: l }
 }

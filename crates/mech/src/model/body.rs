@@ -185,7 +185,10 @@ fn read(r: &mut Reader<'_>, b: &Spanned<RawBody>, index: usize) -> Result<Body, 
         None => read_inertia(r, &raw.inertia)?,
     };
 
-    // Numeric sanity at the parameters' values: M > 0, I positive definite.
+    // Numeric sanity at the parameters' values: M > 0, I a physical tensor
+    // (moments ≥ 0, each at most the sum of the other two). A zero moment (a
+    // thin rod about its axis, a point mass) is allowed: only a singular
+    // total mass matrix is refused, by the derivation, naming the coordinate.
     let values = |r: &Reader<'_>, e: ExprId| {
         let env = |n: &str| r.parameters.iter().find(|p| p.name == n).map(|p| p.value);
         r.pool.eval(e, &env).ok()
@@ -201,12 +204,14 @@ fn read(r: &mut Reader<'_>, b: &Spanned<RawBody>, index: usize) -> Result<Body, 
             num[i][j] = values(r, inertia[i][j]).unwrap_or(f64::NAN);
         }
     }
-    if num.iter().flatten().all(|v| v.is_finite()) && !positive_definite(&num) {
-        return Err(ModelError::at(
-            raw.inertia.span(),
-            format!("the inertia tensor {num:?} is not positive definite at the parameters' values"),
-        )
-        .with_help("principal moments are positive (and each is at most the sum of the other two)"));
+    if num.iter().flatten().all(|v| v.is_finite()) {
+        if let Err(why) = physical(&num) {
+            return Err(ModelError::at(
+                raw.inertia.span(),
+                format!("the inertia tensor {num:?} is not a rigid body's at the parameters' values: {why}"),
+            )
+            .with_help("principal moments are ≥ 0 and each is at most the sum of the other two (a thin rod has one zero moment)"));
+        }
     }
     Ok(Body {
         name,
@@ -266,12 +271,30 @@ fn agree_with_file(r: &Reader<'_>, given: ExprId, want: f64, span: Range<usize>,
 }
 
 /// Leading principal minors all positive.
-fn positive_definite(m: &[[f64; 3]; 3]) -> bool {
-    let d1 = m[0][0];
-    let d2 = m[0][0] * m[1][1] - m[0][1] * m[1][0];
-    let d3 = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-    d1 > 0.0 && d2 > 0.0 && d3 > 0.0
+/// Whether `m` is a rigid body's inertia tensor: symmetric, its principal
+/// moments ≥ 0 and each at most the sum of the other two (to rounding).
+fn physical(m: &[[f64; 3]; 3]) -> Result<(), String> {
+    let scale = m.iter().flatten().fold(0.0f64, |a, &x| a.max(x.abs()));
+    let tol = 1e-12 * scale;
+    for (i, j) in [(0, 1), (0, 2), (1, 2)] {
+        if (m[i][j] - m[j][i]).abs() > tol {
+            return Err(format!("I{}{} ≠ I{}{}", i + 1, j + 1, j + 1, i + 1));
+        }
+    }
+    let moments = nalgebra::Matrix3::from_fn(|i, j| m[i][j]).symmetric_eigenvalues();
+    let (a, b, c) = (moments[0], moments[1], moments[2]);
+    if let Some(&negative) = [a, b, c].iter().find(|&&x| x < -tol) {
+        return Err(format!("a principal moment is negative ({negative})"));
+    }
+    if scale == 0.0 {
+        return Ok(());
+    }
+    for (x, y, z) in [(a, b, c), (b, c, a), (c, a, b)] {
+        if x > y + z + tol {
+            return Err(format!("the principal moment {x} exceeds the sum of the other two ({y} + {z})"));
+        }
+    }
+    Ok(())
 }
 
 /// The inertia: three principal moments, or a symmetric 3×3 tensor.
