@@ -461,3 +461,79 @@ fn an_error_in_a_body_file_names_its_line_and_column() {
     assert!(first.contains(":3:11: in the body file broken_body.toml:5:"), "{}", r.describe());
     assert!(first.contains("unknown name 'R'"), "{}", r.describe());
 }
+
+/// A body in roll, pitch and yaw (`sequence = "xyz"`): with no torque its
+/// angular momentum in space, Dᵀ·L with D = R_z(ps)·R_y(th)·R_x(ph) written out
+/// here, stays where it starts; and a run that pitches through ±π/2 stops at
+/// the Tait–Bryan gimbal singularity, |cos th| → 0, with its reason.
+#[test]
+fn a_body_in_tait_bryan_angles_keeps_its_angular_momentum_in_space() {
+    let out = scratch("bodies", "xyz.csv");
+    let r = lagrange(&[
+        "simulate",
+        "examples/tops/free_body_xyz.toml",
+        "--until",
+        "10",
+        "--rtol",
+        "1e-11",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let text = std::fs::read_to_string(&out).unwrap();
+    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (ph, th, ps) = (col("ph"), col("th"), col("ps"));
+    let l_body = [col("L1"), col("L2"), col("L3")];
+    let mut first: Option<[f64; 3]> = None;
+    let mut rows = 0;
+    for line in lines {
+        let v: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+        let (c1, s1) = (v[ph].cos(), v[ph].sin());
+        let (c2, s2) = (v[th].cos(), v[th].sin());
+        let (c3, s3) = (v[ps].cos(), v[ps].sin());
+        // D = R_z(ps) R_y(th) R_x(ph), each the turn of the frame (passive).
+        let rx = [[1.0, 0.0, 0.0], [0.0, c1, s1], [0.0, -s1, c1]];
+        let ry = [[c2, 0.0, -s2], [0.0, 1.0, 0.0], [s2, 0.0, c2]];
+        let rz = [[c3, s3, 0.0], [-s3, c3, 0.0], [0.0, 0.0, 1.0]];
+        let mul = |a: [[f64; 3]; 3], b: [[f64; 3]; 3]| -> [[f64; 3]; 3] {
+            std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
+        };
+        let d = mul(rz, mul(ry, rx));
+        let lb = l_body.map(|c| v[c]);
+        let space: [f64; 3] = std::array::from_fn(|i| (0..3).map(|k| d[k][i] * lb[k]).sum());
+        let first = *first.get_or_insert(space);
+        for k in 0..3 {
+            assert!((space[k] - first[k]).abs() < 1e-8, "L{} in space moved to {} from {}", k + 1, space[k], first[k]);
+        }
+        rows += 1;
+    }
+    assert!(rows > 100, "{rows} rows");
+
+    let model = std::fs::read_to_string(repo_root().join("examples/tops/free_body_xyz.toml")).unwrap();
+    let file = scratch("bodies", "xyz_gimbal.toml");
+    // A pure turn about the body's y axis: th runs through π/2.
+    let pitching = model
+        .replace("ph = 0.3", "ph = 0")
+        .replace("th = 0.2", "th = 1.4")
+        .replace("ps = -0.4", "ps = 0")
+        .replace("\"ph'\" = 0.5", "\"ph'\" = 0")
+        .replace("\"th'\" = 1.0", "\"th'\" = 3.0")
+        .replace("\"ps'\" = -0.7", "\"ps'\" = 0");
+    std::fs::write(&file, pitching).unwrap();
+    let r = lagrange(&["simulate", file.to_str().unwrap(), "--until", "2", "--out", "gimbal.csv"]);
+    assert_eq!(r.code, Some(1), "{}", r.stderr);
+    assert!(r.stderr.contains("|cos th| fell below") && r.stderr.contains("xyz angles"), "{}", r.stderr);
+
+    // `top` reads the notes' angles only, and says so at the body.
+    let r = lagrange(&["top", "examples/tops/free_body_xyz.toml"]);
+    assert_eq!(r.code, Some(2), "{}", r.stderr);
+    assert!(r.stderr.contains("free_body_xyz.toml:11:1") && r.stderr.contains("z-x-z"), "{}", r.stderr);
+    // A sequence that is not one is refused where it is written.
+    let bad = scratch("bodies", "bad_sequence.toml");
+    std::fs::write(&bad, model.replace("sequence = \"xyz\"", "sequence = \"xxz\"")).unwrap();
+    let r = lagrange(&["derive", bad.to_str().unwrap()]);
+    assert_eq!(r.code, Some(2), "{}", r.stderr);
+    assert!(r.stderr.contains("'xxz' is not a sequence of three turns") && r.stderr.contains(":15:12"), "{}", r.stderr);
+}

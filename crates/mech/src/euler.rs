@@ -1,4 +1,5 @@
-//! Euler angles in the notes' convention (section 3.2.4, appendix A.5).
+//! Euler angles in the notes' convention (section 3.2.4, appendix A.5), and
+//! the other eleven rotation sequences engineers use.
 //!
 //! α turns about the space z axis, β about the new x axis, γ about the newest
 //! z axis. `D = D_γ·D_β·D_α` takes the components of a vector in the fixed
@@ -12,6 +13,12 @@
 //! ω₃ = α' cos β + γ'
 //! ```
 //!
+//! A [`Sequence`] names the three axes of the turns (`"zxz"` is the notes';
+//! `"xyz"` the Tait–Bryan roll, pitch and yaw of most engineering models):
+//! `D = R_c(γ)·R_b(β)·R_a(α)` with `R_k(θ)` the turn of the frame by θ about
+//! its axis k, and ω = γ' e_c + β' R_c(γ) e_b + α' R_c(γ) R_b(β) e_a in body
+//! components. The notes' sequence keeps its written-out forms above.
+//!
 //! Both the symbolic forms (for derivations) and the numeric ones (for
 //! placing the parts of a body and for recording ω along a run) live here so
 //! that one convention serves every command.
@@ -20,6 +27,152 @@ use sym::{ExprId, Func, Pool};
 
 /// A 3×3 matrix of expressions, row-major.
 pub type ExprMatrix = [[ExprId; 3]; 3];
+
+/// The axes of the three turns (0 = x, 1 = y, 2 = z), each turn about an
+/// axis other than the one before: six proper Euler sequences (first axis =
+/// last) and six Tait–Bryan ones (three different axes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Sequence(pub [usize; 3]);
+
+impl Sequence {
+    /// The notes' z-x-z angles.
+    pub const NOTES: Sequence = Sequence([2, 0, 2]);
+
+    /// Reads `"zxz"`, `"xyz"`, … (case-insensitive); None for anything else.
+    pub fn parse(text: &str) -> Option<Sequence> {
+        let axes: Vec<usize> = text
+            .chars()
+            .map(|c| match c.to_ascii_lowercase() {
+                'x' => Some(0),
+                'y' => Some(1),
+                'z' => Some(2),
+                _ => None,
+            })
+            .collect::<Option<_>>()?;
+        match axes.as_slice() {
+            &[a, b, c] if a != b && b != c => Some(Sequence([a, b, c])),
+            _ => None,
+        }
+    }
+
+    /// Whether the first and last turns are about the same axis (proper
+    /// Euler angles: the gimbal singularity is at sin β = 0; Tait–Bryan
+    /// angles have it at cos β = 0).
+    pub fn proper(self) -> bool {
+        self.0[0] == self.0[2]
+    }
+
+    /// Its name, `"zxz"`.
+    pub fn name(self) -> String {
+        self.0.iter().map(|&k| ['x', 'y', 'z'][k]).collect()
+    }
+}
+
+/// The turn of the frame by θ about its axis k (components in the old frame
+/// to components in the new), given sin θ and cos θ: the pattern of
+/// `D_α = [[c, s, 0], [−s, c, 0], [0, 0, 1]]` about z.
+fn turn<T: Copy>(k: usize, s: T, c: T, neg_s: T, zero: T, one: T) -> [[T; 3]; 3] {
+    let (i, j) = ((k + 1) % 3, (k + 2) % 3);
+    let mut m = [[zero; 3]; 3];
+    m[k][k] = one;
+    m[i][i] = c;
+    m[j][j] = c;
+    m[i][j] = s;
+    m[j][i] = neg_s;
+    m
+}
+
+/// `D = R_c(γ)·R_b(β)·R_a(α)` of any sequence, as expressions.
+pub fn rotation_of(pool: &mut Pool, seq: Sequence, [al, be, ga]: [ExprId; 3]) -> ExprMatrix {
+    if seq == Sequence::NOTES {
+        return rotation(pool, al, be, ga);
+    }
+    let (zero, one) = (pool.zero(), pool.one());
+    let mut turns = Vec::new();
+    for (k, angle) in seq.0.into_iter().zip([al, be, ga]) {
+        let (s, c) = (pool.func(Func::Sin, angle), pool.func(Func::Cos, angle));
+        let neg_s = pool.neg(s);
+        turns.push(turn(k, s, c, neg_s, zero, one));
+    }
+    let ba = mat_mul(pool, &turns[1], &turns[0]);
+    mat_mul(pool, &turns[2], &ba)
+}
+
+fn mat_mul(pool: &mut Pool, a: &ExprMatrix, b: &ExprMatrix) -> ExprMatrix {
+    let mut c = [[pool.zero(); 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            let terms: Vec<ExprId> = (0..3).map(|k| pool.mul2(a[i][k], b[k][j])).collect();
+            c[i][j] = pool.add(&terms);
+        }
+    }
+    c
+}
+
+/// The body-frame angular velocity of any sequence, as expressions:
+/// γ' e_c + β' R_c(γ) e_b + α' R_c(γ) R_b(β) e_a.
+pub fn angular_velocity_of(pool: &mut Pool, seq: Sequence, angles: [ExprId; 3], rates: [ExprId; 3]) -> [ExprId; 3] {
+    if seq == Sequence::NOTES {
+        return angular_velocity(pool, angles, rates);
+    }
+    let (zero, one) = (pool.zero(), pool.one());
+    let [a, b, c] = seq.0;
+    let turn_of = |pool: &mut Pool, k: usize, angle: ExprId| {
+        let (s, c) = (pool.func(Func::Sin, angle), pool.func(Func::Cos, angle));
+        let neg_s = pool.neg(s);
+        turn(k, s, c, neg_s, zero, one)
+    };
+    let r_c = turn_of(pool, c, angles[2]);
+    let r_b = turn_of(pool, b, angles[1]);
+    let r_cb = mat_mul(pool, &r_c, &r_b);
+    let mut omega = [zero; 3];
+    for (i, w) in omega.iter_mut().enumerate() {
+        let mut terms = Vec::new();
+        if i == c {
+            terms.push(rates[2]);
+        }
+        terms.push(pool.mul2(rates[1], r_c[i][b]));
+        terms.push(pool.mul2(rates[0], r_cb[i][a]));
+        *w = pool.add(&terms);
+    }
+    omega
+}
+
+/// The numeric `D` of any sequence.
+pub fn rotation_of_f64(seq: Sequence, [al, be, ga]: [f64; 3]) -> [[f64; 3]; 3] {
+    if seq == Sequence::NOTES {
+        return rotation_f64(al, be, ga);
+    }
+    let t = |k: usize, x: f64| {
+        let (s, c) = x.sin_cos();
+        turn(k, s, c, -s, 0.0, 1.0)
+    };
+    let [a, b, c] = seq.0;
+    mat_mul_f64(&t(c, ga), &mat_mul_f64(&t(b, be), &t(a, al)))
+}
+
+/// The numeric body-frame angular velocity of any sequence.
+#[cfg(test)]
+pub fn angular_velocity_of_f64(seq: Sequence, [_, be, ga]: [f64; 3], rates: [f64; 3]) -> [f64; 3] {
+    if seq == Sequence::NOTES {
+        return angular_velocity_f64(be, ga, rates);
+    }
+    let t = |k: usize, x: f64| {
+        let (s, c) = x.sin_cos();
+        turn(k, s, c, -s, 0.0, 1.0)
+    };
+    let [a, b, c] = seq.0;
+    let (r_c, r_b) = (t(c, ga), t(b, be));
+    let r_cb = mat_mul_f64(&r_c, &r_b);
+    std::array::from_fn(|i| {
+        let own = if i == c { rates[2] } else { 0.0 };
+        own + rates[1] * r_c[i][b] + rates[0] * r_cb[i][a]
+    })
+}
+
+fn mat_mul_f64(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
+}
 
 /// The rotation `D = D_γ·D_β·D_α` from fixed-frame to body-frame components,
 /// as expressions in the three angle expressions.
@@ -140,6 +293,70 @@ mod tests {
             for j in 0..3 {
                 let v = pool.eval(d[i][j], &env).unwrap();
                 assert!((v - e[i][j]).abs() < 1e-15);
+            }
+        }
+    }
+
+    const ALL: [&str; 12] = ["zxz", "xyx", "yzy", "zyz", "xzx", "yxy", "xyz", "yzx", "zxy", "xzy", "zyx", "yxz"];
+
+    /// ω from D by finite differences: Ḋ·Dᵀ = −[ω]× in body components.
+    fn omega_from_rotation(seq: Sequence, q: [f64; 3], rates: [f64; 3]) -> [f64; 3] {
+        let h = 1e-6;
+        let at = |s: f64| rotation_of_f64(seq, std::array::from_fn(|k| q[k] + s * rates[k] * h));
+        let (dp, dm, d) = (at(1.0), at(-1.0), at(0.0));
+        let dd: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| (dp[i][j] - dm[i][j]) / (2.0 * h)));
+        let dt: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| d[j][i]));
+        let w = matmul(&dd, &dt);
+        [w[1][2], w[2][0], w[0][1]]
+    }
+
+    #[test]
+    fn every_sequence_is_a_rotation_whose_rate_is_its_angular_velocity() {
+        assert_eq!(ALL.iter().filter_map(|s| Sequence::parse(s)).count(), 12);
+        for bad in ["zzx", "xy", "xyzx", "abc", ""] {
+            assert_eq!(Sequence::parse(bad), None, "{bad}");
+        }
+        let (q, rates) = ([0.4, 1.2, -0.9], [0.7, -0.3, 1.9]);
+        let mut pool = Pool::default();
+        let names = ["al", "be", "ga", "ald", "bed", "gad"];
+        let syms: Vec<ExprId> = names.iter().map(|n| pool.symbol(n)).collect();
+        let values = [q[0], q[1], q[2], rates[0], rates[1], rates[2]];
+        let env = |n: &str| names.iter().position(|m| *m == n).map(|i| values[i]);
+        for name in ALL {
+            let seq = Sequence::parse(name).unwrap();
+            assert_eq!(seq.name(), name);
+            let d = rotation_of_f64(seq, q);
+            let ddt = matmul(&d, &std::array::from_fn(|i| std::array::from_fn(|j| d[j][i])));
+            for i in 0..3 {
+                for j in 0..3 {
+                    let id = if i == j { 1.0 } else { 0.0 };
+                    assert!((ddt[i][j] - id).abs() < 1e-14, "{name}: D·Dᵀ");
+                }
+            }
+            let w = angular_velocity_of_f64(seq, q, rates);
+            let fd = omega_from_rotation(seq, q, rates);
+            let sym_d = rotation_of(&mut pool, seq, [syms[0], syms[1], syms[2]]);
+            let sym_w = angular_velocity_of(&mut pool, seq, [syms[0], syms[1], syms[2]], [syms[3], syms[4], syms[5]]);
+            for k in 0..3 {
+                assert!((w[k] - fd[k]).abs() < 1e-8, "{name}: ω{}: {} vs {}", k + 1, w[k], fd[k]);
+                assert!((pool.eval(sym_w[k], &env).unwrap() - w[k]).abs() < 1e-14, "{name}: symbolic ω{}", k + 1);
+                for j in 0..3 {
+                    assert!((pool.eval(sym_d[k][j], &env).unwrap() - d[k][j]).abs() < 1e-14, "{name}: D{k}{j}");
+                }
+            }
+        }
+        // The notes' sequence through the general product: the written-out forms.
+        let general = mat_mul_f64(
+            &turn(2, q[2].sin(), q[2].cos(), -q[2].sin(), 0.0, 1.0),
+            &mat_mul_f64(
+                &turn(0, q[1].sin(), q[1].cos(), -q[1].sin(), 0.0, 1.0),
+                &turn(2, q[0].sin(), q[0].cos(), -q[0].sin(), 0.0, 1.0),
+            ),
+        );
+        let notes = rotation_f64(q[0], q[1], q[2]);
+        for i in 0..3 {
+            for j in 0..3 {
+                assert!((general[i][j] - notes[i][j]).abs() < 1e-15);
             }
         }
     }

@@ -16,7 +16,7 @@
 //! between the fixed origin and a point or two consecutive points whose
 //! distance does not change along the run.
 
-use crate::euler::rotation_f64;
+use crate::euler::rotation_of_f64;
 use crate::{Derivation, Orbit};
 use sym::{ExprId, Tape};
 
@@ -62,6 +62,8 @@ pub struct BodyAxes {
     pub point: usize,
     /// Its Euler angles' coordinates (α, β, γ).
     pub angles: [usize; 3],
+    /// The axes they turn about.
+    pub sequence: crate::euler::Sequence,
 }
 
 /// How the points follow from the coordinates.
@@ -110,7 +112,12 @@ impl Mechanism {
             }
             let mut bodies = Vec::new();
             for b in &model.bodies {
-                bodies.push(BodyAxes { name: b.name.clone(), point: points.len(), angles: b.angles });
+                bodies.push(BodyAxes {
+                    name: b.name.clone(),
+                    point: points.len(),
+                    angles: b.angles,
+                    sequence: b.sequence,
+                });
                 points.push(Point { name: b.name.clone(), kind: PointKind::Body, mass: value(b.mass) });
                 exprs.extend(b.position.iter().copied());
             }
@@ -190,7 +197,7 @@ impl Mechanism {
     pub fn axes(&self, b: usize, q: &[f64]) -> [[f64; 3]; 3] {
         let [a, be, g] = self.bodies[b].angles;
         // The rows of the rotation are the body axes.
-        rotation_f64(q[a], q[be], q[g])
+        rotation_of_f64(self.bodies[b].sequence, [q[a], q[be], q[g]])
     }
 }
 

@@ -217,6 +217,16 @@ impl Top {
             ));
         }
         let body = &model.bodies[0];
+        if body.sequence != crate::euler::Sequence::NOTES {
+            return Err(TopError::at(
+                body.span.clone(),
+                format!(
+                    "`lagrange top` reads a top in the notes' z-x-z Euler angles; this body turns in the sequence {}",
+                    body.sequence.name()
+                ),
+                "leave out `sequence` (or give sequence = \"zxz\") for `lagrange top`; `simulate` takes any sequence",
+            ));
+        }
         if !model.particles.is_empty()
             || model.kinetic.is_some()
             || model.potential.is_some()

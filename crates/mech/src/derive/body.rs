@@ -40,8 +40,8 @@ pub fn terms(
     gravity: Option<&Gravity>,
 ) -> BodyTerms {
     let [a, b, c] = body.angles;
-    let omega = euler::angular_velocity(pool, [q[a], q[b], q[c]], [qd[a], qd[b], qd[c]]);
-    let d = euler::rotation(pool, q[a], q[b], q[c]);
+    let omega = euler::angular_velocity_of(pool, body.sequence, [q[a], q[b], q[c]], [qd[a], qd[b], qd[c]]);
+    let d = euler::rotation_of(pool, body.sequence, [q[a], q[b], q[c]]);
     // v_ref = Σ ∂x/∂q_i q_i' + ∂x/∂t, space components.
     let v_ref: Vec<ExprId> = body
         .position

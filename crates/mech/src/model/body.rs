@@ -46,6 +46,8 @@ pub struct Body {
     pub principal: bool,
     /// The coordinates used as Euler angles (α, β, γ), as coordinate indices.
     pub angles: [usize; 3],
+    /// The axes the three angles turn about (`sequence = "zxz"`, the notes').
+    pub sequence: crate::euler::Sequence,
     /// The reference point in space, functions of (q, t).
     pub position: [ExprId; 3],
     /// The centre of mass relative to the reference point, body components (parameters).
@@ -64,6 +66,7 @@ pub(crate) struct RawBody {
     mass: Option<Spanned<NumOrText>>,
     inertia: Spanned<toml::Value>,
     angles: Spanned<Vec<Spanned<String>>>,
+    sequence: Option<Spanned<String>>,
     position: Option<Spanned<Vec<Spanned<NumOrText>>>>,
     center_of_mass: Option<Spanned<Vec<Spanned<NumOrText>>>>,
 }
@@ -144,6 +147,15 @@ fn read(r: &mut Reader<'_>, b: &Spanned<RawBody>, index: usize) -> Result<Body, 
         angles[k] = i;
     }
 
+    let sequence = match &raw.sequence {
+        None => crate::euler::Sequence::NOTES,
+        Some(s) => crate::euler::Sequence::parse(s.get_ref()).ok_or_else(|| {
+            ModelError::at(s.span(), format!("'{}' is not a sequence of three turns", s.get_ref())).with_help(
+                "three axes, each other than the one before: \"zxz\" (the notes', default), \"zyz\", \"xyx\", …, or Tait–Bryan \"xyz\", \"zyx\", …",
+            )
+        })?,
+    };
+
     // Reference point and centre of mass: three components each.
     let three = |r: &mut Reader<'_>,
                  v: &Option<Spanned<Vec<Spanned<NumOrText>>>>,
@@ -219,6 +231,7 @@ fn read(r: &mut Reader<'_>, b: &Spanned<RawBody>, index: usize) -> Result<Body, 
         inertia,
         principal,
         angles,
+        sequence,
         position,
         center_of_mass,
         span: b.span(),

@@ -43,17 +43,36 @@ pub struct GimbalGuard {
     pub body: String,
     /// β's name.
     pub beta_name: String,
+    /// The body's sequence of turns: proper Euler angles are singular at
+    /// sin β = 0, Tait–Bryan angles at cos β = 0.
+    pub sequence: crate::euler::Sequence,
 }
 
 impl GimbalGuard {
     /// Whether the state is past the guard.
     pub fn violated(&self, q: &[f64]) -> bool {
-        let s = q[self.beta].sin().abs();
+        let s = self.gauge(q[self.beta]).abs();
         s.is_nan() || s < self.threshold
+    }
+
+    /// sin β for proper Euler angles, cos β for Tait–Bryan ones: zero at the
+    /// singularity.
+    fn gauge(&self, beta: f64) -> f64 {
+        gauge(self.sequence.proper(), beta)
     }
 
     /// What happened at time t, in the user's terms.
     pub fn message(&self, t: f64) -> String {
+        if !self.sequence.proper() {
+            return format!(
+                "body '{}' reached the gimbal singularity of its {} angles at t = {t}: |cos {b}| fell below {:.1e} ({b} near ±π/2), where the first and last turns are about the same axis and the angles' mass matrix (determinant ∝ cos²{b}) is singular, so the accelerations cannot be trusted. {}",
+                self.body,
+                self.sequence.name(),
+                self.threshold,
+                self.advice(),
+                b = self.beta_name
+            );
+        }
         format!(
             "body '{}' reached the gimbal singularity of its Euler angles at t = {t}: |sin {b}| fell below {:.1e} ({b} near 0 or π), where α and γ turn about the same axis and the angles' mass matrix (determinant ∝ sin²{b}) is singular, so the accelerations cannot be trusted. {}",
             self.body,
@@ -70,6 +89,14 @@ impl GimbalGuard {
 
     /// What to do about it.
     pub fn advice(&self) -> String {
+        if self.sequence != crate::euler::Sequence::NOTES {
+            let at = if self.sequence.proper() { "0 or π" } else { "±π/2" };
+            return format!(
+                "{} angles cannot follow a motion through {b} = {at}: choose another sequence (`sequence` of the body) or tilt the fixed frame for this motion, or end the run earlier (a shorter end time, or a stop condition)",
+                self.sequence.name(),
+                b = self.beta_name
+            );
+        }
         format!(
             "Euler angles cannot follow a motion through {b} = 0 or π: tilt the fixed frame so that the body's 3-axis stays away from the fixed z axis, or end the run earlier (a shorter end time, or a stop condition)",
             b = self.beta_name
@@ -84,13 +111,24 @@ impl GimbalGuard {
 pub(crate) fn guard_events(guards: &[GimbalGuard]) -> Vec<Event<'static>> {
     let mut events = Vec::with_capacity(2 * guards.len());
     for g in guards {
-        let (beta, s2) = (g.beta, g.threshold * g.threshold);
+        let (beta, s2, proper) = (g.beta, g.threshold * g.threshold, g.sequence.proper());
         events.push(
-            Event::new(move |_t, y| y[beta].sin().powi(2) - s2).with_direction(Direction::Falling).with_terminal(true),
+            Event::new(move |_t, y| gauge(proper, y[beta]).powi(2) - s2)
+                .with_direction(Direction::Falling)
+                .with_terminal(true),
         );
-        events.push(Event::new(move |_t, y| y[beta].sin()).with_terminal(true));
+        events.push(Event::new(move |_t, y| gauge(proper, y[beta])).with_terminal(true));
     }
     events
+}
+
+/// sin β (proper Euler angles) or cos β (Tait–Bryan): zero at the singularity.
+fn gauge(proper: bool, beta: f64) -> f64 {
+    if proper {
+        beta.sin()
+    } else {
+        beta.cos()
+    }
 }
 
 /// One [`GimbalGuard`] per body, for a run at relative tolerance `rtol`.
@@ -101,7 +139,13 @@ pub fn gimbal_guards(d: &crate::Derivation, rtol: f64) -> Vec<GimbalGuard> {
         .iter()
         .map(|b| {
             let beta = b.angles[1];
-            GimbalGuard { beta, threshold: s, body: b.name.clone(), beta_name: d.model.coordinates[beta].name.clone() }
+            GimbalGuard {
+                beta,
+                threshold: s,
+                body: b.name.clone(),
+                beta_name: d.model.coordinates[beta].name.clone(),
+                sequence: b.sequence,
+            }
         })
         .collect()
 }
