@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 pub struct Args {
     /// The problem file (TOML): independent, unknown, integrand, [parameters], [boundary].
     pub problem: PathBuf,
-    /// Output format.
+    /// Output format: text, or json (the schema `lagrange.extremal/1`).
     #[arg(long, value_enum, default_value_t = ReportFormat::Text)]
     pub format: ReportFormat,
     /// Draw the extremal and the straight line to this SVG file.

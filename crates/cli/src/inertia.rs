@@ -15,12 +15,12 @@ use std::path::PathBuf;
 /// Options of `inertia`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// The body file (TOML): [[parts]] with shape, mass, size, center, orientation, or a density over a region.
+    /// The body file (TOML): [[parts]] with shape, mass, size, center, orientation, a density over a region, or a given inertia tensor.
     pub body: PathBuf,
     /// The reference point: `com` (the centre of mass) or x,y,z (numbers or expressions in the parameters).
     #[arg(long, default_value = "com", allow_hyphen_values = true, value_name = "com|x,y,z")]
     pub about: String,
-    /// Output format.
+    /// Output format: text, or json (the schema `lagrange.inertia/1`).
     #[arg(long, value_enum, default_value_t = ReportFormat::Text)]
     pub format: ReportFormat,
     /// Override a parameter: --set a=2 (repeatable).

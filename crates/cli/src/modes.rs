@@ -23,7 +23,7 @@ pub struct Args {
     /// Start the search for the equilibrium here instead of at [initial]: --at a=0 b=0.
     #[arg(long = "at", value_name = "COORD=VALUE", num_args = 1.., value_parser = crate::parse_set)]
     pub at: Vec<(String, f64)>,
-    /// Output format.
+    /// Output format: text, or json (the schema `lagrange.modes/1`).
     #[arg(long, value_enum, default_value_t = ReportFormat::Text)]
     pub format: ReportFormat,
     /// Draw every mode's shape, animated, to this SVG file.

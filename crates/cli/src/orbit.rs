@@ -17,7 +17,7 @@ use std::path::PathBuf;
 pub struct Args {
     /// The model file (TOML): coordinates r and an angle, L = μ/2·(r'² + r²θ'²) − U(r).
     pub model: PathBuf,
-    /// Output format.
+    /// Output format: text, or json (the schema `lagrange.orbit/1`).
     #[arg(long, value_enum, default_value_t = ReportFormat::Text)]
     pub format: ReportFormat,
     /// Draw U_eff with the energy and the turning points, and the orbit, to this SVG file.

@@ -17,7 +17,7 @@ use std::path::PathBuf;
 pub struct Args {
     /// The model file (TOML): one [[bodies]] table with inertia = ["I", "I", "I3"].
     pub model: PathBuf,
-    /// Output format.
+    /// Output format: text, or json (the schema `lagrange.top/1`).
     #[arg(long, value_enum, default_value_t = ReportFormat::Text)]
     pub format: ReportFormat,
     /// Draw U_eff(β) with E' and the turning angles, and the path of the symmetry axis, to this SVG file.

@@ -401,3 +401,121 @@ fn every_body_example_runs_and_follows_the_contract() {
         assert!(v["tensor_exact"].is_array() || v["tensor_exact"].is_null(), "{file}");
     }
 }
+
+/// Each analysis' `--help` names its own JSON schema and no other command's.
+#[test]
+fn help_names_each_commands_own_schema() {
+    let commands = ["inertia", "modes", "orbit", "top", "extremal"];
+    for command in commands {
+        let Run { code, stdout, stderr, .. } = run(&[command, "--help"]);
+        assert_eq!(code, Some(0), "{stderr}");
+        assert!(stdout.contains(&format!("lagrange.{command}/1")), "{command} --help:\n{stdout}");
+        for other in commands.iter().filter(|&&o| o != command) {
+            assert!(
+                !stdout.contains(&format!("lagrange.{other}/1")),
+                "{command} --help names {other}'s schema:\n{stdout}"
+            );
+        }
+    }
+}
+
+/// A tensor part given the solid cube's tensor M a²/6 · 1 (notes, Sec. 3.2.3 b)
+/// at the cube's centre gives what the cube shape gives: about the centre, the
+/// corner, and in principal moments.
+#[test]
+fn a_given_tensor_equal_to_the_cube_agrees_with_the_cube() {
+    let given = body(
+        "tensor_cube.toml",
+        "name = \"cube by its tensor\"\n[parameters]\nM = 1.0\na = 1.0\n\n[[parts]]\nshape = \"tensor\"\nmass = \"M\"\n\
+         inertia = [\"M*a^2/6\", \"M*a^2/6\", \"M*a^2/6\"]\ncenter = [\"a/2\", \"a/2\", \"a/2\"]\n",
+    );
+    let full = body(
+        "tensor_cube_full.toml",
+        "[parameters]\nM = 1.0\na = 1.0\n\n[[parts]]\nshape = \"tensor\"\nmass = \"M\"\n\
+         inertia = [[\"M*a^2/6\", 0, 0], [0, \"M*a^2/6\", 0], [0, 0, \"M*a^2/6\"]]\ncenter = [\"a/2\", \"a/2\", \"a/2\"]\n",
+    );
+    for about in ["com", "0,0,0", "1,-2,0.5"] {
+        let cube = inertia(&["examples/bodies/cube.toml", "--about", about]);
+        for file in [&given, &full] {
+            let v = inertia(&[file, "--about", about]);
+            assert_eq!(v["parts"][0]["shape"], "tensor");
+            assert_eq!(v["parts"][0]["method"], "given");
+            close(v["mass"].as_f64().unwrap(), cube["mass"].as_f64().unwrap(), 1e-12);
+            let (c, w) = (vector(&v["center_of_mass"]), vector(&cube["center_of_mass"]));
+            for k in 0..3 {
+                close(c[k], w[k], 1e-12);
+            }
+            close_matrix(&matrix(&v["tensor"]), &matrix(&cube["tensor"]), 1e-12);
+            close_matrix(&matrix(&v["tensor_com"]), &matrix(&cube["tensor_com"]), 1e-12);
+            let (p, q) = (vector(&v["principal_moments"]), vector(&cube["principal_moments"]));
+            for k in 0..3 {
+                close(p[k], q[k], 1e-12);
+            }
+            assert_eq!(v["tensor_exact"], cube["tensor_exact"], "about {about}");
+        }
+    }
+}
+
+/// A given tensor (m1 = 2 at the origin) and a solid sphere (m2 = 1, R = 1) at
+/// (3, 0, 0): the tensor about the centre of mass by the parallel-axis theorem,
+/// worked by hand here: X = 3 m2/(m1 + m2) = 1, so the tensor part sits at
+/// d1 = (−1, 0, 0) and the sphere at d2 = (2, 0, 0), each adding m (|d|² 1 − d dᵀ).
+#[test]
+fn a_given_tensor_and_an_offset_sphere_follow_steiner() {
+    let path = body(
+        "tensor_and_sphere.toml",
+        "[[parts]]\nname = \"block\"\nshape = \"tensor\"\nmass = 2\n\
+         inertia = [[2, -0.5, 0], [-0.5, 3, 0], [0, 0, 4]]\n\n\
+         [[parts]]\nname = \"ball\"\nshape = \"sphere\"\nmass = 1\nsize = [1]\ncenter = [3, 0, 0]\n",
+    );
+    let v = inertia(&[&path]);
+    let (m1, m2, r) = (2.0, 1.0, 1.0);
+    let given = [[2.0, -0.5, 0.0], [-0.5, 3.0, 0.0], [0.0, 0.0, 4.0]];
+    let sphere = 0.4 * m2 * r * r;
+    let x = 3.0 * m2 / (m1 + m2);
+    let c = vector(&v["center_of_mass"]);
+    close(c[0], x, 1e-15);
+    assert_eq!([c[1], c[2]], [0.0, 0.0]);
+    let (d1, d2) = (0.0 - x, 3.0 - x);
+    // m (|d|² 1 − d dᵀ) for d along x: 0 on xx, m d² on yy and zz.
+    let want = [
+        [given[0][0] + sphere, given[0][1], given[0][2]],
+        [given[1][0], given[1][1] + sphere + m1 * d1 * d1 + m2 * d2 * d2, given[1][2]],
+        [given[2][0], given[2][1], given[2][2] + sphere + m1 * d1 * d1 + m2 * d2 * d2],
+    ];
+    // = [[2.4, -0.5, 0], [-0.5, 9.4, 0], [0, 0, 10.4]]
+    close_matrix(&matrix(&v["tensor"]), &want, 1e-14);
+    assert_eq!(strings(&v["tensor_exact"])[1], ["-1/2", "47/5", "0"]);
+    // About the origin (the tensor part's centre): I_O = I_R + M (|R|² 1 − R Rᵀ).
+    let o = inertia(&[&path, "--about", "0,0,0"]);
+    let mt = m1 + m2;
+    let shifted: [[f64; 3]; 3] =
+        std::array::from_fn(|j| std::array::from_fn(|k| want[j][k] + if j == k && j > 0 { mt * x * x } else { 0.0 }));
+    close_matrix(&matrix(&o["tensor"]), &shifted, 1e-14);
+}
+
+#[test]
+fn bad_tensors_exit_2_with_file_line_and_column() {
+    let head = "[parameters]\nM = 1.0\na = 1.0\n\n[[parts]]\nshape = \"tensor\"\nmass = \"M\"\n";
+    check_bad(
+        "tensor_asymmetric.toml",
+        &format!("{head}inertia = [[1, 0.5, 0],\n           [0.25, 1, 0],\n           [0, 0, 1]]\n"),
+        "9:13",
+        "the inertia tensor is not symmetric: I12 = 1/2 but I21 = 1/4",
+    );
+    check_bad(
+        "tensor_negative_moment.toml",
+        &format!("{head}inertia = [\"a\", \"-a\", \"a\"]\n"),
+        "8:17",
+        "the moment I22 is -1: expected a moment ≥ 0",
+    );
+    check_bad(
+        "tensor_indefinite.toml",
+        &format!("{head}inertia = [[1, 2, 0], [2, 1, 0], [0, 0, 1]]\n"),
+        "8:11",
+        "not positive semi-definite",
+    );
+    check_bad("tensor_triangle.toml", &format!("{head}inertia = [1, 1, 3]\n"), "8:11", "break the triangle inequality");
+    check_bad("tensor_missing.toml", head, "5:1", "(tensor) has no `inertia`");
+    check_bad("tensor_infinite.toml", &format!("{head}inertia = [1, \"1/(a - 1)\", 1]\n"), "8:15", "finite number");
+}

@@ -8,7 +8,7 @@ use serde_json::Value;
 use std::f64::consts::PI;
 
 mod common;
-use common::{close, json, run, scratch, Run};
+use common::{close, json, run, scratch, Run, TempFile};
 
 fn floats(v: &Value) -> Vec<f64> {
     v.as_array().expect("an array").iter().map(|x| x.as_f64().expect("a number")).collect()
@@ -81,6 +81,40 @@ fn modes_bad_input_exits_2() {
     let Run { code, stderr, .. } = run(&["modes", "examples/coupled_oscillators.toml", "--at", "zz=1"]);
     assert_eq!(code, Some(2));
     assert!(stderr.contains("no coordinate 'zz'"), "{stderr}");
+}
+
+/// A generalized force keeps small oscillations out: the refusal names the
+/// `[forces]` entry's value by file:line:col (here line 7, after `y = `).
+#[test]
+fn modes_refuses_a_generalized_force_at_its_entry() {
+    let text = "coordinates = [\"x\", \"y\"]\n\
+                kinetic = \"(x'^2 + y'^2)/2\"\n\
+                potential = \"(x^2 + y^2)/2\"\n\
+                \n\
+                [forces]\n\
+                x = \"0\"\n\
+                y = \"-y'\"\n\
+                \n\
+                [initial]\n\
+                x = 0.1\n\
+                y = 0.0\n\
+                \"x'\" = 0.0\n\
+                \"y'\" = 0.0\n";
+    assert_eq!(text.lines().nth(6), Some("y = \"-y'\""));
+    let model = TempFile::with_text("modes-force", text);
+    let Run { code, stderr, .. } = run(&["modes", model.path()]);
+    assert_eq!(code, Some(2), "{stderr}");
+    let first = stderr.lines().next().unwrap_or("");
+    assert!(first.starts_with(&format!("error: {}:7:5: ", model.path())), "{stderr}");
+    assert!(first.contains("generalized forces [forces], which are not derived from a potential"), "{stderr}");
+
+    // The same for the example with a driving force (its only [forces] entry).
+    let example = std::fs::read_to_string(common::repo_root().join("examples/driven_oscillator.toml")).unwrap();
+    let (line, entry) = example.lines().enumerate().find(|(_, l)| l.starts_with("x = \"F0")).expect("the force");
+    let col = entry.find('"').unwrap() + 1;
+    let Run { code, stderr, .. } = run(&["modes", "examples/driven_oscillator.toml"]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.starts_with(&format!("error: examples/driven_oscillator.toml:{}:{col}: ", line + 1)), "{stderr}");
 }
 
 #[test]

@@ -20,7 +20,8 @@
 //!
 //! Each part contributes its mass m, its centre of mass c and its tensor about
 //! c in the body's axes: a shape's diagonal tensor turned by its orientation
-//! (`R·diag(I₁, I₂, I₃)·Rᵀ` with `R = Dᵀ`, `D` the notes' Euler rotation), or a
+//! (`R·diag(I₁, I₂, I₃)·Rᵀ` with `R = Dᵀ`, `D` the notes' Euler rotation), a
+//! given tensor turned the same way (`R·I·Rᵀ`), or a
 //! density's moments integrated over its box, exactly when ρ is a polynomial in
 //! x, y, z and by adaptive cubature otherwise. The body's tensor about its
 //! centre of mass R is `Σ I_c + m (|d|² 1 − d dᵀ)`, d = c − R, built both about
@@ -34,7 +35,7 @@ mod cubature;
 mod polynomial;
 mod shapes;
 
-pub use body_file::{BodyFile, Part, PartKind, DENSITY_VARIABLES};
+pub use body_file::{BodyFile, Part, PartKind, DENSITY_VARIABLES, TENSOR_RTOL};
 pub(crate) use cubature::N_MOMENTS;
 pub(crate) use polynomial::{as_polynomial, integrate_monomials};
 
@@ -63,7 +64,7 @@ pub type ExprMatrix = [[ExprId; 3]; 3];
 pub struct PartProperties {
     /// The part's name.
     pub name: String,
-    /// Its shape's name (`box`, …, `density`).
+    /// Its shape's name (`box`, …, `density`, `tensor`).
     pub shape: &'static str,
     /// Its mass.
     pub mass: ExprId,
@@ -71,7 +72,8 @@ pub struct PartProperties {
     pub center_of_mass: [ExprId; 3],
     /// Its tensor about its own centre of mass, in the body's axes.
     pub tensor: ExprMatrix,
-    /// How it was integrated: `"closed form"`, `"exact polynomial integration"` or `"adaptive cubature"`.
+    /// How it was found: `"closed form"`, `"exact polynomial integration"`,
+    /// `"adaptive cubature"`, or `"given"` (a tensor part's own).
     pub method: &'static str,
 }
 
@@ -262,6 +264,20 @@ impl BodyFile {
                         center_of_mass: *center,
                         tensor,
                         method: "closed form",
+                    }
+                }
+                PartKind::Tensor { mass, inertia, center, orientation, .. } => {
+                    let tensor = match orientation {
+                        Some([al, be, ga]) => turn(&mut pool, inertia, *al, *be, *ga),
+                        None => *inertia,
+                    };
+                    PartProperties {
+                        name: part.name.clone(),
+                        shape: "tensor",
+                        mass: *mass,
+                        center_of_mass: *center,
+                        tensor,
+                        method: "given",
                     }
                 }
                 PartKind::Density { density, span, region } => {

@@ -143,10 +143,14 @@ impl Modes {
     }
 }
 
+/// The hint of a refusal because the model is not conservative.
+const NEEDS_CONSERVATIVE: &str = "small oscillations need L = T − U with T quadratic in q' and U(q) not depending on t";
+
 /// Why there are no normal modes to report.
 #[derive(Debug, Clone, thiserror::Error)]
 pub enum ModesError {
-    /// The model itself is wrong (missing initial values, unknown `--at` name).
+    /// The model itself is wrong (missing initial values, unknown `--at` name),
+    /// or a place in it keeps small oscillations out (a `[forces]` entry).
     #[error("{0}")]
     Model(ModelError),
     /// The model is not a conservative system about a fixed equilibrium.
@@ -184,9 +188,7 @@ impl ModesError {
     pub fn help(&self) -> Option<String> {
         match self {
             ModesError::Model(e) => e.help.clone(),
-            ModesError::NotConservative { .. } => {
-                Some("small oscillations need L = T − U with T quadratic in q' and U(q) not depending on t".into())
-            }
+            ModesError::NotConservative { .. } => Some(NEEDS_CONSERVATIVE.into()),
             ModesError::NoEquilibrium { .. } => Some(
                 "start elsewhere (give the coordinates other starting values), or check that U has a minimum".into(),
             ),
@@ -276,21 +278,23 @@ fn potential_of(d: &Derivation, pool: &mut Pool) -> Result<(ExprId, Vec<String>)
             ))
         }
     }
-    for &f in d.forces() {
-        match probe::decide_zero(pool, f) {
-            Decision::Zero => {}
+    for (i, &f) in d.forces().iter().enumerate() {
+        let reason = match probe::decide_zero(pool, f) {
+            Decision::Zero => continue,
             Decision::NonZero => {
-                return not_conservative(
-                    "the model has generalized forces [forces], which are not derived from a potential".into(),
-                )
+                "the model has generalized forces [forces], which are not derived from a potential".to_string()
             }
             Decision::Undecided => {
-                return not_conservative(format!(
-                    "could not decide whether the generalized force {} is zero ({UNDECIDED})",
-                    pool.display(f)
-                ))
+                format!("could not decide whether the generalized force {} is zero ({UNDECIDED})", pool.display(f))
             }
-        }
+        };
+        // A force comes from its `[forces]` entry: the refusal points at it.
+        return match d.model.forces.get(i).and_then(Option::as_ref) {
+            Some(entry) => {
+                Err(ModesError::Model(ModelError::at(entry.span.clone(), reason).with_help(NEEDS_CONSERVATIVE)))
+            }
+            None => not_conservative(reason),
+        };
     }
     if d.dissipation.is_some() {
         notes.push("Rayleigh's dissipation function is left out: these are the undamped normal modes".into());
@@ -980,6 +984,22 @@ mod tests {
         let d = derive(&example("kepler"), &[]);
         let e = normal_modes(&d, &ModesConfig::default()).unwrap_err();
         assert!(matches!(e, ModesError::NoEquilibrium { .. }), "{e}");
+    }
+
+    /// A `[forces]` entry keeps small oscillations out; the refusal points at
+    /// the entry's value (the second coordinate's, the first's being zero).
+    #[test]
+    fn a_generalized_force_is_refused_at_its_entry() {
+        let text = "coordinates = [\"x\", \"y\"]\nkinetic = \"(x'^2 + y'^2)/2\"\npotential = \"(x^2 + y^2)/2\"\n\
+                    [forces]\nx = \"0\"\ny = \"-y'\"\n[initial]\nx = 0.0\ny = 0.0\n\"x'\" = 0.0\n\"y'\" = 0.0\n";
+        let d = derive(text, &[]);
+        let e = normal_modes(&d, &ModesConfig::default()).unwrap_err();
+        let ModesError::Model(m) = e else { panic!("expected a located model error, got {e:?}") };
+        assert!(m.message.contains("not derived from a potential"), "{}", m.message);
+        let span = m.span.expect("the error has a place");
+        assert_eq!(&text[span.clone()], "\"-y'\"");
+        assert_eq!(span.start, text.find("y = \"-y'").unwrap() + 4);
+        assert!(m.help.is_some());
     }
 
     /// The notes' case (iii): started in the Ω₃ mode, the molecule stays in it:

@@ -106,6 +106,19 @@ pub fn text(body: &BodyFile, p: &MassProperties, point: [ExprId; 3], r: &Inertia
                     if orientation.is_some() { "; turned by Euler angles: I = R diag(I_x, I_y, I_z) Rᵀ" } else { "" };
                 format!("{}{}", shape.describe(), turned)
             }
+            PartKind::Tensor { principal, orientation, .. } => {
+                let given = if *principal { "given principal moments" } else { "given tensor" };
+                let turned = if orientation.is_some() {
+                    if *principal {
+                        "; turned by Euler angles: I = R diag(I_x, I_y, I_z) Rᵀ"
+                    } else {
+                        "; turned by Euler angles: I = R I_part Rᵀ"
+                    }
+                } else {
+                    ""
+                };
+                format!("{given} about its centre of mass{turned}")
+            }
             PartKind::Density { density, .. } => {
                 format!("density ρ = {} over a box, by {}", body.pool().display(*density), rp.method)
             }

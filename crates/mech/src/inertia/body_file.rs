@@ -5,12 +5,15 @@
 //! Enter with [`BodyFile::parse`]. A part is a standard shape (`point`, `rod`,
 //! `box`, `sphere`, `shell`, `cylinder`, `cone`, `disk`, `ring`, `ellipsoid`)
 //! with `mass`, `size`, `center` (where its centre of mass sits) and an
-//! optional `orientation` (Euler angles, [`crate::euler`]), or a `density`
-//! ρ(x, y, z) over a box `region`. Values are numbers or expressions in
-//! `[parameters]`.
+//! optional `orientation` (Euler angles, [`crate::euler`]), a `density`
+//! ρ(x, y, z) over a box `region`, or a `tensor`: a given `inertia` about the
+//! part's centre of mass (three principal moments or a symmetric 3×3 tensor,
+//! spelled as a model's `[[bodies]]` spell it), checked to be one a mass
+//! distribution can have. Values are numbers or expressions in `[parameters]`.
 
 use super::shapes::Shape;
 use crate::error::ModelError;
+use crate::probe::{self, Decision};
 use crate::source::Parameter;
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -20,6 +23,12 @@ use toml::Spanned;
 
 /// The integration variables of a density part; no parameter may take these names.
 pub const DENSITY_VARIABLES: [&str; 3] = ["x", "y", "z"];
+
+/// How far a given tensor may miss positive semi-definiteness and the
+/// triangle inequality of its principal moments, relative to its trace: the
+/// rounding of moments written as decimals to about ten digits (a thin disk's
+/// I_z = I_x + I_y written as 0.6666666667 = 0.3333333333 + 0.3333333333).
+pub const TENSOR_RTOL: f64 = 1e-9;
 
 /// Names the expression language reserves.
 const RESERVED: &[&str] = &[
@@ -50,7 +59,7 @@ pub struct Part {
     pub span: Range<usize>,
 }
 
-/// A standard shape or a density.
+/// A standard shape, a density or a given tensor.
 #[derive(Debug, Clone)]
 pub enum PartKind {
     /// A shape with closed-form moments.
@@ -74,6 +83,21 @@ pub enum PartKind {
         span: Range<usize>,
         /// Per axis [lower, upper], expressions in the parameters.
         region: [[ExprId; 2]; 3],
+    },
+    /// A part whose inertia tensor about its centre of mass is given
+    /// (`shape = "tensor"`).
+    Tensor {
+        /// Its mass.
+        mass: ExprId,
+        /// The tensor about its centre of mass in the part's axes, symmetric
+        /// (diagonal when given as principal moments).
+        inertia: [[ExprId; 3]; 3],
+        /// Whether it was given as three principal moments.
+        principal: bool,
+        /// Its centre of mass in the body's axes.
+        center: [ExprId; 3],
+        /// Euler angles (α, β, γ) turning the part's axes; `None`: aligned with the body's.
+        orientation: Option<[ExprId; 3]>,
     },
 }
 
@@ -100,6 +124,47 @@ struct RawPart {
     orientation: Option<RawList>,
     density: Option<Spanned<NumOrText>>,
     region: Option<Spanned<Vec<RawList>>>,
+    inertia: Option<Spanned<Vec<Spanned<InertiaItem>>>>,
+}
+
+/// An entry of a tensor part's `inertia`: a principal moment, or a row of the tensor.
+enum InertiaItem {
+    Moment(NumOrText),
+    Row(Vec<Spanned<NumOrText>>),
+}
+
+// By hand rather than `#[serde(untagged)]`: an untagged enum buffers its
+// input, which loses the places of a row's entries.
+impl<'de> Deserialize<'de> for InertiaItem {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Item;
+        impl<'de> serde::de::Visitor<'de> for Item {
+            type Value = InertiaItem;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a moment (a number or an expression in quotes) or a row of three")
+            }
+            fn visit_i64<E>(self, v: i64) -> Result<InertiaItem, E> {
+                Ok(InertiaItem::Moment(NumOrText::Num(v as f64)))
+            }
+            fn visit_u64<E>(self, v: u64) -> Result<InertiaItem, E> {
+                Ok(InertiaItem::Moment(NumOrText::Num(v as f64)))
+            }
+            fn visit_f64<E>(self, v: f64) -> Result<InertiaItem, E> {
+                Ok(InertiaItem::Moment(NumOrText::Num(v)))
+            }
+            fn visit_str<E>(self, v: &str) -> Result<InertiaItem, E> {
+                Ok(InertiaItem::Moment(NumOrText::Text(v.to_string())))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<InertiaItem, A::Error> {
+                let mut row = Vec::new();
+                while let Some(x) = seq.next_element::<Spanned<NumOrText>>()? {
+                    row.push(x);
+                }
+                Ok(InertiaItem::Row(row))
+            }
+        }
+        d.deserialize_any(Item)
+    }
 }
 
 #[derive(Deserialize, Clone)]
@@ -207,9 +272,11 @@ impl Reader<'_> {
         let shape_name = p.shape.get_ref().as_str();
         let kind = if shape_name == "density" {
             self.density_part(p, &name)?
+        } else if shape_name == "tensor" {
+            self.tensor_part(p, raw.span(), &name)?
         } else {
             let shape = Shape::from_name(shape_name).ok_or_else(|| {
-                let known: Vec<&str> = Shape::ALL.iter().map(|s| s.name()).chain(["density"]).collect();
+                let known: Vec<&str> = Shape::ALL.iter().map(|s| s.name()).chain(["density", "tensor"]).collect();
                 ModelError::at(p.shape.span(), format!("unknown shape '{shape_name}'"))
                     .with_help(format!("the shapes are: {}", known.join(", ")))
             })?;
@@ -233,18 +300,11 @@ impl Reader<'_> {
                     .with_help("`density` and `region` belong to parts with shape = \"density\""));
             }
         }
-        let raw_mass = p.mass.as_ref().ok_or_else(|| {
-            ModelError::at(table.clone(), format!("part '{name}' ({}) has no `mass`", shape.name()))
-                .with_help("give its mass: mass = \"M\" or a number")
-        })?;
-        let mass = self.value(raw_mass, false, "the mass")?;
-        let m = self.number(mass, raw_mass.span(), "the mass")?;
-        if m < 0.0 {
-            return Err(ModelError::at(
-                raw_mass.span(),
-                format!("the mass of part '{name}' is {m}: expected a mass ≥ 0"),
-            ));
+        if let Some(i) = &p.inertia {
+            return Err(ModelError::at(i.span(), format!("a {} has no `inertia`: its shape gives it", shape.name()))
+                .with_help("a part with a given inertia has shape = \"tensor\""));
         }
+        let mass = self.mass(p, table.clone(), name, shape.name())?;
         let names = shape.size_names();
         let size = match (&p.size, names.len()) {
             (None, 0) => Vec::new(),
@@ -269,6 +329,29 @@ impl Reader<'_> {
                 size.into_iter().map(|(e, _, _)| e).collect()
             }
         };
+        let (center, orientation) = self.placement(p)?;
+        Ok(PartKind::Shape { shape, mass, size, center, orientation })
+    }
+
+    /// A shape's or a tensor part's `mass` (`kind` names the part's shape).
+    fn mass(&mut self, p: &RawPart, table: Range<usize>, name: &str, kind: &str) -> Result<ExprId, ModelError> {
+        let raw_mass = p.mass.as_ref().ok_or_else(|| {
+            ModelError::at(table, format!("part '{name}' ({kind}) has no `mass`"))
+                .with_help("give its mass: mass = \"M\" or a number")
+        })?;
+        let mass = self.value(raw_mass, false, "the mass")?;
+        let m = self.number(mass, raw_mass.span(), "the mass")?;
+        if m < 0.0 {
+            return Err(ModelError::at(
+                raw_mass.span(),
+                format!("the mass of part '{name}' is {m}: expected a mass ≥ 0"),
+            ));
+        }
+        Ok(mass)
+    }
+
+    /// A shape's or a tensor part's `center` (default the origin) and `orientation`.
+    fn placement(&mut self, p: &RawPart) -> Result<([ExprId; 3], Option<[ExprId; 3]>), ModelError> {
         let center = match &p.center {
             Some(c) => {
                 let c = self.list(c, 3, "the centre", "x, y, z of the part's centre of mass")?;
@@ -283,7 +366,103 @@ impl Reader<'_> {
             }
             None => None,
         };
-        Ok(PartKind::Shape { shape, mass, size, center, orientation })
+        Ok((center, orientation))
+    }
+
+    /// A part with a given `inertia` about its centre of mass: three principal
+    /// moments or a symmetric 3×3 tensor, checked to be the tensor of some
+    /// mass distribution (symmetric, positive semi-definite, each principal
+    /// moment at most the sum of the other two).
+    fn tensor_part(&mut self, p: &RawPart, table: Range<usize>, name: &str) -> Result<PartKind, ModelError> {
+        let misplaced = [
+            ("size", p.size.as_ref().map(|v| v.span()), "its `inertia` gives the moments"),
+            ("density", p.density.as_ref().map(|v| v.span()), "`density` belongs to parts with shape = \"density\""),
+            ("region", p.region.as_ref().map(|v| v.span()), "`region` belongs to parts with shape = \"density\""),
+        ];
+        for (key, span, why) in misplaced {
+            if let Some(span) = span {
+                return Err(ModelError::at(span, format!("a tensor part has no `{key}`: {why}")));
+            }
+        }
+        let mass = self.mass(p, table.clone(), name, "tensor")?;
+        let raw = p.inertia.as_ref().ok_or_else(|| {
+            ModelError::at(table, format!("part '{name}' (tensor) has no `inertia`"))
+                .with_help("give its tensor about its centre of mass: inertia = [[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]], or principal moments inertia = [A, B, C]")
+        })?;
+        let span = raw.span();
+        let items = raw.get_ref();
+        let expected = "expected three principal moments [A, B, C] or a 3×3 tensor [[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]]";
+        let zero = self.pool.zero();
+        let mut inertia = [[zero; 3]; 3];
+        // The place of each entry, for the checks below.
+        let mut places: [[Range<usize>; 3]; 3] = std::array::from_fn(|_| std::array::from_fn(|_| span.clone()));
+        let mut values = [[0.0; 3]; 3];
+        let principal = if items.len() == 3 && items.iter().all(|x| matches!(x.get_ref(), InertiaItem::Row(_))) {
+            for (i, row) in items.iter().enumerate() {
+                let InertiaItem::Row(entries) = row.get_ref() else { unreachable!("checked: every item is a row") };
+                if entries.len() != 3 {
+                    return Err(ModelError::at(
+                        row.span(),
+                        format!("row {} of the inertia tensor has {} entries, not 3", i + 1, entries.len()),
+                    ));
+                }
+                for (j, x) in entries.iter().enumerate() {
+                    let what = format!("the inertia entry I{}{}", i + 1, j + 1);
+                    inertia[i][j] = self.value(x, false, &what)?;
+                    values[i][j] = self.number(inertia[i][j], x.span(), &what)?;
+                    places[i][j] = x.span();
+                }
+            }
+            false
+        } else if items.len() == 3 && items.iter().all(|x| matches!(x.get_ref(), InertiaItem::Moment(_))) {
+            for (k, x) in items.iter().enumerate() {
+                let InertiaItem::Moment(v) = x.get_ref() else { unreachable!("checked: every item is a moment") };
+                let what = format!("the principal moment I{}", k + 1);
+                let v = Spanned::new(x.span(), v.clone());
+                inertia[k][k] = self.value(&v, false, &what)?;
+                values[k][k] = self.number(inertia[k][k], x.span(), &what)?;
+                places[k][k] = x.span();
+            }
+            true
+        } else {
+            return Err(ModelError::at(span, format!("the inertia has {} entries: {expected}", items.len())));
+        };
+        for i in 0..3 {
+            for j in i + 1..3 {
+                // A symmetric tensor is a claim: proven, or the part is refused.
+                let problem = match probe::decide_equal(&mut self.pool, inertia[i][j], inertia[j][i]) {
+                    Decision::Zero => continue,
+                    Decision::NonZero => "the inertia tensor is not symmetric",
+                    Decision::Undecided => "could not show that the inertia tensor is symmetric",
+                };
+                return Err(ModelError::at(
+                    places[j][i].clone(),
+                    format!(
+                        "{problem}: I{}{} = {} but I{}{} = {}",
+                        i + 1,
+                        j + 1,
+                        self.pool.display(inertia[i][j]),
+                        j + 1,
+                        i + 1,
+                        self.pool.display(inertia[j][i])
+                    ),
+                )
+                .with_help("the tensor about the centre of mass is symmetric: I_jk = I_kj"));
+            }
+        }
+        let help = "a mass distribution's tensor has principal moments ≥ 0, each at most the sum of the other two";
+        for k in 0..3 {
+            if values[k][k] < 0.0 {
+                return Err(ModelError::at(
+                    places[k][k].clone(),
+                    format!("the moment I{0}{0} is {1}: expected a moment ≥ 0", k + 1, values[k][k]),
+                )
+                .with_help(help));
+            }
+        }
+        check_tensor(&values).map_err(|why| ModelError::at(span, why).with_help(help))?;
+        let (center, orientation) = self.placement(p)?;
+        Ok(PartKind::Tensor { mass, inertia, principal, center, orientation })
     }
 
     fn density_part(&mut self, p: &RawPart, name: &str) -> Result<PartKind, ModelError> {
@@ -292,6 +471,7 @@ impl Reader<'_> {
             ("size", p.size.as_ref().map(|v| v.span()), "the region gives its extent"),
             ("center", p.center.as_ref().map(|v| v.span()), "x, y, z are the body's own coordinates"),
             ("orientation", p.orientation.as_ref().map(|v| v.span()), "x, y, z are the body's own axes"),
+            ("inertia", p.inertia.as_ref().map(|v| v.span()), "its tensor is integrated from ρ"),
         ];
         for (key, span, why) in misplaced {
             if let Some(span) = span {
@@ -328,6 +508,32 @@ impl Reader<'_> {
         }
         Ok(PartKind::Density { density, span: raw_density.span(), region })
     }
+}
+
+/// Whether a symmetric tensor (its values) is one a mass distribution can
+/// have: positive semi-definite with each principal moment at most the sum of
+/// the other two, both to [`TENSOR_RTOL`] of its trace; otherwise why not.
+fn check_tensor(t: &[[f64; 3]; 3]) -> Result<(), String> {
+    let m = nalgebra::Matrix3::from_fn(|j, k| t[j][k]);
+    let mut moments: Vec<f64> = nalgebra::SymmetricEigen::new(m).eigenvalues.iter().copied().collect();
+    moments.sort_by(f64::total_cmp);
+    let slack = TENSOR_RTOL * (t[0][0] + t[1][1] + t[2][2]).abs();
+    let shown = || format!("({}, {}, {})", moments[0], moments[1], moments[2]);
+    if moments[0] < -slack {
+        return Err(format!(
+            "the inertia tensor is not positive semi-definite: its principal moments are {}, and a moment of inertia is ≥ 0",
+            shown()
+        ));
+    }
+    if moments[2] > moments[0] + moments[1] + slack {
+        return Err(format!(
+            "the principal moments {} break the triangle inequality: I3 = {} exceeds I1 + I2 = {}",
+            shown(),
+            moments[2],
+            moments[0] + moments[1]
+        ));
+    }
+    Ok(())
 }
 
 /// A plain decimal literal (`0.7`, `-12.25`, `3`) as the exact rational it
@@ -475,6 +681,47 @@ mod tests {
             "[\"a\", \"0\"]",
         );
         check_error("[parameters]\nx = 1.0\n[[parts]]\nshape = \"point\"\nmass = 1\n", "reserved", "x");
+    }
+
+    #[test]
+    fn bad_tensors_are_located() {
+        let part = format!("{HEAD}[[parts]]\nshape = \"tensor\"\nmass = \"M\"\n");
+        check_error(
+            &format!("{part}inertia = [[1, 0.5, 0], [0.25, 1, 0], [0, 0, 1]]\n"),
+            "not symmetric: I12 = 1/2 but I21 = 1/4",
+            "0.25",
+        );
+        check_error(
+            &format!("{part}inertia = [1, \"-a\", 1]\n"),
+            "the moment I22 is -2: expected a moment ≥ 0",
+            "\"-a\"",
+        );
+        // Diagonal entries ≥ 0, yet an eigenvalue 1 − 2 < 0.
+        check_error(
+            &format!("{part}inertia = [[1, 2, 0], [2, 1, 0], [0, 0, 1]]\n"),
+            "not positive semi-definite",
+            "[[1, 2, 0], [2, 1, 0], [0, 0, 1]]",
+        );
+        check_error(&format!("{part}inertia = [1, 1, 3]\n"), "break the triangle inequality", "[1, 1, 3]");
+        check_error(&format!("{part}inertia = [1, 1]\n"), "the inertia has 2 entries", "[1, 1]");
+        check_error(
+            &format!("{part}inertia = [[1, 0, 0], [0, 1], [0, 0, 1]]\n"),
+            "row 2 of the inertia tensor",
+            "[0, 1]",
+        );
+        check_error(&format!("{part}inertia = [1, \"1/(a - 2)\", 1]\n"), "expected a finite number", "\"1/(a - 2)\"");
+        check_error(&format!("{part}inertia = [1, 1, 1]\nsize = [1]\n"), "a tensor part has no `size`", "[1]");
+        check_error(&format!("{part}center = [0, 0, 0]\n"), "(tensor) has no `inertia`", "[[parts]]");
+        check_error(
+            &format!("{HEAD}[[parts]]\nshape = \"box\"\nmass = 1\nsize = [1, 1, 1]\ninertia = [1, 1, 1]\n"),
+            "a box has no `inertia`",
+            "[1, 1, 1]",
+        );
+        // A flat body's moments written to ten digits meet I3 = I1 + I2 within rounding.
+        let disk = format!("{part}inertia = [0.3333333333, 0.3333333333, 0.6666666667]\n");
+        assert!(BodyFile::parse(&disk, &[]).is_ok());
+        // A point-like part (all moments zero) is a tensor too.
+        assert!(BodyFile::parse(&format!("{part}inertia = [0, 0, 0]\n"), &[]).is_ok());
     }
 
     #[test]

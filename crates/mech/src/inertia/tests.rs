@@ -152,3 +152,45 @@ fn two_masses_give_the_reduced_mass() {
     assert!(p.pool().is_zero(p.tensor[0][0]));
     close(p.value(p.tensor[2][2]), 3.0, 1e-15);
 }
+
+/// A tensor part given the solid cube's tensor M a²/6 · 1 is the cube: the same
+/// mass, centre of mass and tensor, exactly, about the centre and a corner.
+#[test]
+fn a_given_tensor_equal_to_a_cube_is_the_cube() {
+    let given = "name = \"cube\"\n[parameters]\nM = 3.0\na = 2.0\n[[parts]]\nshape = \"tensor\"\nmass = \"M\"\ninertia = [[\"M*a^2/6\", 0, 0], [0, \"M*a^2/6\", 0], [0, 0, \"M*a^2/6\"]]\ncenter = [\"a/2\", \"a/2\", \"a/2\"]\n";
+    let principal_form = given.replace(
+        "inertia = [[\"M*a^2/6\", 0, 0], [0, \"M*a^2/6\", 0], [0, 0, \"M*a^2/6\"]]",
+        "inertia = [\"M*a^2/6\", \"M*a^2/6\", \"M*a^2/6\"]",
+    );
+    let mut cube = props(CUBE);
+    let corner = cube.parse_about("0,0,0").unwrap();
+    let want = cube.about(corner);
+    let want_text = want.map(|row| row.map(|e| cube.pool().display(e).to_string()));
+    for src in [given, principal_form.as_str()] {
+        let mut p = props(src);
+        assert!(p.exact);
+        assert_eq!(p.parts[0].shape, "tensor");
+        assert_eq!(p.parts[0].method, "given");
+        assert_eq!(p.pool().display(p.mass).to_string(), "M");
+        let t = p.tensor;
+        check_matrix(&p, &t, [["M*a^2/6", "0", "0"], ["0", "M*a^2/6", "0"], ["0", "0", "M*a^2/6"]]);
+        let corner = p.parse_about("0,0,0").unwrap();
+        let c = p.about(corner);
+        assert_eq!(c.map(|row| row.map(|e| p.pool().display(e).to_string())), want_text);
+    }
+}
+
+/// A given tensor turned by Euler angles is R I Rᵀ, like a shape.
+#[test]
+fn a_given_tensor_turns_like_a_shape() {
+    let boxed = "[[parts]]\nshape = \"box\"\nmass = 2\nsize = [1, 2, 3]\norientation = [0.3, 1.1, -0.7]\n";
+    // The box's moments 2·(b² + c²)/12, …: (13/6, 5/3, 5/6).
+    let given = "[[parts]]\nshape = \"tensor\"\nmass = 2\ninertia = [\"13/6\", \"5/3\", \"5/6\"]\norientation = [0.3, 1.1, -0.7]\n";
+    let (a, b) = (props(boxed), props(given));
+    let (ia, ib) = (a.values(&a.tensor), b.values(&b.tensor));
+    for j in 0..3 {
+        for k in 0..3 {
+            assert!((ia[j][k] - ib[j][k]).abs() < 1e-14, "{j}{k}: {} vs {}", ia[j][k], ib[j][k]);
+        }
+    }
+}
