@@ -218,3 +218,45 @@ fn orbit_rejects_other_models() {
     assert_eq!(code, Some(2));
     assert!(stderr.contains("exactly two"), "{stderr}");
 }
+
+/// With dissipation the damped motion's roots come too: m x'' + β x' + k x = 0
+/// has s = −β/2m ± i√(k/m − β²/4m²) (underdamped) and two real roots
+/// (−β ± √(β² − 4mk))/2m (overdamped), in `lagrange.modes/1` as `C` and `damped`.
+#[test]
+fn a_damped_oscillator_has_the_roots_of_its_characteristic_equation() {
+    for (be, om) in [(0.1, 1.0), (0.3, 2.0), (3.0, 1.0)] {
+        let r = run(&[
+            "modes",
+            "examples/damped_oscillator.toml",
+            "--set",
+            &format!("be={be}"),
+            "--set",
+            &format!("om={om}"),
+            "--format",
+            "json",
+        ]);
+        assert_eq!(r.code, Some(0), "{}", r.stderr);
+        let v: serde_json::Value = serde_json::from_str(&r.stdout).unwrap();
+        assert_eq!(v["C"][0][0].as_f64(), Some(be));
+        let roots = v["damped"].as_array().unwrap();
+        assert_eq!(roots.len(), 2);
+        let (m, k) = (1.0f64, om * om);
+        let disc = be * be - 4.0 * m * k;
+        let want: Vec<(f64, f64)> = if disc < 0.0 {
+            let w = (-disc).sqrt() / (2.0 * m);
+            vec![(-be / (2.0 * m), w), (-be / (2.0 * m), -w)]
+        } else {
+            vec![((-be + disc.sqrt()) / (2.0 * m), 0.0), ((-be - disc.sqrt()) / (2.0 * m), 0.0)]
+        };
+        for (root, (re, im)) in roots.iter().zip(want) {
+            let (got_re, got_im) = (root["re"].as_f64().unwrap(), root["im"].as_f64().unwrap());
+            assert!((got_re - re).abs() < 1e-12 && (got_im - im).abs() < 1e-12, "be = {be}: {root} vs {re} {im}");
+            assert!((root["decay_rate"].as_f64().unwrap() + re).abs() < 1e-12);
+            assert!((root["frequency"].as_f64().unwrap() - im.abs()).abs() < 1e-12);
+        }
+    }
+    // Without dissipation there is no damped motion to report.
+    let r = run(&["modes", "examples/oscillator.toml", "--format", "json"]);
+    let v: serde_json::Value = serde_json::from_str(&r.stdout).unwrap();
+    assert!(v["damped"].is_null() && v["C"].is_null(), "{}", r.stdout);
+}

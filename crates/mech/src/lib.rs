@@ -97,7 +97,9 @@ pub use mechanism::{Mechanism, Point, PointKind};
 pub use model::{
     Body, ConstraintKind, ConstraintSpec, Coordinate, Gravity, InitialValue, Located, Model, Parameter, Particle,
 };
-pub use modes::{normal_modes, Mode, ModeKind, Modes, ModesConfig, ModesError, ModesReport, SymbolicModes};
+pub use modes::{
+    normal_modes, DampedRoot, Damping, Mode, ModeKind, Modes, ModesConfig, ModesError, ModesReport, SymbolicModes,
+};
 pub use num::{Method, Output};
 pub use orbit::{Kepler, Orbit, OrbitError, OrbitKind, OrbitReport};
 pub use report::{BodyReport, ConstraintReport, DeriveReport, HamiltonEquations, NamedExpr, Ordered};

@@ -132,8 +132,21 @@ pub struct Modes {
     pub stable: bool,
     /// The closed forms, when the system is small and the equilibrium exact.
     pub symbolic: Option<SymbolicModes>,
+    /// The damped motion, when the model has Rayleigh's dissipation function.
+    pub damping: Option<Damping>,
     /// Remarks for the reader (what was neglected, why no closed form).
     pub notes: Vec<String>,
+}
+
+/// The small motion with friction: T (q − q₀)'' + C (q − q₀)' + U (q − q₀) = 0,
+/// whose solutions go as e^{st} with det(s²T + sC + U) = 0.
+#[derive(Debug, Clone)]
+pub struct Damping {
+    /// C = ∂²R/∂q'∂q' at q₀ and q' = 0.
+    pub c_matrix: Vec<Vec<f64>>,
+    /// The 2n roots s = (Re s, Im s): decay rate −Re s, damped frequency |Im s|;
+    /// by decay rate, then by Im s descending (a conjugate pair + before −).
+    pub eigenvalues: Vec<(f64, f64)>,
 }
 
 impl Modes {
@@ -297,7 +310,7 @@ fn potential_of(d: &Derivation, pool: &mut Pool) -> Result<(ExprId, Vec<String>)
         };
     }
     if d.dissipation.is_some() {
-        notes.push("Rayleigh's dissipation function is left out: these are the undamped normal modes".into());
+        notes.push("the normal modes are the undamped ones (R left out); the damped motion's roots s include R".into());
     }
     let zero_vel: Subst = d.qd.iter().map(|&v| (v, pool.zero())).collect();
     // Terms linear in the velocities, b(q)·q', act like a magnetic field (gyroscopic
@@ -451,6 +464,10 @@ pub fn normal_modes(d: &Derivation, config: &ModesConfig) -> Result<Modes, Modes
 
     let to_rows =
         |m: &nalgebra::DMatrix<f64>| -> Vec<Vec<f64>> { (0..n).map(|i| (0..n).map(|j| m[(i, j)]).collect()).collect() };
+    let damping = match d.dissipation {
+        Some(r) => Some(damped(d, r, &q0, &tmat, &hmat)?),
+        None => None,
+    };
     Ok(Modes {
         coordinates: names,
         start,
@@ -463,8 +480,65 @@ pub fn normal_modes(d: &Derivation, config: &ModesConfig) -> Result<Modes, Modes
         modes,
         stable,
         symbolic,
+        damping,
         notes,
     })
+}
+
+/// C = ∂²R/∂q'∂q' at (q₀, q' = 0) and the roots of det(s²T + sC + U) = 0, the
+/// eigenvalues of the first-order system [[0, 1], [−T⁻¹U, −T⁻¹C]].
+fn damped(
+    d: &Derivation,
+    r: ExprId,
+    q0: &[f64],
+    tmat: &nalgebra::DMatrix<f64>,
+    hmat: &nalgebra::DMatrix<f64>,
+) -> Result<Damping, ModesError> {
+    let n = q0.len();
+    let mut pool = d.pool().clone();
+    let mut roots = Vec::with_capacity(n * n);
+    for i in 0..n {
+        let ri = pool.diff(r, d.qd[i]);
+        for j in 0..n {
+            roots.push(pool.diff(ri, d.qd[j]));
+        }
+    }
+    let at = || pairs(&d.model.coordinates.iter().map(|c| c.name.clone()).collect::<Vec<_>>(), q0);
+    let mut tape = Tape::compile(&pool, &roots, d.layout.symbols())
+        .map_err(|e| ModesError::NotConservative { reason: format!("R cannot be evaluated: {e}") })?;
+    let mut inputs = d.layout.values();
+    inputs[..n].copy_from_slice(q0);
+    inputs[n..2 * n].iter_mut().for_each(|v| *v = 0.0);
+    let mut c = vec![0.0; n * n];
+    tape.eval(&inputs, &mut c);
+    let cmat = nalgebra::DMatrix::from_row_slice(n, n, &c);
+    if !cmat.iter().all(|v| v.is_finite()) {
+        return Err(ModesError::NoEquilibrium {
+            start: at(), why: format!("∂²R/∂q'∂q' is not finite at {}", at())
+        });
+    }
+    let t_inv = tmat.clone().try_inverse().ok_or_else(|| ModesError::SingularKinetic { at: at() })?;
+    let mut a = nalgebra::DMatrix::<f64>::zeros(2 * n, 2 * n);
+    for i in 0..n {
+        a[(i, n + i)] = 1.0;
+    }
+    let (k, damp) = (-(&t_inv * hmat), -(&t_inv * &cmat));
+    a.view_mut((n, 0), (n, n)).copy_from(&k);
+    a.view_mut((n, n), (n, n)).copy_from(&damp);
+    let scale = a.amax().max(f64::MIN_POSITIVE);
+    let mut eigenvalues: Vec<(f64, f64)> = a
+        .complex_eigenvalues()
+        .iter()
+        .map(|s| {
+            // Rounding noise about a real root (or a zero decay) is zero.
+            let im = if s.im.abs() <= 1e-12 * scale { 0.0 } else { s.im };
+            let re = if s.re.abs() <= 1e-12 * scale { 0.0 } else { s.re };
+            (re, im)
+        })
+        .collect();
+    eigenvalues.sort_by(|x, y| (-x.0).total_cmp(&-y.0).then(y.1.total_cmp(&x.1)));
+    let rows = (0..n).map(|i| (0..n).map(|j| cmat[(i, j)]).collect()).collect();
+    Ok(Damping { c_matrix: rows, eigenvalues })
 }
 
 /// The starting configuration: `[initial]` values (0 where missing), overridden by `--at`.
@@ -810,6 +884,25 @@ pub struct ModesReport {
     pub exact_frequencies: Option<Vec<String>>,
     /// Newton iterations used to find the equilibrium.
     pub newton_iterations: usize,
+    /// C = ∂²R/∂q'∂q' at q₀, or null without dissipation.
+    #[serde(rename = "C")]
+    pub c_matrix: Option<Vec<Vec<f64>>>,
+    /// The damped motion's roots s of det(s²T + sC + U) = 0 (e^{st}), or null
+    /// without dissipation.
+    pub damped: Option<Vec<DampedRoot>>,
+}
+
+/// One root s of the damped motion.
+#[derive(Debug, Clone, Serialize)]
+pub struct DampedRoot {
+    /// Re s.
+    pub re: f64,
+    /// Im s.
+    pub im: f64,
+    /// −Re s: how fast the motion decays (negative: grows).
+    pub decay_rate: f64,
+    /// |Im s|: the damped angular frequency (0 for an overdamped root).
+    pub frequency: f64,
 }
 
 impl ModesReport {
@@ -832,6 +925,13 @@ impl ModesReport {
                 .and_then(|s| s.frequencies.as_ref().map(|f| (f, &s.pool)))
                 .map(|(f, pool)| f.iter().map(|&e| pool.display(e).to_string()).collect()),
             newton_iterations: m.newton_iterations,
+            c_matrix: m.damping.as_ref().map(|x| x.c_matrix.clone()),
+            damped: m.damping.as_ref().map(|x| {
+                x.eigenvalues
+                    .iter()
+                    .map(|&(re, im)| DampedRoot { re, im, decay_rate: -re, frequency: im.abs() })
+                    .collect()
+            }),
         }
     }
 }

@@ -119,10 +119,69 @@ pub fn text(d: &Derivation, m: &Modes, config: &ModesConfig, terms: &Terms) -> S
             "Unstable: some Ω² < 0, so U is not a minimum at q₀; a displacement along such a mode grows exponentially."
         );
     }
+    if let Some(damping) = &m.damping {
+        damped_text(&mut s, m, damping, terms);
+    }
     for note in &m.notes {
         let _ = writeln!(s, "Note: {note}.");
     }
     s
+}
+
+/// The damped motion's section: C and the roots s, a conjugate pair on one line.
+fn damped_text(s: &mut String, m: &Modes, damping: &mech::Damping, terms: &Terms) {
+    let n = m.coordinates.len();
+    let _ = writeln!(s);
+    let _ = writeln!(
+        s,
+        "Damped motion: T (q − q₀)'' + C (q − q₀)' + U (q − q₀) = 0 with C = ∂²R/∂q'∂q' at q₀, solutions e^(s t) with det(s²T + sC + U) = 0:"
+    );
+    if n <= MAX_PRINTED_SHAPE {
+        for (i, line) in matrix_lines(&damping.c_matrix).iter().enumerate() {
+            let label = if i == 0 { "C = " } else { "    " };
+            let _ = writeln!(s, "  {label}{line}");
+        }
+    } else {
+        let _ = writeln!(s, "  ({n}×{n} matrix; see {})", terms.full_output);
+    }
+    let roots = &damping.eigenvalues;
+    let mut k = 0;
+    while k < roots.len() {
+        let (re, im) = roots[k];
+        let pair = im > 0.0 && roots.get(k + 1).is_some_and(|&(r2, i2)| r2 == re && i2 == -im);
+        if pair {
+            let _ = writeln!(
+                s,
+                "  s = {} ± {}i    decay rate {}, damped frequency {}",
+                human(re),
+                human(im),
+                human(-re),
+                human(im)
+            );
+            k += 2;
+        } else {
+            let what = if im == 0.0 { "  (overdamped: no oscillation)" } else { "" };
+            let im_text = if im == 0.0 {
+                String::new()
+            } else {
+                format!(" {} {}i", if im < 0.0 { "−" } else { "+" }, human(im.abs()))
+            };
+            let _ = writeln!(s, "  s = {}{im_text}    decay rate {}{what}", human(re), human(-re));
+            k += 1;
+        }
+    }
+    let growing = roots.iter().any(|&(re, _)| re > 0.0);
+    let _ = writeln!(
+        s,
+        "{}",
+        if growing {
+            "Some Re s > 0: a small displacement grows."
+        } else if roots.iter().all(|&(re, _)| re < 0.0) {
+            "Every Re s < 0: a small displacement dies away."
+        } else {
+            "No Re s > 0, but some Re s = 0: an undamped or free motion remains."
+        }
+    );
 }
 
 /// An SVG with one row per mode: the coordinates side by side, each displaced
