@@ -82,20 +82,29 @@ fn turn<T: Copy>(k: usize, s: T, c: T, neg_s: T, zero: T, one: T) -> [[T; 3]; 3]
     m
 }
 
+/// The turn about axis k by `angle`, as expressions.
+fn turn_expr(pool: &mut Pool, k: usize, angle: ExprId) -> ExprMatrix {
+    let (s, c) = (pool.func(Func::Sin, angle), pool.func(Func::Cos, angle));
+    let neg_s = pool.neg(s);
+    let (zero, one) = (pool.zero(), pool.one());
+    turn(k, s, c, neg_s, zero, one)
+}
+
+/// The turn about axis k by `angle`, numerically.
+fn turn_f64(k: usize, angle: f64) -> [[f64; 3]; 3] {
+    let (s, c) = angle.sin_cos();
+    turn(k, s, c, -s, 0.0, 1.0)
+}
+
 /// `D = R_c(γ)·R_b(β)·R_a(α)` of any sequence, as expressions.
 pub fn rotation_of(pool: &mut Pool, seq: Sequence, [al, be, ga]: [ExprId; 3]) -> ExprMatrix {
     if seq == Sequence::NOTES {
         return rotation(pool, al, be, ga);
     }
-    let (zero, one) = (pool.zero(), pool.one());
-    let mut turns = Vec::new();
-    for (k, angle) in seq.0.into_iter().zip([al, be, ga]) {
-        let (s, c) = (pool.func(Func::Sin, angle), pool.func(Func::Cos, angle));
-        let neg_s = pool.neg(s);
-        turns.push(turn(k, s, c, neg_s, zero, one));
-    }
-    let ba = mat_mul(pool, &turns[1], &turns[0]);
-    mat_mul(pool, &turns[2], &ba)
+    let [a, b, c] = seq.0;
+    let (r_a, r_b, r_c) = (turn_expr(pool, a, al), turn_expr(pool, b, be), turn_expr(pool, c, ga));
+    let ba = mat_mul(pool, &r_b, &r_a);
+    mat_mul(pool, &r_c, &ba)
 }
 
 fn mat_mul(pool: &mut Pool, a: &ExprMatrix, b: &ExprMatrix) -> ExprMatrix {
@@ -115,17 +124,11 @@ pub fn angular_velocity_of(pool: &mut Pool, seq: Sequence, angles: [ExprId; 3], 
     if seq == Sequence::NOTES {
         return angular_velocity(pool, angles, rates);
     }
-    let (zero, one) = (pool.zero(), pool.one());
     let [a, b, c] = seq.0;
-    let turn_of = |pool: &mut Pool, k: usize, angle: ExprId| {
-        let (s, c) = (pool.func(Func::Sin, angle), pool.func(Func::Cos, angle));
-        let neg_s = pool.neg(s);
-        turn(k, s, c, neg_s, zero, one)
-    };
-    let r_c = turn_of(pool, c, angles[2]);
-    let r_b = turn_of(pool, b, angles[1]);
+    let r_c = turn_expr(pool, c, angles[2]);
+    let r_b = turn_expr(pool, b, angles[1]);
     let r_cb = mat_mul(pool, &r_c, &r_b);
-    let mut omega = [zero; 3];
+    let mut omega = [pool.zero(); 3];
     for (i, w) in omega.iter_mut().enumerate() {
         let mut terms = Vec::new();
         if i == c {
@@ -143,12 +146,8 @@ pub fn rotation_of_f64(seq: Sequence, [al, be, ga]: [f64; 3]) -> [[f64; 3]; 3] {
     if seq == Sequence::NOTES {
         return rotation_f64(al, be, ga);
     }
-    let t = |k: usize, x: f64| {
-        let (s, c) = x.sin_cos();
-        turn(k, s, c, -s, 0.0, 1.0)
-    };
     let [a, b, c] = seq.0;
-    mat_mul_f64(&t(c, ga), &mat_mul_f64(&t(b, be), &t(a, al)))
+    mat_mul_f64(&turn_f64(c, ga), &mat_mul_f64(&turn_f64(b, be), &turn_f64(a, al)))
 }
 
 /// The numeric body-frame angular velocity of any sequence.
@@ -157,12 +156,8 @@ pub fn angular_velocity_of_f64(seq: Sequence, [_, be, ga]: [f64; 3], rates: [f64
     if seq == Sequence::NOTES {
         return angular_velocity_f64(be, ga, rates);
     }
-    let t = |k: usize, x: f64| {
-        let (s, c) = x.sin_cos();
-        turn(k, s, c, -s, 0.0, 1.0)
-    };
     let [a, b, c] = seq.0;
-    let (r_c, r_b) = (t(c, ga), t(b, be));
+    let (r_c, r_b) = (turn_f64(c, ga), turn_f64(b, be));
     let r_cb = mat_mul_f64(&r_c, &r_b);
     std::array::from_fn(|i| {
         let own = if i == c { rates[2] } else { 0.0 };
@@ -346,13 +341,7 @@ mod tests {
             }
         }
         // The notes' sequence through the general product: the written-out forms.
-        let general = mat_mul_f64(
-            &turn(2, q[2].sin(), q[2].cos(), -q[2].sin(), 0.0, 1.0),
-            &mat_mul_f64(
-                &turn(0, q[1].sin(), q[1].cos(), -q[1].sin(), 0.0, 1.0),
-                &turn(2, q[0].sin(), q[0].cos(), -q[0].sin(), 0.0, 1.0),
-            ),
-        );
+        let general = mat_mul_f64(&turn_f64(2, q[2]), &mat_mul_f64(&turn_f64(0, q[1]), &turn_f64(2, q[0])));
         let notes = rotation_f64(q[0], q[1], q[2]);
         for i in 0..3 {
             for j in 0..3 {
