@@ -99,6 +99,26 @@ fn a_torque_fixed_in_space_adds_to_the_angular_momentum_in_space() {
     }
 }
 
+/// The leaning disc (a body on Euler angles with rolling constraints), started
+/// upright without lean, rolls straight along x at its speed v.
+#[test]
+fn an_upright_rolling_disc_rolls_straight() {
+    let out = TempFile::new("disc", "csv");
+    let args = ["--until", "5", "--samples", "51", "--set", "lean=0", "--set", "v=1.5", "--out", out.path()];
+    ok(&[&["simulate", "examples/constraints/rolling_disc.toml"][..], &args[..]].concat());
+    let csv = Csv::read(out.path());
+    let (t, x, y, th) = (csv.column("t"), csv.column("x"), csv.column("y"), csv.column("th"));
+    for k in 0..t.len() {
+        assert!((x[k] - 1.5 * t[k]).abs() < 1e-9, "x = {} at t = {}", x[k], t[k]);
+        assert!(
+            y[k].abs() < 1e-9 && (th[k] - std::f64::consts::FRAC_PI_2).abs() < 1e-9,
+            "y = {}, th = {}",
+            y[k],
+            th[k]
+        );
+    }
+}
+
 /// What a load or an input cannot be is refused at its entry (exit 2).
 #[test]
 fn bad_loads_and_inputs_exit_2_at_the_entry() {
