@@ -167,6 +167,47 @@ fn a_tree_of_bodies_moves_as_its_points_do() {
     }
 }
 
+/// A hinge about a tilted axis n (a steering head): the arm turns by ph about
+/// n = (1, 2, 2)/3 of its parent's axes, D_rel = cos ph + (1 − cos ph) n nᵀ −
+/// sin ph [n]ₓ written out here, and T, U agree with the points'.
+#[test]
+fn a_hinge_about_a_tilted_axis_moves_as_its_points_do() {
+    let text = format!(
+        "coordinates = [\"x\", \"be\", \"ph\"]\ngravity = \"g\"\n[parameters]\ng = 9.81\n{}{}",
+        cluster_table("base", "angle = \"be\"\naxis = \"y\"\nposition = [\"x\", \"0\", \"0.2*t\"]\n"),
+        cluster_table(
+            "arm",
+            "parent = \"base\"\nangle = \"ph\"\naxis = [\"1\", \"2\", \"2\"]\nposition = [\"0.5\", \"0\", \"0.3\"]\n"
+        ),
+    );
+    let d = derive(&text);
+    let n = [1.0 / 3.0, 2.0 / 3.0, 2.0 / 3.0];
+    let hinge = |a: f64| -> [[f64; 3]; 3] {
+        let (s, c) = a.sin_cos();
+        let cross = [[0.0, -n[2], n[1]], [n[2], 0.0, -n[0]], [-n[1], n[0], 0.0]];
+        std::array::from_fn(|i| {
+            std::array::from_fn(|j| if i == j { c } else { 0.0 } + (1.0 - c) * n[i] * n[j] - s * cross[i][j])
+        })
+    };
+    let place = |q: &[f64], t: f64| -> Vec<(f64, [f64; 3])> {
+        let d_base = turn(1, q[1]);
+        let x_base = [q[0], 0.0, 0.2 * t];
+        let d_arm = mul(&hinge(q[2]), &d_base);
+        let x_arm = add(x_base, to_space(&d_base, [0.5, 0.0, 0.3]));
+        let mut points = Vec::new();
+        for (d, x0) in [(d_base, x_base), (d_arm, x_arm)] {
+            points.extend(CLUSTER.iter().map(|&(m, r)| (m, add(x0, to_space(&d, r)))));
+        }
+        points
+    };
+    let names = ["x", "be", "ph"];
+    for (q, qd, t) in [([0.3, 0.4, 1.1], [0.5, 2.0, -0.7], 0.3), ([-1.0, 2.0, -2.3], [-2.2, 0.1, 1.3], 1.7)] {
+        let (kinetic, potential) = points_energy(&place, &q, &qd, t, 9.81);
+        assert_close("T", value(&d, d.kinetic().unwrap(), &names, &q, &qd, t), kinetic);
+        assert_close("U", value(&d, d.potential().unwrap(), &names, &q, &qd, t), potential);
+    }
+}
+
 /// The notes' physical pendulum (a rigid body about a fixed pivot, one angle):
 /// I θ'' = −M g l sin θ, with I the moment about the pivot.
 #[test]

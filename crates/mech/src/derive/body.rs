@@ -33,6 +33,9 @@ pub(crate) fn frames(pool: &mut Pool, bodies: &[Body], q: &[ExprId], qd: &[ExprI
                 w[axis] = qd[angle];
                 (Some(euler::turn_expr(pool, axis, q[angle])), w)
             }
+            Orientation::Hinge { angle, axis } => {
+                (Some(hinge(pool, axis, q[angle])), axis.map(|n| pool.mul2(n, qd[angle])))
+            }
             Orientation::Fixed => (None, [zero; 3]),
         };
         let frame = match body.parent.map(|p| out[p].clone()) {
@@ -57,6 +60,30 @@ pub(crate) fn frames(pool: &mut Pool, bodies: &[Body], q: &[ExprId], qd: &[ExprI
         out.push(frame);
     }
     out
+}
+
+/// The turn by `angle` about the unit vector n, space → body components:
+/// D = cos θ·1 + (1 − cos θ) n nᵀ − sin θ [n]ₓ (the notes' R_z for n = z).
+fn hinge(pool: &mut Pool, n: [ExprId; 3], angle: ExprId) -> euler::ExprMatrix {
+    let (s, c) = (pool.func(sym::Func::Sin, angle), pool.func(sym::Func::Cos, angle));
+    let one = pool.one();
+    let one_minus_c = pool.sub(one, c);
+    std::array::from_fn(|i| {
+        std::array::from_fn(|j| {
+            let mut terms = vec![pool.mul(&[one_minus_c, n[i], n[j]])];
+            if i == j {
+                terms.push(c);
+            }
+            // [n]ₓ[i][j] = −ε_ijk n_k; −sin θ [n]ₓ adds sin θ ε_ijk n_k.
+            if i != j {
+                let k = 3 - i - j;
+                let sign = if (j + 3 - i) % 3 == 1 { 1 } else { -1 };
+                let term = pool.mul2(s, n[k]);
+                terms.push(if sign > 0 { term } else { pool.neg(term) });
+            }
+            pool.add(&terms)
+        })
+    })
 }
 
 fn mat_vec(pool: &mut Pool, m: &euler::ExprMatrix, v: &[ExprId; 3]) -> [ExprId; 3] {

@@ -90,6 +90,14 @@ pub enum Orientation {
         /// The axis.
         axis: usize,
     },
+    /// One coordinate, the angle about a fixed unit vector of the parent's
+    /// axes (a hinge at any direction: a bicycle's steering head).
+    Hinge {
+        /// The angle's coordinate index.
+        angle: usize,
+        /// The unit vector (expressions in the parameters, normalized).
+        axis: [ExprId; 3],
+    },
     /// No angle of its own: the parent's axes, or space's.
     Fixed,
 }
@@ -99,7 +107,7 @@ impl Orientation {
     pub fn angles(&self) -> Vec<usize> {
         match *self {
             Orientation::Euler { angles, .. } => angles.to_vec(),
-            Orientation::Planar { angle, .. } => vec![angle],
+            Orientation::Planar { angle, .. } | Orientation::Hinge { angle, .. } => vec![angle],
             Orientation::Fixed => Vec::new(),
         }
     }
@@ -133,7 +141,7 @@ pub(crate) struct RawBody {
     inertia: Option<Spanned<toml::Value>>,
     angles: Option<Spanned<Vec<Spanned<String>>>>,
     angle: Option<Spanned<String>>,
-    axis: Option<Spanned<String>>,
+    axis: Option<Spanned<toml::Value>>,
     sequence: Option<Spanned<String>>,
     parent: Option<Spanned<String>>,
     position: Option<Spanned<Vec<Spanned<NumOrText>>>>,
@@ -165,7 +173,7 @@ pub(crate) fn read_all(r: &mut Reader<'_>, raw: &[Spanned<RawBody>]) -> Result<V
     }
     // Planar or spatial: one for the whole model.
     let about_z = |b: &Body| match b.orientation {
-        Orientation::Euler { .. } => false,
+        Orientation::Euler { .. } | Orientation::Hinge { .. } => false,
         Orientation::Planar { axis, .. } => axis == 2,
         Orientation::Fixed => true,
     };
@@ -221,7 +229,7 @@ fn angle_coordinate(r: &Reader<'_>, a: &Spanned<String>) -> Result<usize, ModelE
 }
 
 /// The body's orientation: `angles` (and `sequence`), `angle` (and `axis`), or neither.
-fn read_orientation(r: &Reader<'_>, b: &Spanned<RawBody>) -> Result<Orientation, ModelError> {
+fn read_orientation(r: &mut Reader<'_>, b: &Spanned<RawBody>) -> Result<Orientation, ModelError> {
     let raw = b.get_ref();
     match (&raw.angles, &raw.angle) {
         (Some(_), Some(one)) => {
@@ -271,23 +279,42 @@ fn read_orientation(r: &Reader<'_>, b: &Spanned<RawBody>) -> Result<Orientation,
                 ));
             }
             let angle = angle_coordinate(r, one)?;
-            let axis = match &raw.axis {
-                None => 2,
-                Some(a) => match a.get_ref().as_str() {
-                    "x" => 0,
-                    "y" => 1,
-                    "z" => 2,
-                    other => {
-                        return Err(ModelError::at(a.span(), format!("'{other}' is not an axis"))
-                            .with_help("axis = \"x\", \"y\" or \"z\" (default z), of the parent's axes or space's"))
-                    }
+            match raw.axis.as_ref().map(|a| (a.get_ref(), a.span())) {
+                None => Ok(Orientation::Planar { angle, axis: 2 }),
+                Some((toml::Value::String(name), span)) => match name.as_str() {
+                    "x" => Ok(Orientation::Planar { angle, axis: 0 }),
+                    "y" => Ok(Orientation::Planar { angle, axis: 1 }),
+                    "z" => Ok(Orientation::Planar { angle, axis: 2 }),
+                    other => Err(ModelError::at(span, format!("'{other}' is not an axis")).with_help(
+                        "axis = \"x\", \"y\" or \"z\" (default z), or a vector [\"ax\", \"ay\", \"az\"], in the parent's axes or space's",
+                    )),
                 },
-            };
-            Ok(Orientation::Planar { angle, axis })
+                Some((toml::Value::Array(items), span)) if items.len() == 3 => {
+                    let mut cursor = span.start;
+                    let mut v = [r.pool.zero(); 3];
+                    for (k, x) in items.iter().enumerate() {
+                        v[k] = entry(r, x, &span, &mut cursor, &format!("component {} of the axis", k + 1))?;
+                    }
+                    let env = |n: &str| r.parameters.iter().find(|p| p.name == n).map(|p| p.value);
+                    let size: Option<f64> =
+                        v.iter().map(|&c| r.pool.eval(c, &env).ok().map(|x| x * x)).sum::<Option<f64>>().map(f64::sqrt);
+                    if size.is_some_and(|n| !(n > 1e-12 && n.is_finite())) {
+                        return Err(ModelError::at(span, "the axis has no direction (its length is 0)")
+                            .with_help("give a non-zero vector; it is normalized"));
+                    }
+                    let squares: Vec<ExprId> = v.iter().map(|&c| r.pool.powi(c, 2)).collect();
+                    let sum = r.pool.add(&squares);
+                    let norm = r.pool.sqrt(sum);
+                    let axis = v.map(|c| r.pool.div(c, norm));
+                    Ok(Orientation::Hinge { angle, axis })
+                }
+                Some((_, span)) => Err(ModelError::at(span, "the axis is \"x\", \"y\", \"z\" or three components")),
+            }
         }
         (None, None) => {
-            if let Some(x) = raw.sequence.as_ref().or(raw.axis.as_ref()) {
-                return Err(ModelError::at(x.span(), "the body has no angles for this to apply to")
+            let stray = raw.sequence.as_ref().map(|s| s.span()).or(raw.axis.as_ref().map(|a| a.span()));
+            if let Some(span) = stray {
+                return Err(ModelError::at(span, "the body has no angles for this to apply to")
                     .with_help("give angles = [..] (three) with `sequence`, or angle = \"..\" with `axis`"));
             }
             Ok(Orientation::Fixed)
@@ -330,7 +357,7 @@ fn read(
         (Orientation::Fixed, s) => s,
         (Orientation::Planar { axis, .. }, Spin::None) => Spin::About(axis),
         (Orientation::Planar { axis, .. }, Spin::About(k)) if k == axis => Spin::About(axis),
-        (Orientation::Planar { .. }, _) => Spin::Free,
+        (Orientation::Planar { .. }, _) | (Orientation::Hinge { .. }, _) => Spin::Free,
     };
 
     // A body file gives the mass, the centre of mass and the tensor at once.
