@@ -119,11 +119,40 @@ fn an_upright_rolling_disc_rolls_straight() {
     }
 }
 
+/// The coin whose contact is stated (`rolling = "coin"`, the centre's height a
+/// coordinate held by the contact constraint) moves as the disc whose
+/// constraints are written by hand with the height worked out, and its centre
+/// stays at R sin(th).
+#[test]
+fn a_stated_rolling_contact_moves_as_the_hand_written_one() {
+    let (a, b) = (TempFile::new("coin", "csv"), TempFile::new("disc", "csv"));
+    ok(&["simulate", "examples/constraints/rolling_coin.toml", "--until", "5", "--samples", "51", "--out", a.path()]);
+    ok(&["simulate", "examples/constraints/rolling_disc.toml", "--until", "5", "--samples", "51", "--out", b.path()]);
+    let (coin, disc) = (Csv::read(a.path()), Csv::read(b.path()));
+    for name in ["x", "y", "ph", "th", "ps", "x'", "th'"] {
+        let (p, q) = (coin.column(name), disc.column(name));
+        for k in 0..p.len() {
+            assert!((p[k] - q[k]).abs() < 1e-7 * (1.0 + q[k].abs()), "{name}: {} vs {} (row {k})", p[k], q[k]);
+        }
+    }
+    let (z, th) = (coin.column("z"), coin.column("th"));
+    for k in 0..z.len() {
+        assert!((z[k] - 0.5 * th[k].sin()).abs() < 1e-9, "z = {} at th = {}", z[k], th[k]);
+    }
+}
+
 /// What a load or an input cannot be is refused at its entry (exit 2).
 #[test]
 fn bad_loads_and_inputs_exit_2_at_the_entry() {
-    let base = std::fs::read_to_string(common::repo_root().join("examples/cart_pendulum.toml")).unwrap();
-    for (from, to, what, at) in [
+    let cart = std::fs::read_to_string(common::repo_root().join("examples/cart_pendulum.toml")).unwrap();
+    let coin = std::fs::read_to_string(common::repo_root().join("examples/constraints/rolling_coin.toml")).unwrap();
+    let rolling = [
+        ("rolling = \"coin\" ", "rolling = \"wheel\" ", "'wheel' is not a body of the model", "\"wheel\""),
+        ("radius = \"R\"\n", "", "the rolling contact has no `radius`", "[[constraints]]"),
+        ("contact = \"constraint\"  ", "contact = \"glued\"  ", "not a kind of contact", "\"glued\""),
+        ("rolling = \"coin\" ", "velocity = \"x'\" ", "`radius` belongs to a rolling contact", "\"R\"\ncontact"),
+    ];
+    let cases = [
         ("body = \"cart\"\nforce", "body = \"truck\"\nforce", "the model does not have", "\"truck\""),
         ("body = \"rod\"\ntorque", "torque", "the load has no `body`", "\"tau\""),
         ("torque = \"tau\"", "torque = \"tau\"\nforce = [\"1\", \"0\"]", "a force or a torque, not both", "\"tau\""),
@@ -131,8 +160,10 @@ fn bad_loads_and_inputs_exit_2_at_the_entry() {
         ("force = [\"F\", \"0\"]", "force = [\"F\", \"0\"]\naxes = \"diagonal\"", "not a set of axes", "\"diagonal\""),
         ("F = \"F0*sin(2*t)\"", "F = \"F0*sin(2*x)\"", "'x' is not allowed here", "x)\""),
         ("F = \"F0*sin(2*t)\"", "g = \"t\"", "name of a coordinate, a parameter", "g = \"t\""),
-    ] {
-        assert!(base.contains(from), "{from}");
+    ];
+    let all = cases.iter().map(|c| (&cart, c)).chain(rolling.iter().map(|c| (&coin, c)));
+    for (base, &(from, to, what, at)) in all {
+        assert_eq!(base.matches(from).count(), 1, "{from}");
         let text = base.replacen(from, to, 1);
         let file = TempFile::with_text("bad-load", &text);
         let r = lagrange(&["derive", file.path()]);

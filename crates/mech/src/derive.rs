@@ -198,7 +198,7 @@ impl Derivation {
         let s = Symbols::new(pool, &model);
         let is_var = |x: Symbol| s.is_var(x);
 
-        let frames = body::frames(pool, &model.bodies, &s.q, &s.qd);
+        let frames = crate::model::frames::frames(pool, &model.bodies, &s.q, &s.qd);
         let energies = energies(pool, &model, &s, &frames, &is_var);
         let ext = external(pool, &model, &s, &frames, &is_var);
         let motion = equations_of_motion(pool, &s, &energies, &ext, &is_var);
@@ -477,7 +477,7 @@ fn energies(
     pool: &mut Pool,
     model: &Model,
     s: &Symbols,
-    frames: &[body::Frame],
+    frames: &[crate::model::frames::Frame],
     is_var: &dyn Fn(Symbol) -> bool,
 ) -> Energies {
     let (q, qd, t) = (&s.q, &s.qd, s.t);
@@ -562,7 +562,7 @@ fn external(
     pool: &mut Pool,
     model: &Model,
     s: &Symbols,
-    frames: &[body::Frame],
+    frames: &[crate::model::frames::Frame],
     is_var: &dyn Fn(Symbol) -> bool,
 ) -> External {
     let dissipation = model.dissipation.as_ref().map(|r| pool.simplify_in(r.expr, is_var));

@@ -19,6 +19,7 @@ use toml::Spanned;
 
 pub(crate) mod body;
 pub(crate) mod constraint;
+pub(crate) mod frames;
 pub(crate) mod gravity;
 pub(crate) mod load;
 
@@ -605,21 +606,27 @@ impl Model {
         // Constraints (read by `model/constraint.rs`).
         let mut constraints = Vec::new();
         for (k, c) in raw.constraints.iter().enumerate() {
-            let spec = constraint::read_spec(c, k, &constraints, &mut |text, scope_state, what| {
-                let scope = if scope_state { Scope::State } else { Scope::Configuration };
-                r.expr(text, scope, what)
-            })?;
-            let multiplier = format!("lambda_{}", spec.name);
-            if r.is_coordinate(&spec.name) || r.is_parameter(&spec.name) || r.is_parameter(&multiplier) {
-                return Err(ModelError::at(
+            let specs = if c.get_ref().is_rolling() {
+                constraint::read_rolling(&mut r, c, k, &constraints, &bodies)?
+            } else {
+                vec![constraint::read_spec(c, k, &constraints, &mut |text, scope_state, what| {
+                    let scope = if scope_state { Scope::State } else { Scope::Configuration };
+                    r.expr(text, scope, what)
+                })?]
+            };
+            for spec in specs {
+                let multiplier = format!("lambda_{}", spec.name);
+                if r.is_coordinate(&spec.name) || r.is_parameter(&spec.name) || r.is_parameter(&multiplier) {
+                    return Err(ModelError::at(
                     spec.name_span.clone(),
                     format!("constraint '{}' has the name of a coordinate or parameter", spec.name),
                 )
                 .with_help(format!(
                     "give the constraint a name of its own (its multiplier is called {multiplier}, which must not be a parameter either)"
                 )));
+                }
+                constraints.push(spec);
             }
-            constraints.push(spec);
         }
 
         Ok(Model {

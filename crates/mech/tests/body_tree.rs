@@ -307,3 +307,49 @@ fn bad_trees_are_refused_at_the_entry() {
         assert_eq!(span.start, want, "{text}\n→ {} at {:?}", e.message, &text[span.clone()]);
     }
 }
+
+/// A rolling contact (`rolling = "disc"`) makes the constraints written by hand
+/// in `examples/constraints/rolling_disc.toml`: v_C + ω × (P − C) = 0 with the
+/// contact below the centre, equal at states where the disc stands (0 < th < π).
+#[test]
+fn a_rolling_contact_makes_the_hand_written_constraints() {
+    let hand =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/constraints/rolling_disc.toml"))
+            .unwrap();
+    let start = hand.find("[[constraints]]").unwrap();
+    let end = hand.find("[initial]").unwrap();
+    let made = format!(
+        "{}[[constraints]]\nname = \"roll\"\nrolling = \"disc\"\nradius = \"R\"\n\n{}",
+        &hand[..start],
+        &hand[end..]
+    );
+    let (a, b) = (mech::Model::parse(&hand, &[]).unwrap(), mech::Model::parse(&made, &[]).unwrap());
+    assert_eq!(b.constraints.iter().map(|c| c.name.as_str()).collect::<Vec<_>>(), ["roll_x", "roll_y"]);
+    let names = ["x", "y", "ph", "th", "ps"];
+    for (q, qd) in [
+        ([0.3, -0.2, 0.7, 1.2, 2.0], [0.4, -1.1, 0.9, 0.3, -2.5]),
+        ([1.0, 2.0, -2.1, 2.6, -0.4], [-0.7, 0.2, -1.4, 1.9, 0.8]),
+        ([0.0, 0.0, 3.0, 0.4, 1.0], [1.5, 0.5, 0.2, -0.6, 3.1]),
+    ] {
+        let env = |n: &str| -> Option<f64> {
+            if let Some(k) = names.iter().position(|c| *c == n) {
+                return Some(q[k]);
+            }
+            if let Some(k) = names.iter().position(|c| format!("{c}'") == n) {
+                return Some(qd[k]);
+            }
+            a.parameter(n)
+        };
+        for k in 0..2 {
+            let want = a.pool.eval(a.constraints[k].expr.expr, &env).unwrap();
+            let got = b.pool.eval(b.constraints[k].expr.expr, &env).unwrap();
+            assert!((got - want).abs() < 1e-12 * (1.0 + want.abs()), "{}: {got} vs {want}", b.constraints[k].name);
+        }
+    }
+    // With contact = "constraint", P_z = R sin(th) − R √(1 − cos²th) vanishes too.
+    let kept = made.replace("radius = \"R\"\n", "radius = \"R\"\ncontact = \"constraint\"\n");
+    let c = mech::Model::parse(&kept, &[]).unwrap();
+    assert_eq!(c.constraints[2].name, "roll_z");
+    let env = |n: &str| if n == "th" { Some(1.1) } else { c.parameter(n) };
+    assert!(c.pool.eval(c.constraints[2].expr.expr, &env).unwrap().abs() < 1e-15);
+}

@@ -3,7 +3,7 @@
 //! `Q_j = τ·∂ω/∂q'_j`, both in one set of components (a body's loads are
 //! turned into space or body components with its rotation D).
 
-use super::body::Frame;
+use crate::model::frames::Frame;
 use crate::model::{Load, LoadKind};
 use sym::{ExprId, Pool};
 
