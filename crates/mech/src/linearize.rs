@@ -178,7 +178,7 @@ pub struct Linearization {
     pub inputs: Vec<String>,
     /// B of x' = A x + B u (None while the model has no inputs).
     pub b: Option<Vec<Vec<f64>>>,
-    /// The eigenvalues (Re, Im) of A, by decay rate (−Re) ascending, then Im descending.
+    /// The eigenvalues (Re, Im) of A, by decay rate (−Re) ascending, then |Im| descending (+ before −).
     pub eigenvalues: Vec<(f64, f64)>,
     /// The verdict.
     pub stability: Stability,
@@ -385,8 +385,8 @@ struct Setup {
     speeds: Vec<f64>,
     /// Dependent speeds (positions in the active list), m of them.
     dependent: Vec<usize>,
-    /// Dependent coordinates (positions in the active list), one per holonomic constraint.
-    dependent_q: Vec<usize>,
+    /// Speeds given by the user (positions in the active list): not made dependent if avoidable.
+    avoid: Vec<usize>,
 }
 
 /// The linearization at one point, in active positions.
@@ -400,6 +400,8 @@ struct AtPoint {
     stability: Stability,
     independent_q: Vec<usize>,
     independent_v: Vec<usize>,
+    dependent_q: Vec<usize>,
+    dependent_v: Vec<usize>,
 }
 
 struct Problem<'a> {
@@ -575,8 +577,13 @@ impl Problem<'_> {
             full[(i, n + i)] = 1.0;
         }
         full.view_mut((n, 0), (n, 2 * n)).copy_from(&g.rows(0, n));
-        // Elimination: δq = P_q δq_I, δq' = Q P_q δq_I + P_v δq'_I.
-        let (dq, dv) = (&self.setup.dependent_q, &self.setup.dependent);
+        // Elimination: δq = P_q δq_I, δq' = Q P_q δq_I + P_v δq'_I, with the
+        // dependent coordinates and speeds chosen here (a choice good at the
+        // start may be singular at the point: x for a pendulum hanging straight down).
+        let phi_q = nb.b.select_rows(self.c.hol.iter());
+        let dq = if self.c.hol.is_empty() { Vec::new() } else { pivots(&phi_q, &[], &[])? };
+        let dv = if m == 0 { Vec::new() } else { pivots(&nb.b, &dq, &self.setup.avoid)? };
+        let (dq, dv) = (&dq, &dv);
         let iq: Vec<usize> = (0..n).filter(|j| !dq.contains(j)).collect();
         let iv: Vec<usize> = (0..n).filter(|j| !dv.contains(j)).collect();
         let mut pq = DMatrix::zeros(n, iq.len());
@@ -584,7 +591,6 @@ impl Problem<'_> {
             pq[(j, k)] = 1.0;
         }
         if !dq.is_empty() {
-            let phi_q = nb.b.select_rows(self.c.hol.iter());
             let solved = phi_q.select_columns(dq.iter()).lu().solve(&phi_q.select_columns(iq.iter()))?;
             for (r, &j) in dq.iter().enumerate() {
                 for k in 0..iq.len() {
@@ -631,8 +637,38 @@ impl Problem<'_> {
             stability,
             independent_q: iq,
             independent_v: iv,
+            dependent_q: dq.clone(),
+            dependent_v: dv.clone(),
         })
     }
+}
+
+/// Entries of A below this fraction of max |A| count as zero when a zero row
+/// or column is deflated (structural zeros come out exact; this is round-off).
+const DEFLATE: f64 = 1e-14;
+/// Most QR sweeps of one Schur decomposition: nalgebra's own
+/// `complex_eigenvalues` has no bound and cycles on some matrices with exact
+/// zero blocks (a sleeping top's cyclic spin).
+const MAX_SCHUR: usize = 10_000;
+
+/// The eigenvalues of A: a bounded Schur decomposition of A, else of a
+/// similar matrix H A H (H a fixed Householder reflection, so the eigenvalues
+/// are the same) that breaks the exact structure the iteration cycles on.
+fn eigenvalues(a: &DMatrix<f64>) -> Vec<nalgebra::Complex<f64>> {
+    let n = a.nrows();
+    for k in 0..4 {
+        let m = if k == 0 {
+            a.clone()
+        } else {
+            let v = DVector::from_fn(n, |i, _| 1.0 + ((i * (k + 2)) % 7) as f64).normalize();
+            let h = DMatrix::identity(n, n) - &v * v.transpose() * 2.0;
+            &h * a * &h
+        };
+        if let Some(schur) = nalgebra::Schur::try_new(m, f64::EPSILON, MAX_SCHUR) {
+            return schur.complex_eigenvalues().iter().copied().collect();
+        }
+    }
+    vec![nalgebra::Complex::new(f64::NAN, f64::NAN); n]
 }
 
 /// The eigenvalues of A, sorted, and the verdict.
@@ -641,9 +677,21 @@ fn spectrum(a: &DMatrix<f64>) -> (Vec<(f64, f64)>, Stability) {
         return (Vec::new(), Stability::Marginal);
     }
     let scale = a.amax().max(f64::MIN_POSITIVE);
-    let mut ev: Vec<(f64, f64)> = a
-        .clone()
-        .complex_eigenvalues()
+    // A zero row or column (a cyclic coordinate, a rate nothing changes) is an
+    // exact zero eigenvalue: deflate it before the iteration, which would split
+    // a defective zero by the k-th root of the rounding error.
+    let mut keep: Vec<usize> = (0..a.nrows()).collect();
+    let mut zeros = 0;
+    let tiny = DEFLATE * scale;
+    while let Some(pos) = (0..keep.len()).find(|&p| {
+        let i = keep[p];
+        keep.iter().all(|&j| a[(i, j)].abs() <= tiny) || keep.iter().all(|&j| a[(j, i)].abs() <= tiny)
+    }) {
+        keep.remove(pos);
+        zeros += 1;
+    }
+    let rest = a.select_rows(keep.iter()).select_columns(keep.iter());
+    let mut ev: Vec<(f64, f64)> = eigenvalues(&rest)
         .iter()
         .map(|s| {
             let re = if s.re.abs() <= ZERO_REAL * scale { 0.0 } else { s.re };
@@ -651,8 +699,10 @@ fn spectrum(a: &DMatrix<f64>) -> (Vec<(f64, f64)>, Stability) {
             (re, im)
         })
         .collect();
-    ev.sort_by(|x, y| (-x.0).total_cmp(&-y.0).then(y.1.total_cmp(&x.1)));
-    let stability = if ev.iter().any(|e| e.0 > 0.0) {
+    ev.extend(std::iter::repeat_n((0.0, 0.0), zeros));
+    // By decay rate, then frequency descending, a conjugate pair + before −.
+    ev.sort_by(|x, y| (-x.0).total_cmp(&-y.0).then(y.1.abs().total_cmp(&x.1.abs())).then(y.1.total_cmp(&x.1)));
+    let stability = if ev.iter().any(|e| e.0 > 0.0 || !e.0.is_finite()) {
         Stability::Unstable
     } else if ev.iter().all(|e| e.0 < 0.0) {
         Stability::Stable
@@ -840,8 +890,10 @@ pub fn linearize(d: &Derivation, config: &LinearizeConfig) -> Result<Linearizati
     let unknown: Vec<usize> = (0..act.len()).filter(|&k| !moving.contains(&act[k])).collect();
     let speeds: Vec<f64> = act.iter().map(|&i| rate[i]).collect();
     let mut compiled = Compiled::new(d, act.clone())?;
-    // Dependent coordinates and speeds, chosen at the start.
-    let (dependent_q, dependent) = {
+    // Dependent coordinates and speeds, chosen at the start for the search (at
+    // the point they are chosen again for the elimination).
+    let avoid: Vec<usize> = flagged.iter().map(|&i| pos(i)).collect();
+    let dependent = {
         let zero = vec![0.0; big_n];
         let nb = compiled.eval(&q_start, &zero);
         let phi_q = nb.b.select_rows(compiled.hol.iter());
@@ -850,30 +902,20 @@ pub fn linearize(d: &Derivation, config: &LinearizeConfig) -> Result<Linearizati
         } else {
             pivots(&phi_q, &[], &[]).ok_or_else(|| LinearizeError::Singular { at: pairs(&names, &q_start) })?
         };
-        let avoid: Vec<usize> = flagged.iter().map(|&i| pos(i)).collect();
-        let dv = if compiled.m == 0 {
+        if compiled.m == 0 {
             Vec::new()
         } else {
             pivots(&nb.b, &dq, &avoid).ok_or_else(|| LinearizeError::Singular { at: pairs(&names, &q_start) })?
-        };
-        (dq, dv)
-    };
-    for &j in &dependent {
-        if flagged.contains(&act[j]) {
-            notes.push(format!(
-                "the rate of {} follows from the constraints (it is a dependent speed), not from the one given",
-                names[act[j]]
-            ));
         }
-    }
+    };
     let unknown_names: Vec<String> = unknown.iter().map(|&k| names[act[k]].clone()).collect();
     let start: Vec<f64> = unknown.iter().map(|&k| q_start[act[k]]).collect();
     let setup = Setup {
         unknown: unknown.clone(),
         base_q: q_start.clone(),
         speeds,
-        dependent: dependent.clone(),
-        dependent_q: dependent_q.clone(),
+        dependent,
+        avoid,
     };
     let mut problem = Problem { c: compiled, setup, names: &names, scale: 0.0 };
     let what = match config.about {
@@ -891,6 +933,14 @@ pub fn linearize(d: &Derivation, config: &LinearizeConfig) -> Result<Linearizati
     })?;
     let x = search.found[search.chosen].x.clone();
     let point = problem.at(&x).ok_or_else(|| LinearizeError::Singular { at: pairs(&unknown_names, &x) })?;
+    for &j in &point.dependent_v {
+        if flagged.contains(&act[j]) {
+            notes.push(format!(
+                "the rate of {} follows from the constraints (it is a dependent speed), not from the one given",
+                names[act[j]]
+            ));
+        }
+    }
     for (k, &j) in unknown.iter().enumerate() {
         q_start[act[j]] = x[k];
     }
@@ -955,8 +1005,8 @@ pub fn linearize(d: &Derivation, config: &LinearizeConfig) -> Result<Linearizati
         multipliers: d.constraints.list.iter().zip(&point.lambda).map(|(c, &l)| (c.name.clone(), l)).collect(),
         idle: idle.iter().map(|&i| names[i].clone()).collect(),
         moving: moving.iter().map(|&i| (names[i].clone(), rate[i])).collect(),
-        dependent_coordinates: dependent_q.iter().map(|&j| names[act[j]].clone()).collect(),
-        dependent_speeds: dependent.iter().map(|&j| speed_name(j)).collect(),
+        dependent_coordinates: point.dependent_q.iter().map(|&j| names[act[j]].clone()).collect(),
+        dependent_speeds: point.dependent_v.iter().map(|&j| speed_name(j)).collect(),
         state,
         a: rows(&point.a),
         inputs: Vec::new(),
