@@ -36,7 +36,8 @@ fn check_nonzero(v: &Value, want: &[(f64, f64)], tol: f64) {
     assert_eq!(got.len(), want.len(), "{got:?} against {want:?}");
     for w in want {
         assert!(
-            got.iter().any(|g| (g.0 - w.0).abs() <= tol * (1.0 + w.0.abs()) && (g.1 - w.1).abs() <= tol * (1.0 + w.1.abs())),
+            got.iter()
+                .any(|g| (g.0 - w.0).abs() <= tol * (1.0 + w.0.abs()) && (g.1 - w.1).abs() <= tol * (1.0 + w.1.abs())),
             "{w:?} is not among {got:?}"
         );
     }
@@ -93,7 +94,16 @@ fn sleeping_top_is_stable_above_the_bound_and_unstable_below() {
     let bound = (4.0 * i1 * m * g * s).sqrt() / i3;
     for w3 in [12.0f64, 6.0] {
         let rate = format!("c={w3}");
-        let v = json(&["linearize", "examples/tops/sleeping_top.toml", "--about", "steady", "--rate", &rate, "--format", "json"]);
+        let v = json(&[
+            "linearize",
+            "examples/tops/sleeping_top.toml",
+            "--about",
+            "steady",
+            "--rate",
+            &rate,
+            "--format",
+            "json",
+        ]);
         let disc = (i3 * w3).powi(2) - 4.0 * i1 * m * g * s;
         if w3 > bound {
             let (a, b) = ((i3 * w3 + disc.sqrt()) / (2.0 * i1), (i3 * w3 - disc.sqrt()) / (2.0 * i1));
@@ -115,7 +125,16 @@ fn sleeping_top_is_stable_above_the_bound_and_unstable_below() {
 fn heavy_top_steady_precession_against_the_effective_potential() {
     let (m, i1, i3, s, g) = (1.0f64, 1.0f64, 0.5f64, 0.5f64, 9.81f64);
     let (al, ga) = (0.85f64, 12.0f64);
-    let v = json(&["linearize", "examples/tops/heavy_top.toml", "--about", "steady", "--rate", "al=0.85", "--format", "json"]);
+    let v = json(&[
+        "linearize",
+        "examples/tops/heavy_top.toml",
+        "--about",
+        "steady",
+        "--rate",
+        "al=0.85",
+        "--format",
+        "json",
+    ]);
     let be = v["q"]["be"].as_f64().unwrap();
     // ω3 = al' cos β + ga': I al'² cos β − I3 (al' cos β + ga') al' + M g S = 0.
     let cos_be = (i3 * ga * al - m * g * s) / ((i1 - i3) * al * al);
@@ -138,9 +157,19 @@ fn leaning_disk_rolls_upright_above_the_critical_spin() {
     let (g, r) = (9.81f64, 0.5f64);
     for w in [5.0f64, 2.0] {
         let rate = format!("ph={w}");
-        let v = json(&["linearize", "examples/constraints/leaning_disk.toml", "--about", "steady", "--rate", &rate, "--format", "json"]);
+        let v = json(&[
+            "linearize",
+            "examples/constraints/leaning_disk.toml",
+            "--about",
+            "steady",
+            "--rate",
+            &rate,
+            "--format",
+            "json",
+        ]);
         assert_eq!(v["state"].as_array().unwrap().len(), 8, "5 coordinates and 3 independent speeds");
-        let mut dep: Vec<String> = v["dependent_speeds"].as_array().unwrap().iter().map(|x| x.as_str().unwrap().to_string()).collect();
+        let mut dep: Vec<String> =
+            v["dependent_speeds"].as_array().unwrap().iter().map(|x| x.as_str().unwrap().to_string()).collect();
         dep.sort();
         assert_eq!(dep, ["x'", "y'"]);
         let l2 = 0.8 * (g / r - 3.0 * w * w);

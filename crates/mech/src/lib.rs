@@ -97,9 +97,7 @@ pub use extremal::{
     extremal, Candidate, Euler, EulerError, ExtremalConfig, ExtremalError, ExtremalReport, ExtremalSummary, Problem,
     SecondVariation, Start, EXTREMAL_FORMAT,
 };
-pub use linearize::{
-    linearize, About, Eigenvalue, Linearization, LinearizeConfig, LinearizeError, LinearizeReport,
-};
+pub use linearize::{linearize, About, Eigenvalue, Linearization, LinearizeConfig, LinearizeError, LinearizeReport};
 pub use mechanism::{Mechanism, Point, PointKind};
 pub use model::{
     Body, ConstraintKind, ConstraintSpec, Coordinate, Gravity, InitialValue, Located, Model, Parameter, Particle,

@@ -724,8 +724,7 @@ impl Landscape for Problem<'_> {
 }
 
 fn pairs(names: &[String], values: &[f64]) -> String {
-    let parts: Vec<String> =
-        names.iter().zip(values).map(|(n, v)| format!("{n}={}", equilibria::short(*v))).collect();
+    let parts: Vec<String> = names.iter().zip(values).map(|(n, v)| format!("{n}={}", equilibria::short(*v))).collect();
     format!("({})", parts.join(", "))
 }
 
@@ -742,7 +741,9 @@ fn check_autonomous(d: &Derivation, pool: &mut Pool, act: &[usize]) -> Result<()
         match probe::decide_zero(pool, df) {
             Decision::Zero => {}
             Decision::NonZero => {
-                let reason = format!("the equation of {name} depends on the time t, so there is no fixed point to linearize about");
+                let reason = format!(
+                    "the equation of {name} depends on the time t, so there is no fixed point to linearize about"
+                );
                 let force_t = pool.diff(d.forces[i], t);
                 if let (Some(entry), false) =
                     (d.model.forces.get(i).and_then(Option::as_ref), probe::is_zero(pool, force_t))
@@ -759,8 +760,9 @@ fn check_autonomous(d: &Derivation, pool: &mut Pool, act: &[usize]) -> Result<()
                 Decision::Zero => {}
                 Decision::NonZero => {
                     return Err(LinearizeError::NotAutonomous {
-                        reason: "the mass matrix M depends on the time t, so there is no fixed point to linearize about"
-                            .into(),
+                        reason:
+                            "the mass matrix M depends on the time t, so there is no fixed point to linearize about"
+                                .into(),
                     })
                 }
                 Decision::Undecided => return Err(undecided("M".into())),
@@ -824,9 +826,7 @@ pub fn linearize(d: &Derivation, config: &LinearizeConfig) -> Result<Linearizati
     let mut notes = Vec::new();
     // Idle coordinates: a row of M proven zero.
     let idle: Vec<usize> = (0..big_n)
-        .filter(|&i| {
-            d.mass_matrix[i].iter().all(|&e| probe::decide_zero(&mut pool, e) == Decision::Zero)
-        })
+        .filter(|&i| d.mass_matrix[i].iter().all(|&e| probe::decide_zero(&mut pool, e) == Decision::Zero))
         .collect();
     let act: Vec<usize> = (0..big_n).filter(|i| !idle.contains(i)).collect();
     if !idle.is_empty() {
@@ -910,13 +910,7 @@ pub fn linearize(d: &Derivation, config: &LinearizeConfig) -> Result<Linearizati
     };
     let unknown_names: Vec<String> = unknown.iter().map(|&k| names[act[k]].clone()).collect();
     let start: Vec<f64> = unknown.iter().map(|&k| q_start[act[k]]).collect();
-    let setup = Setup {
-        unknown: unknown.clone(),
-        base_q: q_start.clone(),
-        speeds,
-        dependent,
-        avoid,
-    };
+    let setup = Setup { unknown: unknown.clone(), base_q: q_start.clone(), speeds, dependent, avoid };
     let mut problem = Problem { c: compiled, setup, names: &names, scale: 0.0 };
     let what = match config.about {
         About::Equilibrium => "equilibrium",
@@ -928,9 +922,8 @@ pub fn linearize(d: &Derivation, config: &LinearizeConfig) -> Result<Linearizati
         why: "the equations cannot be evaluated there".into(),
     })?;
     problem.scale = r0.amax();
-    let search = equilibria::search(&mut problem, &start, !config.keep_unstable).map_err(|why| {
-        LinearizeError::NoPoint { what, start: pairs(&unknown_names, &start), why }
-    })?;
+    let search = equilibria::search(&mut problem, &start, !config.keep_unstable)
+        .map_err(|why| LinearizeError::NoPoint { what, start: pairs(&unknown_names, &start), why })?;
     let x = search.found[search.chosen].x.clone();
     let point = problem.at(&x).ok_or_else(|| LinearizeError::Singular { at: pairs(&unknown_names, &x) })?;
     for &j in &point.dependent_v {

@@ -55,7 +55,11 @@ pub fn text(d: &Derivation, m: &Modes, config: &ModesConfig, terms: &Terms) -> S
     }
     match &m.effective_potential {
         Some(t0) => {
-            let _ = writeln!(s, "  U(q₀) = {}   (the effective potential U − T₀ with T₀ = {t0}, not derive's U)", human(m.potential));
+            let _ = writeln!(
+                s,
+                "  U(q₀) = {}   (the effective potential U − T₀ with T₀ = {t0}, not derive's U)",
+                human(m.potential)
+            );
         }
         None => {
             let _ = writeln!(s, "  U(q₀) = {}", human(m.potential));
