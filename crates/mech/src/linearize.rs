@@ -1136,16 +1136,6 @@ mod tests {
     }
 
     #[test]
-    fn an_idle_coordinate_is_left_out() {
-        let text = "coordinates = [\"x\", \"z\"]\nkinetic = \"x'^2/2\"\npotential = \"x^2/2\"\n\
-            [initial]\nx = 0.1\n\"x'\" = 0.0\nz = 0.0\n\"z'\" = 0.0\n";
-        let l = linearize(&derive(text), &LinearizeConfig::default()).unwrap();
-        assert_eq!(l.idle, ["z"]);
-        assert_eq!(l.state, ["x", "x'"]);
-        assert_eq!(l.stability, Stability::Marginal);
-    }
-
-    #[test]
     fn pivots_prefer_what_is_forced_and_avoid_what_is_asked() {
         let b = DMatrix::from_row_slice(1, 3, &[1.0, 2.0, 0.5]);
         assert_eq!(pivots(&b, &[], &[]), Some(vec![1]));
