@@ -202,6 +202,23 @@ impl Explained for mech::ModesError {
     }
 }
 
+impl Explained for mech::LinearizeError {
+    fn into_model(self) -> Result<mech::ModelError, Self> {
+        match self {
+            mech::LinearizeError::Model(m) => Ok(m),
+            other => Err(other),
+        }
+    }
+    fn help(&self) -> Option<String> {
+        match self {
+            mech::LinearizeError::NoPoint { .. } => {
+                Some("start elsewhere with --at q=v, or change the rates with --rate q=v".into())
+            }
+            other => other.help(),
+        }
+    }
+}
+
 impl Explained for mech::OrbitError {
     fn into_model(self) -> Result<mech::ModelError, Self> {
         match self {

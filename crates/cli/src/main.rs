@@ -13,6 +13,7 @@ mod extremal;
 mod files;
 mod inertia;
 mod interrupt;
+mod linearize;
 mod modes;
 mod orbit;
 mod output;
@@ -106,6 +107,8 @@ enum Command {
     Sweep(sweep::Args),
     /// Small oscillations about an equilibrium: normal frequencies and mode shapes.
     Modes(modes::Args),
+    /// The state-space matrix A about an equilibrium or a steady motion, its eigenvalues and the stability.
+    Linearize(linearize::Args),
     /// A central-force orbit from the initial state: turning points, kind, period, apsidal angle.
     Orbit(orbit::Args),
     /// The inertia tensor of a body file: mass, centre of mass, tensor about a point, principal axes.
@@ -160,6 +163,7 @@ fn main() -> ExitCode {
         Command::Derive { model, format, set } => derive(&model, format, &set),
         Command::Sweep(args) => sweep::run(&args),
         Command::Modes(args) => modes::run(&args),
+        Command::Linearize(args) => linearize::run(&args),
         Command::Orbit(args) => orbit::run(&args),
         Command::Inertia(args) => inertia::run(&args),
         Command::Top(args) => top::run(&args),

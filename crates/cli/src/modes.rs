@@ -43,7 +43,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let path = &args.model;
     let (source, d) = crate::derive_file(path, &args.set)?;
     d.reject_constraints("`lagrange modes`").map_err(|e| Failure::model(path, &source, e))?;
-    let config = ModesConfig { at: args.at.clone() };
+    let config = ModesConfig { at: args.at.clone(), keep_unstable: args.allow_unstable };
     let modes = mech::normal_modes(&d, &config).map_err(|e| Failure::analysis(path, &source, e))?;
     if !modes.stable && !args.allow_unstable {
         let unstable: Vec<String> = modes

@@ -67,7 +67,10 @@ mod derive;
 mod report;
 // Runs: the derivation compiled, integrated, audited.
 mod run;
+// Equilibria found from a start, and trusted (shared by the analyses).
+mod equilibria;
 // Analyses of a derivation.
+mod linearize;
 mod modes;
 mod sweep;
 mod top;
@@ -88,11 +91,13 @@ pub use derive::{
     ConservationReason, Conserved, ConservedReason, CyclicReason, Derivation, EnergyReason, HamiltonianReason, Layout,
     RateTerm, Verdicts,
 };
+pub use equilibria::{Equilibrium, EquilibriumReport, Stability};
 pub use error::{ModelError, Setting, Within};
 pub use extremal::{
     extremal, Candidate, Euler, EulerError, ExtremalConfig, ExtremalError, ExtremalReport, ExtremalSummary, Problem,
     SecondVariation, Start, EXTREMAL_FORMAT,
 };
+pub use linearize::{linearize, About, Eigenvalue, Linearization, LinearizeConfig, LinearizeError, LinearizeReport};
 pub use mechanism::{Mechanism, Point, PointKind};
 pub use model::{
     Body, ConstraintKind, ConstraintSpec, Coordinate, Gravity, InitialValue, Input, Load, LoadKind, Located, Model,

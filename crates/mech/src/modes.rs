@@ -20,6 +20,7 @@
 //! moving constraints this includes −T₀, the effective potential).
 
 use crate::derive::Derivation;
+use crate::equilibria::{self, Assessment, Equilibrium, EquilibriumReport, Landscape, Solved, Stability};
 use crate::error::ModelError;
 use crate::probe::{self, Decision, Subst, UNDECIDED};
 use crate::report::Ordered;
@@ -61,6 +62,10 @@ pub struct ModesConfig {
     /// Starting values for some coordinates (`--at q=v`); the others start at
     /// their `[initial]` value.
     pub at: Vec<(String, f64)>,
+    /// Keep the equilibrium Newton's method lands on from the start even when
+    /// it is unstable; otherwise a stable one near the start is looked for and
+    /// preferred (both are listed in [`Modes::equilibria`]).
+    pub keep_unstable: bool,
 }
 
 /// What kind of motion a normal mode is.
@@ -136,6 +141,16 @@ pub struct Modes {
     pub damping: Option<Damping>,
     /// Remarks for the reader (what was neglected, why no closed form).
     pub notes: Vec<String>,
+    /// Every equilibrium the search met near the start, with its stability
+    /// (Newton's landing point from the start first).
+    pub equilibria: Vec<Equilibrium>,
+    /// Which of `equilibria` is analysed here.
+    pub chosen: usize,
+    /// Which of `equilibria` Newton's method reached from the start, if any.
+    pub landing: Option<usize>,
+    /// T₀ = T(q, q' = 0), printed, when it is not zero: U is then the effective
+    /// potential U − T₀ of moving constraints, not the model's U.
+    pub effective_potential: Option<String>,
 }
 
 /// The small motion with friction: T (q − q₀)'' + C (q − q₀)' + U (q − q₀) = 0,
@@ -260,22 +275,14 @@ fn pairs(names: &[String], values: &[f64]) -> String {
 
 /// A number with 6 significant digits, trailing zeros dropped.
 pub(crate) fn short(v: f64) -> String {
-    if v == 0.0 || (v.abs() >= 1e-4 && v.abs() < 1e6) {
-        let s = format!("{:.6}", v);
-        let s = s.trim_end_matches('0').trim_end_matches('.').to_string();
-        if s == "-0" {
-            "0".into()
-        } else {
-            s
-        }
-    } else {
-        format!("{v:.5e}")
-    }
+    equilibria::short(v)
 }
 
 /// The velocity-independent potential U(q) = −L(q, 0) and the checks that
 /// small oscillations apply.
-fn potential_of(d: &Derivation, pool: &mut Pool) -> Result<(ExprId, Vec<String>), ModesError> {
+/// Also T₀ = T(q, q' = 0), printed, when it is not proven zero: U is then the
+/// effective potential U − T₀.
+fn potential_of(d: &Derivation, pool: &mut Pool) -> Result<(ExprId, Vec<String>, Option<String>), ModesError> {
     let mut notes = Vec::new();
     let not_conservative = |reason: String| Err(ModesError::NotConservative { reason });
     match d.explicit_time {
@@ -334,9 +341,25 @@ fn potential_of(d: &Derivation, pool: &mut Pool) -> Result<(ExprId, Vec<String>)
             }
         }
     }
+    let effective = match d.kinetic {
+        Some(t) => {
+            let t0 = pool.substitute(t, &zero_vel);
+            let t0 = pool.simplify(t0);
+            match probe::decide_zero(pool, t0) {
+                Decision::Zero => None,
+                _ => Some(pool.display(t0).to_string()),
+            }
+        }
+        None => None,
+    };
+    if let Some(t0) = &effective {
+        notes.push(format!(
+            "U here is the effective potential U − T₀ = −L(q, q' = 0), not derive's U: T has the part T₀ = {t0} that does not vanish at rest (a moving constraint), and it counts as potential energy"
+        ));
+    }
     let l0 = pool.substitute(d.lagrangian, &zero_vel);
     let u = pool.neg(l0);
-    Ok((pool.simplify(u), notes))
+    Ok((pool.simplify(u), notes, effective))
 }
 
 /// Finds the equilibrium near the starting point and the normal modes about it.
@@ -348,7 +371,7 @@ pub fn normal_modes(d: &Derivation, config: &ModesConfig) -> Result<Modes, Modes
     // are built in a copy, which the symbolic result keeps.
     let mut pool_owned = d.pool().clone();
     let pool = &mut pool_owned;
-    let (u, mut notes) = potential_of(d, pool)?;
+    let (u, mut notes, effective_potential) = potential_of(d, pool)?;
 
     // Compile U, ∇U and the upper triangle of the Hessian.
     let grad: Vec<ExprId> = d.q.iter().map(|&q| pool.diff(u, q)).collect();
@@ -369,20 +392,30 @@ pub fn normal_modes(d: &Derivation, config: &ModesConfig) -> Result<Modes, Modes
     let n_out = roots.len();
     let mut pot = Potential { tape, n, inputs: input_values.clone(), out: vec![0.0; n_out] };
 
-    let (mut q0, iterations, gnorm) = newton(&mut pot, &start, &names)?;
+    // T = M(q), compiled beside U: the search asks for both at each point it finds.
+    let m_roots: Vec<ExprId> = d.mass_matrix.iter().flatten().copied().collect();
+    let mtape = Tape::compile(pool, &m_roots, input_ids)
+        .map_err(|e| ModesError::NotConservative { reason: format!("T cannot be evaluated: {e}") })?;
+    let mut land = ModesLandscape { pot: &mut pot, mtape, inputs: input_values, names: &names };
+    let search = equilibria::search(&mut land, &start, !config.keep_unstable)
+        .map_err(|why| ModesError::NoEquilibrium { start: pairs(&names, &start), why })?;
+    let chosen = &search.found[search.chosen];
+    let (mut q0, iterations, gnorm) = (chosen.x.clone(), chosen.iterations, chosen.residual);
+    if search.landing.is_some_and(|i| i != search.chosen) {
+        notes.push(
+            "Newton's method from the start reached an unstable equilibrium; the stable one nearest the start is analysed instead".into(),
+        );
+    }
     // Rounding noise about an exact zero is zero (q = -1e-16 reads as a result).
     let q_big = q0.iter().fold(1.0f64, |m, v| m.max(v.abs()));
     q0.iter_mut().filter(|v| v.abs() <= EQUILIBRIUM_ROUND_OFF * q_big).for_each(|v| *v = 0.0);
-    let (u0, _, hmat) = pot.eval(&q0);
-
-    // T = M(q₀).
-    let m_roots: Vec<ExprId> = d.mass_matrix.iter().flatten().copied().collect();
-    let mut mtape = Tape::compile(pool, &m_roots, input_ids)
-        .map_err(|e| ModesError::NotConservative { reason: format!("T cannot be evaluated: {e}") })?;
-    let mut inputs = input_values;
-    inputs[..n].copy_from_slice(&q0);
-    let mut mvals = vec![0.0; m_roots.len()];
-    mtape.eval(&inputs, &mut mvals);
+    let mvals = land.kinetic(&q0);
+    let (u0, _, hmat) = land.pot.eval(&q0);
+    let mut equilibria_found = search.found.clone();
+    for e in &mut equilibria_found {
+        let big = e.x.iter().fold(1.0f64, |m, v| m.max(v.abs()));
+        e.x.iter_mut().filter(|v| v.abs() <= EQUILIBRIUM_ROUND_OFF * big).for_each(|v| *v = 0.0);
+    }
     let tmat = nalgebra::DMatrix::from_row_slice(n, n, &mvals);
     let at = pairs(&names, &q0);
     if !tmat.iter().all(|v| v.is_finite()) || !hmat.iter().all(|v| v.is_finite()) {
@@ -482,7 +515,59 @@ pub fn normal_modes(d: &Derivation, config: &ModesConfig) -> Result<Modes, Modes
         symbolic,
         damping,
         notes,
+        equilibria: equilibria_found,
+        chosen: search.chosen,
+        landing: search.landing,
+        effective_potential,
     })
+}
+
+/// The search's view of U: Newton on ∇U = 0, and the stability from the
+/// eigenvalues of `U a = Ω² T a` (a negative one is unstable; its shape is the
+/// direction to look for a stable equilibrium in).
+struct ModesLandscape<'a> {
+    pot: &'a mut Potential,
+    mtape: Tape,
+    inputs: Vec<f64>,
+    names: &'a [String],
+}
+
+impl ModesLandscape<'_> {
+    /// M(q), row by row.
+    fn kinetic(&mut self, q: &[f64]) -> Vec<f64> {
+        let n = q.len();
+        self.inputs[..n].copy_from_slice(q);
+        let mut out = vec![0.0; n * n];
+        self.mtape.eval(&self.inputs, &mut out);
+        out
+    }
+}
+
+impl Landscape for ModesLandscape<'_> {
+    fn solve(&mut self, x0: &[f64]) -> Result<Solved, String> {
+        newton(self.pot, x0, self.names).map(|(x, iterations, residual)| Solved { x, iterations, residual })
+    }
+
+    fn assess(&mut self, x: &[f64]) -> Assessment {
+        let n = x.len();
+        let unknown = Assessment { stability: Stability::Unstable, unstable_directions: Vec::new() };
+        let t = nalgebra::DMatrix::from_row_slice(n, n, &self.kinetic(x));
+        let (_, _, h) = self.pot.eval(x);
+        if !t.iter().chain(h.iter()).all(|v| v.is_finite()) {
+            return unknown;
+        }
+        let Some(chol) = t.cholesky() else { return unknown };
+        let Some(l_inv) = chol.l().try_inverse() else { return unknown };
+        let s = &l_inv * h * l_inv.transpose();
+        let eig = ((&s + s.transpose()) * 0.5).symmetric_eigen();
+        let scale = eig.eigenvalues.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
+        let unstable_directions: Vec<Vec<f64>> = (0..n)
+            .filter(|&k| eig.eigenvalues[k] < -ZERO_MODE * scale)
+            .map(|k| (l_inv.transpose() * eig.eigenvectors.column(k)).iter().copied().collect())
+            .collect();
+        let stability = if unstable_directions.is_empty() { Stability::Stable } else { Stability::Unstable };
+        Assessment { stability, unstable_directions }
+    }
 }
 
 /// C = ∂²R/∂q'∂q' at (q₀, q' = 0) and the roots of det(s²T + sC + U) = 0, the
@@ -577,10 +662,10 @@ fn starting_point(d: &Derivation, config: &ModesConfig) -> Result<Vec<f64>, Mode
 /// The equilibrium search: `num::newton` on ∇U = 0 with the Hessian as
 /// Jacobian (|∇U|² as merit function; a flat direction, such as a free
 /// translation, gets no step), with its defaults but [`MAX_NEWTON`] iterations.
-/// Returns the point, the iterations and |∇U| there.
-fn newton(pot: &mut Potential, start: &[f64], names: &[String]) -> Result<(Vec<f64>, usize, f64), ModesError> {
+/// Returns the point, the iterations and |∇U| there, or why it found none.
+fn newton(pot: &mut Potential, start: &[f64], names: &[String]) -> Result<(Vec<f64>, usize, f64), String> {
     let n = start.len();
-    let fail = |why: String| ModesError::NoEquilibrium { start: pairs(names, start), why };
+    let fail = |why: String| why;
     let gradient = |q: &[f64], g: &mut [f64], jac: &mut [f64]| {
         let (_, grad, hess) = pot.eval(q);
         g.copy_from_slice(&grad);
@@ -890,6 +975,14 @@ pub struct ModesReport {
     /// The damped motion's roots s of det(s²T + sC + U) = 0 (e^{st}), or null
     /// without dissipation.
     pub damped: Option<Vec<DampedRoot>>,
+    /// Every equilibrium met near the start with its stability; `chosen` marks
+    /// the one analysed, `landing` the one Newton's method reached from the start.
+    pub equilibria: Vec<EquilibriumReport>,
+    /// T₀ = T(q, q' = 0) when it is not zero: then `U` (and U(q₀)) is the
+    /// effective potential U − T₀, not the model's U; null otherwise.
+    pub effective_potential: Option<String>,
+    /// U(q₀), the (effective) potential at the equilibrium.
+    pub potential: f64,
 }
 
 /// One root s of the damped motion.
@@ -932,6 +1025,9 @@ impl ModesReport {
                     .map(|&(re, im)| DampedRoot { re, im, decay_rate: -re, frequency: im.abs() })
                     .collect()
             }),
+            equilibria: EquilibriumReport::list(&m.coordinates, &m.equilibria, m.chosen, m.landing),
+            effective_potential: m.effective_potential.clone(),
+            potential: m.potential,
         }
     }
 }
@@ -1037,7 +1133,7 @@ mod tests {
     fn double_pendulum_about_its_lowest_position() {
         let d = derive(&example("double_pendulum"), &[]);
         let at = vec![("a".to_string(), 0.1), ("b".to_string(), -0.2)];
-        let m = normal_modes(&d, &ModesConfig { at }).unwrap();
+        let m = normal_modes(&d, &ModesConfig { at, ..Default::default() }).unwrap();
         assert!(m.equilibrium.iter().all(|q| q.abs() < 1e-12), "{:?}", m.equilibrium);
         // Equal masses and lengths: Ω² = (2 ∓ √2) g/l.
         let g = 9.81f64;

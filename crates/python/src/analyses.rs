@@ -54,7 +54,7 @@ impl Derived {
     fn modes(&self, py: Python<'_>, at: Option<HashMap<String, f64>>, allow_unstable: bool) -> PyResult<Analysis> {
         guarded("modes", || {
             self.refuse_constraints(py, "modes()")?;
-            let config = mech::ModesConfig { at: overrides(at) };
+            let config = mech::ModesConfig { at: overrides(at), keep_unstable: allow_unstable };
             let modes = py.detach(|| mech::normal_modes(&self.d, &config)).map_err(|e| {
                 let help = match &e {
                     ModesError::NoEquilibrium { .. } => {

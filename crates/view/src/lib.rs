@@ -36,6 +36,7 @@ mod error;
 pub mod extremal;
 pub mod heatmap;
 pub mod inertia;
+pub mod linearize;
 pub mod modes;
 mod number;
 pub mod orbit;

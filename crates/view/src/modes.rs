@@ -53,7 +53,34 @@ pub fn text(d: &Derivation, m: &Modes, config: &ModesConfig, terms: &Terms) -> S
             let _ = writeln!(s, "  … ({} more; see {})", n - MAX_PRINTED_SHAPE, terms.full_output);
         }
     }
-    let _ = writeln!(s, "  U(q₀) = {}\n", human(m.potential));
+    match &m.effective_potential {
+        Some(t0) => {
+            let _ = writeln!(
+                s,
+                "  U(q₀) = {}   (the effective potential U − T₀ with T₀ = {t0}, not derive's U)",
+                human(m.potential)
+            );
+        }
+        None => {
+            let _ = writeln!(s, "  U(q₀) = {}", human(m.potential));
+        }
+    }
+    if m.equilibria.len() > 1 || m.landing != Some(m.chosen) {
+        let _ = writeln!(s, "Equilibria found near the start:");
+        for (i, e) in m.equilibria.iter().enumerate() {
+            let mut marks = Vec::new();
+            if m.landing == Some(i) {
+                marks.push("reached from the start");
+            }
+            if m.chosen == i {
+                marks.push("analysed here");
+            }
+            let marks = if marks.is_empty() { String::new() } else { format!("  ({})", marks.join("; ")) };
+            let at: Vec<String> = m.coordinates.iter().zip(&e.x).map(|(c, v)| format!("{c} = {}", human(*v))).collect();
+            let _ = writeln!(s, "  {}: {}{marks}", at.join(", "), e.stability.word());
+        }
+    }
+    let _ = writeln!(s);
     let _ = writeln!(s, "L ≈ ½ q'ᵀ T q' − ½ (q − q₀)ᵀ U (q − q₀), with T = M(q₀) and U = ∂²U/∂q∂q at q₀:");
     if n <= MAX_PRINTED_SHAPE {
         let (tl, ul) = (matrix_lines(&m.t_matrix), matrix_lines(&m.u_matrix));
@@ -354,7 +381,7 @@ q2 = 0.0
                 "Stable: every Ω² ≥ 0",
             ],
         );
-        let config = ModesConfig { at: vec![("q1".into(), 0.1)] };
+        let config = ModesConfig { at: vec![("q1".into(), 0.1)], ..Default::default() };
         let (d, m) = modes(COUPLED, &config);
         check_contains(&text(&d, &m, &config, &OTHER), &["damped Newton from at=,"]);
     }

@@ -1,0 +1,1147 @@
+//! Linearization of the equations of motion about an equilibrium or a steady
+//! motion: the state-space matrix A of x' = A x for the small deviation x of the
+//! coordinates and speeds, in the minimal coordinates and speeds when the model
+//! has constraints, its eigenvalues and the verdict on stability.
+//!
+//! Entry point: [`linearize`]. The operating point is found from a start
+//! (`[initial]`, overridden by `at`) by [`crate::equilibria::search`]: at an
+//! equilibrium every speed is zero and nothing accelerates; in a steady motion
+//! the cyclic coordinates move at constant rates (`[initial]`, overridden by
+//! `rates`) and the others stand still. With constraints the equations are
+//! `M q'' = f + Bᵀλ`, `B q'' = c` (B the constraint Jacobian, c the
+//! acceleration terms, [`crate::Constraints`]); a dependent speed (one the
+//! velocity constraints fix, as the rolling disc's x' and y') may accelerate.
+//!
+//! The derivatives are symbolic: ∂f/∂q, ∂f/∂q', ∂M/∂q, ∂B/∂q, ∂c/∂q, ∂c/∂q'
+//! are differentiated from the derivation and compiled; at the point, with
+//! q''₀ and λ₀, differentiating `M q'' − Bᵀλ = f`, `B q'' = c` gives
+//! `K (δq'', δλ) = (F_q δq + f_q' δq', C_q δq + c_q' δq')` with
+//! `K = [[M, −Bᵀ], [B, 0]]`, `F_q = f_q − (∂M/∂q) q''₀ + (∂Bᵀ/∂q) λ₀` and
+//! `C_q = c_q − (∂B/∂q) q''₀` (without constraints this is `M⁻¹ f_x`, q''₀
+//! being zero). Then the constraints are eliminated as SymPy's `Linearizer`
+//! does: dependent coordinates (pivots of the holonomic Jacobian) follow from
+//! `Φ_q δq = 0`, dependent speeds (pivots of B) from `B δq' + ∂(Bq')/∂q δq = 0`,
+//! and A acts on (independent coordinates, independent speeds).
+//!
+//! Idle coordinates (a row of M proven zero: no inertia) are left out, at their
+//! start value. B (inputs) is a slot: the model has no inputs yet, so it is
+//! empty.
+
+use crate::derive::Derivation;
+use crate::equilibria::{self, Assessment, Equilibrium, EquilibriumReport, Landscape, Solved, Stability};
+use crate::error::ModelError;
+use crate::model::ConstraintKind;
+use crate::probe::{self, Decision};
+use crate::report::Ordered;
+use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
+use sym::{ExprId, Pool, Tape};
+
+/// Gauss–Newton iterations of the search for the operating point.
+const MAX_ITERATIONS: usize = 100;
+/// Forward-difference step of the search's Jacobian, relative to (1 + |x|):
+/// about the square root of the rounding error, for a step that is exact to
+/// eight digits (Newton then converges linearly with that factor).
+const JACOBIAN_STEP: f64 = 1e-7;
+/// Converged when a step is below this, relative to (1 + |x|).
+const STEP_TOL: f64 = 1e-13;
+/// A point is an operating point when the residual (accelerations and
+/// holonomic constraints) is below this, relative to (1 + the residual at the
+/// start and the size of q'' terms there): eight digits.
+const ACCEPT: f64 = 1e-8;
+/// Singular values of the search's Jacobian below this fraction of the largest
+/// are zero (a flat direction gets no step).
+const SINGULAR: f64 = 1e-10;
+/// A column of the constraint Jacobian is a pivot only when its part outside
+/// the pivots already chosen is above this fraction of the largest column.
+const PIVOT: f64 = 1e-9;
+/// Eigenvalues whose real part is below this fraction of max |A| have Re = 0:
+/// rounding in a defective zero eigenvalue (a cyclic coordinate's Jordan
+/// block) splits it by about the square root of the rounding error.
+const ZERO_REAL: f64 = 1e-7;
+
+/// What to linearize about.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum About {
+    /// Rest: every q' = 0 and q'' = 0.
+    #[default]
+    Equilibrium,
+    /// The cyclic coordinates at constant rates, the others at rest.
+    Steady,
+}
+
+/// Options of [`linearize`].
+#[derive(Debug, Clone, Default)]
+pub struct LinearizeConfig {
+    /// Equilibrium or steady motion.
+    pub about: About,
+    /// Starting values for some coordinates; the others start at `[initial]`.
+    pub at: Vec<(String, f64)>,
+    /// Rates of cyclic coordinates (steady motion); the others come from `[initial]`.
+    pub rates: Vec<(String, f64)>,
+    /// Keep Newton's landing point from the start even when it is unstable.
+    pub keep_unstable: bool,
+}
+
+/// Why there is no linearization to report.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum LinearizeError {
+    /// The model is wrong at a place, or a place keeps the analysis out.
+    #[error("{0}")]
+    Model(ModelError),
+    /// A rate given for a coordinate is not usable.
+    #[error("{message}")]
+    Rate {
+        /// The coordinate named.
+        name: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The equations depend on the time, or cannot be evaluated.
+    #[error("{reason}")]
+    NotAutonomous {
+        /// Why.
+        reason: String,
+    },
+    /// No operating point was found.
+    #[error("no {what} near {start}: {why}")]
+    NoPoint {
+        /// "equilibrium" or "steady motion".
+        what: &'static str,
+        /// The start, as `q=v` pairs.
+        start: String,
+        /// What went wrong.
+        why: String,
+    },
+    /// The equations cannot be solved for q'' and λ at the point.
+    #[error("the equations cannot be solved for q'' at {at}: M (with the constraints) is singular there")]
+    Singular {
+        /// The point, as `q=v` pairs.
+        at: String,
+    },
+}
+
+impl LinearizeError {
+    /// A hint on how to fix it.
+    pub fn help(&self) -> Option<String> {
+        match self {
+            LinearizeError::Model(e) => e.help.clone(),
+            LinearizeError::Rate { .. } => Some("in a steady motion only cyclic coordinates move (∂L/∂q = 0)".into()),
+            LinearizeError::NotAutonomous { .. } => {
+                Some("linearization about a fixed point needs equations free of the time t".into())
+            }
+            LinearizeError::NoPoint { .. } => {
+                Some("start elsewhere (give the coordinates other starting values) or change the rates".into())
+            }
+            LinearizeError::Singular { .. } => {
+                Some("the coordinates are singular there (like Euler angles at β = 0); choose others".into())
+            }
+        }
+    }
+}
+
+impl From<ModelError> for LinearizeError {
+    fn from(e: ModelError) -> Self {
+        LinearizeError::Model(e)
+    }
+}
+
+/// The linearized motion about one point.
+#[derive(Debug, Clone)]
+pub struct Linearization {
+    /// Equilibrium or steady motion.
+    pub about: About,
+    /// The model's coordinates.
+    pub coordinates: Vec<String>,
+    /// q at the operating point (every coordinate).
+    pub q: Vec<f64>,
+    /// q' there.
+    pub qd: Vec<f64>,
+    /// q'' there (zero but for dependent speeds).
+    pub qdd: Vec<f64>,
+    /// The multipliers λ₀ there, by constraint name.
+    pub multipliers: Vec<(String, f64)>,
+    /// Coordinates without inertia, left out.
+    pub idle: Vec<String>,
+    /// Cyclic coordinates moving at constant rates (steady motion), with the rates.
+    pub moving: Vec<(String, f64)>,
+    /// Coordinates the holonomic constraints fix, eliminated.
+    pub dependent_coordinates: Vec<String>,
+    /// Speeds the constraints fix, eliminated.
+    pub dependent_speeds: Vec<String>,
+    /// The state: the independent coordinates, then the independent speeds (`q'`).
+    pub state: Vec<String>,
+    /// A, row-major: x' = A x.
+    pub a: Vec<Vec<f64>>,
+    /// The inputs u (none yet).
+    pub inputs: Vec<String>,
+    /// B of x' = A x + B u (None while the model has no inputs).
+    pub b: Option<Vec<Vec<f64>>>,
+    /// The eigenvalues (Re, Im) of A, by decay rate (−Re) ascending, then |Im| descending (+ before −).
+    pub eigenvalues: Vec<(f64, f64)>,
+    /// The verdict.
+    pub stability: Stability,
+    /// The coordinates the search solved for (all of them at an equilibrium).
+    pub unknowns: Vec<String>,
+    /// The start of the search, in `unknowns`.
+    pub start: Vec<f64>,
+    /// The operating points met near the start, in `unknowns`.
+    pub equilibria: Vec<Equilibrium>,
+    /// Which of them is analysed.
+    pub chosen: usize,
+    /// Which of them Newton's method reached from the start.
+    pub landing: Option<usize>,
+    /// Remarks for the reader.
+    pub notes: Vec<String>,
+}
+
+/// The compiled equations and their derivatives over the active coordinates.
+struct Compiled {
+    /// All coordinates of the model.
+    big_n: usize,
+    /// Active coordinate indices.
+    act: Vec<usize>,
+    /// Constraints.
+    m: usize,
+    /// Holonomic constraint indices (into the constraint list).
+    hol: Vec<usize>,
+    tape: Tape,
+    inputs: Vec<f64>,
+    out: Vec<f64>,
+    /// Whether ∂M/∂q is compiled (with constraints only).
+    with_mq: bool,
+}
+
+/// The numbers at one state.
+struct Numbers {
+    m: DMatrix<f64>,
+    f: DVector<f64>,
+    fq: DMatrix<f64>,
+    fv: DMatrix<f64>,
+    b: DMatrix<f64>,
+    /// Per constraint k: ∂B_ki/∂q_j.
+    bq: Vec<DMatrix<f64>>,
+    c: DVector<f64>,
+    cq: DMatrix<f64>,
+    cv: DMatrix<f64>,
+    phi: DVector<f64>,
+    /// Per coordinate j: ∂M/∂q_j.
+    mq: Vec<DMatrix<f64>>,
+}
+
+impl Compiled {
+    fn new(d: &Derivation, act: Vec<usize>) -> Result<Compiled, LinearizeError> {
+        let mut pool: Pool = d.pool().clone();
+        let cons = &d.constraints.list;
+        let m = cons.len();
+        let hol: Vec<usize> = (0..m).filter(|&k| cons[k].kind == ConstraintKind::Holonomic).collect();
+        let with_mq = m > 0;
+        let mut roots: Vec<ExprId> = Vec::new();
+        for &i in &act {
+            for &j in &act {
+                roots.push(d.mass_matrix[i][j]);
+            }
+        }
+        for &i in &act {
+            roots.push(d.forcing[i]);
+        }
+        for wrt in [&d.q, &d.qd] {
+            for &i in &act {
+                for &j in &act {
+                    let e = pool.diff(d.forcing[i], wrt[j]);
+                    roots.push(e);
+                }
+            }
+        }
+        for c in cons {
+            for &i in &act {
+                roots.push(c.jacobian[i]);
+            }
+        }
+        for c in cons {
+            for &i in &act {
+                for &j in &act {
+                    let e = pool.diff(c.jacobian[i], d.q[j]);
+                    roots.push(e);
+                }
+            }
+        }
+        for c in cons {
+            roots.push(c.acceleration_rhs);
+        }
+        for wrt in [&d.q, &d.qd] {
+            for c in cons {
+                for &j in &act {
+                    let e = pool.diff(c.acceleration_rhs, wrt[j]);
+                    roots.push(e);
+                }
+            }
+        }
+        for &k in &hol {
+            roots.push(cons[k].expr);
+        }
+        if with_mq {
+            for &j in &act {
+                for &i in &act {
+                    for &l in &act {
+                        let e = pool.diff(d.mass_matrix[i][l], d.q[j]);
+                        roots.push(e);
+                    }
+                }
+            }
+        }
+        let tape = Tape::compile(&pool, &roots, d.layout.symbols()).map_err(|e| LinearizeError::NotAutonomous {
+            reason: format!("the equations of motion cannot be evaluated: {e}"),
+        })?;
+        let out = vec![0.0; roots.len()];
+        Ok(Compiled { big_n: d.q.len(), act, m, hol, tape, inputs: d.layout.values(), out, with_mq })
+    }
+
+    /// Evaluates at the full q and q' (every coordinate).
+    fn eval(&mut self, q: &[f64], qd: &[f64]) -> Numbers {
+        let (n, m, big) = (self.act.len(), self.m, self.big_n);
+        self.inputs[..big].copy_from_slice(q);
+        self.inputs[big..2 * big].copy_from_slice(qd);
+        self.tape.eval(&self.inputs, &mut self.out);
+        let mut k = 0;
+        let out = &self.out;
+        let mut take = |rows: usize, cols: usize| -> DMatrix<f64> {
+            let mat = DMatrix::from_row_slice(rows, cols, &out[k..k + rows * cols]);
+            k += rows * cols;
+            mat
+        };
+        let mm = take(n, n);
+        let f = take(n, 1).column(0).into_owned();
+        let fq = take(n, n);
+        let fv = take(n, n);
+        let b = take(m, n);
+        let bq: Vec<DMatrix<f64>> = (0..m).map(|_| take(n, n)).collect();
+        let c = take(m, 1).column(0).into_owned();
+        let cq = take(m, n);
+        let cv = take(m, n);
+        let phi = take(self.hol.len(), 1).column(0).into_owned();
+        let mq: Vec<DMatrix<f64>> = if self.with_mq { (0..n).map(|_| take(n, n)).collect() } else { Vec::new() };
+        Numbers { m: mm, f, fq, fv, b, bq, c, cq, cv, phi, mq }
+    }
+}
+
+/// K = [[M, −Bᵀ], [B, 0]].
+fn kkt(nb: &Numbers) -> DMatrix<f64> {
+    let (n, m) = (nb.m.nrows(), nb.b.nrows());
+    let mut k = DMatrix::zeros(n + m, n + m);
+    k.view_mut((0, 0), (n, n)).copy_from(&nb.m);
+    k.view_mut((0, n), (n, m)).copy_from(&(-nb.b.transpose()));
+    k.view_mut((n, 0), (m, n)).copy_from(&nb.b);
+    k
+}
+
+/// Columns of `b` that make a square invertible block: `forced` first, then
+/// the others by size of their part outside the chosen span, `avoid` last.
+fn pivots(b: &DMatrix<f64>, forced: &[usize], avoid: &[usize]) -> Option<Vec<usize>> {
+    let (m, n) = (b.nrows(), b.ncols());
+    let scale = (0..n).map(|j| b.column(j).norm()).fold(0.0f64, f64::max).max(f64::MIN_POSITIVE);
+    let mut basis: Vec<DVector<f64>> = Vec::new();
+    let mut chosen: Vec<usize> = Vec::new();
+    let residual = |basis: &[DVector<f64>], j: usize| -> DVector<f64> {
+        let mut r = b.column(j).into_owned();
+        for e in basis {
+            let p = e.dot(&r);
+            r -= e * p;
+        }
+        r
+    };
+    for &j in forced {
+        let r = residual(&basis, j);
+        if r.norm() <= PIVOT * scale {
+            return None;
+        }
+        basis.push(r.normalize());
+        chosen.push(j);
+    }
+    for pass in 0..2 {
+        while chosen.len() < m {
+            let best = (0..n)
+                .filter(|j| !chosen.contains(j) && (avoid.contains(j) == (pass == 1)))
+                .map(|j| (j, residual(&basis, j).norm()))
+                .filter(|&(_, r)| r > PIVOT * scale)
+                .max_by(|a, b| a.1.total_cmp(&b.1));
+            let Some((j, _)) = best else { break };
+            let r = residual(&basis, j);
+            basis.push(r.normalize());
+            chosen.push(j);
+        }
+    }
+    (chosen.len() == m).then_some(chosen)
+}
+
+/// Everything fixed while the search runs: which coordinates move, the speeds.
+struct Setup {
+    /// Active indices (into the model's coordinates) the search solves for.
+    unknown: Vec<usize>,
+    /// Full q with the fixed coordinates at their start values.
+    base_q: Vec<f64>,
+    /// Per active coordinate: the given speed (rates of moving coordinates, else 0).
+    speeds: Vec<f64>,
+    /// Dependent speeds (positions in the active list), m of them.
+    dependent: Vec<usize>,
+    /// Speeds given by the user (positions in the active list): not made dependent if avoidable.
+    avoid: Vec<usize>,
+}
+
+/// The linearization at one point, in active positions.
+struct AtPoint {
+    q: Vec<f64>,
+    qd: Vec<f64>,
+    qdd: Vec<f64>,
+    lambda: Vec<f64>,
+    a: DMatrix<f64>,
+    eigenvalues: Vec<(f64, f64)>,
+    stability: Stability,
+    independent_q: Vec<usize>,
+    independent_v: Vec<usize>,
+    dependent_q: Vec<usize>,
+    dependent_v: Vec<usize>,
+}
+
+struct Problem<'a> {
+    c: Compiled,
+    setup: Setup,
+    names: &'a [String],
+    /// The residual's size at the start, the scale for "zero".
+    scale: f64,
+}
+
+impl Problem<'_> {
+    /// Full q and q' for the unknowns x: dependent speeds from the constraints.
+    fn state(&mut self, x: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
+        let mut q = self.setup.base_q.clone();
+        for (k, &i) in self.setup.unknown.iter().enumerate() {
+            q[self.c.act[i]] = x[k];
+        }
+        let mut qd = vec![0.0; self.c.big_n];
+        for (k, &i) in self.c.act.iter().enumerate() {
+            qd[i] = self.setup.speeds[k];
+        }
+        if self.c.m > 0 {
+            let nb = self.c.eval(&q, &qd);
+            let dep = &self.setup.dependent;
+            let n = self.c.act.len();
+            let ind: Vec<usize> = (0..n).filter(|j| !dep.contains(j)).collect();
+            let bd = nb.b.select_columns(dep.iter());
+            let bi = nb.b.select_columns(ind.iter());
+            let vi = DVector::from_iterator(ind.len(), ind.iter().map(|&j| self.setup.speeds[j]));
+            let vd = bd.lu().solve(&(-(bi * vi)))?;
+            for (k, &j) in dep.iter().enumerate() {
+                qd[self.c.act[j]] = vd[k];
+            }
+        }
+        Some((q, qd))
+    }
+
+    /// q'' and λ at a state.
+    fn accelerations(&mut self, q: &[f64], qd: &[f64]) -> Option<(Numbers, DVector<f64>, DVector<f64>)> {
+        let nb = self.c.eval(q, qd);
+        let n = nb.m.nrows();
+        let k = kkt(&nb);
+        let mut rhs = DVector::zeros(n + self.c.m);
+        rhs.rows_mut(0, n).copy_from(&nb.f);
+        rhs.rows_mut(n, self.c.m).copy_from(&nb.c);
+        let z = k.lu().solve(&rhs)?;
+        if !z.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let a = z.rows(0, n).into_owned();
+        let lam = z.rows(n, self.c.m).into_owned();
+        Some((nb, a, lam))
+    }
+
+    /// The residual: holonomic constraints, the accelerations that must vanish.
+    fn residual(&mut self, x: &[f64]) -> Option<DVector<f64>> {
+        let (q, qd) = self.state(x)?;
+        let (nb, a, _) = self.accelerations(&q, &qd)?;
+        let n = a.len();
+        let dep = &self.setup.dependent;
+        let rows: Vec<f64> = nb
+            .phi
+            .iter()
+            .copied()
+            .chain((0..n).filter(|j| !dep.contains(j) || self.setup.unknown.contains(j)).map(|j| a[j]))
+            .collect();
+        rows.iter().all(|v| v.is_finite()).then(|| DVector::from_vec(rows))
+    }
+
+    /// Gauss–Newton on the residual with a forward-difference Jacobian and
+    /// backtracking on |r|².
+    fn gauss_newton(&mut self, x0: &[f64]) -> Result<Solved, String> {
+        let mut x = x0.to_vec();
+        let fail_at = |x: &[f64], names: &[String], unknown: &[usize], act: &[usize], why: &str| {
+            let at: Vec<String> =
+                unknown.iter().zip(x).map(|(&i, v)| format!("{}={}", names[act[i]], equilibria::short(*v))).collect();
+            format!("{why} at ({})", at.join(", "))
+        };
+        let mut r = self.residual(&x).ok_or_else(|| "the equations cannot be evaluated at the start".to_string())?;
+        let tol = ACCEPT * (1.0 + self.scale);
+        for it in 0..=MAX_ITERATIONS {
+            if x.is_empty() {
+                return if r.amax() <= tol {
+                    Ok(Solved { x, iterations: 0, residual: r.norm() })
+                } else {
+                    Err(format!("the accelerations do not vanish (|q''| = {})", equilibria::short(r.amax())))
+                };
+            }
+            let nx = x.len();
+            let mut jac = DMatrix::zeros(r.len(), nx);
+            for j in 0..nx {
+                let h = JACOBIAN_STEP * (1.0 + x[j].abs());
+                let mut xp = x.clone();
+                xp[j] += h;
+                let rp = self.residual(&xp).ok_or_else(|| "the equations cannot be evaluated".to_string())?;
+                jac.set_column(j, &((rp - &r) / h));
+            }
+            let svd = jac.svd(true, true);
+            let smax = svd.singular_values.amax();
+            let step = svd
+                .solve(&(-&r), SINGULAR * smax.max(f64::MIN_POSITIVE))
+                .map_err(|e| format!("the Jacobian cannot be solved: {e}"))?;
+            let size = 1.0 + x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if step.amax() <= STEP_TOL * size || (r.amax() <= tol * 1e-4) {
+                return if r.amax() <= tol {
+                    Ok(Solved { x, iterations: it, residual: r.norm() })
+                } else {
+                    Err(fail_at(&x, self.names, &self.setup.unknown, &self.c.act, "Newton's method stalls"))
+                };
+            }
+            let mut t = 1.0;
+            loop {
+                let xt: Vec<f64> = x.iter().zip(step.iter()).map(|(a, s)| a + t * s).collect();
+                if let Some(rt) = self.residual(&xt) {
+                    if rt.norm() < r.norm() || t < 1e-4 {
+                        x = xt;
+                        r = rt;
+                        break;
+                    }
+                }
+                t *= 0.5;
+                if t < 1e-6 {
+                    return Err(fail_at(&x, self.names, &self.setup.unknown, &self.c.act, "Newton's method stalls"));
+                }
+            }
+            if x.iter().zip(x0).any(|(a, b)| (a - b).abs() > 1e3 * (1.0 + b.abs())) {
+                return Err(fail_at(&x, self.names, &self.setup.unknown, &self.c.act, "Newton's method runs away"));
+            }
+        }
+        if r.amax() <= tol {
+            return Ok(Solved { x, iterations: MAX_ITERATIONS, residual: r.norm() });
+        }
+        Err(format!("Newton's method did not converge in {MAX_ITERATIONS} iterations"))
+    }
+
+    /// A and its eigenvalues at the unknowns x.
+    fn at(&mut self, x: &[f64]) -> Option<AtPoint> {
+        let (q, qd) = self.state(x)?;
+        let (nb, qdd, lam) = self.accelerations(&q, &qd)?;
+        let n = nb.m.nrows();
+        let m = self.c.m;
+        // F_q = f_q − (∂M/∂q) q'' + (∂Bᵀ/∂q) λ; C_q = c_q − (∂B/∂q) q''.
+        let mut fq = nb.fq.clone();
+        for j in 0..nb.mq.len() {
+            let col = &nb.mq[j] * &qdd;
+            for i in 0..n {
+                fq[(i, j)] -= col[i];
+            }
+        }
+        for (k, bqk) in nb.bq.iter().enumerate() {
+            fq += bqk * lam[k];
+        }
+        let mut cq = nb.cq.clone();
+        // W = ∂(B q')/∂q (for the velocity constraints) and ∂(B q'')/∂q.
+        let vact = DVector::from_iterator(n, self.c.act.iter().map(|&i| qd[i]));
+        let mut w = DMatrix::zeros(m, n);
+        for (k, bqk) in nb.bq.iter().enumerate() {
+            let by_a = bqk.transpose() * &qdd;
+            let by_v = bqk.transpose() * &vact;
+            for j in 0..n {
+                cq[(k, j)] -= by_a[j];
+                w[(k, j)] = by_v[j];
+            }
+        }
+        let mut rhs = DMatrix::zeros(n + m, 2 * n);
+        rhs.view_mut((0, 0), (n, n)).copy_from(&fq);
+        rhs.view_mut((0, n), (n, n)).copy_from(&nb.fv);
+        rhs.view_mut((n, 0), (m, n)).copy_from(&cq);
+        rhs.view_mut((n, n), (m, n)).copy_from(&nb.cv);
+        let g = kkt(&nb).lu().solve(&rhs)?;
+        let mut full = DMatrix::zeros(2 * n, 2 * n);
+        for i in 0..n {
+            full[(i, n + i)] = 1.0;
+        }
+        full.view_mut((n, 0), (n, 2 * n)).copy_from(&g.rows(0, n));
+        // Elimination: δq = P_q δq_I, δq' = Q P_q δq_I + P_v δq'_I, with the
+        // dependent coordinates and speeds chosen here (a choice good at the
+        // start may be singular at the point: x for a pendulum hanging straight down).
+        let phi_q = nb.b.select_rows(self.c.hol.iter());
+        let dq = if self.c.hol.is_empty() { Vec::new() } else { pivots(&phi_q, &[], &[])? };
+        let dv = if m == 0 { Vec::new() } else { pivots(&nb.b, &dq, &self.setup.avoid)? };
+        let (dq, dv) = (&dq, &dv);
+        let iq: Vec<usize> = (0..n).filter(|j| !dq.contains(j)).collect();
+        let iv: Vec<usize> = (0..n).filter(|j| !dv.contains(j)).collect();
+        let mut pq = DMatrix::zeros(n, iq.len());
+        for (k, &j) in iq.iter().enumerate() {
+            pq[(j, k)] = 1.0;
+        }
+        if !dq.is_empty() {
+            let solved = phi_q.select_columns(dq.iter()).lu().solve(&phi_q.select_columns(iq.iter()))?;
+            for (r, &j) in dq.iter().enumerate() {
+                for k in 0..iq.len() {
+                    pq[(j, k)] = -solved[(r, k)];
+                }
+            }
+        }
+        let mut pv = DMatrix::zeros(n, iv.len());
+        for (k, &j) in iv.iter().enumerate() {
+            pv[(j, k)] = 1.0;
+        }
+        let mut qm = DMatrix::zeros(n, n);
+        if m > 0 {
+            let bd = nb.b.select_columns(dv.iter()).lu();
+            let sv = bd.solve(&nb.b.select_columns(iv.iter()))?;
+            let sw = bd.solve(&w)?;
+            for (r, &j) in dv.iter().enumerate() {
+                for k in 0..iv.len() {
+                    pv[(j, k)] = -sv[(r, k)];
+                }
+                for k in 0..n {
+                    qm[(j, k)] = -sw[(r, k)];
+                }
+            }
+        }
+        let (nq, nv) = (iq.len(), iv.len());
+        let mut t = DMatrix::zeros(2 * n, nq + nv);
+        t.view_mut((0, 0), (n, nq)).copy_from(&pq);
+        t.view_mut((n, 0), (n, nq)).copy_from(&(&qm * &pq));
+        t.view_mut((n, nq), (n, nv)).copy_from(&pv);
+        let rows: Vec<usize> = iq.iter().copied().chain(iv.iter().map(|&j| n + j)).collect();
+        let a = (full * t).select_rows(rows.iter());
+        if !a.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let (eigenvalues, stability) = spectrum(&a);
+        Some(AtPoint {
+            q,
+            qd,
+            qdd: qdd.iter().copied().collect(),
+            lambda: lam.iter().copied().collect(),
+            a,
+            eigenvalues,
+            stability,
+            independent_q: iq,
+            independent_v: iv,
+            dependent_q: dq.clone(),
+            dependent_v: dv.clone(),
+        })
+    }
+}
+
+/// Entries of A below this fraction of max |A| count as zero when a zero row
+/// or column is deflated (structural zeros come out exact; this is round-off).
+const DEFLATE: f64 = 1e-14;
+/// Most QR sweeps of one Schur decomposition: nalgebra's own
+/// `complex_eigenvalues` has no bound and cycles on some matrices with exact
+/// zero blocks (a sleeping top's cyclic spin).
+const MAX_SCHUR: usize = 10_000;
+
+/// The eigenvalues of A: a bounded Schur decomposition of A, else of a
+/// similar matrix H A H (H a fixed Householder reflection, so the eigenvalues
+/// are the same) that breaks the exact structure the iteration cycles on.
+fn eigenvalues(a: &DMatrix<f64>) -> Vec<nalgebra::Complex<f64>> {
+    let n = a.nrows();
+    for k in 0..4 {
+        let m = if k == 0 {
+            a.clone()
+        } else {
+            let v = DVector::from_fn(n, |i, _| 1.0 + ((i * (k + 2)) % 7) as f64).normalize();
+            let h = DMatrix::identity(n, n) - &v * v.transpose() * 2.0;
+            &h * a * &h
+        };
+        if let Some(schur) = nalgebra::Schur::try_new(m, f64::EPSILON, MAX_SCHUR) {
+            return schur.complex_eigenvalues().iter().copied().collect();
+        }
+    }
+    vec![nalgebra::Complex::new(f64::NAN, f64::NAN); n]
+}
+
+/// The eigenvalues of A, sorted, and the verdict.
+fn spectrum(a: &DMatrix<f64>) -> (Vec<(f64, f64)>, Stability) {
+    if a.is_empty() {
+        return (Vec::new(), Stability::Marginal);
+    }
+    let scale = a.amax().max(f64::MIN_POSITIVE);
+    // A zero row or column (a cyclic coordinate, a rate nothing changes) is an
+    // exact zero eigenvalue: deflate it before the iteration, which would split
+    // a defective zero by the k-th root of the rounding error.
+    let mut keep: Vec<usize> = (0..a.nrows()).collect();
+    let mut zeros = 0;
+    let tiny = DEFLATE * scale;
+    while let Some(pos) = (0..keep.len()).find(|&p| {
+        let i = keep[p];
+        keep.iter().all(|&j| a[(i, j)].abs() <= tiny) || keep.iter().all(|&j| a[(j, i)].abs() <= tiny)
+    }) {
+        keep.remove(pos);
+        zeros += 1;
+    }
+    let rest = a.select_rows(keep.iter()).select_columns(keep.iter());
+    let mut ev: Vec<(f64, f64)> = eigenvalues(&rest)
+        .iter()
+        .map(|s| {
+            let re = if s.re.abs() <= ZERO_REAL * scale { 0.0 } else { s.re };
+            let im = if s.im.abs() <= ZERO_REAL * scale { 0.0 } else { s.im };
+            (re, im)
+        })
+        .collect();
+    ev.extend(std::iter::repeat_n((0.0, 0.0), zeros));
+    // By decay rate, then frequency descending, a conjugate pair + before −.
+    ev.sort_by(|x, y| (-x.0).total_cmp(&-y.0).then(y.1.abs().total_cmp(&x.1.abs())).then(y.1.total_cmp(&x.1)));
+    let stability = if ev.iter().any(|e| e.0 > 0.0 || !e.0.is_finite()) {
+        Stability::Unstable
+    } else if ev.iter().all(|e| e.0 < 0.0) {
+        Stability::Stable
+    } else {
+        Stability::Marginal
+    };
+    (ev, stability)
+}
+
+impl Landscape for Problem<'_> {
+    fn solve(&mut self, x0: &[f64]) -> Result<Solved, String> {
+        self.gauss_newton(x0)
+    }
+
+    fn assess(&mut self, x: &[f64]) -> Assessment {
+        let stability = self.at(x).map_or(Stability::Unstable, |p| p.stability);
+        Assessment { stability, unstable_directions: Vec::new() }
+    }
+}
+
+fn pairs(names: &[String], values: &[f64]) -> String {
+    let parts: Vec<String> = names.iter().zip(values).map(|(n, v)| format!("{n}={}", equilibria::short(*v))).collect();
+    format!("({})", parts.join(", "))
+}
+
+/// Refuses equations that depend on the time: a forced coordinate at its
+/// `[forces]` entry, a moving constraint at its entry.
+fn check_autonomous(d: &Derivation, pool: &mut Pool, act: &[usize]) -> Result<(), LinearizeError> {
+    let t = d.t;
+    let undecided = |what: String| LinearizeError::NotAutonomous {
+        reason: format!("could not decide whether {what} depends on the time t ({})", probe::UNDECIDED),
+    };
+    for &i in act {
+        let name = &d.model.coordinates[i].name;
+        let df = pool.diff(d.forcing[i], t);
+        match probe::decide_zero(pool, df) {
+            Decision::Zero => {}
+            Decision::NonZero => {
+                let reason = format!(
+                    "the equation of {name} depends on the time t, so there is no fixed point to linearize about"
+                );
+                let force_t = pool.diff(d.forces[i], t);
+                if let (Some(entry), false) =
+                    (d.model.forces.get(i).and_then(Option::as_ref), probe::is_zero(pool, force_t))
+                {
+                    return Err(ModelError::at(entry.span.clone(), reason).into());
+                }
+                return Err(LinearizeError::NotAutonomous { reason });
+            }
+            Decision::Undecided => return Err(undecided(format!("the equation of {name}"))),
+        }
+        for &j in act {
+            let dm = pool.diff(d.mass_matrix[i][j], t);
+            match probe::decide_zero(pool, dm) {
+                Decision::Zero => {}
+                Decision::NonZero => {
+                    return Err(LinearizeError::NotAutonomous {
+                        reason:
+                            "the mass matrix M depends on the time t, so there is no fixed point to linearize about"
+                                .into(),
+                    })
+                }
+                Decision::Undecided => return Err(undecided("M".into())),
+            }
+        }
+    }
+    for c in &d.constraints.list {
+        if c.rheonomic != Some(false) {
+            return Err(ModelError::at(
+                c.span.clone(),
+                format!("the constraint '{}' depends on the time t (or could not be shown not to), so there is no fixed point to linearize about", c.name),
+            )
+            .into());
+        }
+    }
+    Ok(())
+}
+
+/// The starting q (every coordinate) and q' from `[initial]`, `at` over q.
+fn initial(d: &Derivation, at: &[(String, f64)]) -> Result<(Vec<f64>, Vec<f64>), LinearizeError> {
+    let model = &d.model;
+    let n = model.n_coords();
+    let (mut q, mut qd) = (vec![0.0; n], vec![0.0; n]);
+    let env = |name: &str| model.parameter(name);
+    for iv in &model.initial {
+        let v =
+            model.pool.eval(iv.value.expr, &env).map_err(|e| ModelError::at(iv.value.span.clone(), e.to_string()))?;
+        if iv.order == 0 {
+            q[iv.coord] = v;
+        } else {
+            qd[iv.coord] = v;
+        }
+    }
+    for (name, v) in at {
+        let Some(i) = model.coordinates.iter().position(|c| &c.name == name) else {
+            let known: Vec<&str> = model.coordinates.iter().map(|c| c.name.as_str()).collect();
+            return Err(ModelError::setting(
+                crate::error::Setting::Start { name: name.clone() },
+                format!("the model has no coordinate '{name}'"),
+            )
+            .with_help(format!("its coordinates are: {}", known.join(", ")))
+            .into());
+        };
+        if !v.is_finite() {
+            return Err(ModelError::setting(
+                crate::error::Setting::Start { name: name.clone() },
+                "the value must be finite",
+            )
+            .into());
+        }
+        q[i] = *v;
+    }
+    Ok((q, qd))
+}
+
+/// Linearizes the model about the equilibrium or steady motion near the start.
+pub fn linearize(d: &Derivation, config: &LinearizeConfig) -> Result<Linearization, LinearizeError> {
+    let names: Vec<String> = d.model.coordinates.iter().map(|c| c.name.clone()).collect();
+    let big_n = names.len();
+    let mut pool = d.pool().clone();
+    let mut notes = Vec::new();
+    // Idle coordinates: a row of M proven zero.
+    let idle: Vec<usize> = (0..big_n)
+        .filter(|&i| d.mass_matrix[i].iter().all(|&e| probe::decide_zero(&mut pool, e) == Decision::Zero))
+        .collect();
+    let act: Vec<usize> = (0..big_n).filter(|i| !idle.contains(i)).collect();
+    if !idle.is_empty() {
+        let list: Vec<&str> = idle.iter().map(|&i| names[i].as_str()).collect();
+        notes.push(format!(
+            "idle coordinate{} {} (no inertia: its row of M is zero) left out, at {} start value",
+            if idle.len() == 1 { "" } else { "s" },
+            list.join(", "),
+            if idle.len() == 1 { "its" } else { "their" }
+        ));
+    }
+    check_autonomous(d, &mut pool, &act)?;
+    if d.constraints.independent < d.constraints.list.len() {
+        let c = &d.constraints.list[0];
+        return Err(ModelError::at(
+            c.span.clone(),
+            "the constraints are not independent (their Jacobian has lower rank), so the dependent coordinates cannot be chosen",
+        )
+        .into());
+    }
+    let (mut q_start, qd_start) = initial(d, &config.at)?;
+    // Rates: cyclic coordinates move in a steady motion.
+    let cyclic: Vec<usize> = d.cyclic.iter().copied().filter(|i| act.contains(i)).collect();
+    let mut rate = vec![0.0; big_n];
+    let mut flagged: Vec<usize> = Vec::new();
+    for (name, v) in &config.rates {
+        let Some(i) = names.iter().position(|c| c == name) else {
+            return Err(LinearizeError::Rate {
+                name: name.clone(),
+                message: format!("the model has no coordinate '{name}' (its coordinates are: {})", names.join(", ")),
+            });
+        };
+        if config.about != About::Steady {
+            return Err(LinearizeError::Rate {
+                name: name.clone(),
+                message: "a rate applies to a steady motion, not to an equilibrium (every speed is zero there)".into(),
+            });
+        }
+        if !cyclic.contains(&i) {
+            return Err(LinearizeError::Rate {
+                name: name.clone(),
+                message: format!("'{name}' is not cyclic (∂L/∂{name} ≠ 0), so it cannot move at a constant rate"),
+            });
+        }
+        if !v.is_finite() {
+            return Err(LinearizeError::Rate { name: name.clone(), message: "the value must be finite".into() });
+        }
+        rate[i] = *v;
+        flagged.push(i);
+    }
+    let moving: Vec<usize> = match config.about {
+        About::Equilibrium => Vec::new(),
+        About::Steady => cyclic.clone(),
+    };
+    for &i in &moving {
+        if !flagged.contains(&i) {
+            rate[i] = qd_start[i];
+        }
+    }
+    let pos = |i: usize| act.iter().position(|&a| a == i).unwrap_or(0);
+    let unknown: Vec<usize> = (0..act.len()).filter(|&k| !moving.contains(&act[k])).collect();
+    let speeds: Vec<f64> = act.iter().map(|&i| rate[i]).collect();
+    let mut compiled = Compiled::new(d, act.clone())?;
+    // Dependent coordinates and speeds, chosen at the start for the search (at
+    // the point they are chosen again for the elimination).
+    let avoid: Vec<usize> = flagged.iter().map(|&i| pos(i)).collect();
+    let dependent = {
+        let zero = vec![0.0; big_n];
+        let nb = compiled.eval(&q_start, &zero);
+        let phi_q = nb.b.select_rows(compiled.hol.iter());
+        let dq = if compiled.hol.is_empty() {
+            Vec::new()
+        } else {
+            pivots(&phi_q, &[], &[]).ok_or_else(|| LinearizeError::Singular { at: pairs(&names, &q_start) })?
+        };
+        if compiled.m == 0 {
+            Vec::new()
+        } else {
+            pivots(&nb.b, &dq, &avoid).ok_or_else(|| LinearizeError::Singular { at: pairs(&names, &q_start) })?
+        }
+    };
+    let unknown_names: Vec<String> = unknown.iter().map(|&k| names[act[k]].clone()).collect();
+    let start: Vec<f64> = unknown.iter().map(|&k| q_start[act[k]]).collect();
+    let setup = Setup { unknown: unknown.clone(), base_q: q_start.clone(), speeds, dependent, avoid };
+    let mut problem = Problem { c: compiled, setup, names: &names, scale: 0.0 };
+    let what = match config.about {
+        About::Equilibrium => "equilibrium",
+        About::Steady => "steady motion",
+    };
+    let r0 = problem.residual(&start).ok_or_else(|| LinearizeError::NoPoint {
+        what,
+        start: pairs(&unknown_names, &start),
+        why: "the equations cannot be evaluated there".into(),
+    })?;
+    problem.scale = r0.amax();
+    let search = equilibria::search(&mut problem, &start, !config.keep_unstable)
+        .map_err(|why| LinearizeError::NoPoint { what, start: pairs(&unknown_names, &start), why })?;
+    let x = search.found[search.chosen].x.clone();
+    let point = problem.at(&x).ok_or_else(|| LinearizeError::Singular { at: pairs(&unknown_names, &x) })?;
+    for &j in &point.dependent_v {
+        if flagged.contains(&act[j]) {
+            notes.push(format!(
+                "the rate of {} follows from the constraints (it is a dependent speed), not from the one given",
+                names[act[j]]
+            ));
+        }
+    }
+    for (k, &j) in unknown.iter().enumerate() {
+        q_start[act[j]] = x[k];
+    }
+    if search.landing.is_some_and(|i| i != search.chosen) {
+        notes.push(format!(
+            "Newton's method from the start reached an unstable {what}; the nearest one that is not unstable is linearized instead"
+        ));
+    }
+    // A steady motion keeps the non-cyclic coordinates still.
+    for &k in &unknown {
+        let i = act[k];
+        if point.qd[i].abs() > ACCEPT * (1.0 + point.qd.iter().fold(0.0f64, |m, v| m.max(v.abs()))) {
+            return Err(LinearizeError::NoPoint {
+                what,
+                start: pairs(&unknown_names, &start),
+                why: format!(
+                    "the constraints make {}' = {} there, so that coordinate does not stand still",
+                    names[i],
+                    equilibria::short(point.qd[i])
+                ),
+            });
+        }
+    }
+    if config.about == About::Steady && !moving.is_empty() {
+        notes.push(
+            "a cyclic coordinate's position does not enter the equations: its column of A is zero, and a change of its rate moves to a neighbouring steady motion, so zero eigenvalues come with each".into(),
+        );
+    }
+    let speed_name = |j: usize| format!("{}'", names[act[j]]);
+    let state: Vec<String> = point
+        .independent_q
+        .iter()
+        .map(|&j| names[act[j]].clone())
+        .chain(point.independent_v.iter().map(|&j| speed_name(j)))
+        .collect();
+    let rows = |m: &DMatrix<f64>| -> Vec<Vec<f64>> {
+        (0..m.nrows()).map(|i| (0..m.ncols()).map(|j| m[(i, j)]).collect()).collect()
+    };
+    let mut full_qdd = vec![0.0; big_n];
+    for (k, &i) in act.iter().enumerate() {
+        full_qdd[i] = point.qdd[k];
+    }
+    // Rounding noise about exact zeros of the point is zero.
+    let clean = |v: &mut Vec<f64>| {
+        let big = v.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+        v.iter_mut().filter(|x| x.abs() <= 1e-14 * big).for_each(|x| *x = 0.0);
+    };
+    let (mut q, mut qd) = (point.q.clone(), point.qd.clone());
+    clean(&mut q);
+    clean(&mut qd);
+    clean(&mut full_qdd);
+    let mut equilibria_found = search.found.clone();
+    for e in &mut equilibria_found {
+        clean(&mut e.x);
+    }
+    Ok(Linearization {
+        about: config.about,
+        coordinates: names.clone(),
+        q,
+        qd,
+        qdd: full_qdd,
+        multipliers: d.constraints.list.iter().zip(&point.lambda).map(|(c, &l)| (c.name.clone(), l)).collect(),
+        idle: idle.iter().map(|&i| names[i].clone()).collect(),
+        moving: moving.iter().map(|&i| (names[i].clone(), rate[i])).collect(),
+        dependent_coordinates: point.dependent_q.iter().map(|&j| names[act[j]].clone()).collect(),
+        dependent_speeds: point.dependent_v.iter().map(|&j| speed_name(j)).collect(),
+        state,
+        a: rows(&point.a),
+        inputs: Vec::new(),
+        b: None,
+        eigenvalues: point.eigenvalues,
+        stability: point.stability,
+        unknowns: unknown_names,
+        start,
+        equilibria: equilibria_found,
+        chosen: search.chosen,
+        landing: search.landing,
+        notes,
+    })
+}
+
+/// One eigenvalue of A in the report.
+#[derive(Debug, Clone, Serialize)]
+pub struct Eigenvalue {
+    /// Re s.
+    pub re: f64,
+    /// Im s.
+    pub im: f64,
+    /// −Re s: how fast the motion decays (negative: grows).
+    pub decay_rate: f64,
+    /// |Im s|: the damped angular frequency.
+    pub frequency: f64,
+}
+
+/// The linearization as the JSON contract `lagrange.linearize/1`.
+#[derive(Debug, Clone, Serialize)]
+pub struct LinearizeReport {
+    /// Always `lagrange.linearize/1`.
+    pub format: &'static str,
+    /// The model's name.
+    pub name: String,
+    /// equilibrium or steady.
+    pub about: About,
+    /// q at the operating point.
+    pub q: Ordered<f64>,
+    /// q' there.
+    pub qd: Ordered<f64>,
+    /// q'' there.
+    pub qdd: Ordered<f64>,
+    /// λ there, by constraint.
+    pub multipliers: Ordered<f64>,
+    /// Cyclic coordinates moving at constant rates, with the rates.
+    pub moving: Ordered<f64>,
+    /// Coordinates left out (no inertia).
+    pub idle: Vec<String>,
+    /// Coordinates eliminated by holonomic constraints.
+    pub dependent_coordinates: Vec<String>,
+    /// Speeds eliminated by the constraints.
+    pub dependent_speeds: Vec<String>,
+    /// The state x: independent coordinates, then independent speeds.
+    pub state: Vec<String>,
+    /// x' = A x + B u.
+    #[serde(rename = "A")]
+    pub a: Vec<Vec<f64>>,
+    /// The inputs u (none yet).
+    pub inputs: Vec<String>,
+    /// B, one column per input (null while the model has no inputs).
+    #[serde(rename = "B")]
+    pub b: Option<Vec<Vec<f64>>>,
+    /// The eigenvalues of A.
+    pub eigenvalues: Vec<Eigenvalue>,
+    /// stable (every Re < 0), marginal (none > 0, some = 0) or unstable.
+    pub stability: Stability,
+    /// The operating points met near the start.
+    pub equilibria: Vec<EquilibriumReport>,
+    /// Remarks.
+    pub notes: Vec<String>,
+}
+
+impl LinearizeReport {
+    /// The report of a linearization.
+    pub fn new(d: &Derivation, l: &Linearization) -> LinearizeReport {
+        let named = |v: &[f64]| Ordered(l.coordinates.iter().cloned().zip(v.iter().copied()).collect());
+        LinearizeReport {
+            format: "lagrange.linearize/1",
+            name: d.model.name.clone(),
+            about: l.about,
+            q: named(&l.q),
+            qd: named(&l.qd),
+            qdd: named(&l.qdd),
+            multipliers: Ordered(l.multipliers.clone()),
+            moving: Ordered(l.moving.clone()),
+            idle: l.idle.clone(),
+            dependent_coordinates: l.dependent_coordinates.clone(),
+            dependent_speeds: l.dependent_speeds.clone(),
+            state: l.state.clone(),
+            a: l.a.clone(),
+            inputs: l.inputs.clone(),
+            b: l.b.clone(),
+            eigenvalues: l
+                .eigenvalues
+                .iter()
+                .map(|&(re, im)| Eigenvalue { re, im, decay_rate: -re, frequency: im.abs() })
+                .collect(),
+            stability: l.stability,
+            equilibria: EquilibriumReport::list(&l.unknowns, &l.equilibria, l.chosen, l.landing),
+            notes: l.notes.clone(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Model;
+
+    fn derive(text: &str) -> Derivation {
+        Derivation::new(Model::parse(text, &[]).expect("model parses")).expect("derivation")
+    }
+
+    const DAMPED: &str = "coordinates = [\"x\"]\nkinetic = \"m*x'^2/2\"\npotential = \"k*x^2/2\"\n\
+        dissipation = \"b*x'^2/2\"\n[parameters]\nm = 2.0\nk = 8.0\nb = 0.4\n[initial]\nx = 0.3\n\"x'\" = 0.0\n";
+
+    #[test]
+    fn the_damped_oscillator_has_the_textbook_matrix() {
+        let l = linearize(&derive(DAMPED), &LinearizeConfig::default()).unwrap();
+        let (m, k, b) = (2.0, 8.0, 0.4);
+        let want = [[0.0, 1.0], [-k / m, -b / m]];
+        for i in 0..2 {
+            for j in 0..2 {
+                assert!((l.a[i][j] - want[i][j]).abs() < 1e-12, "{:?}", l.a);
+            }
+        }
+        assert_eq!(l.state, ["x", "x'"]);
+        assert_eq!(l.stability, Stability::Stable);
+        // s = −b/2m ± i sqrt(k/m − b²/4m²).
+        let (re, im) = (-b / (2.0 * m), (k / m - b * b / (4.0 * m * m)).sqrt());
+        assert!((l.eigenvalues[0].0 - re).abs() < 1e-12 && (l.eigenvalues[0].1 - im).abs() < 1e-12);
+        assert!(l.b.is_none() && l.inputs.is_empty());
+    }
+
+    #[test]
+    fn pivots_prefer_what_is_forced_and_avoid_what_is_asked() {
+        let b = DMatrix::from_row_slice(1, 3, &[1.0, 2.0, 0.5]);
+        assert_eq!(pivots(&b, &[], &[]), Some(vec![1]));
+        assert_eq!(pivots(&b, &[], &[1]), Some(vec![0]));
+        assert_eq!(pivots(&b, &[2], &[]), Some(vec![2]));
+        let zero = DMatrix::from_row_slice(1, 2, &[0.0, 0.0]);
+        assert_eq!(pivots(&zero, &[], &[]), None);
+    }
+}
