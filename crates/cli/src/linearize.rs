@@ -48,7 +48,10 @@ pub struct Args {
 /// Runs the command.
 pub fn run(args: &Args) -> Result<(), Failure> {
     let path = &args.model;
-    let (source, d) = crate::derive_file(path, &args.set)?;
+    // The inputs stay symbols: B is the response to them.
+    let source = crate::read_source(path)?;
+    let model = crate::parse_model(path, &source, &args.set)?;
+    let d = mech::Derivation::new(model).map_err(|e| Failure::model(path, &source, e))?;
     let about = match args.about {
         AboutArg::Equilibrium => About::Equilibrium,
         AboutArg::Steady => About::Steady,

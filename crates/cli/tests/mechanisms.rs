@@ -64,6 +64,29 @@ fn an_input_force_changes_the_cart_momentum_as_its_integral() {
     assert_eq!(d["inputs_affine"], true);
 }
 
+/// `linearize` keeps the inputs and gives B: the cart and rod's accelerations
+/// respond to (F, tau) through M⁻¹, M = [[M + m, m l], [m l, 4 m l²/3]] at th = 0,
+/// and A's th column is M⁻¹ (0, −m g l).
+#[test]
+fn linearize_gives_b_for_the_inputs() {
+    let v = json(&["linearize", "examples/cart_pendulum.toml", "--at", "x=0", "--at", "th=0", "--format", "json"]);
+    assert_eq!(v["inputs"], serde_json::json!(["F", "tau"]));
+    let (mc, m, l, g) = (2.0f64, 0.5f64, 0.4f64, 9.81f64);
+    let (a, b, c) = (mc + m, m * l, 4.0 * m * l * l / 3.0);
+    let det = a * c - b * b;
+    let inv = [[c / det, -b / det], [-b / det, a / det]];
+    for i in 0..2 {
+        for j in 0..2 {
+            let got = v["B"][2 + i][j].as_f64().unwrap();
+            assert!((got - inv[i][j]).abs() < 1e-12 * inv[i][j].abs().max(1.0), "B[{}][{j}] = {got}", 2 + i);
+            assert_eq!(v["B"][i][j].as_f64().unwrap(), 0.0);
+        }
+        let got = v["A"][2 + i][1].as_f64().unwrap();
+        let want = -inv[i][1] * m * g * l;
+        assert!((got - want).abs() < 1e-12 * want.abs(), "A[{}][1] = {got}, want {want}", 2 + i);
+    }
+}
+
 /// A torque fixed in space on a free asymmetric body: L in space (Dᵀ L_body,
 /// with D = R_z(ps) R_y(th) R_x(ph) written out here) grows as L(0) + τ t.
 #[test]

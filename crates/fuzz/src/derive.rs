@@ -41,6 +41,8 @@ pub fn check_derivation(text: &str) -> Outcome {
 
 /// Derives and checks a loaded model; `text` is its source (for spans).
 pub(crate) fn check_model(text: &str, model: Model) -> Outcome {
+    // Inputs take their values, as in every run.
+    let model = model.with_inputs_applied();
     let oracle = Oracle::new(&model);
     let d = match Derivation::new(model) {
         Ok(d) => d,
@@ -61,7 +63,10 @@ pub(crate) fn check_model(text: &str, model: Model) -> Outcome {
     }
     let o = match (oracle, d.kinetic(), d.potential()) {
         (Some(o), _, _) => o,
-        (None, Some(tt), Some(uu)) => Oracle::with_energies(d.model(), d.pool().clone(), tt, uu),
+        (None, Some(tt), Some(uu)) => {
+            let forces = (!d.model().loads.is_empty()).then(|| d.forces().to_vec());
+            Oracle::with_energies(d.model(), d.pool().clone(), tt, uu, forces)
+        }
         (None, _, _) => return Outcome::fine("derived (bodies without T and U)"),
     };
     let mut rng = Rng::new(hash(text));

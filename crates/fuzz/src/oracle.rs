@@ -65,22 +65,30 @@ pub struct Point {
 
 impl Oracle {
     /// The oracle of a model; None for a model with rigid bodies, whose T the
-    /// oracle does not build.
+    /// oracle does not build, or with loads, whose virtual work it does not.
     pub fn new(model: &Model) -> Option<Oracle> {
-        if !model.bodies.is_empty() {
+        if !model.bodies.is_empty() || !model.loads.is_empty() {
             return None;
         }
-        Some(Oracle::build(model, model.pool.clone(), None))
+        Some(Oracle::build(model, model.pool.clone(), None, None))
     }
 
     /// The oracle of a model with rigid bodies, from the T and U the derivation
     /// built (in `pool`, its pool): what follows from them is still derived
     /// independently (momenta, M, the equations, h, H's checks, the verdicts).
-    pub fn with_energies(model: &Model, pool: Pool, kinetic: ExprId, potential: ExprId) -> Oracle {
-        Oracle::build(model, pool, Some((kinetic, potential)))
+    /// With loads, `forces` are the derivation's generalized forces (`[forces]`
+    /// and the loads' virtual work), taken as given in the same way.
+    pub fn with_energies(
+        model: &Model,
+        pool: Pool,
+        kinetic: ExprId,
+        potential: ExprId,
+        forces: Option<Vec<ExprId>>,
+    ) -> Oracle {
+        Oracle::build(model, pool, Some((kinetic, potential)), forces)
     }
 
-    fn build(model: &Model, mut pool: Pool, energies: Option<(ExprId, ExprId)>) -> Oracle {
+    fn build(model: &Model, mut pool: Pool, energies: Option<(ExprId, ExprId)>, given: Option<Vec<ExprId>>) -> Oracle {
         let pool_ref = &mut pool;
         let names: Vec<String> = model.coordinates.iter().map(|c| c.name.clone()).collect();
         let q: Vec<ExprId> = names.iter().map(|c| pool_ref.var(c, 0)).collect();
@@ -145,7 +153,10 @@ impl Oracle {
             }
         };
         let dissipation = model.dissipation.as_ref().map_or(pool_ref.zero(), |r| r.expr);
-        let forces: Vec<ExprId> = model.forces.iter().map(|f| f.as_ref().map_or(pool_ref.zero(), |f| f.expr)).collect();
+        let forces: Vec<ExprId> = match given {
+            Some(f) => f,
+            None => model.forces.iter().map(|f| f.as_ref().map_or(pool_ref.zero(), |f| f.expr)).collect(),
+        };
 
         let momenta: Vec<ExprId> = qd.iter().map(|&v| pool_ref.diff(lagrangian, v)).collect();
         let mass_matrix: Vec<Vec<ExprId>> =

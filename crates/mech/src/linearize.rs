@@ -24,8 +24,9 @@
 //! and A acts on (independent coordinates, independent speeds).
 //!
 //! Idle coordinates (a row of M proven zero: no inertia) are left out, at their
-//! start value. B (inputs) is a slot: the model has no inputs yet, so it is
-//! empty.
+//! start value. With `[inputs]`, u is held at u₀ (the inputs' values at t = 0)
+//! and B = ∂x'/∂u follows from `K [∂q''/∂u; ∂λ/∂u] = [∂f/∂u; 0]`, reduced to the
+//! same state as A.
 
 use crate::derive::Derivation;
 use crate::equilibria::{self, Assessment, Equilibrium, EquilibriumReport, Landscape, Solved, Stability};
@@ -174,9 +175,9 @@ pub struct Linearization {
     pub state: Vec<String>,
     /// A, row-major: x' = A x.
     pub a: Vec<Vec<f64>>,
-    /// The inputs u (none yet).
+    /// The inputs u (`[inputs]`), held at u₀, their values at t = 0.
     pub inputs: Vec<String>,
-    /// B of x' = A x + B u (None while the model has no inputs).
+    /// B of x' = A x + B u, one column per input (None without inputs).
     pub b: Option<Vec<Vec<f64>>>,
     /// The eigenvalues (Re, Im) of A, by decay rate (−Re) ascending, then |Im| descending (+ before −).
     pub eigenvalues: Vec<(f64, f64)>,
@@ -211,6 +212,8 @@ struct Compiled {
     out: Vec<f64>,
     /// Whether ∂M/∂q is compiled (with constraints only).
     with_mq: bool,
+    /// The model's inputs u (their symbols held at u₀ in everything compiled).
+    n_u: usize,
 }
 
 /// The numbers at one state.
@@ -228,6 +231,8 @@ struct Numbers {
     phi: DVector<f64>,
     /// Per coordinate j: ∂M/∂q_j.
     mq: Vec<DMatrix<f64>>,
+    /// ∂f/∂u (n × inputs).
+    fu: DMatrix<f64>,
 }
 
 impl Compiled {
@@ -291,11 +296,24 @@ impl Compiled {
                 }
             }
         }
+        // The inputs: B = ∂f/∂u, and u held at u₀ (their values at t = 0) in all of it.
+        for &i in &act {
+            roots.extend(d.input_matrix[i].iter().copied());
+        }
+        let n_u = d.inputs.len();
+        if n_u > 0 {
+            let u0 = input_values(d)?;
+            let held: rustc_hash::FxHashMap<ExprId, ExprId> =
+                d.inputs.iter().zip(&u0).map(|(&u, &v)| (u, crate::source::number_expr(&mut pool, v))).collect();
+            for r in &mut roots {
+                *r = pool.substitute(*r, &held);
+            }
+        }
         let tape = Tape::compile(&pool, &roots, d.layout.symbols()).map_err(|e| LinearizeError::NotAutonomous {
             reason: format!("the equations of motion cannot be evaluated: {e}"),
         })?;
         let out = vec![0.0; roots.len()];
-        Ok(Compiled { big_n: d.q.len(), act, m, hol, tape, inputs: d.layout.values(), out, with_mq })
+        Ok(Compiled { big_n: d.q.len(), act, m, hol, tape, inputs: d.layout.values(), out, with_mq, n_u })
     }
 
     /// Evaluates at the full q and q' (every coordinate).
@@ -322,8 +340,26 @@ impl Compiled {
         let cv = take(m, n);
         let phi = take(self.hol.len(), 1).column(0).into_owned();
         let mq: Vec<DMatrix<f64>> = if self.with_mq { (0..n).map(|_| take(n, n)).collect() } else { Vec::new() };
-        Numbers { m: mm, f, fq, fv, b, bq, c, cq, cv, phi, mq }
+        let fu = take(n, self.n_u);
+        Numbers { m: mm, f, fq, fv, b, bq, c, cq, cv, phi, mq, fu }
     }
+}
+
+/// The inputs' values u₀ at t = 0 (parameters at their values), about which
+/// the motion is linearized.
+fn input_values(d: &Derivation) -> Result<Vec<f64>, LinearizeError> {
+    let model = &d.model;
+    model
+        .inputs
+        .iter()
+        .map(|u| {
+            let env = |n: &str| if n == "t" { Some(0.0) } else { model.parameter(n) };
+            model
+                .pool
+                .eval(u.value.expr, &env)
+                .map_err(|e| LinearizeError::from(ModelError::at(u.value.span.clone(), e.to_string())))
+        })
+        .collect()
 }
 
 /// K = [[M, −Bᵀ], [B, 0]].
@@ -396,6 +432,8 @@ struct AtPoint {
     qdd: Vec<f64>,
     lambda: Vec<f64>,
     a: DMatrix<f64>,
+    /// B of the reduced state (zero columns without inputs).
+    b: DMatrix<f64>,
     eigenvalues: Vec<(f64, f64)>,
     stability: Stability,
     independent_q: Vec<usize>,
@@ -623,6 +661,16 @@ impl Problem<'_> {
         t.view_mut((n, nq), (n, nv)).copy_from(&pv);
         let rows: Vec<usize> = iq.iter().copied().chain(iv.iter().map(|&j| n + j)).collect();
         let a = (full * t).select_rows(rows.iter());
+        // B: the accelerations' response to u, K [∂q''/∂u; ∂λ/∂u] = [∂f/∂u; 0].
+        let n_u = nb.fu.ncols();
+        let mut b_full = DMatrix::zeros(2 * n, n_u);
+        if n_u > 0 {
+            let mut rhs_u = DMatrix::zeros(n + m, n_u);
+            rhs_u.view_mut((0, 0), (n, n_u)).copy_from(&nb.fu);
+            let gu = kkt(&nb).lu().solve(&rhs_u)?;
+            b_full.view_mut((n, 0), (n, n_u)).copy_from(&gu.rows(0, n));
+        }
+        let b = b_full.select_rows(rows.iter());
         if !a.iter().all(|v| v.is_finite()) {
             return None;
         }
@@ -633,6 +681,7 @@ impl Problem<'_> {
             qdd: qdd.iter().copied().collect(),
             lambda: lam.iter().copied().collect(),
             a,
+            b,
             eigenvalues,
             stability,
             independent_q: iq,
@@ -1002,8 +1051,8 @@ pub fn linearize(d: &Derivation, config: &LinearizeConfig) -> Result<Linearizati
         dependent_speeds: point.dependent_v.iter().map(|&j| speed_name(j)).collect(),
         state,
         a: rows(&point.a),
-        inputs: Vec::new(),
-        b: None,
+        inputs: d.model.inputs.iter().map(|u| u.name.clone()).collect(),
+        b: (!d.inputs.is_empty()).then(|| rows(&point.b)),
         eigenvalues: point.eigenvalues,
         stability: point.stability,
         unknowns: unknown_names,
@@ -1058,9 +1107,9 @@ pub struct LinearizeReport {
     /// x' = A x + B u.
     #[serde(rename = "A")]
     pub a: Vec<Vec<f64>>,
-    /// The inputs u (none yet).
+    /// The inputs u, held at their values at t = 0.
     pub inputs: Vec<String>,
-    /// B, one column per input (null while the model has no inputs).
+    /// B, one column per input (null without inputs).
     #[serde(rename = "B")]
     pub b: Option<Vec<Vec<f64>>>,
     /// The eigenvalues of A.

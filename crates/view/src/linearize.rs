@@ -133,7 +133,23 @@ pub fn text(d: &Derivation, l: &Linearization, config: &LinearizeConfig, terms: 
     } else {
         let _ = writeln!(s, "  ({n}×{n} matrix; see {})", terms.full_output);
     }
-    let _ = writeln!(s, "  B: none (the model has no inputs)");
+    match &l.b {
+        None => {
+            let _ = writeln!(s, "  B: none (the model has no inputs)");
+        }
+        Some(b) => {
+            let _ =
+                writeln!(s, "\nInputs u = ({}) at u₀ (their values at t = 0), x' = A x + B u:", l.inputs.join(", "));
+            if n <= MAX_PRINTED_STATE {
+                for (i, line) in matrix_lines(b).iter().enumerate() {
+                    let label = if i == 0 { "B = " } else { "    " };
+                    let _ = writeln!(s, "  {label}{line}");
+                }
+            } else {
+                let _ = writeln!(s, "  ({n}×{} matrix; see {})", l.inputs.len(), terms.full_output);
+            }
+        }
+    }
     let _ = writeln!(s, "\nEigenvalues s of A (solutions e^(s t)):");
     for line in eigenvalue_lines(&l.eigenvalues) {
         let _ = writeln!(s, "  {line}");
