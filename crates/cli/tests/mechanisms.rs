@@ -164,6 +164,44 @@ fn a_stated_rolling_contact_moves_as_the_hand_written_one() {
     }
 }
 
+/// The upright rolling disc, a body with rolling constraints, linearized about
+/// rolling straight at spin W: its lean obeys λ² = (4/5)(g/R − 3W²) (a thin
+/// disc; the classic bound W² > g/3R), so W = 2 falls over and W = 4 wobbles.
+/// The same with the contact stated (rolling_coin, its height eliminated).
+#[test]
+fn the_rolling_disc_is_stable_above_the_classic_speed() {
+    let (g, r) = (9.81f64, 0.5f64);
+    for (file, extra) in [
+        ("examples/constraints/rolling_disc.toml", &[][..]),
+        ("examples/constraints/rolling_coin.toml", &["--at", "z=0.5"][..]),
+    ] {
+        for w in [2.0f64, 4.0] {
+            let (rate, v) = (format!("ps={}", -w), format!("v={}", r * w));
+            let mut args = vec!["linearize", file, "--about", "steady", "--rate", &rate, "--set", &v];
+            args.extend(["--at", "th=1.5707963267948966", "--format", "json"]);
+            args.extend(extra);
+            let out = json(&args);
+            let lam2 = 0.8 * (g / r - 3.0 * w * w);
+            let nonzero: Vec<(f64, f64)> = out["eigenvalues"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|e| (e["re"].as_f64().unwrap(), e["im"].as_f64().unwrap()))
+                .filter(|(re, im)| re.abs() + im.abs() > 1e-9)
+                .collect();
+            assert_eq!(nonzero.len(), 2, "{file} W = {w}: {nonzero:?}");
+            let (re, im) = nonzero[0];
+            let size = lam2.abs().sqrt();
+            if lam2 > 0.0 {
+                assert!((re.abs() - size).abs() < 1e-9 && im.abs() < 1e-9, "{file} W = {w}: {re} {im}, want ±{size}");
+                assert_eq!(out["stability"], "unstable");
+            } else {
+                assert!((im.abs() - size).abs() < 1e-9 && re.abs() < 1e-9, "{file} W = {w}: {re} {im}, want ±{size}i");
+            }
+        }
+    }
+}
+
 /// What a load or an input cannot be is refused at its entry (exit 2).
 #[test]
 fn bad_loads_and_inputs_exit_2_at_the_entry() {
