@@ -302,6 +302,12 @@ fn read_orientation(r: &mut Reader<'_>, b: &Spanned<RawBody>) -> Result<Orientat
                         return Err(ModelError::at(span, "the axis has no direction (its length is 0)")
                             .with_help("give a non-zero vector; it is normalized"));
                     }
+                    // A unit vector at the parameters' values (sin, 0, −cos of an
+                    // angle) is taken as written: dividing by √(sin² + cos²) only
+                    // makes every expression longer.
+                    if size.is_some_and(|n| (n - 1.0).abs() <= 1e-14) {
+                        return Ok(Orientation::Hinge { angle, axis: v });
+                    }
                     let squares: Vec<ExprId> = v.iter().map(|&c| r.pool.powi(c, 2)).collect();
                     let sum = r.pool.add(&squares);
                     let norm = r.pool.sqrt(sum);
