@@ -1046,7 +1046,7 @@ pub fn linearize(d: &Derivation, config: &LinearizeConfig) -> Result<Linearizati
         qdd: full_qdd,
         multipliers: d.constraints.list.iter().zip(&point.lambda).map(|(c, &l)| (c.name.clone(), l)).collect(),
         idle: idle.iter().map(|&i| names[i].clone()).collect(),
-        moving: moving.iter().map(|&i| (names[i].clone(), rate[i])).collect(),
+        moving: moving.iter().map(|&i| (names[i].clone(), point.qd[i])).collect(),
         dependent_coordinates: point.dependent_q.iter().map(|&j| names[act[j]].clone()).collect(),
         dependent_speeds: point.dependent_v.iter().map(|&j| speed_name(j)).collect(),
         state,
