@@ -15,14 +15,22 @@ pub struct Derived {
     pub file: String,
     /// Its text.
     pub source: String,
-    /// The derivation.
+    /// The derivation runs use: the model's inputs replaced by their values.
     pub d: Derivation,
+    /// With `[inputs]`: the derivation that keeps them as symbols, which
+    /// `derive` shows (as the CLI's `derive` does).
+    pub symbolic: Option<Derivation>,
 }
 
 impl Derived {
     /// Where errors about the model point.
     pub fn place(&self) -> Place<'_> {
         Place { file: &self.file, text: &self.source }
+    }
+
+    /// The derivation `derive` shows: with the inputs as symbols.
+    pub fn shown(&self) -> &Derivation {
+        self.symbolic.as_ref().unwrap_or(&self.d)
     }
 
     /// A model error as `lagrange.ModelError`.
@@ -53,10 +61,17 @@ fn derive(py: Python<'_>, file: String, source: String, set: &[(String, f64)], f
         let place = Place { file: &file, text: &source };
         let parsed = py.detach(|| mech::Model::parse_with(&source, set, &files));
         let model = parsed.map_err(|e| errors::model_error(py, &place, &e))?;
+        // With inputs, derive shows them as symbols and runs use their values.
+        let symbolic = match model.inputs.is_empty() {
+            true => None,
+            false => {
+                Some(py.detach(|| Derivation::new(model.clone())).map_err(|e| errors::model_error(py, &place, &e))?)
+            }
+        };
         let d = py
             .detach(|| Derivation::new(model.with_inputs_applied()))
             .map_err(|e| errors::model_error(py, &place, &e))?;
-        Ok(Derived { file: file.clone(), source: source.clone(), d })
+        Ok(Derived { file: file.clone(), source: source.clone(), d, symbolic })
     })
 }
 
@@ -133,17 +148,17 @@ impl Derived {
 
     /// The `lagrange.derive/1` report as JSON text.
     fn derive_json(&self) -> PyResult<String> {
-        let report = mech::DeriveReport::new(&self.d);
+        let report = mech::DeriveReport::new(self.shown());
         serde_json::to_string(&report).map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))
     }
 
     /// The derivation as the CLI's text.
     fn text(&self) -> String {
-        view::derive::text(&self.d)
+        view::derive::text(self.shown())
     }
 
     /// The derivation as LaTeX, as the CLI's `--format latex`.
     fn latex(&self) -> String {
-        view::derive::latex(&self.d)
+        view::derive::latex(self.shown())
     }
 }
