@@ -331,7 +331,7 @@ fn bad_bodies_exit_2_with_a_location() {
         ("inertia = [\"I\", \"I\", \"I3\"]", "inertia = [\"I\", \"-I\", \"I3\"]", "a principal moment is negative"),
         ("inertia = [\"I\", \"I\", \"I3\"]", "inertia = [\"I\", \"I\", \"3*I\"]", "exceeds the sum of the other two"),
         ("inertia = [\"I\", \"I\", \"I3\"]", "inertia = [\"I\", \"I\", \"J3\"]", "J3"),
-        ("position = [\"0\", \"0\", \"0\"]", "position = [\"0\", \"0\"]", "3 components"),
+        ("position = [\"0\", \"0\", \"0\"]", "position = [\"0\", \"0\"]", "not 3 (x, y, z)"),
         ("center_of_mass = [\"0\", \"0\", \"S\"]", "center_of_mass = [\"0\", \"0\", \"be\"]", "be"),
         ("[[bodies]]", "[[particles]]\nmass = 1\nposition = [\"0\", \"1\"]\n[[bodies]]", "3-D"),
         ("angles = [\"al\", \"be\", \"ga\"]", "angles = [\"al\", \"be\", \"th\"]", "not a coordinate"),

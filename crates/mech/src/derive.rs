@@ -16,6 +16,7 @@ use sym::{ExprId, NameId, Pool, Symbol};
 mod body;
 pub(crate) mod constraint;
 mod layout;
+mod load;
 mod quadratic;
 mod verdict;
 
@@ -102,6 +103,12 @@ pub struct Derivation {
     pub(crate) constraints: Constraints,
     /// The input layout of every compiled expression: `[q, q', t, parameters]`.
     pub(crate) layout: Layout,
+    /// The symbols of the model's inputs u (`[inputs]`), in file order.
+    pub(crate) inputs: Vec<ExprId>,
+    /// B = ∂f/∂u, one row per coordinate (M q'' = f with f = f₀ + B u where f is affine in u).
+    pub(crate) input_matrix: Vec<Vec<ExprId>>,
+    /// Whether f is proven affine in u (∂B/∂u = 0), so that B u is all of u's part.
+    pub(crate) inputs_affine: bool,
 }
 
 /// The symbols of a derivation and the "is a variable" predicate used for collecting.
@@ -191,8 +198,9 @@ impl Derivation {
         let s = Symbols::new(pool, &model);
         let is_var = |x: Symbol| s.is_var(x);
 
-        let energies = energies(pool, &model, &s, &is_var);
-        let ext = external(pool, &model, &is_var);
+        let frames = body::frames(pool, &model.bodies, &s.q, &s.qd);
+        let energies = energies(pool, &model, &s, &frames, &is_var);
+        let ext = external(pool, &model, &s, &frames, &is_var);
         let motion = equations_of_motion(pool, &s, &energies, &ext, &is_var);
         let equations_seconds = started.elapsed().as_secs_f64();
         check_regular(pool, &model, &motion.mass_matrix)?;
@@ -213,6 +221,26 @@ impl Derivation {
         let (hamiltonian, velocities, hamilton) =
             hamiltonian(pool, &s, &energies, &motion, &ext, &mut judged.verdicts, &is_var);
 
+        let inputs: Vec<ExprId> = model.inputs.iter().map(|u| pool.symbol(&u.name)).collect();
+        let input_matrix: Vec<Vec<ExprId>> = motion
+            .forcing
+            .iter()
+            .map(|&f| {
+                inputs
+                    .iter()
+                    .map(|&u| {
+                        let b = pool.diff(f, u);
+                        pool.simplify_in(b, &is_var)
+                    })
+                    .collect()
+            })
+            .collect();
+        let inputs_affine = input_matrix.iter().flatten().all(|&b| {
+            inputs.iter().all(|&u| {
+                let d = pool.diff(b, u);
+                probe::decide_zero(pool, d).is_zero()
+            })
+        });
         let layout = Layout::new(pool, &s.q, &s.qd, s.t, &model.parameters);
         model.pool = pool_owned;
         let Symbols { q, qd, qdd, p, t, .. } = s;
@@ -247,10 +275,28 @@ impl Derivation {
             equations_seconds,
             constraints: Default::default(),
             layout,
+            inputs,
+            input_matrix,
+            inputs_affine,
         };
         // The constraints amend the equations and the verdicts of the system without them.
         constraint::attach(&mut derivation)?;
         Ok(derivation)
+    }
+
+    /// The symbols of the model's inputs u, in file order (empty without `[inputs]`).
+    pub fn inputs(&self) -> &[ExprId] {
+        &self.inputs
+    }
+
+    /// B = ∂f/∂u, one row per coordinate and one column per input.
+    pub fn input_matrix(&self) -> &[Vec<ExprId>] {
+        &self.input_matrix
+    }
+
+    /// Whether f is proven affine in the inputs (f = f₀ + B u with B free of u).
+    pub fn inputs_affine(&self) -> bool {
+        self.inputs_affine
     }
 
     /// The model it was derived from (it owns the pool).
@@ -427,7 +473,13 @@ impl Derivation {
 /// T and U from particles, bodies, `kinetic` and `potential`, or L itself. When L
 /// is quadratic in the velocities (almost always) it is also held as (M, b, L₀),
 /// from which the rest is built without expanding L whole.
-fn energies(pool: &mut Pool, model: &Model, s: &Symbols, is_var: &dyn Fn(Symbol) -> bool) -> Energies {
+fn energies(
+    pool: &mut Pool,
+    model: &Model,
+    s: &Symbols,
+    frames: &[body::Frame],
+    is_var: &dyn Fn(Symbol) -> bool,
+) -> Energies {
     let (q, qd, t) = (&s.q, &s.qd, s.t);
     let vars_q = QVars { q, qd, t, is_var };
     let mut bodies = Vec::new();
@@ -447,11 +499,11 @@ fn energies(pool: &mut Pool, model: &Model, s: &Symbols, is_var: &dyn Fn(Symbol)
         }
         // Rigid bodies' T is small and quadratic in the rates: it joins `kinetic`.
         let mut k_terms = Vec::new();
-        for body in &model.bodies {
-            let terms = body::terms(pool, body, q, qd, t, model.gravity.as_ref());
+        for (body, frame) in model.bodies.iter().zip(frames) {
+            let terms = body::terms(pool, body, frame, q, qd, t, model.gravity.as_ref());
             k_terms.push(terms.kinetic);
             u_terms.extend(terms.potential);
-            bodies.push(body::motion(pool, body, &terms, is_var));
+            bodies.push(body::motion(pool, body, frame, &terms, is_var));
         }
         if let Some(k) = &model.kinetic {
             k_terms.push(k.expr);
@@ -504,15 +556,27 @@ fn energies(pool: &mut Pool, model: &Model, s: &Symbols, is_var: &dyn Fn(Symbol)
     Energies { kinetic, potential, lagrangian, form, sparsity, bodies }
 }
 
-/// Rayleigh's R and the generalized forces Q (zero where none is given), simplified.
-fn external(pool: &mut Pool, model: &Model, is_var: &dyn Fn(Symbol) -> bool) -> External {
+/// Rayleigh's R and the generalized forces Q (`[forces]` and the loads' virtual
+/// work; zero where neither gives one), simplified.
+fn external(
+    pool: &mut Pool,
+    model: &Model,
+    s: &Symbols,
+    frames: &[body::Frame],
+    is_var: &dyn Fn(Symbol) -> bool,
+) -> External {
     let dissipation = model.dissipation.as_ref().map(|r| pool.simplify_in(r.expr, is_var));
+    let from_loads = load::generalized_forces(pool, &model.loads, frames, &s.q, &s.qd);
     let forces = model
         .forces
         .iter()
-        .map(|f| match f {
-            Some(f) => pool.simplify_in(f.expr, is_var),
-            None => pool.zero(),
+        .zip(from_loads)
+        .map(|(f, l)| {
+            let f = match f {
+                Some(f) => pool.add2(f.expr, l),
+                None => l,
+            };
+            pool.simplify_in(f, is_var)
         })
         .collect();
     External { dissipation, forces }
@@ -628,7 +692,7 @@ fn check_regular(pool: &mut Pool, model: &Model, mass_matrix: &[Vec<ExprId>]) ->
         .filter(|&i| mass_matrix[i].iter().all(|&m| probe::decide_zero(pool, m) == Decision::Zero))
         .collect();
     let names: Vec<String> = idle.iter().map(|&i| format!("'{}'", model.coordinates[i].name)).collect();
-    let body = model.bodies.iter().find(|b| b.angles.iter().any(|a| idle.contains(a)));
+    let body = model.bodies.iter().find(|b| b.orientation.angles().iter().any(|a| idle.contains(a)));
     let span = body.map(|b| b.span.clone()).or_else(|| {
         model
             .lagrangian

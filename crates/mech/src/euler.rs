@@ -83,7 +83,7 @@ fn turn<T: Copy>(k: usize, s: T, c: T, neg_s: T, zero: T, one: T) -> [[T; 3]; 3]
 }
 
 /// The turn about axis k by `angle`, as expressions.
-fn turn_expr(pool: &mut Pool, k: usize, angle: ExprId) -> ExprMatrix {
+pub(crate) fn turn_expr(pool: &mut Pool, k: usize, angle: ExprId) -> ExprMatrix {
     let (s, c) = (pool.func(Func::Sin, angle), pool.func(Func::Cos, angle));
     let neg_s = pool.neg(s);
     let (zero, one) = (pool.zero(), pool.one());
@@ -107,7 +107,7 @@ pub fn rotation_of(pool: &mut Pool, seq: Sequence, [al, be, ga]: [ExprId; 3]) ->
     mat_mul(pool, &r_c, &ba)
 }
 
-fn mat_mul(pool: &mut Pool, a: &ExprMatrix, b: &ExprMatrix) -> ExprMatrix {
+pub(crate) fn mat_mul(pool: &mut Pool, a: &ExprMatrix, b: &ExprMatrix) -> ExprMatrix {
     let mut c = [[pool.zero(); 3]; 3];
     for i in 0..3 {
         for j in 0..3 {

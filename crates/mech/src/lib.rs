@@ -54,7 +54,7 @@
 mod error;
 // Leaves: the clock, deciding symbolic facts (proofs, numeric refutation), Euler angles, TOML files.
 mod clock;
-mod euler;
+pub mod euler;
 mod probe;
 mod source;
 // Siblings of the pipeline: body files and inertia tensors, variational problems.
@@ -96,7 +96,8 @@ pub use extremal::{
 };
 pub use mechanism::{Mechanism, Point, PointKind};
 pub use model::{
-    Body, ConstraintKind, ConstraintSpec, Coordinate, Gravity, InitialValue, Located, Model, Parameter, Particle,
+    Body, ConstraintKind, ConstraintSpec, Coordinate, Gravity, InitialValue, Input, Load, LoadKind, Located, Model,
+    Orientation, Parameter, Particle,
 };
 pub use modes::{
     normal_modes, DampedRoot, Damping, Mode, ModeKind, Modes, ModesConfig, ModesError, ModesReport, SymbolicModes,

@@ -3,7 +3,8 @@
 //!
 //! What is drawn, by what the model gives:
 //! - **particles** at their positions x_i(q, t), and **rigid bodies** at their
-//!   reference points with their body axes (the rotation of their Euler angles);
+//!   reference points (and centres of mass, where those differ) with their body
+//!   axes (in 3-D);
 //! - a model without particles or bodies whose first two coordinates are the
 //!   plane polar coordinates of an orbit (`r` and an angle, as `lagrange
 //!   orbit` reads them): one point at (r cos θ, r sin θ);
@@ -16,7 +17,6 @@
 //! between the fixed origin and a point or two consecutive points whose
 //! distance does not change along the run.
 
-use crate::euler::rotation_of_f64;
 use crate::{Derivation, Orbit};
 use sym::{ExprId, Tape};
 
@@ -60,17 +60,14 @@ pub struct BodyAxes {
     pub name: String,
     /// The index of its reference point in [`Mechanism::points`].
     pub point: usize,
-    /// Its Euler angles' coordinates (α, β, γ).
-    pub angles: [usize; 3],
-    /// The axes they turn about.
-    pub sequence: crate::euler::Sequence,
 }
 
 /// How the points follow from the coordinates.
 #[derive(Debug, Clone)]
 enum Placement {
-    /// Positions compiled from the model's expressions over `[q, q', t, parameters]`.
-    Compiled { tape: Box<Tape>, inputs: Vec<f64> },
+    /// Positions compiled from the model's expressions over `[q, q', t, parameters]`,
+    /// followed by the nine entries of each body's axes (3-D).
+    Compiled { tape: Box<Tape>, inputs: Vec<f64>, values: Vec<f64> },
     /// (r cos θ, r sin θ) of coordinates `r` and `angle`.
     Polar { r: usize, angle: usize },
     /// Coordinate k at (k·spacing + q_k, 0).
@@ -97,7 +94,7 @@ impl Mechanism {
         let layout = d.layout().clone();
         if !model.particles.is_empty() || !model.bodies.is_empty() {
             let dimension =
-                model.particles.iter().map(|p| p.position.len()).chain(model.bodies.iter().map(|_| 3)).max();
+                model.particles.iter().map(|p| p.position.len()).chain(model.bodies.iter().map(|b| b.dimension)).max();
             let dimension = dimension.unwrap_or(3);
             let mut points = Vec::new();
             let mut exprs = Vec::new();
@@ -111,18 +108,29 @@ impl Mechanism {
                 exprs.extend((0..dimension).map(|k| p.position.get(k).copied().unwrap_or(zero)));
             }
             let mut bodies = Vec::new();
-            for b in &model.bodies {
-                bodies.push(BodyAxes {
-                    name: b.name.clone(),
-                    point: points.len(),
-                    angles: b.angles,
-                    sequence: b.sequence,
-                });
+            for (b, motion) in model.bodies.iter().zip(d.bodies()) {
+                if dimension == 3 {
+                    bodies.push(BodyAxes { name: b.name.clone(), point: points.len() });
+                }
                 points.push(Point { name: b.name.clone(), kind: PointKind::Body, mass: value(b.mass) });
-                exprs.extend(b.position.iter().copied());
+                exprs.extend(motion.position[..dimension].iter().copied());
+                if motion.center != motion.position {
+                    let name = format!("{} (centre of mass)", b.name);
+                    points.push(Point { name, kind: PointKind::Body, mass: value(b.mass) });
+                    exprs.extend(motion.center[..dimension].iter().copied());
+                }
+            }
+            if dimension == 3 {
+                for motion in d.bodies() {
+                    exprs.extend(motion.axes.iter().flatten().copied());
+                }
             }
             if let Ok(tape) = Tape::compile(pool, &exprs, layout.symbols()) {
-                let placement = Placement::Compiled { tape: Box::new(tape), inputs: layout.values() };
+                let placement = Placement::Compiled {
+                    tape: Box::new(tape),
+                    inputs: layout.values(),
+                    values: vec![0.0; exprs.len()],
+                };
                 return Mechanism { points, bodies, dimension, placement, springs: Vec::new(), layout };
             }
         }
@@ -176,9 +184,11 @@ impl Mechanism {
     /// Where the points are at (t, q, q'): `dimension()` numbers per point, into `out`.
     pub fn place(&mut self, t: f64, q: &[f64], qd: &[f64], out: &mut [f64]) {
         match &mut self.placement {
-            Placement::Compiled { tape, inputs } => {
+            Placement::Compiled { tape, inputs, values } => {
                 self.layout.set_state(inputs, t, q, qd);
-                tape.eval(inputs, out);
+                tape.eval(inputs, values);
+                let n = out.len();
+                out.copy_from_slice(&values[..n]);
             }
             Placement::Polar { r, angle } => {
                 out[0] = q[*r] * q[*angle].cos();
@@ -193,11 +203,16 @@ impl Mechanism {
         }
     }
 
-    /// The body axes e1, e2, e3 of body `b` at q, in space components.
-    pub fn axes(&self, b: usize, q: &[f64]) -> [[f64; 3]; 3] {
-        let [a, be, g] = self.bodies[b].angles;
-        // The rows of the rotation are the body axes.
-        rotation_of_f64(self.bodies[b].sequence, [q[a], q[be], q[g]])
+    /// The body axes e1, e2, e3 of body `b` at (t, q, q'), in space components
+    /// (the rows of its rotation, through its tree).
+    pub fn axes(&mut self, b: usize, t: f64, q: &[f64], qd: &[f64]) -> [[f64; 3]; 3] {
+        let Placement::Compiled { tape, inputs, values } = &mut self.placement else {
+            return [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        };
+        self.layout.set_state(inputs, t, q, qd);
+        tape.eval(inputs, values);
+        let start = values.len() - 9 * self.bodies.len() + 9 * b;
+        std::array::from_fn(|i| std::array::from_fn(|j| values[start + 3 * i + j]))
     }
 }
 

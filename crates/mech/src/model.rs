@@ -20,11 +20,13 @@ use toml::Spanned;
 pub(crate) mod body;
 pub(crate) mod constraint;
 pub(crate) mod gravity;
+pub(crate) mod load;
 
 pub use crate::source::Parameter;
-pub use body::Body;
+pub use body::{Body, Orientation};
 pub use constraint::{ConstraintKind, ConstraintSpec};
 pub use gravity::Gravity;
+pub use load::{Load, LoadKind};
 
 /// A generalized coordinate.
 #[derive(Debug, Clone)]
@@ -99,6 +101,22 @@ pub struct Model {
     pub bodies: Vec<Body>,
     /// Constraints from `[[constraints]]`, in file order.
     pub constraints: Vec<ConstraintSpec>,
+    /// Forces at points and torques on bodies (`[[loads]]`).
+    pub loads: Vec<Load>,
+    /// Named inputs u(t) (`[inputs]`): symbols in the forces and loads, with
+    /// the values a run gives them ([`Model::with_inputs_applied`]).
+    pub inputs: Vec<Input>,
+}
+
+/// A named input u(t) of `[inputs]`.
+#[derive(Debug, Clone)]
+pub struct Input {
+    /// Its name, a symbol in the forces and loads.
+    pub name: String,
+    /// Its value in a run, an expression of t and the parameters.
+    pub value: Located,
+    /// Where its name is written.
+    pub span: Range<usize>,
 }
 
 #[derive(Deserialize)]
@@ -123,6 +141,10 @@ struct RawModel {
     bodies: Vec<Spanned<body::RawBody>>,
     #[serde(default)]
     constraints: Vec<Spanned<constraint::RawConstraint>>,
+    #[serde(default)]
+    loads: Vec<Spanned<load::RawLoad>>,
+    #[serde(default)]
+    inputs: BTreeMap<Spanned<String>, Spanned<NumOrText>>,
 }
 
 #[derive(Deserialize)]
@@ -174,8 +196,12 @@ pub(crate) enum Scope {
     Parameters,
     /// Coordinates and time (positions).
     Configuration,
-    /// Coordinates, velocities and time (energies, forces).
+    /// Coordinates, velocities and time (energies).
     State,
+    /// Coordinates, velocities, time and the inputs (forces and loads).
+    Driven,
+    /// The time only (the values of inputs).
+    Time,
 }
 
 impl Scope {
@@ -184,6 +210,8 @@ impl Scope {
             Scope::Parameters => "parameters",
             Scope::Configuration => "parameters, coordinates and the time t",
             Scope::State => "parameters, coordinates, velocities (q') and the time t",
+            Scope::Driven => "parameters, inputs, coordinates, velocities (q') and the time t",
+            Scope::Time => "parameters and the time t",
         }
     }
 }
@@ -207,6 +235,8 @@ pub(crate) struct Reader<'a> {
     pub(crate) pool: Pool,
     pub(crate) coordinates: Vec<Coordinate>,
     pub(crate) parameters: Vec<Parameter>,
+    /// The inputs' names (`[inputs]`), known to forces and loads.
+    pub(crate) inputs: Vec<String>,
 }
 
 impl Reader<'_> {
@@ -233,14 +263,18 @@ impl Reader<'_> {
         let offset = content_offset(self.source, &span, text);
         let coordinates: Vec<String> = self.coordinates.iter().map(|c| c.name.clone()).collect();
         let parameters: Vec<String> = self.parameters.iter().map(|p| p.name.clone()).collect();
+        let inputs = &self.inputs;
         let known = |name: &str, order: u8| -> bool {
             if parameters.iter().any(|p| p == name) {
                 return order == 0;
             }
+            let state = (name == "t" && order == 0) || (order <= 1 && coordinates.iter().any(|c| c == name));
             match scope {
                 Scope::Parameters => false,
                 Scope::Configuration => order == 0 && (name == "t" || coordinates.iter().any(|c| c == name)),
-                Scope::State => (name == "t" && order == 0) || (order <= 1 && coordinates.iter().any(|c| c == name)),
+                Scope::State => state,
+                Scope::Driven => state || (order == 0 && inputs.iter().any(|u| u == name)),
+                Scope::Time => order == 0 && name == "t",
             }
         };
         let opts = ParseOptions::default().with_known(&known);
@@ -336,7 +370,14 @@ impl Model {
     /// `[[bodies]]`), which `files` reads.
     pub fn parse_with(source: &str, overrides: &[(String, f64)], files: &FileReader) -> Result<Model, ModelError> {
         let raw: RawModel = read_toml(source, "model")?;
-        let mut r = Reader { source, files, pool: Pool::default(), coordinates: Vec::new(), parameters: Vec::new() };
+        let mut r = Reader {
+            source,
+            files,
+            pool: Pool::default(),
+            coordinates: Vec::new(),
+            parameters: Vec::new(),
+            inputs: Vec::new(),
+        };
 
         // Coordinates.
         let coords = raw.coordinates.as_ref().ok_or_else(|| {
@@ -405,6 +446,27 @@ impl Model {
             r.pool.set_rank(&format!("p_{}", c.name), RANK_MOMENTUM);
         }
 
+        // Inputs: names for forces and loads, values of t for runs.
+        let mut raw_inputs: Vec<(&Spanned<String>, &Spanned<NumOrText>)> = raw.inputs.iter().collect();
+        raw_inputs.sort_by_key(|(k, _)| k.span().start);
+        let mut inputs = Vec::new();
+        for (k, v) in raw_inputs {
+            check_identifier(k, "input")?;
+            check_not_generated(k, "input", false)?;
+            let name = k.get_ref();
+            if r.is_coordinate(name) || r.parameters.iter().any(|p| &p.name == name) || name == "t" {
+                return Err(ModelError::at(
+                    k.span(),
+                    format!("input '{name}' has the name of a coordinate, a parameter or the time"),
+                )
+                .with_help("an input is a name of its own"));
+            }
+            let value = r.num_or_expr(v, Scope::Time, &format!("the value of input '{name}'"))?;
+            r.pool.set_rank(name, RANK_PARAMETER);
+            r.inputs.push(name.clone());
+            inputs.push(Input { name: name.clone(), value, span: k.span() });
+        }
+
         // What the system is made of.
         let gravity = raw.gravity.as_ref().map(|g| gravity::read(&mut r, g)).transpose()?;
         let mut particles = Vec::new();
@@ -447,18 +509,24 @@ impl Model {
             particles.push(Particle { mass, position, potential, span: p.span() });
         }
         let bodies = body::read_all(&mut r, &raw.bodies)?;
-        if let (Some(g), Some(b)) = (&gravity, raw.bodies.first()) {
-            if g.dimension().is_some_and(|n| n != 3) {
+        if let (Some(g), Some(b)) = (&gravity, bodies.first()) {
+            let n = b.dimension;
+            if g.dimension().is_some_and(|d| d != n) {
                 return Err(ModelError::at(
                     g.span(),
-                    "with [[bodies]], the gravity vector has 3 components (bodies move in 3-D)",
+                    format!(
+                        "with these [[bodies]], the gravity vector has {n} components (the bodies' vectors have {n})"
+                    ),
                 ));
             }
-            if let Some(p) = particles.iter().find(|p| p.position.len() != 3) {
-                let _ = b;
+            if let Some(p) = particles.iter().find(|p| p.position.len() != n) {
+                let axes = if n == 3 { "3-D (x, y, z)" } else { "2-D (x, y)" };
                 return Err(ModelError::at(
                     p.span.clone(),
-                    "with [[bodies]], gravity acts in 3-D: give the particles 3-D (x, y, z) positions",
+                    format!(
+                        "with these [[bodies]], gravity acts in {}: give the particles {axes} positions",
+                        &axes[..3]
+                    ),
                 ));
             }
         }
@@ -496,6 +564,10 @@ impl Model {
             return Err(ModelError::at(g, "`gravity` acts on [[particles]], and the model has none"));
         }
 
+        // Forces at points and torques on bodies.
+        let dimension = bodies.first().map(|b| b.dimension).unwrap_or(3);
+        let loads = load::read_all(&mut r, &raw.loads, &bodies, dimension)?;
+
         // Generalized forces.
         let mut forces: Vec<Option<Located>> = vec![None; r.coordinates.len()];
         for (k, v) in &raw.forces {
@@ -505,7 +577,7 @@ impl Model {
                     format!("[forces] names '{}', which is not a coordinate", k.get_ref()),
                 ));
             };
-            forces[i] = Some(r.expr(v, Scope::State, &format!("the force on '{}'", k.get_ref()))?);
+            forces[i] = Some(r.expr(v, Scope::Driven, &format!("the force on '{}'", k.get_ref()))?);
         }
 
         // Initial values.
@@ -565,7 +637,43 @@ impl Model {
             initial,
             bodies,
             constraints,
+            loads,
+            inputs,
         })
+    }
+
+    /// The model a run integrates: every input replaced by its value, an
+    /// expression of t, in the forces and loads (and no inputs left). `derive`
+    /// and `linearize` keep the inputs as symbols; runs need numbers.
+    pub fn with_inputs_applied(mut self) -> Model {
+        if self.inputs.is_empty() {
+            return self;
+        }
+        let subst: rustc_hash::FxHashMap<ExprId, ExprId> =
+            self.inputs.iter().map(|u| (self.pool.symbol(&u.name), u.value.expr)).collect();
+        let pool = &mut self.pool;
+        let mut apply = |e: ExprId| pool.substitute(e, &subst);
+        for f in self.forces.iter_mut().flatten() {
+            f.expr = apply(f.expr);
+        }
+        for l in &mut self.loads {
+            l.vector = l.vector.map(&mut apply);
+        }
+        self.inputs.clear();
+        self
+    }
+
+    /// An error at the first input when the model still has its inputs as
+    /// symbols, which a run cannot evaluate.
+    pub fn check_inputs_applied(&self) -> Result<(), ModelError> {
+        match self.inputs.first() {
+            None => Ok(()),
+            Some(u) => Err(ModelError::at(
+                u.span.clone(),
+                format!("input '{}' is a symbol in this derivation, and a run needs its value", u.name),
+            )
+            .with_help("derive `Model::with_inputs_applied()` for runs (the command line does)")),
+        }
     }
 
     /// Parses an expression in the model's names (parameters, coordinates,
@@ -578,6 +686,7 @@ impl Model {
             pool: std::mem::take(&mut self.pool),
             coordinates: self.coordinates.clone(),
             parameters: self.parameters.clone(),
+            inputs: Vec::new(),
         };
         let result = r.expr_str(text, 0..text.len(), Scope::State, what).map(|l| l.expr);
         // The whole text is the expression: spans are offsets into it.

@@ -131,6 +131,17 @@ pub struct DeriveReport {
     /// With constraints: the teaching text about the set.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub constraint_explanations: Vec<String>,
+    /// The model's inputs u with their values in runs (extra field, present
+    /// only with `[inputs]`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub inputs: Vec<InputReport>,
+    /// With inputs: B = ∂f/∂u, one row per coordinate (M q'' = f₀ + B u when
+    /// `inputs_affine`).
+    #[serde(rename = "B", skip_serializing_if = "Option::is_none")]
+    pub input_matrix: Option<Vec<Vec<String>>>,
+    /// With inputs: whether f is proven affine in u.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub inputs_affine: Option<bool>,
 }
 
 /// A rigid body's angular velocity and angular momentum, body components.
@@ -142,6 +153,15 @@ pub struct BodyReport {
     pub angular_velocity: [String; 3],
     /// (L₁, L₂, L₃) about the reference point.
     pub angular_momentum: [String; 3],
+}
+
+/// One input in the derive report: its name and its value in runs.
+#[derive(Debug, Clone, Serialize)]
+pub struct InputReport {
+    /// The input's name.
+    pub name: String,
+    /// Its value, an expression of t.
+    pub value: String,
 }
 
 /// One constraint in the report.
@@ -277,6 +297,15 @@ impl DeriveReport {
             degrees_of_freedom: (!d.constraints.is_empty()).then_some(d.constraints.degrees_of_freedom),
             constraints_integrable: d.constraints.integrable,
             constraint_explanations: d.constraints.explanation.clone(),
+            inputs: d
+                .model
+                .inputs
+                .iter()
+                .map(|u| InputReport { name: u.name.clone(), value: s(u.value.expr) })
+                .collect(),
+            input_matrix: (!d.inputs.is_empty())
+                .then(|| d.input_matrix.iter().map(|row| row.iter().map(|&b| s(b)).collect()).collect()),
+            inputs_affine: (!d.inputs.is_empty()).then_some(d.inputs_affine),
         }
     }
 }

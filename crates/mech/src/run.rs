@@ -523,6 +523,7 @@ pub fn simulate(
 ) -> Result<RunReport, RunError> {
     let start = Instant::now();
     config.check()?;
+    d.model.check_inputs_applied().map_err(RunError::Input)?;
     let (mut q0, mut qd0) = d.model.initial_state().map_err(RunError::Input)?;
     override_initial(d, &config.initial, &mut q0, &mut qd0)?;
     // Rigid bodies: a terminal event before the Euler angles' gimbal singularity.

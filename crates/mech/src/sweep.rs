@@ -666,6 +666,7 @@ impl<'a> Sweep<'a> {
         if !crate::run::is_positive_time(config.until) {
             return Err(SweepError::Until { until: config.until });
         }
+        d.model.check_inputs_applied().map_err(SweepError::Model)?;
         let dynamics = Dynamics::new(d);
         // Rigid bodies need the gimbal guard's events, which the lock-step batches
         // do not check, and equations with a kink (abs) that a Taylor series does

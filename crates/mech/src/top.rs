@@ -217,12 +217,26 @@ impl Top {
             ));
         }
         let body = &model.bodies[0];
-        if body.sequence != crate::euler::Sequence::NOTES {
+        let Some((body_angles, sequence)) = body.orientation.euler() else {
+            return Err(TopError::at(
+                body.span.clone(),
+                "`lagrange top` reads a top turning in three Euler angles; this body has fewer",
+                "give the top angles = [\"al\", \"be\", \"ga\"]; `simulate` takes bodies with one angle or none",
+            ));
+        };
+        if body.parent.is_some() {
+            return Err(TopError::at(
+                body.span.clone(),
+                "`lagrange top` reads a top turning in space; this body turns relative to a parent",
+                "leave out `parent` for `lagrange top`; `simulate` follows bodies through their tree",
+            ));
+        }
+        if sequence != crate::euler::Sequence::NOTES {
             return Err(TopError::at(
                 body.span.clone(),
                 format!(
                     "`lagrange top` reads a top in the notes' z-x-z Euler angles; this body turns in the sequence {}",
-                    body.sequence.name()
+                    sequence.name()
                 ),
                 "leave out `sequence` (or give sequence = \"zxz\") for `lagrange top`; `simulate` takes any sequence",
             ));
@@ -292,7 +306,7 @@ impl Top {
             ));
         }
         let kind = if mgs != 0.0 { TopKind::Heavy } else { TopKind::Free };
-        let [a, b, gidx] = body.angles;
+        let [a, b, gidx] = body_angles;
         let (q0, qd0) = model.initial_state().map_err(TopError::Model)?;
         let angles = [q0[a], q0[b], q0[gidx]];
         let rates = [qd0[a], qd0[b], qd0[gidx]];

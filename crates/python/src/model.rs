@@ -53,7 +53,9 @@ fn derive(py: Python<'_>, file: String, source: String, set: &[(String, f64)], f
         let place = Place { file: &file, text: &source };
         let parsed = py.detach(|| mech::Model::parse_with(&source, set, &files));
         let model = parsed.map_err(|e| errors::model_error(py, &place, &e))?;
-        let d = py.detach(|| Derivation::new(model)).map_err(|e| errors::model_error(py, &place, &e))?;
+        let d = py
+            .detach(|| Derivation::new(model.with_inputs_applied()))
+            .map_err(|e| errors::model_error(py, &place, &e))?;
         Ok(Derived { file: file.clone(), source: source.clone(), d })
     })
 }

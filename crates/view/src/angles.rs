@@ -21,7 +21,8 @@ pub fn angles(d: &Derivation) -> Vec<bool> {
         .iter()
         .enumerate()
         .map(|(i, name)| {
-            if model.bodies.iter().any(|b| b.angles.contains(&i)) || orbit_angle.as_deref() == Some(*name) {
+            if model.bodies.iter().any(|b| b.orientation.angles().contains(&i)) || orbit_angle.as_deref() == Some(*name)
+            {
                 return true;
             }
             let mut seen = false;

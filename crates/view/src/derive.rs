@@ -52,6 +52,8 @@ enum Item<'a> {
     Define(Defined, ExprId),
     /// The generalized force on coordinate `i`, when it is not zero.
     Force(usize, ExprId),
+    /// The inputs u, their values in runs, and B = ∂f/∂u.
+    Inputs,
     /// A rigid body's angular velocity and momentum.
     Body(&'a BodyMotion),
     /// The start of a section.
@@ -118,6 +120,9 @@ fn layout<'a>(d: &'a Derivation, emit: &mut impl FnMut(Item<'a>)) {
         if !pool.is_zero(f) {
             emit(Item::Force(i, f));
         }
+    }
+    if !d.inputs().is_empty() {
+        emit(Item::Inputs);
     }
     for b in d.bodies() {
         emit(Item::Body(b));
@@ -223,6 +228,20 @@ impl Text<'_> {
             }
             Item::Force(i, f) => {
                 let _ = writeln!(o, "generalized force   Q_{} = {}", names[i], self.s(f));
+            }
+            Item::Inputs => {
+                let model = d.model();
+                let names_u: Vec<String> = d.inputs().iter().map(|&u| self.s(u)).collect();
+                let _ = writeln!(o, "\ninputs u = ({}), symbols here; their values in runs:", names_u.join(", "));
+                for u in &model.inputs {
+                    let _ = writeln!(o, "  {} = {}", u.name, self.s(u.value.expr));
+                }
+                let form = if d.inputs_affine() { "f = f₀ + B u" } else { "f is not affine in u; B at u" };
+                let _ = writeln!(o, "  {form}, B = ∂f/∂u:");
+                for (i, row) in d.input_matrix().iter().enumerate() {
+                    let row: Vec<String> = row.iter().map(|&b| self.s(b)).collect();
+                    let _ = writeln!(o, "    {}: [{}]", names[i], row.join(", "));
+                }
             }
             Item::Body(b) => {
                 let _ = writeln!(o, "\nrigid body '{}' (body frame, notes A.5)", b.name);
@@ -509,6 +528,7 @@ impl Latex<'_> {
             }
             // Text only.
             Item::Force(..)
+            | Item::Inputs
             | Item::Body(_)
             | Item::Heading(_)
             | Item::MassMatrixForm
@@ -703,6 +723,14 @@ impl MathMl<'_> {
             }
             Item::Force(i, f) => {
                 self.row(sub("Q", &self.q[i]), self.m(f), Self::note("generalized force", ""));
+            }
+            Item::Inputs => {
+                let names_u: Vec<String> = d.model().inputs.iter().map(|u| escape(&u.name)).collect();
+                self.para(&format!("Inputs u = ({}), symbols here; B = ∂f/∂u:", names_u.join(", ")));
+                for (i, row) in d.input_matrix().iter().enumerate() {
+                    let row: Vec<String> = row.iter().map(|&b| self.m(b)).collect();
+                    self.row(sub("B", &self.q[i]), tuple(&row), None);
+                }
             }
             Item::Body(b) => {
                 self.para(&format!("Rigid body ‘{}’ (body frame, notes A.5)", escape(&b.name)));

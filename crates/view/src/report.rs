@@ -154,7 +154,7 @@ impl Recorder {
         };
         let bodies: Vec<Value> = (0..mech.bodies().len())
             .map(|b| {
-                let axes: Vec<[[f64; 3]; 3]> = rows.iter().map(|r| mech.axes(b, &r.q)).collect();
+                let axes: Vec<[[f64; 3]; 3]> = rows.iter().map(|r| mech.axes(b, r.t, &r.q, &r.qd)).collect();
                 let per_axis: Vec<Vec<[f64; 3]>> = (0..3).map(|k| axes.iter().map(|a| a[k]).collect()).collect();
                 json!({
                     "name": mech.bodies()[b].name,
@@ -183,7 +183,7 @@ impl Recorder {
         if let Some(o) = orbit(d) {
             analyses.insert("orbit".into(), o);
         }
-        if let Some(t) = top(d, &mech, &rows) {
+        if let Some(t) = top(d, &mut mech, &rows) {
             analyses.insert("top".into(), t);
         }
         json!({
@@ -374,13 +374,13 @@ fn orbit(d: &Derivation) -> Option<Value> {
 }
 
 /// The top's nutation bounds and its figure axis (e3 of its body) along the run.
-fn top(d: &Derivation, mech: &Mechanism, rows: &[&Row]) -> Option<Value> {
+fn top(d: &Derivation, mech: &mut Mechanism, rows: &[&Row]) -> Option<Value> {
     let top = Top::new(d).ok()?;
     let report = serde_json::to_value(top.report()).ok()?;
     if mech.bodies().is_empty() {
         return None;
     }
-    let e3: Vec<[f64; 3]> = rows.iter().map(|r| mech.axes(0, &r.q)[2]).collect();
+    let e3: Vec<[f64; 3]> = rows.iter().map(|r| mech.axes(0, r.t, &r.q, &r.qd)[2]).collect();
     let mut value = report;
     value["axis"] = json!({
         "x": e3.iter().map(|e| e[0]).collect::<Vec<_>>(),

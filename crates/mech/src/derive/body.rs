@@ -3,8 +3,95 @@
 //! (q, q', t). See [`crate::model::body`] for the formulas and the reading.
 
 use crate::euler;
-use crate::model::{Body, Gravity};
+use crate::model::{Body, Gravity, Orientation};
 use sym::{ExprId, Pool, Symbol};
+
+/// A body's axes and reference point, followed through the tree from its root.
+#[derive(Debug, Clone)]
+pub(crate) struct Frame {
+    /// The rotation from space components to body components (rows: the body axes).
+    pub d: euler::ExprMatrix,
+    /// The angular velocity, body components.
+    pub omega: [ExprId; 3],
+    /// The reference point in space.
+    pub origin: [ExprId; 3],
+}
+
+/// The frame of every body, parents first (the model lists them so):
+/// `D = D_rel·D_parent`, `ω = D_rel·ω_parent + ω_rel`, `x = x_parent + D_parentᵀ·position`.
+pub(crate) fn frames(pool: &mut Pool, bodies: &[Body], q: &[ExprId], qd: &[ExprId]) -> Vec<Frame> {
+    let mut out: Vec<Frame> = Vec::with_capacity(bodies.len());
+    for body in bodies {
+        let (zero, one) = (pool.zero(), pool.one());
+        let (d_rel, w_rel) = match body.orientation {
+            Orientation::Euler { angles: [a, b, c], sequence } => (
+                Some(euler::rotation_of(pool, sequence, [q[a], q[b], q[c]])),
+                euler::angular_velocity_of(pool, sequence, [q[a], q[b], q[c]], [qd[a], qd[b], qd[c]]),
+            ),
+            Orientation::Planar { angle, axis } => {
+                let mut w = [zero; 3];
+                w[axis] = qd[angle];
+                (Some(euler::turn_expr(pool, axis, q[angle])), w)
+            }
+            Orientation::Hinge { angle, axis } => {
+                (Some(hinge(pool, axis, q[angle])), axis.map(|n| pool.mul2(n, qd[angle])))
+            }
+            Orientation::Fixed => (None, [zero; 3]),
+        };
+        let frame = match body.parent.map(|p| out[p].clone()) {
+            None => {
+                let identity = std::array::from_fn(|i| std::array::from_fn(|j| if i == j { one } else { zero }));
+                Frame { d: d_rel.unwrap_or(identity), omega: w_rel, origin: body.position }
+            }
+            Some(parent) => {
+                let (d, carried) = match &d_rel {
+                    Some(d_rel) => (euler::mat_mul(pool, d_rel, &parent.d), mat_vec(pool, d_rel, &parent.omega)),
+                    None => (parent.d, parent.omega),
+                };
+                let omega = std::array::from_fn(|k| pool.add2(carried[k], w_rel[k]));
+                let origin = std::array::from_fn(|i| {
+                    let mut terms = vec![parent.origin[i]];
+                    terms.extend((0..3).map(|k| pool.mul2(parent.d[k][i], body.position[k])));
+                    pool.add(&terms)
+                });
+                Frame { d, omega, origin }
+            }
+        };
+        out.push(frame);
+    }
+    out
+}
+
+/// The turn by `angle` about the unit vector n, space → body components:
+/// D = cos θ·1 + (1 − cos θ) n nᵀ − sin θ [n]ₓ (the notes' R_z for n = z).
+fn hinge(pool: &mut Pool, n: [ExprId; 3], angle: ExprId) -> euler::ExprMatrix {
+    let (s, c) = (pool.func(sym::Func::Sin, angle), pool.func(sym::Func::Cos, angle));
+    let one = pool.one();
+    let one_minus_c = pool.sub(one, c);
+    std::array::from_fn(|i| {
+        std::array::from_fn(|j| {
+            let mut terms = vec![pool.mul(&[one_minus_c, n[i], n[j]])];
+            if i == j {
+                terms.push(c);
+            }
+            // [n]ₓ[i][j] = −ε_ijk n_k; −sin θ [n]ₓ adds sin θ ε_ijk n_k.
+            if i != j {
+                let k = 3 - i - j;
+                let sign = if (j + 3 - i) % 3 == 1 { 1 } else { -1 };
+                let term = pool.mul2(s, n[k]);
+                terms.push(if sign > 0 { term } else { pool.neg(term) });
+            }
+            pool.add(&terms)
+        })
+    })
+}
+
+fn mat_vec(pool: &mut Pool, m: &euler::ExprMatrix, v: &[ExprId; 3]) -> [ExprId; 3] {
+    std::array::from_fn(|i| {
+        let terms: Vec<ExprId> = (0..3).map(|j| pool.mul2(m[i][j], v[j])).collect();
+        pool.add(&terms)
+    })
+}
 
 /// What a body contributes to a derivation, as expressions in (q, q', t).
 #[derive(Debug, Clone)]
@@ -17,9 +104,12 @@ pub struct BodyTerms {
     pub omega: [ExprId; 3],
     /// Body-frame angular momentum about the reference point.
     pub angular_momentum: [ExprId; 3],
+    /// The centre of mass in space.
+    pub center: [ExprId; 3],
 }
 
-/// A body's angular velocity and angular momentum in a derivation (simplified).
+/// A body's angular velocity and angular momentum in a derivation (simplified),
+/// and where it is.
 #[derive(Debug, Clone)]
 pub struct BodyMotion {
     /// The body's name.
@@ -28,23 +118,28 @@ pub struct BodyMotion {
     pub omega: [ExprId; 3],
     /// Body-frame angular momentum (L₁, L₂, L₃) about the reference point.
     pub angular_momentum: [ExprId; 3],
+    /// The reference point in space, in (q, t).
+    pub position: [ExprId; 3],
+    /// The centre of mass in space, in (q, t).
+    pub center: [ExprId; 3],
+    /// The body axes e1, e2, e3 (rows) in space components, in q.
+    pub axes: euler::ExprMatrix,
 }
 
-/// The kinetic energy, gravity potential, ω and L of a body (see the module text).
-pub fn terms(
+/// The kinetic energy, gravity potential, ω and L of a body in its frame (see the module text).
+pub(crate) fn terms(
     pool: &mut Pool,
     body: &Body,
+    frame: &Frame,
     q: &[ExprId],
     qd: &[ExprId],
     t: ExprId,
     gravity: Option<&Gravity>,
 ) -> BodyTerms {
-    let [a, b, c] = body.angles;
-    let omega = euler::angular_velocity_of(pool, body.sequence, [q[a], q[b], q[c]], [qd[a], qd[b], qd[c]]);
-    let d = euler::rotation_of(pool, body.sequence, [q[a], q[b], q[c]]);
+    let (omega, d) = (frame.omega, frame.d);
     // v_ref = Σ ∂x/∂q_i q_i' + ∂x/∂t, space components.
-    let v_ref: Vec<ExprId> = body
-        .position
+    let v_ref: Vec<ExprId> = frame
+        .origin
         .iter()
         .map(|&x| {
             let mut terms: Vec<ExprId> = q
@@ -106,28 +201,32 @@ pub fn terms(
         }
     }
     let kinetic = pool.add(&t_terms);
-    let potential = gravity.map(|g| {
-        // r_cm,i = x_ref,i + Σ_k D_ki c_k (the components of x_ref + Dᵀc); a
-        // field's zero components are left out.
-        let mut r_cm = Vec::with_capacity(3);
-        for i in 0..3 {
-            let wanted = match g {
-                Gravity::Down(_) => i == 2,
-                Gravity::Field { components, .. } => !pool.is_zero(components[i].expr),
-            };
-            if !wanted {
-                r_cm.push(pool.zero());
-                continue;
-            }
-            let mut x = vec![body.position[i]];
-            for k in 0..3 {
-                x.push(pool.mul2(d[k][i], body.center_of_mass[k]));
-            }
-            r_cm.push(pool.add(&x));
+    // r_cm,i = x_ref,i + Σ_k D_ki c_k (the components of x_ref + Dᵀc).
+    let center: [ExprId; 3] = std::array::from_fn(|i| {
+        let mut x = vec![frame.origin[i]];
+        for k in 0..3 {
+            x.push(pool.mul2(d[k][i], body.center_of_mass[k]));
         }
+        pool.add(&x)
+    });
+    let potential = gravity.map(|g| {
+        // A planar model's positions are (x, y); a field's zero components are left out.
+        let r_cm: Vec<ExprId> = (0..body.dimension)
+            .map(|i| {
+                let wanted = match g {
+                    Gravity::Down(_) => i == body.dimension - 1,
+                    Gravity::Field { components, .. } => !pool.is_zero(components[i].expr),
+                };
+                if wanted {
+                    center[i]
+                } else {
+                    pool.zero()
+                }
+            })
+            .collect();
         g.potential(pool, body.mass, &r_cm)
     });
-    BodyTerms { kinetic, potential, omega, angular_momentum: l }
+    BodyTerms { kinetic, potential, omega, angular_momentum: l, center }
 }
 
 fn cross(pool: &mut Pool, a: &[ExprId; 3], b: &[ExprId; 3]) -> [ExprId; 3] {
@@ -141,10 +240,23 @@ fn cross(pool: &mut Pool, a: &[ExprId; 3], b: &[ExprId; 3]) -> [ExprId; 3] {
 }
 
 /// Simplifies a body's ω and L for printing and recording.
-pub(crate) fn motion(pool: &mut Pool, body: &Body, terms: &BodyTerms, is_var: &dyn Fn(Symbol) -> bool) -> BodyMotion {
+pub(crate) fn motion(
+    pool: &mut Pool,
+    body: &Body,
+    frame: &Frame,
+    terms: &BodyTerms,
+    is_var: &dyn Fn(Symbol) -> bool,
+) -> BodyMotion {
     let omega = terms.omega.map(|w| pool.simplify_in(w, is_var));
     let angular_momentum = terms.angular_momentum.map(|l| pool.simplify_in(l, is_var));
-    BodyMotion { name: body.name.clone(), omega, angular_momentum }
+    BodyMotion {
+        name: body.name.clone(),
+        omega,
+        angular_momentum,
+        position: frame.origin,
+        center: terms.center,
+        axes: frame.d,
+    }
 }
 
 #[cfg(test)]

@@ -131,21 +131,22 @@ fn gauge(proper: bool, beta: f64) -> f64 {
     }
 }
 
-/// One [`GimbalGuard`] per body, for a run at relative tolerance `rtol`.
+/// One [`GimbalGuard`] per body that turns in Euler angles, for a run at relative tolerance `rtol`.
 pub fn gimbal_guards(d: &crate::Derivation, rtol: f64) -> Vec<GimbalGuard> {
     let s = gimbal_threshold(rtol);
     d.model
         .bodies
         .iter()
-        .map(|b| {
-            let beta = b.angles[1];
-            GimbalGuard {
+        .filter_map(|b| {
+            let (angles, sequence) = b.orientation.euler()?;
+            let beta = angles[1];
+            Some(GimbalGuard {
                 beta,
                 threshold: s,
                 body: b.name.clone(),
                 beta_name: d.model.coordinates[beta].name.clone(),
-                sequence: b.sequence,
-            }
+                sequence,
+            })
         })
         .collect()
 }
@@ -209,7 +210,7 @@ mod tests {
         assert_eq!(cols[11], "right_L3");
         let shared = text.replace("[\"b1\", \"b2\", \"b3\"]", "[\"b1\", \"a2\", \"b3\"]");
         let e = Model::parse(&shared, &[]).unwrap_err();
-        assert!(e.message.contains("already an Euler angle of body 'left'"), "{}", e.message);
+        assert!(e.message.contains("already an angle of body 'left'"), "{}", e.message);
         let single = column_names(&d.bodies[..1]);
         assert_eq!(single, ["omega1", "omega2", "omega3", "L1", "L2", "L3"]);
     }
