@@ -10,7 +10,8 @@
 // reports; the report's animation advances; and the library in WebAssembly gives what the
 // CLI gives for every example — derive (the whole lagrange.derive/1 value: every
 // expression, so every sample point), simulate (the final state), modes, orbit, top,
-// extremal — to 1e-12. It also times the double pendulum to t = 20 at rtol 1e-9 in the
+// extremal — to 1e-12 (H − W of a constrained run at the scale of H, and an extremal
+// search's count of shots not at all: see sameWork). It also times the double pendulum to t = 20 at rtol 1e-9 in the
 // worker and writes out/playground-timing.json and screenshots out/playground-*.png.
 
 import { test, before, after } from 'node:test';
@@ -119,6 +120,34 @@ function same(a, b, path, skip = new Set()) {
   }
 }
 
+/**
+ * The audit of H − W (a constrained run whose constraints do work) in two summaries, to
+ * TOLERANCE of the size of H, then removed from both for `same`.
+ *
+ * WebAssembly's `pow` (Rust's port of musl's libm) and glibc's, which the CLI calls, differ
+ * in the last bit for some arguments; the step-size controller (num/src/adaptive.rs) takes
+ * err^(-1/8), so the two builds' steps can differ by an ulp and their states by rounding
+ * (constraints/rotating_wire.toml to t = 5: r = 11013.2329197573 in both, 5e-15 apart
+ * relative; with libm's pow natively the CLI's numbers are wasm's to the bit). H and W
+ * then agree to H's rounding, but H − W is a difference of two numbers of H's size (there
+ * 2.4e8) whose value is 1: its final value and drift differ by 3e-8, which is 1e-16 of H.
+ * The audit itself measures H − W against the largest |H| of the run (max_rel_drift =
+ * max_abs_drift / that |H|), and so does this comparison.
+ */
+function sameWork(native, wasm, path) {
+  const [a, b] = [native.invariants?.['H-W'], wasm.invariants?.['H-W']];
+  if (!a && !b) return;
+  assert.ok(a && b, `${path}: H-W audited only in ${a ? 'native' : 'wasm'}`);
+  const size = a.max_rel_drift > 0 ? a.max_abs_drift / a.max_rel_drift : 1;
+  for (const k of ['initial', 'final', 'max_abs_drift']) {
+    assert.ok(Math.abs(a[k] - b[k]) <= TOLERANCE * Math.max(1, size), `${path}.H-W.${k}: wasm ${b[k]}, native ${a[k]} (|H| up to ${size})`);
+  }
+  assert.ok(Math.abs(a.max_rel_drift - b.max_rel_drift) <= TOLERANCE, `${path}.H-W.max_rel_drift`);
+  assert.equal(a.conserved, b.conserved, `${path}.H-W.conserved`);
+  delete native.invariants['H-W'];
+  delete wasm.invariants['H-W'];
+}
+
 test('the page loads, shows the equation of motion as typed, underlines errors, animates', async () => {
   const context = await browser.newContext({ viewport: { width: 1400, height: 900 }, deviceScaleFactor: 1 });
   try {
@@ -173,10 +202,7 @@ test('the page loads, shows the equation of motion as typed, underlines errors, 
   }
 });
 
-// TODO (open): constraints/rotating_wire.toml's audit of H-W differs in its final value by
-// 3e-8 between wasm and the CLI (the final state itself agreed); until explained, this
-// comparison reports without failing the run.
-test('WebAssembly gives what the CLI gives, for every example', { todo: 'rotating_wire H-W audit differs by 3e-8' }, async () => {
+test('WebAssembly gives what the CLI gives, for every example', async () => {
   const context = await browser.newContext();
   try {
     const { page, problems } = await open(context);
@@ -191,7 +217,11 @@ test('WebAssembly gives what the CLI gives, for every example', { todo: 'rotatin
       if (path.startsWith('extremal/')) {
         const n = native(['extremal', file, '--format', 'json']);
         const w = (await call('extremal', source, options)).value;
-        if (n.value) same(n.value, w, `${path} extremal`), compared++;
+        // `shots` counts the trial extremals of the search, work rather than result: the
+        // search stops when the end residual is small enough, and with the last-bit
+        // differences of libm (see sameWork) it may take one shot more (brachistochrone:
+        // 431 in wasm, 430 native; the path agrees to 4e-14).
+        if (n.value) same(n.value, w, `${path} extremal`, new Set(['shots'])), compared++;
         else assert.equal(w.format, 'lagrange.error/1', `${path}: the CLI refused, wasm did not`);
         continue;
       }
@@ -206,6 +236,7 @@ test('WebAssembly gives what the CLI gives, for every example', { todo: 'rotatin
       const s = native(['simulate', file, '--until', '5', '--samples', '3', '--summary', 'json']);
       const ws = (await call('simulate', source, { ...options, until: 5, samples: 3 })).value;
       assert.ok(s.value, `${path}: ${s.error}`);
+      sameWork(s.value, ws, `${path} simulate`);
       same(s.value, ws, `${path} simulate`, new Set(['tolerance_controls']));
       compared += 2;
       for (const analysis of ['modes', 'orbit', 'top']) {

@@ -41,8 +41,16 @@ fn parse(source: &str, o: &Options) -> Result<Model, Failure> {
     Model::parse_with(source, &o.overrides(), &files).map_err(|e| model_error(source, &e))
 }
 
+/// The derivation `derive` shows: the model's inputs u(t) stay symbols.
 fn derive_model(source: &str, o: &Options) -> Result<Derivation, Failure> {
     let model = parse(source, o)?;
+    Derivation::new(model).map_err(|e| model_error(source, &e))
+}
+
+/// The derivation a run or an analysis needs, as the CLI's `derive_file` makes
+/// it: every input replaced by its value, an expression of t.
+fn derive_for_run(source: &str, o: &Options) -> Result<Derivation, Failure> {
+    let model = parse(source, o)?.with_inputs_applied();
     Derivation::new(model).map_err(|e| model_error(source, &e))
 }
 
@@ -117,7 +125,7 @@ fn run(
     mut on_row: impl FnMut(&mech::Row<'_>),
 ) -> Result<(Derivation, RunConfig, Value), Failure> {
     let started = Instant::now();
-    let d = derive_model(source, o)?;
+    let d = derive_for_run(source, o)?;
     let derived = started.elapsed().as_secs_f64();
     let config = run_config(o)?;
     let mut first_row = None;
@@ -170,7 +178,7 @@ pub fn report(source: &str, options_json: &str) -> String {
 pub fn modes(source: &str, options_json: &str) -> String {
     answer((|| {
         let o = options(options_json)?;
-        let d = derive_model(source, &o)?;
+        let d = derive_for_run(source, &o)?;
         d.reject_constraints("modes").map_err(|e| model_error(source, &e))?;
         let m = mech::normal_modes(&d, &mech::ModesConfig::default()).map_err(|e| match e {
             mech::ModesError::Model(m) => model_error(source, &m),
@@ -185,7 +193,7 @@ pub fn modes(source: &str, options_json: &str) -> String {
 pub fn orbit(source: &str, options_json: &str) -> String {
     answer((|| {
         let o = options(options_json)?;
-        let d = derive_model(source, &o)?;
+        let d = derive_for_run(source, &o)?;
         d.reject_constraints("orbit").map_err(|e| model_error(source, &e))?;
         let orbit = mech::Orbit::new(&d).map_err(|e| match e {
             mech::OrbitError::Model(m) => model_error(source, &m),
@@ -200,7 +208,7 @@ pub fn orbit(source: &str, options_json: &str) -> String {
 pub fn top(source: &str, options_json: &str) -> String {
     answer((|| {
         let o = options(options_json)?;
-        let d = derive_model(source, &o)?;
+        let d = derive_for_run(source, &o)?;
         let top = mech::Top::new(&d).map_err(|e| match e {
             mech::TopError::Model(m) => model_error(source, &m),
         })?;

@@ -48,3 +48,19 @@ fn an_error_is_located_at_its_line_and_column() {
     let e = call(lagrange_web::derive, PENDULUM, "{");
     assert_eq!(e["format"], "lagrange.error/1");
 }
+
+#[test]
+fn inputs_are_symbols_in_derive_and_their_values_in_a_run() {
+    // As the CLI: `derive` keeps F and tau as symbols (M q'' = f0 + B u), a run
+    // and the analyses put in their values of t.
+    let cart = include_str!("../../../examples/cart_pendulum.toml");
+    let d = call(lagrange_web::derive, cart, "");
+    assert_eq!(d["format"], "lagrange.derive/1", "{d}");
+    let inputs: Vec<&str> = d["inputs"].as_array().unwrap().iter().map(|u| u["name"].as_str().unwrap()).collect();
+    assert_eq!(inputs, ["F", "tau"]);
+    let s = call(lagrange_web::simulate, cart, r#"{"until": 1}"#);
+    assert_eq!(s["format"], "lagrange.simulate/1", "{s}");
+    assert_eq!(s["t_final"], 1.0);
+    let r = call(lagrange_web::report, cart, r#"{"until": 1, "samples": 11}"#);
+    assert_eq!(r["format"], "lagrange.report/1", "{r}");
+}
