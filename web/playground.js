@@ -59,10 +59,17 @@ window.lagrange = { call };
 
 let examples = { models: [], files: {} };
 let folder = '';
+// The example last chosen: its folder resolves the files the text names, edited or not.
+let chosen = '';
+// The menu's neutral entry, shown once the text is no longer the chosen example's.
+const EDITED = '';
 
 async function loadExamples() {
   examples = await (await fetch('examples.json')).json();
   const menu = $('examples');
+  const edited = document.createElement('option');
+  Object.assign(edited, { value: EDITED, textContent: '(edited)', disabled: true, hidden: true });
+  menu.append(edited);
   for (const m of examples.models) {
     const option = document.createElement('option');
     option.value = m.path;
@@ -73,11 +80,18 @@ async function loadExamples() {
 }
 
 function choose(path) {
+  chosen = path;
   $('examples').value = path;
   folder = path.includes('/') ? path.slice(0, path.lastIndexOf('/')) : '';
   source.value = examples.files[path];
   parameterValues = {};
+  parameterNames = ''; // the sliders are made again at the file's values
   changed();
+}
+
+/** The menu names the example while the text is that example's, and says "(edited)" after. */
+function markEdited() {
+  $('examples').value = source.value === examples.files[chosen] ? chosen : EDITED;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -125,7 +139,9 @@ function clearError() {
 }
 
 // ---------------------------------------------------------------------------------------
-// Parameters as sliders: from 0 to twice the file's value (or ±1 about 0).
+// Parameters as sliders: from 0 to twice the file's value (or ±1 about 0), each with a
+// number box beside it that takes an exact value (the slider moves in 200 steps; a
+// value typed outside its range widens it).
 
 let parameterValues = {};
 let parameterNames = '';
@@ -145,14 +161,25 @@ function sliders(parameters) {
     const slider = document.createElement('input');
     Object.assign(slider, { type: 'range', id: `parameter-${p.name}`, min: lo, max: hi, step: (hi - lo) / 200, value });
     slider.dataset.name = p.name;
-    const shown = document.createElement('output');
-    shown.textContent = String(value);
+    const exact = document.createElement('input');
+    Object.assign(exact, { type: 'number', id: `value-${p.name}`, step: 'any', value: String(value) });
+    exact.dataset.name = p.name;
+    exact.setAttribute('aria-label', `${p.name} (exact value)`);
     slider.addEventListener('input', () => {
       parameterValues[p.name] = Number(slider.value);
-      shown.textContent = slider.value;
+      exact.value = slider.value;
       schedule(runOnly);
     });
-    box.append(label, slider, shown);
+    exact.addEventListener('input', () => {
+      const v = exact.valueAsNumber;
+      if (!Number.isFinite(v)) return;
+      parameterValues[p.name] = v;
+      if (v < Number(slider.min)) slider.min = v;
+      if (v > Number(slider.max)) slider.max = v;
+      slider.value = v;
+      schedule(runOnly);
+    });
+    box.append(label, slider, exact);
   }
 }
 
@@ -232,6 +259,7 @@ async function run(mine, text, deriveMs) {
 
 source.addEventListener('input', () => {
   underline(null);
+  markEdited();
   changed();
 });
 $('until').addEventListener('change', () => schedule(runOnly));

@@ -180,6 +180,35 @@ test('the page loads, shows the equation of motion as typed, underlines errors, 
     await page.waitForFunction(() => document.body.dataset.state === 'ready', null, { timeout: WAIT_MS });
     const set = await frame.locator('#lagrange-data').textContent();
     assert.ok(JSON.parse(set).summary, 'the report has its summary');
+    // The slider holds 1.62 to its step (2 g / 200); the number box shows what it holds.
+    const slid = await page.$eval('#parameter-g', (e) => e.value);
+    assert.ok(Math.abs(Number(slid) - 1.62) <= 9.81 / 200 + 1e-9, `the slider at ${slid}`);
+    assert.equal(await page.$eval('#value-g', (e) => e.value), slid, 'the number box follows the slider');
+
+    // The number box takes an exact value, which the slider's 200 steps cannot hold: the
+    // run starts from the energy the CLI computes with --set g=1.6180339887.
+    await page.evaluate(() => { document.body.dataset.state = 'moving'; });
+    await page.fill('#value-g', '1.6180339887');
+    await page.waitForFunction(() => document.body.dataset.state === 'ready', null, { timeout: WAIT_MS });
+    const exact = JSON.parse(await frame.locator('#lagrange-data').textContent()).summary.invariants;
+    const pendulumFile = join(root, 'examples', 'pendulum.toml');
+    const cliExact = native(['simulate', pendulumFile, '--set', 'g=1.6180339887', '--until', '1', '--summary', 'json']);
+    assert.ok(cliExact.value, cliExact.error);
+    for (const [name, audit] of Object.entries(cliExact.value.invariants)) {
+      same(audit.initial, exact[name].initial, `g = 1.6180339887: ${name}.initial`);
+    }
+    // The slider shows the value to its step (2 g / 200 of the file's g = 9.81).
+    const moved = Number(await page.$eval('#parameter-g', (e) => e.value));
+    assert.ok(Math.abs(moved - 1.6180339887) <= 9.81 / 200 + 1e-9, `the slider at ${moved}`);
+
+    // The example menu names the example while the text is its own, "(edited)" after.
+    assert.equal(await page.$eval('#examples', (e) => e.value), '', 'the pendulum typed over the first example');
+    await page.evaluate(() => { document.body.dataset.state = 'choosing'; });
+    await page.selectOption('#examples', 'pendulum.toml');
+    await page.waitForFunction(() => document.body.dataset.state === 'ready', null, { timeout: WAIT_MS });
+    assert.equal(await page.$eval('#examples', (e) => e.value), 'pendulum.toml');
+    // A new example starts from its file's values, sliders and boxes too.
+    assert.equal(await page.$eval('#value-g', (e) => e.value), '9.81');
 
     // An error: underlined where the CLI says it is.
     const bad = pendulum.replace('"-l*cos(ph)"', '"-l*cos(ph) +"');
@@ -187,6 +216,8 @@ test('the page loads, shows the equation of motion as typed, underlines errors, 
     const stderr = spawnSync(cli, ['derive', join(out, 'bad_pendulum.toml')], { encoding: 'utf8' }).stderr;
     const [, line, column] = stderr.match(/bad_pendulum\.toml:(\d+):(\d+)/);
     await type(page, bad, 'error');
+    const menu = await page.$eval('#examples', (e) => ({ value: e.value, text: e.selectedOptions[0]?.textContent }));
+    assert.deepEqual(menu, { value: '', text: '(edited)' });
     const mark = await page.$eval('#backdrop mark', (m) => ({ ...m.dataset, text: m.textContent }));
     assert.deepEqual([mark.line, mark.column], [line, column], `CLI:\n${stderr}`);
     // The mark sits on the text at that line and column.
