@@ -191,7 +191,7 @@ impl Derivation {
     /// equations of motion, what is conserved and why, H and Hamilton's
     /// equations, then the constraints. Fails on a singular mass matrix.
     pub fn new(mut model: Model) -> Result<Derivation, ModelError> {
-        let started = std::time::Instant::now();
+        let started = crate::clock::Instant::now();
         // The pool is taken out of the model while the model's other parts are read.
         let mut pool_owned = std::mem::take(&mut model.pool);
         let pool = &mut pool_owned;

@@ -52,7 +52,8 @@
 // modules of the groups above its own (`tests/layers.rs` checks it).
 // Errors.
 mod error;
-// Leaves: deciding symbolic facts (proofs, numeric refutation), Euler angles, TOML files.
+// Leaves: the clock, deciding symbolic facts (proofs, numeric refutation), Euler angles, TOML files.
+mod clock;
 pub mod euler;
 mod probe;
 mod source;

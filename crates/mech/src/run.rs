@@ -23,6 +23,7 @@ pub(crate) mod ensemble;
 mod plain;
 pub(crate) mod series;
 
+use crate::clock::Instant;
 use crate::derive::Derivation;
 use crate::error::ModelError;
 use audit::InvariantAudit;
@@ -33,7 +34,6 @@ use num::{
     StopReason,
 };
 use std::ops::ControlFlow;
-use std::time::Instant;
 use sym::Tape;
 
 /// A condition that ends the run (or records a row) where an expression g(q,

@@ -36,33 +36,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
-/// Why C could not serve: the caller falls back to cranelift and may say why.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-pub enum CcError {
-    /// No compiler was found, or `LAGRANGE_CC=off`.
-    #[error("no C compiler: {0}")]
-    NoCompiler(String),
-    /// The compiler ran and failed.
-    #[error("the C compiler failed: {0}")]
-    Failed(String),
-    /// Files could not be written or the library could not be loaded.
-    #[error("{0}")]
-    Io(String),
-}
-
-/// How a library came to be: the compiler, where it lies, and what it cost.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CBuild {
-    /// The compiler that built it.
-    pub compiler: PathBuf,
-    /// The shared library.
-    pub library: PathBuf,
-    /// Seconds spent getting it: compiling, or finding it in the cache and
-    /// loading it.
-    pub seconds: f64,
-    /// Whether it came from the cache.
-    pub cached: bool,
-}
+pub(crate) use crate::native::{CBuild, CcError};
 
 /// The flags every source is compiled with (before the output and input).
 /// The source is written in vectors already (`taylor_c.rs`), so `-O1`

@@ -40,6 +40,7 @@ pub(crate) mod trig;
 
 use crate::eval::{Op, Tape};
 use crate::expr::Func;
+pub(crate) use crate::native::JitError;
 use cranelift_codegen::ir::condcodes::FloatCC;
 use cranelift_codegen::ir::{
     types, AbiParam, BlockArg, FuncRef, InstBuilder, MemFlagsData, Signature, UserFuncName, Value,
@@ -51,24 +52,6 @@ use cranelift_jit::{JITBuilder, JITModule};
 use cranelift_module::{default_libcall_names, FuncId, Linkage, Module};
 use rustc_hash::FxHashMap;
 use std::sync::{Mutex, OnceLock, PoisonError};
-
-/// Why a tape could not be compiled to native code. The caller falls back to
-/// [`Tape::eval`].
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum JitError {
-    /// Cranelift has no backend for this machine, or refused its flags.
-    #[error("no native code generator for this machine: {reason}")]
-    UnsupportedHost {
-        /// What cranelift said.
-        reason: String,
-    },
-    /// Cranelift failed to compile or link the function.
-    #[error("native code generation failed: {message}")]
-    Codegen {
-        /// What cranelift said.
-        message: String,
-    },
-}
 
 /// The signature of every compiled function: `inputs` points to
 /// `n_inputs` values, `outputs` to `n_outputs` values.

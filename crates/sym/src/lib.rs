@@ -15,24 +15,39 @@
 //! assert_eq!(pool.display(p_q).to_string(), "l^2*m*q'");
 //! ```
 
+#[cfg(feature = "jit")]
 mod cc;
 mod diff;
 mod eval;
 mod expr;
+#[cfg(not(feature = "jit"))]
+mod interpreted;
+#[cfg(feature = "jit")]
 mod jit;
+mod native;
 mod number;
 mod parse;
 mod print;
 mod rational;
 mod simplify;
 mod taylor;
+#[cfg(feature = "jit")]
 mod taylor_c;
+#[cfg(feature = "jit")]
 mod taylor_jit;
+/// `sin` and `cos` without native code: declared here, since `jit` is not.
+#[cfg(not(feature = "jit"))]
+#[path = "jit/trig.rs"]
+mod trig;
 
-pub use cc::{compiler as c_compiler, CBuild, CcError};
+#[cfg(not(feature = "jit"))]
+use interpreted::{cc, jit, taylor_jit};
+
+pub use cc::compiler as c_compiler;
 pub use eval::{EvalError, Tape};
 pub use expr::{ExprId, Func, NameId, Node, Pool, Symbol};
-pub use jit::{Compiled, JitError};
+pub use jit::Compiled;
+pub use native::{CBuild, CcError, JitError};
 pub use number::{Number, Rational};
 pub use parse::{Limits, ParseError, ParseErrorKind, ParseOptions, Span};
 pub use print::{PrintMode, PrintOptions, Printed};

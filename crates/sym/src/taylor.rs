@@ -28,11 +28,10 @@
 //! Every coefficient is an array of `L` lanes: `L` independent trajectories
 //! run in lock step, and the loops over lanes vectorize.
 
-use crate::cc::{CBuild, CcError};
 use crate::eval::{Op, Tape};
 use crate::expr::Func;
-use crate::jit::JitError;
-use crate::taylor_jit::{host_has_fma, NativeTaylor, SecondOrderLayout, NATIVE_MAX_WORK};
+use crate::native::{host_has_fma, CBuild, CcError, JitError};
+use crate::taylor_jit::{NativeTaylor, NATIVE_MAX_WORK};
 use std::sync::{Arc, OnceLock};
 
 /// Which code computes a tape's Taylor expansions ([`TaylorTape::code`]).
@@ -44,6 +43,29 @@ pub enum TaylorCode {
     Cranelift,
     /// Native code from the system C compiler, at the machine's vector width.
     C(CBuild),
+}
+
+/// Where the parts of a linearly implicit second-order system `A y'' = b`
+/// sit among the slots (see [`TaylorTape::compile_second_order`]).
+#[derive(Clone, Debug)]
+pub(crate) struct SecondOrderLayout {
+    pub(crate) n: usize,
+    /// `(row, column)` of the entries of A the tape outputs first.
+    pub(crate) entries: Vec<(usize, usize)>,
+    /// Slots of y and y' (inputs 0..2n; t, input 2n, is the caller's).
+    pub(crate) y: Vec<u32>,
+    pub(crate) dy: Vec<u32>,
+    /// Slots of A's entries and of b (outputs).
+    pub(crate) matrix: Vec<u32>,
+    pub(crate) rhs: Vec<u32>,
+    /// Which entries of A vary along a trajectory.
+    pub(crate) varying: Vec<bool>,
+    /// Extra slots: y'' (n) and A[0]⁻¹ (n for a diagonal A, n² otherwise).
+    pub(crate) second: Vec<u32>,
+    pub(crate) inverse: Vec<u32>,
+    /// A[0]⁻¹ by reciprocals ([`crate::ClosedFormInverse::Diagonal`]), not
+    /// by the adjugate.
+    pub(crate) diagonal: bool,
 }
 
 /// One coefficient of one slot on every lane.
@@ -852,6 +874,7 @@ impl<const L: usize> TaylorTape<L> {
     }
 
     /// The variable instructions, for the code generator.
+    #[cfg(feature = "jit")]
     pub(crate) fn program(&self) -> &[(u32, T)] {
         &self.program
     }

@@ -24,8 +24,7 @@
 //! steps.
 
 use crate::jit::trig;
-use crate::taylor::{TaylorTape, T};
-use crate::taylor_jit::SecondOrderLayout;
+use crate::taylor::{SecondOrderLayout, TaylorTape, T};
 use std::fmt::Write as _;
 
 /// The C source of a Taylor expansion: functions `part0` … `part{n−1}`, each

@@ -31,7 +31,8 @@ use crate::cc::{self, CBuild, CLibrary, CcError};
 use crate::expr::Func;
 use crate::jit::shared::{compile_shared, compile_shared_then, Part};
 use crate::jit::{codegen, define_function, offset, unary, Codegen, Imports, JitError, ATAN2, POWF};
-use crate::taylor::{TaylorTape, T};
+use crate::native::host_has_fma;
+use crate::taylor::{SecondOrderLayout, TaylorTape, T};
 use crate::taylor_c;
 use cranelift_codegen::ir::{condcodes::FloatCC, types, AbiParam, InstBuilder, MemFlagsData, Signature, Value};
 use cranelift_frontend::FunctionBuilder;
@@ -85,17 +86,6 @@ struct Emitter<'a, 'b, const L: usize> {
     /// Whether the host fuses multiply-adds (the interpreter then fuses the
     /// same ones).
     fma: bool,
-}
-
-/// Whether `fma` compiles to one instruction here (elsewhere cranelift would
-/// call a library routine).
-pub(crate) fn host_has_fma() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    return std::arch::is_x86_feature_detected!("fma");
-    #[cfg(target_arch = "aarch64")]
-    return true;
-    #[allow(unreachable_code)]
-    false
 }
 
 /// Two lanes per instruction when the lanes pair up (SSE2 on x86-64, NEON on
@@ -576,29 +566,6 @@ impl<const L: usize> Emitter<'_, '_, L> {
         }
         Ok(())
     }
-}
-
-/// Where the parts of a linearly implicit second-order system `A y'' = b`
-/// sit among the slots (see [`TaylorTape::compile_second_order`]).
-#[derive(Clone, Debug)]
-pub(crate) struct SecondOrderLayout {
-    pub(crate) n: usize,
-    /// `(row, column)` of the entries of A the tape outputs first.
-    pub(crate) entries: Vec<(usize, usize)>,
-    /// Slots of y and y' (inputs 0..2n; t, input 2n, is the caller's).
-    pub(crate) y: Vec<u32>,
-    pub(crate) dy: Vec<u32>,
-    /// Slots of A's entries and of b (outputs).
-    pub(crate) matrix: Vec<u32>,
-    pub(crate) rhs: Vec<u32>,
-    /// Which entries of A vary along a trajectory.
-    pub(crate) varying: Vec<bool>,
-    /// Extra slots: y'' (n) and A[0]⁻¹ (n for a diagonal A, n² otherwise).
-    pub(crate) second: Vec<u32>,
-    pub(crate) inverse: Vec<u32>,
-    /// A[0]⁻¹ by reciprocals ([`crate::ClosedFormInverse::Diagonal`]), not
-    /// by the adjugate.
-    pub(crate) diagonal: bool,
 }
 
 impl<const L: usize> Emitter<'_, '_, L> {

@@ -16,9 +16,9 @@
 //! per order, and the 2×2 of a double pendulum is solved thirteen times per
 //! step), and by LU solves beyond.
 
+use crate::clock::Instant;
 use num::{LinearSolver, RhsError};
 use std::sync::Arc;
-use std::time::Instant;
 use sym::{ClosedFormInverse, Lanes, LinearSecondOrder, Tape, TaylorCode, TaylorTape};
 
 /// Up to this many coordinates M[0]⁻¹ is formed explicitly.

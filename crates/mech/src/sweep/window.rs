@@ -10,20 +10,25 @@
 //! between jobs; a job checks the halt itself (through the flag it is given)
 //! and may give up, and nothing after the first job not finished is emitted.
 
-use std::collections::BTreeMap;
 use std::ops::ControlFlow;
-use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Condvar, Mutex, MutexGuard};
-use std::thread;
-use std::time::Duration;
+#[cfg(feature = "parallel")]
+use std::{
+    collections::BTreeMap,
+    panic::{catch_unwind, resume_unwind, AssertUnwindSafe},
+    sync::atomic::{AtomicBool, Ordering},
+    sync::{Condvar, Mutex, MutexGuard},
+    thread,
+    time::Duration,
+};
 
 /// How often the calling thread looks at `stop` while it waits for the job at
 /// the head of the line: a signal is noticed within this time.
+#[cfg(feature = "parallel")]
 const POLL: Duration = Duration::from_millis(20);
 
 /// The shape of the work: how many jobs, on how many threads, how far ahead.
 #[derive(Debug, Clone, Copy)]
+#[cfg_attr(not(feature = "parallel"), allow(dead_code))]
 pub(crate) struct Plan {
     /// Jobs, numbered `0..jobs` in the order their results are emitted.
     pub jobs: usize,
@@ -43,6 +48,7 @@ pub(crate) enum End {
 }
 
 /// What the workers and the emitter share.
+#[cfg(feature = "parallel")]
 struct Line<R> {
     /// The next job to hand out.
     next: usize,
@@ -52,6 +58,7 @@ struct Line<R> {
     done: BTreeMap<usize, Option<R>>,
 }
 
+#[cfg(feature = "parallel")]
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     // A worker that panicked leaves consistent data (its job is marked given
     // up before the panic goes on); the panic itself is re-raised by the scope.
@@ -62,7 +69,8 @@ fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
 /// with its own `state` from `init`, and calls `emit` with the results in job
 /// order on the calling thread. `work` returns `None` when it gives up because
 /// `halted()` turned true. `stop` is looked at by every thread; it must stay
-/// true once it is.
+/// true once it is. Without the `parallel` feature, [`in_turn`].
+#[cfg(feature = "parallel")]
 pub(crate) fn ordered<S, R: Send>(
     plan: Plan,
     init: impl Fn() -> S + Sync,
@@ -131,7 +139,48 @@ pub(crate) fn ordered<S, R: Send>(
     })
 }
 
+/// [`ordered`] without threads (the browser's build): every job in turn on
+/// the calling thread, with one `state`, each result emitted as it is made.
+/// The same results in the same order, since a job's result never depends on
+/// the thread that computed it.
+#[cfg(not(feature = "parallel"))]
+pub(crate) fn ordered<S, R: Send>(
+    plan: Plan,
+    init: impl Fn() -> S + Sync,
+    work: impl Fn(&mut S, usize, &dyn Fn() -> bool) -> Option<R> + Sync,
+    stop: &(dyn Fn() -> bool + Sync),
+    emit: impl FnMut(R) -> ControlFlow<()>,
+) -> Result<End, std::io::Error> {
+    Ok(in_turn(plan, init, work, stop, emit))
+}
+
+/// Every job in turn on the calling thread; what [`ordered`] is without the
+/// `parallel` feature (and tested as such on every build).
+#[cfg_attr(feature = "parallel", allow(dead_code))]
+fn in_turn<S, R>(
+    plan: Plan,
+    init: impl Fn() -> S,
+    work: impl Fn(&mut S, usize, &dyn Fn() -> bool) -> Option<R>,
+    stop: &dyn Fn() -> bool,
+    mut emit: impl FnMut(R) -> ControlFlow<()>,
+) -> End {
+    let mut state = init();
+    for job in 0..plan.jobs {
+        if stop() {
+            return End::Stopped;
+        }
+        let Some(result) = work(&mut state, job, stop) else {
+            return End::Stopped;
+        };
+        if emit(result).is_break() {
+            return End::Stopped;
+        }
+    }
+    End::Finished
+}
+
 /// The calling thread's part: emits the finished jobs in order as they come.
+#[cfg(feature = "parallel")]
 fn emit_in_order<R>(
     jobs: usize,
     line: &Mutex<Line<R>>,
@@ -169,7 +218,9 @@ fn emit_in_order<R>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::sync::atomic::AtomicUsize;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::thread;
+    use std::time::Duration;
 
     #[track_caller]
     fn check(plan: Plan, stop_after: Option<usize>, expect_end: End, expect: &[usize]) {
@@ -244,5 +295,35 @@ mod tests {
         )
         .unwrap();
         assert_eq!((end, got), (End::Stopped, (0..6).collect::<Vec<_>>()));
+    }
+
+    /// The path of the build without threads, run on every build: what the
+    /// threads emit, job by job, where they finish, stop or give up.
+    #[test]
+    fn in_turn_emits_what_the_threads_emit() {
+        let plan = Plan { jobs: 30, threads: 3, window: 4 };
+        for give_up in [None, Some(0), Some(17)] {
+            for stop_at in [None, Some(0), Some(9)] {
+                let work = |(): &mut (), job: usize, _: &dyn Fn() -> bool| (Some(job) != give_up).then_some(job * job);
+                let run = |threads: bool| {
+                    let mut got = Vec::new();
+                    let emit = |r| {
+                        got.push(r);
+                        if Some(got.len()) == stop_at.map(|n| n + 1) {
+                            ControlFlow::Break(())
+                        } else {
+                            ControlFlow::Continue(())
+                        }
+                    };
+                    let end = if threads {
+                        ordered(plan, || (), work, &|| false, emit).unwrap()
+                    } else {
+                        in_turn(plan, || (), work, &|| false, emit)
+                    };
+                    (end, got)
+                };
+                assert_eq!(run(false), run(true), "give up at {give_up:?}, stop at {stop_at:?}");
+            }
+        }
     }
 }

@@ -34,7 +34,9 @@
 //! (the tests below), the results differ by at most one ulp, in about 3% of
 //! cases.
 
+#[cfg(feature = "jit")]
 use cranelift_codegen::ir::{condcodes::FloatCC, types, InstBuilder, MemFlagsData, Value};
+#[cfg(feature = "jit")]
 use cranelift_frontend::FunctionBuilder;
 
 /// `|x|` below which [`sin_cos`] is valid: 2¹⁹·π/2, so that `|n| ≤ 2¹⁹`.
@@ -79,6 +81,7 @@ pub(crate) const COS_SMALL: f64 = f64::from_bits(0x3FD3_3333_0000_0000);
 /// `|x| > 0.78125` in `__kernel_cos` (high word above 0x3FE90000): `qx = 0.28125`.
 pub(crate) const COS_LARGE: f64 = f64::from_bits(0x3FE9_0001_0000_0000);
 
+#[cfg(feature = "jit")]
 /// Emits `(sin x, cos x)` for `|x| <` [`INLINE_MAX`] into the current block
 /// (straight-line code; the caller handles other `x`).
 pub(crate) fn sin_cos(b: &mut FunctionBuilder<'_>, x: Value) -> (Value, Value) {
@@ -101,6 +104,7 @@ pub(crate) fn sin_cos(b: &mut FunctionBuilder<'_>, x: Value) -> (Value, Value) {
     (sin, cos)
 }
 
+#[cfg(feature = "jit")]
 /// `x − n·π/2 = y0 + y1` and `n` as an `i64` whose two low bits are
 /// `n mod 4`.
 ///
@@ -139,6 +143,7 @@ fn reduce(b: &mut FunctionBuilder<'_>, x: Value) -> (Value, Value, Value) {
     (y0, y1, quadrant)
 }
 
+#[cfg(feature = "jit")]
 /// `a − c = s + e` exactly, with `s` the rounded difference (Knuth's TwoSum,
 /// no condition on the magnitudes).
 fn two_diff(b: &mut FunctionBuilder<'_>, a: Value, c: Value) -> (Value, Value) {
@@ -151,6 +156,7 @@ fn two_diff(b: &mut FunctionBuilder<'_>, a: Value, c: Value) -> (Value, Value) {
     (s, e)
 }
 
+#[cfg(feature = "jit")]
 /// `c0 + c1·z + … + cn·zⁿ` by Estrin's scheme: pairs `c2k + c2k+1·z` first,
 /// then combined with `z²`, `z⁴`, … (half of Horner's dependent steps).
 fn polynomial(b: &mut FunctionBuilder<'_>, z: Value, coefficients: &[f64]) -> Value {
@@ -186,6 +192,7 @@ fn polynomial(b: &mut FunctionBuilder<'_>, z: Value, coefficients: &[f64]) -> Va
     terms[0]
 }
 
+#[cfg(feature = "jit")]
 /// fdlibm `__kernel_sin(x, y, 1)`: `x − ((z·(y/2 − v·r) − y) − v·S1)`.
 fn kernel_sin(b: &mut FunctionBuilder<'_>, x: Value, y: Value) -> Value {
     let z = b.ins().fmul(x, x);
@@ -203,6 +210,7 @@ fn kernel_sin(b: &mut FunctionBuilder<'_>, x: Value, y: Value) -> Value {
     b.ins().fsub(x, t)
 }
 
+#[cfg(feature = "jit")]
 /// fdlibm `__kernel_cos(x, y)`: `(1 − qx) − ((z/2 − qx) − (z·r − x·y))`, with
 /// `qx` 0 for `|x| < 0.3` (then this is fdlibm's first branch exactly),
 /// 0.28125 for `|x| > 0.78125`, and `|x|/4` with its low word cleared between.
@@ -325,7 +333,7 @@ fn kernel_cos_f64(x: f64, y: f64) -> f64 {
     (1.0 - qx) - ((z * 0.5 - qx) - (z * r - x * y))
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "jit"))]
 pub(super) mod tests {
     use super::{COS_LARGE, COS_SMALL, INLINE_MAX};
     use crate::eval::Tape;
