@@ -180,7 +180,9 @@ pub fn modes(source: &str, options_json: &str) -> String {
         let o = options(options_json)?;
         let d = derive_for_run(source, &o)?;
         d.reject_constraints("modes").map_err(|e| model_error(source, &e))?;
-        let m = mech::normal_modes(&d, &mech::ModesConfig::default()).map_err(|e| match e {
+        // As `--allow-unstable`: the equilibrium Newton reaches from the start is kept.
+        let config = mech::ModesConfig { keep_unstable: true, ..mech::ModesConfig::default() };
+        let m = mech::normal_modes(&d, &config).map_err(|e| match e {
             mech::ModesError::Model(m) => model_error(source, &m),
             other => plain(other),
         })?;
