@@ -52,22 +52,7 @@ pub(crate) fn terms(
 ) -> BodyTerms {
     let (omega, d) = (frame.omega, frame.d);
     // v_ref = Σ ∂x/∂q_i q_i' + ∂x/∂t, space components.
-    let v_ref: Vec<ExprId> = frame
-        .origin
-        .iter()
-        .map(|&x| {
-            let mut terms: Vec<ExprId> = q
-                .iter()
-                .zip(qd)
-                .map(|(&qi, &vi)| {
-                    let dx = pool.diff(x, qi);
-                    pool.mul2(dx, vi)
-                })
-                .collect();
-            terms.push(pool.diff(x, t));
-            pool.add(&terms)
-        })
-        .collect();
+    let v_ref = crate::model::frames::velocity(pool, &frame.origin, q, qd, t);
     let moving = v_ref.iter().any(|&v| !pool.is_zero(v));
     let half = pool.rational(1, 2);
     let mut t_terms = Vec::new();

@@ -262,19 +262,7 @@ fn contact_velocity(
             pool.neg(z)
         },
     ];
-    let v_c: [ExprId; 3] = std::array::from_fn(|i| {
-        let x = frame.origin[i];
-        let mut terms: Vec<ExprId> = q
-            .iter()
-            .zip(qd)
-            .map(|(&qi, &vi)| {
-                let dx = pool.diff(x, qi);
-                pool.mul2(dx, vi)
-            })
-            .collect();
-        terms.push(pool.diff(x, t));
-        pool.add(&terms)
-    });
+    let v_c = crate::model::frames::velocity(pool, &frame.origin, q, qd, t);
     let v: [ExprId; 3] = std::array::from_fn(|i| {
         let (j, k) = ((i + 1) % 3, (i + 2) % 3);
         let a = pool.mul2(omega[j], rd[k]);

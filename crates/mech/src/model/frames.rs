@@ -94,3 +94,20 @@ fn mat_vec(pool: &mut Pool, m: &euler::ExprMatrix, v: &[ExprId; 3]) -> [ExprId; 
         pool.add(&terms)
     })
 }
+
+/// The velocity of a point given in space as functions of (q, t):
+/// v = Σ ∂x/∂q_i q_i' + ∂x/∂t, per component.
+pub(crate) fn velocity(pool: &mut Pool, x: &[ExprId; 3], q: &[ExprId], qd: &[ExprId], t: ExprId) -> [ExprId; 3] {
+    std::array::from_fn(|k| {
+        let mut terms: Vec<ExprId> = q
+            .iter()
+            .zip(qd)
+            .map(|(&qi, &vi)| {
+                let dx = pool.diff(x[k], qi);
+                pool.mul2(dx, vi)
+            })
+            .collect();
+        terms.push(pool.diff(x[k], t));
+        pool.add(&terms)
+    })
+}
