@@ -221,6 +221,17 @@ fn bad_loads_and_inputs_exit_2_at_the_entry() {
         ("force = [\"F\", \"0\"]", "force = [\"F\", \"0\"]\naxes = \"diagonal\"", "not a set of axes", "\"diagonal\""),
         ("F = \"F0*sin(2*t)\"", "F = \"F0*sin(2*x)\"", "'x' is not allowed here", "x)\""),
         ("F = \"F0*sin(2*t)\"", "g = \"t\"", "name of a coordinate, a parameter", "g = \"t\""),
+        // Loads that would vanish from the equations: a torque on a body that
+        // does not turn, x and y torques in a planar model, a force at a point
+        // no coordinate moves.
+        ("body = \"rod\"\ntorque", "body = \"cart\"\ntorque", "'cart' does not turn", "\"tau\""),
+        ("torque = \"tau\"", "torque = [\"0\", \"0\", \"tau\"]", "one value, about z", "[\"0\", \"0\", \"tau\"]"),
+        (
+            "body = \"cart\"\nforce = [\"F\", \"0\"]",
+            "force = [\"F\", \"0\"]\nat = [\"1\", \"t\"]",
+            "no coordinate moves",
+            "[\"1\", \"t\"]",
+        ),
     ];
     let all = cases.iter().map(|c| (&cart, c)).chain(rolling.iter().map(|c| (&coin, c)));
     for (base, &(from, to, what, at)) in all {

@@ -234,15 +234,8 @@ fn contact_velocity(
     qd: &[ExprId],
     t: ExprId,
 ) -> ([ExprId; 3], ExprId) {
-    let d = &frame.d;
-    let to_space = |pool: &mut Pool, v: &[ExprId; 3]| -> [ExprId; 3] {
-        std::array::from_fn(|i| {
-            let terms: Vec<ExprId> = (0..3).map(|k| pool.mul2(d[k][i], v[k])).collect();
-            pool.add(&terms)
-        })
-    };
-    let e = to_space(pool, &axle);
-    let omega = to_space(pool, &frame.omega);
+    let e = crate::model::frames::to_space(pool, &frame.d, &axle);
+    let omega = crate::model::frames::to_space(pool, &frame.d, &frame.omega);
     // s = √(1 − e_z²); R d = R (e_z e_x / s, e_z e_y / s, −s).
     let one = pool.one();
     let ez2 = pool.powi(e[2], 2);

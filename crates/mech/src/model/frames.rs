@@ -19,6 +19,14 @@ pub(crate) struct Frame {
     pub origin: [ExprId; 3],
 }
 
+/// A body-components vector in space components: `Dᵀ v`.
+pub(crate) fn to_space(pool: &mut Pool, d: &euler::ExprMatrix, v: &[ExprId; 3]) -> [ExprId; 3] {
+    std::array::from_fn(|i| {
+        let terms: Vec<ExprId> = (0..3).map(|k| pool.mul2(d[k][i], v[k])).collect();
+        pool.add(&terms)
+    })
+}
+
 /// The frame of every body, parents first (the model lists them so):
 /// `D = D_rel·D_parent`, `ω = D_rel·ω_parent + ω_rel`, `x = x_parent + D_parentᵀ·position`.
 pub(crate) fn frames(pool: &mut Pool, bodies: &[Body], q: &[ExprId], qd: &[ExprId]) -> Vec<Frame> {

@@ -76,7 +76,34 @@ pub(crate) fn read_all(
     bodies: &[Body],
     dimension: usize,
 ) -> Result<Vec<Load>, ModelError> {
-    raw.iter().map(|l| read(r, l, bodies, dimension)).collect()
+    let names: Vec<String> = r.coordinates.iter().map(|c| c.name.clone()).collect();
+    let q: Vec<ExprId> = names.iter().map(|n| r.pool.var(n, 0)).collect();
+    let qd: Vec<ExprId> = names.iter().map(|n| r.pool.var(n, 1)).collect();
+    let frames = super::frames::frames(&mut r.pool, bodies, &q, &qd);
+    let mut out = Vec::with_capacity(raw.len());
+    for l in raw {
+        let load = read(r, l, bodies, dimension)?;
+        if let LoadKind::Force { at } = load.kind {
+            // Virtual work F·∂r/∂q: a force at a point that no coordinate moves
+            // would vanish from the equations.
+            let point = match load.body {
+                None => at,
+                Some(b) => {
+                    let rel = super::frames::to_space(&mut r.pool, &frames[b].d, &at);
+                    std::array::from_fn(|i| r.pool.add2(frames[b].origin[i], rel[i]))
+                }
+            };
+            if point.iter().all(|&x| q.iter().all(|&c| r.pool.free_of(x, c))) {
+                let table = l.get_ref();
+                let span =
+                    table.at.as_ref().map(|a| a.span()).or(table.body.as_ref().map(|b| b.span())).unwrap_or(l.span());
+                return Err(ModelError::at(span, "the force acts at a point that no coordinate moves, so it does nothing")
+                    .with_help("a force enters the equations through F·∂r/∂q: give a point that moves with the coordinates (`at`, or a `body` that moves)"));
+            }
+        }
+        out.push(load);
+    }
+    Ok(out)
 }
 
 fn read(r: &mut Reader<'_>, l: &Spanned<RawLoad>, bodies: &[Body], dimension: usize) -> Result<Load, ModelError> {
@@ -153,7 +180,25 @@ fn read(r: &mut Reader<'_>, l: &Spanned<RawLoad>, bodies: &[Body], dimension: us
                 return Err(ModelError::at(at.span(), "a torque acts on the whole body, not at a point")
                     .with_help("leave `at` out; a force at a point takes `force`"));
             }
+            // A torque does work only through the body's angular velocity: on a
+            // body with no angle up its tree it would vanish from the equations.
+            if let Some(b) = body.filter(|&b| !turns(bodies, b)) {
+                return Err(ModelError::at(
+                    torque.span(),
+                    format!("body '{}' does not turn (no angle of its own or of a parent), so a torque on it does nothing", bodies[b].name),
+                )
+                .with_help("a torque acts on a body with `angle` or `angles` (or a parent that has them); a force at a point takes `force` and `at`"));
+            }
             let vector = match torque.get_ref() {
+                toml::Value::Array(_) if dimension == 2 => {
+                    return Err(ModelError::at(
+                        torque.span(),
+                        "a planar model's torque is one value, about z, not a list",
+                    )
+                    .with_help(
+                        "write torque = \"tau\": its bodies turn about z only, so x and y components would do nothing",
+                    ));
+                }
                 toml::Value::Array(_) => {
                     let list: Spanned<Vec<Spanned<NumOrText>>> = torque_list(torque)?;
                     if list.get_ref().len() != 3 {
@@ -188,6 +233,18 @@ fn read(r: &mut Reader<'_>, l: &Spanned<RawLoad>, bodies: &[Body], dimension: us
             Ok(Load { kind: LoadKind::Torque, body, vector, body_axes, span: l.span() })
         }
     }
+}
+
+/// Whether body `b` turns: it or a body up its tree has an angle.
+fn turns(bodies: &[Body], b: usize) -> bool {
+    let mut at = Some(b);
+    while let Some(k) = at {
+        if !bodies[k].orientation.angles().is_empty() {
+            return true;
+        }
+        at = bodies[k].parent;
+    }
+    false
 }
 
 /// A torque written as a list, its entries located by searching its text.
