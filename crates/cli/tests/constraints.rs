@@ -263,3 +263,50 @@ fn bad_constraints_exit_2_with_the_place() {
     bad(&["derive", both.path()], &["either `holonomic` or `velocity`"]);
     bad(&["simulate", good.path(), "--until", "1", "--method", "gauss6"], &["cannot run a model with constraints"]);
 }
+
+/// A wheel lying flat has no lowest rim point, where the contact divides by
+/// √(1 − e_z²): refused at the rolling contact, saying whether its axle is
+/// vertical whatever the coordinates (when read) or at the start (when a run
+/// starts; the model itself derives).
+#[test]
+fn a_wheel_lying_flat_is_refused_at_its_rolling_contact() {
+    let dir = common::repo_root().join("crates/cli/tests/bad_bodies");
+    let flat = dir.join("flat_wheel.toml");
+    bad(&["derive", flat.to_str().unwrap()], &["lies flat whatever the coordinates", "flat_wheel.toml:20:11:"]);
+    let at_start = dir.join("coin_flat_at_start.toml");
+    ok(&["derive", at_start.to_str().unwrap()]);
+    bad(
+        &["simulate", at_start.to_str().unwrap(), "--until", "1"],
+        &["lies flat at the start", "coin_flat_at_start.toml:23:11:"],
+    );
+    // Tilted by 0.3 about y and at rest on its rim, the same model runs.
+    let text = std::fs::read_to_string(&at_start).unwrap();
+    let tilted = text.replacen("th = 0\n", "th = 0.3\n", 1).replacen("z = 0\n", "z = \"R*sin(0.3)\"\n", 1);
+    let tilted = TempFile::with_text("tilted", &tilted.replacen("\"ps'\" = 1", "\"ps'\" = 0", 1));
+    ok(&["simulate", tilted.path(), "--until", "0.1"]);
+}
+
+/// A disc rolling along y about its axle along x never slips along x: the
+/// contact's x component is identically 0 and is left out (not a constraint
+/// the derivation would refuse), and the disc rolls, y' = −R th'.
+#[test]
+fn a_rolling_component_that_is_identically_zero_is_left_out() {
+    let model = TempFile::with_text(
+        "roll-along-y",
+        "coordinates = [\"y\", \"th\"]\n[parameters]\nm = 1.0\nR = 0.5\n\
+         [[bodies]]\nname = \"w\"\nmass = \"m\"\ninertia = [\"m*R^2/2\", \"m*R^2/4\", \"m*R^2/4\"]\n\
+         angle = \"th\"\naxis = \"x\"\nposition = [\"0\", \"y\", \"R\"]\n\
+         [[constraints]]\nname = \"roll\"\nrolling = \"w\"\nradius = \"R\"\n\
+         [initial]\ny = 0\nth = 0\n\"y'\" = 1\n\"th'\" = -2\n",
+    );
+    let csv = TempFile::new("roll-along-y", "csv");
+    ok(&["simulate", model.path(), "--until", "2", "--out", csv.path()]);
+    let table = Csv::read(csv.path());
+    assert!(table.header.iter().any(|c| c == "lambda_roll_y"), "{:?}", table.header);
+    assert!(!table.header.iter().any(|c| c.contains("roll_x")), "{:?}", table.header);
+    let (y, th) = (table.column("y"), table.column("th"));
+    for (y, th) in y.iter().zip(&th) {
+        assert!((y + 0.5 * th).abs() < 1e-9, "y = {y}, th = {th}");
+    }
+    assert!(y.last().unwrap().abs() > 1.0, "the disc rolls: {y:?}");
+}

@@ -177,3 +177,44 @@ fn a_run_whose_series_is_not_finite_fails_alone() {
     let alone = alone.lines().nth(2).unwrap();
     assert_eq!(rows[4].split_once(',').unwrap().1, alone.split_once(',').unwrap().1);
 }
+
+/// A row whose parameter values the model refuses (here a hinge axis of length
+/// 0 at lam = 0.1 + 0.2 = 0.30000000000000004) fails with the reason `--set`
+/// gives for that value, and the rows beside it run as they do alone.
+#[test]
+fn a_row_at_values_the_model_refuses_fails_with_the_reason() {
+    let model = scratch("sweep-test", "hinge.toml");
+    std::fs::write(
+        &model,
+        "name = \"hinge from a parameter\"\ncoordinates = [\"th\"]\ngravity = \"g\"\n\
+         [parameters]\nm = 1.0\ng = 9.81\nlam = 1.3\n\
+         [[bodies]]\nmass = \"m\"\ninertia = [\"m\", \"m\", \"m\"]\nangle = \"th\"\n\
+         axis = [\"lam - 0.3\", \"0\", \"0\"]\ncenter_of_mass = [\"0\", \"0\", \"-1\"]\n\
+         [initial]\nth = 0.5\n\"th'\" = 0\n",
+    )
+    .unwrap();
+    let model = model.to_str().unwrap();
+    let lam = 0.1 + 0.2;
+    let set = lagrange(&["simulate", model, "--until", "1", "--set", &format!("lam={lam:?}")]);
+    assert_eq!(set.code, Some(2), "{}", set.describe());
+    assert!(set.stderr.contains("the axis has no direction"), "{}", set.stderr);
+    let (all, alone) = (scratch("sweep-test", "hinge-all.csv"), scratch("sweep-test", "hinge-alone.csv"));
+    ok(&["sweep", model, "--until", "1", "--grid", "lam=0.1:0.5:3", "--no-lyapunov", "--out", all.to_str().unwrap()]);
+    ok(&["sweep", model, "--until", "1", "--grid", "lam=0.5:0.5:1", "--no-lyapunov", "--out", alone.to_str().unwrap()]);
+    let all = text(&all);
+    let rows: Vec<&str> = all.lines().skip(2).collect();
+    assert_eq!(rows.len(), 3, "{all}");
+    assert!(rows[1].starts_with(&format!("1,{lam:?},")), "{}", rows[1]);
+    assert!(rows[1].ends_with(",the axis has no direction (its length is 0)"), "{}", rows[1]);
+    for row in [rows[0], rows[2]] {
+        let final_th: f64 = row.split(',').nth(3).unwrap().parse().unwrap();
+        assert!(row.ends_with(',') && final_th.is_finite(), "{row}");
+    }
+    // The axis is normalized at every row's values, not only at the file's
+    // (where lam − 0.3 = 1): along −x and +x the pendulum swings alike.
+    let final_th = |row: &str| row.split(',').nth(3).unwrap().to_string();
+    assert_eq!(final_th(rows[0]), final_th(rows[2]));
+    let alone = text(&alone);
+    let alone = alone.lines().nth(2).unwrap();
+    assert_eq!(rows[2].split_once(',').unwrap().1, alone.split_once(',').unwrap().1);
+}

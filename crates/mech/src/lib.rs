@@ -101,8 +101,8 @@ pub use extremal::{
 pub use linearize::{linearize, About, Eigenvalue, Linearization, LinearizeConfig, LinearizeError, LinearizeReport};
 pub use mechanism::{Mechanism, Point, PointKind};
 pub use model::{
-    Body, ConstraintKind, ConstraintSpec, Coordinate, Gravity, InitialValue, Input, Load, LoadKind, Located, Model,
-    Orientation, Parameter, Particle,
+    Body, CheckKind, ConstraintKind, ConstraintSpec, Coordinate, Gravity, InitialValue, Input, Load, LoadKind, Located,
+    Model, Orientation, Parameter, Particle, ValueCheck,
 };
 pub use modes::{
     normal_modes, DampedRoot, Damping, Mode, ModeKind, Modes, ModesConfig, ModesError, ModesReport, SymbolicModes,

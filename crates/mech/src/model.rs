@@ -18,6 +18,7 @@ use sym::{ExprId, ParseErrorKind, ParseOptions, Pool};
 use toml::Spanned;
 
 pub(crate) mod body;
+pub(crate) mod check;
 pub(crate) mod constraint;
 pub(crate) mod frames;
 pub(crate) mod gravity;
@@ -25,6 +26,7 @@ pub(crate) mod load;
 
 pub use crate::source::Parameter;
 pub use body::{Body, Orientation};
+pub use check::{CheckKind, ValueCheck};
 pub use constraint::{ConstraintKind, ConstraintSpec};
 pub use gravity::Gravity;
 pub use load::{Load, LoadKind};
@@ -107,6 +109,10 @@ pub struct Model {
     /// Named inputs u(t) (`[inputs]`): symbols in the forces and loads, with
     /// the values a run gives them ([`Model::with_inputs_applied`]).
     pub inputs: Vec<Input>,
+    /// What must hold at numbers (a body's mass positive, a hinge axis a
+    /// direction, a rolling wheel's axle not vertical at the start), checked at
+    /// the file's values when read and by [`Model::check_values`] at others.
+    pub checks: Vec<ValueCheck>,
 }
 
 /// A named input u(t) of `[inputs]`.
@@ -238,9 +244,22 @@ pub(crate) struct Reader<'a> {
     pub(crate) parameters: Vec<Parameter>,
     /// The inputs' names (`[inputs]`), known to forces and loads.
     pub(crate) inputs: Vec<String>,
+    /// The checks at numbers recorded so far ([`ValueCheck`]).
+    pub(crate) checks: Vec<ValueCheck>,
 }
 
 impl Reader<'_> {
+    /// Records a check at numbers and runs it at the parameters' values (a
+    /// start check runs when a run starts, [`Model::check_values`]).
+    pub(crate) fn check(&mut self, check: ValueCheck) -> Result<(), ModelError> {
+        if !check.at_start() {
+            let env = |n: &str| self.parameters.iter().find(|p| p.name == n).map(|p| p.value);
+            check.run(&self.pool, &env)?;
+        }
+        self.checks.push(check);
+        Ok(())
+    }
+
     fn is_coordinate(&self, name: &str) -> bool {
         self.coordinates.iter().any(|c| c.name == name)
     }
@@ -378,6 +397,7 @@ impl Model {
             coordinates: Vec::new(),
             parameters: Vec::new(),
             inputs: Vec::new(),
+            checks: Vec::new(),
         };
 
         // Coordinates.
@@ -646,6 +666,7 @@ impl Model {
             constraints,
             loads,
             inputs,
+            checks: r.checks,
         })
     }
 
@@ -694,6 +715,7 @@ impl Model {
             coordinates: self.coordinates.clone(),
             parameters: self.parameters.clone(),
             inputs: Vec::new(),
+            checks: Vec::new(),
         };
         let result = r.expr_str(text, 0..text.len(), Scope::State, what).map(|l| l.expr);
         // The whole text is the expression: spans are offsets into it.
@@ -707,6 +729,27 @@ impl Model {
         });
         self.pool = r.pool;
         result
+    }
+
+    /// Runs the model's checks at numbers ([`ValueCheck`]) at its parameters'
+    /// current values, and the start checks too when `start` gives (q, q') at
+    /// t = 0: a sweep runs them for each row, as reading the file with `--set`
+    /// and a run's start do.
+    pub fn check_values(&self, start: Option<(&[f64], &[f64])>) -> Result<(), ModelError> {
+        let env = |name: &str| {
+            if let Some(v) = self.parameter(name) {
+                return Some(v);
+            }
+            let (q, _) = start?;
+            if name == "t" {
+                return Some(0.0);
+            }
+            self.coordinates.iter().position(|c| c.name == name).map(|k| q[k])
+        };
+        for check in self.checks.iter().filter(|c| start.is_some() || !c.at_start()) {
+            check.run(&self.pool, &env)?;
+        }
+        Ok(())
     }
 
     /// The initial coordinates and velocities from `[initial]`, evaluated with

@@ -937,13 +937,18 @@ fn start_of(
                 }
             }
             let model = &*model;
-            initial_values(model).and_then(|base| complete(&base, grid, inputs, model)).map(|(q, qd)| {
+            initial_values(model).and_then(|base| complete(&base, grid, inputs, model)).and_then(|(q, qd)| {
+                // What reading the file with --set checks at these values, and
+                // what a run checks of its start: refused here, the row's failure.
+                model.check_values(Some((&q, &qd)))?;
                 let values = model.parameters.iter().map(|p| p.value).collect();
-                (q, qd, values)
+                Ok((q, qd, values))
             })
         }
-        None => complete(base, grid, inputs, &d.model)
-            .map(|(q, qd)| (q, qd, d.model.parameters.iter().map(|p| p.value).collect())),
+        None => complete(base, grid, inputs, &d.model).and_then(|(q, qd)| {
+            d.model.check_values(Some((&q, &qd)))?;
+            Ok((q, qd, d.model.parameters.iter().map(|p| p.value).collect()))
+        }),
     };
     start.map_err(|e| e.message)
 }

@@ -37,6 +37,7 @@
 //! reads the tables; `derive/body.rs` turns a body into T, U, ω and L.
 
 use crate::error::ModelError;
+use crate::model::check::{CheckKind, ValueCheck};
 use crate::model::{Located, NumOrText, Reader, Scope};
 use crate::probe;
 use serde::Deserialize;
@@ -295,21 +296,18 @@ fn read_orientation(r: &mut Reader<'_>, b: &Spanned<RawBody>) -> Result<Orientat
                     for (k, x) in items.iter().enumerate() {
                         v[k] = entry(r, x, &span, &mut cursor, &format!("component {} of the axis", k + 1))?;
                     }
-                    let env = |n: &str| r.parameters.iter().find(|p| p.name == n).map(|p| p.value);
-                    let size: Option<f64> =
-                        v.iter().map(|&c| r.pool.eval(c, &env).ok().map(|x| x * x)).sum::<Option<f64>>().map(f64::sqrt);
-                    if size.is_some_and(|n| !(n > 1e-12 && n.is_finite())) {
-                        return Err(ModelError::at(span, "the axis has no direction (its length is 0)")
-                            .with_help("give a non-zero vector; it is normalized"));
-                    }
-                    // A unit vector at the parameters' values (sin, 0, −cos of an
-                    // angle) is taken as written: dividing by √(sin² + cos²) only
-                    // makes every expression longer.
-                    if size.is_some_and(|n| (n - 1.0).abs() <= 1e-14) {
-                        return Ok(Orientation::Hinge { angle, axis: v });
-                    }
+                    r.check(ValueCheck { kind: CheckKind::Axis(v), span })?;
+                    // A vector of length 1 whatever the parameters (sin, 0, −cos
+                    // of an angle) is taken as written: dividing by
+                    // √(sin² + cos²) only makes every expression longer. One of
+                    // length 1 at the file's values only is normalized: a sweep
+                    // or --set may give it other lengths.
                     let squares: Vec<ExprId> = v.iter().map(|&c| r.pool.powi(c, 2)).collect();
                     let sum = r.pool.add(&squares);
+                    let one = r.pool.one();
+                    if probe::decide_equal(&mut r.pool, sum, one) == probe::Decision::Zero {
+                        return Ok(Orientation::Hinge { angle, axis: v });
+                    }
                     let norm = r.pool.sqrt(sum);
                     let axis = v.map(|c| r.pool.div(c, norm));
                     Ok(Orientation::Hinge { angle, axis })
@@ -456,35 +454,15 @@ fn read(
     // (moments ≥ 0, each at most the sum of the other two). A zero moment (a
     // thin rod about its axis, a point mass) is allowed: only a singular
     // total mass matrix is refused, by the derivation, naming the coordinate.
-    let values = |r: &Reader<'_>, e: ExprId| {
-        let env = |n: &str| r.parameters.iter().find(|p| p.name == n).map(|p| p.value);
-        r.pool.eval(e, &env).ok()
+    // The checks are kept for a sweep to run at each row's values.
+    let tensor = if moment_only {
+        let sum = r.pool.add(&inertia.iter().flatten().copied().collect::<Vec<_>>());
+        CheckKind::Moment(sum)
+    } else {
+        CheckKind::Tensor(inertia)
     };
-    if let Some(m) = values(r, mass.expr) {
-        if m.is_nan() || m <= 0.0 {
-            return Err(ModelError::at(mass.span.clone(), format!("the body's mass must be positive, not {m}")));
-        }
-    }
-    let mut num = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            num[i][j] = values(r, inertia[i][j]).unwrap_or(f64::NAN);
-        }
-    }
-    if moment_only {
-        let m = num.iter().flatten().fold(0.0f64, |a, &x| a + x);
-        if m.is_nan() || m < 0.0 {
-            return Err(ModelError::at(inertia_span, format!("the moment of inertia must be ≥ 0, not {m}")));
-        }
-    } else if num.iter().flatten().all(|v| v.is_finite()) {
-        if let Err(why) = physical(&num) {
-            return Err(ModelError::at(
-                inertia_span,
-                format!("the inertia tensor {num:?} is not a rigid body's at the parameters' values: {why}"),
-            )
-            .with_help("principal moments are ≥ 0 and each is at most the sum of the other two (a thin rod has one zero moment)"));
-        }
-    }
+    r.check(ValueCheck { kind: CheckKind::Mass(mass.expr), span: mass.span.clone() })?;
+    r.check(ValueCheck { kind: tensor, span: inertia_span.clone() })?;
     let body = Body {
         name,
         mass: mass.expr,
@@ -543,32 +521,6 @@ fn agree_with_file(r: &Reader<'_>, given: ExprId, want: f64, span: Range<usize>,
             .with_help(format!("leave the {what} out to take it from the body file"))),
         Err(e) => Err(ModelError::at(span, e.to_string())),
     }
-}
-
-/// Whether `m` is a rigid body's inertia tensor: symmetric, its principal
-/// moments ≥ 0 and each at most the sum of the other two (to rounding).
-fn physical(m: &[[f64; 3]; 3]) -> Result<(), String> {
-    let scale = m.iter().flatten().fold(0.0f64, |a, &x| a.max(x.abs()));
-    let tol = 1e-12 * scale;
-    for (i, j) in [(0, 1), (0, 2), (1, 2)] {
-        if (m[i][j] - m[j][i]).abs() > tol {
-            return Err(format!("I{}{} ≠ I{}{}", i + 1, j + 1, j + 1, i + 1));
-        }
-    }
-    let moments = nalgebra::Matrix3::from_fn(|i, j| m[i][j]).symmetric_eigenvalues();
-    let (a, b, c) = (moments[0], moments[1], moments[2]);
-    if let Some(&negative) = [a, b, c].iter().find(|&&x| x < -tol) {
-        return Err(format!("a principal moment is negative ({negative})"));
-    }
-    if scale == 0.0 {
-        return Ok(());
-    }
-    for (x, y, z) in [(a, b, c), (b, c, a), (c, a, b)] {
-        if x > y + z + tol {
-            return Err(format!("the principal moment {x} exceeds the sum of the other two ({y} + {z})"));
-        }
-    }
-    Ok(())
 }
 
 /// The inertia: three principal moments, or a symmetric 3×3 tensor.

@@ -7,13 +7,18 @@
 //! wheel is a disc about its axle e, touching the ground at P = C + R d with
 //! d = (−ẑ + (ẑ·e) e)/√(1 − (ẑ·e)²), the lowest point of its rim. Rolling makes
 //! the velocity of the wheel's material point at P vanish, v_C + ω × (P − C) = 0:
-//! its horizontal components are two velocity constraints `NAME_x`, `NAME_y`.
+//! its horizontal components are two velocity constraints `NAME_x`, `NAME_y`
+//! (one that vanishes whatever the motion constrains nothing and is left out).
+//! A wheel lying flat (e vertical) has no such point: refused when its axle is
+//! vertical whatever the coordinates, and at a run's start (`model/check.rs`).
 //! With `contact = "constraint"` the contact itself, P_z = 0, is a holonomic
 //! constraint `NAME_z` too (the default, `"kept"`, leaves it to the wheel's
 //! position, as a centre at height R sin θ keeps a leaning disc on the ground).
 
 use crate::error::ModelError;
+use crate::model::check::{CheckKind, ValueCheck};
 use crate::model::{Body, Located, NumOrText, Orientation, Reader, Scope};
+use crate::probe;
 use serde::Deserialize;
 use std::ops::Range;
 use sym::{ExprId, Pool};
@@ -200,12 +205,33 @@ pub(crate) fn read_rolling(
     let t = r.pool.symbol("t");
     let frames = crate::model::frames::frames(&mut r.pool, bodies, &q, &qd);
     let frame = &frames[b];
-    let (v, height) = contact_velocity(&mut r.pool, frame, axle, radius, &q, &qd, t);
+    let (v, height, tilt) = contact_velocity(&mut r.pool, frame, axle, radius, &q, &qd, t);
     let span = wheel.span();
+    // The contact point divides by √(1 − e_z²): a wheel lying flat (axle
+    // vertical) has no lowest rim point, whatever its motion (refused here) or
+    // at the start (refused when a run starts, `model/check.rs`).
+    if probe::decide_zero(&mut r.pool, tilt) == probe::Decision::Zero {
+        return Err(ModelError::at(
+            span,
+            format!("the wheel '{}' lies flat whatever the coordinates (its axle is identically vertical): its rim has no lowest point to roll on", wheel.get_ref()),
+        )
+        .with_help("a rolling wheel's axle (axle = \"x\", \"y\" or \"z\", in its own axes) is horizontal or leaning, not along the ground's normal z"));
+    }
+    r.check(ValueCheck { kind: CheckKind::Axle { name: name.clone(), tilt }, span: span.clone() })?;
     let mut out = Vec::new();
     let mut parts = vec![("x", ConstraintKind::Velocity, v[0]), ("y", ConstraintKind::Velocity, v[1])];
     if keep {
         parts.push(("z", ConstraintKind::Holonomic, height));
+    }
+    // A component that vanishes whatever the motion (a wheel rolling along y
+    // about an axle along x never slips along x) constrains nothing: left out.
+    parts.retain(|&(_, _, expr)| probe::decide_zero(&mut r.pool, expr) != probe::Decision::Zero);
+    if parts.is_empty() {
+        return Err(ModelError::at(
+            span,
+            "the rolling contact constrains nothing: the contact point's velocity is identically 0",
+        )
+        .with_help("the wheel's motion already keeps it from slipping; leave the rolling contact out"));
     }
     for (axis, kind, expr) in parts {
         let full = format!("{name}_{axis}");
@@ -224,7 +250,7 @@ pub(crate) fn read_rolling(
 }
 
 /// The velocity of the wheel's material point at the contact (space
-/// components), and the contact's height P_z.
+/// components), the contact's height P_z, and 1 − e_z² (e the axle in space).
 fn contact_velocity(
     pool: &mut Pool,
     frame: &crate::model::frames::Frame,
@@ -233,7 +259,7 @@ fn contact_velocity(
     q: &[ExprId],
     qd: &[ExprId],
     t: ExprId,
-) -> ([ExprId; 3], ExprId) {
+) -> ([ExprId; 3], ExprId, ExprId) {
     let e = crate::model::frames::to_space(pool, &frame.d, &axle);
     let omega = crate::model::frames::to_space(pool, &frame.d, &frame.omega);
     // s = √(1 − e_z²); R d = R (e_z e_x / s, e_z e_y / s, −s).
@@ -264,5 +290,5 @@ fn contact_velocity(
         pool.add2(v_c[i], cross)
     });
     let height = pool.add2(frame.origin[2], rd[2]);
-    (v, height)
+    (v, height, rest)
 }
