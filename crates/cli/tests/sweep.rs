@@ -218,3 +218,25 @@ fn a_row_at_values_the_model_refuses_fails_with_the_reason() {
     let alone = alone.lines().nth(2).unwrap();
     assert_eq!(rows[2].split_once(',').unwrap().1, alone.split_once(',').unwrap().1);
 }
+
+/// A grid axis named like a column the sweep writes itself (a parameter
+/// `failure`) would write two columns of one name: exit 2 at the parameter.
+#[test]
+fn an_axis_named_like_a_sweep_column_is_refused() {
+    let model = scratch("sweep-test", "named-failure.toml");
+    std::fs::write(
+        &model,
+        "coordinates = [\"x\"]\nlagrangian = \"x'^2/2 - failure*x^2/2\"\n[parameters]\nfailure = 1.0\n\
+         [initial]\nx = 1.0\n\"x'\" = 0.0\n",
+    )
+    .unwrap();
+    let model = model.to_str().unwrap();
+    ok(&["sweep", model, "--until", "0.1", "--grid", "x=0:1:2", "--no-lyapunov"]);
+    let r = lagrange(&["sweep", model, "--until", "0.1", "--grid", "failure=1:2:2", "--no-lyapunov"]);
+    assert_eq!(r.code, Some(2), "{}", r.describe());
+    assert!(
+        r.stderr.contains("named-failure.toml:4:1: the sweep's CSV would have two columns 'failure'"),
+        "{}",
+        r.stderr
+    );
+}

@@ -19,6 +19,7 @@ use toml::Spanned;
 
 pub(crate) mod body;
 pub(crate) mod check;
+pub(crate) mod columns;
 pub(crate) mod constraint;
 pub(crate) mod frames;
 pub(crate) mod gravity;
@@ -649,7 +650,7 @@ impl Model {
             }
         }
 
-        Ok(Model {
+        let model = Model {
             pool: r.pool,
             name: raw.name.unwrap_or_else(|| "unnamed model".into()),
             coordinates: r.coordinates,
@@ -667,7 +668,9 @@ impl Model {
             loads,
             inputs,
             checks: r.checks,
-        })
+        };
+        columns::refuse_duplicates(&columns::simulate_columns(&model), "simulate's CSV")?;
+        Ok(model)
     }
 
     /// The model a run integrates: every input replaced by its value, an

@@ -62,6 +62,7 @@
 
 use crate::derive::Derivation;
 use crate::error::ModelError;
+use crate::model::columns::{refuse_duplicates, Column};
 use crate::model::Model;
 use crate::run::body::GimbalGuard;
 use crate::run::choose_method;
@@ -684,7 +685,9 @@ impl<'a> Sweep<'a> {
         // Rigid bodies: a run through the Euler angles' gimbal singularity fails
         // there (as `simulate` does) instead of integrating garbage.
         let guards = crate::run::body::gimbal_guards(d, config.rtol);
-        let header = header(d, grid, config, method, dynamics.coordinate_names());
+        let names = dynamics.coordinate_names();
+        refuse_duplicates(&columns(&d.model, grid, names), "the sweep's CSV").map_err(SweepError::Model)?;
+        let header = header(d, grid, config, method, names);
         Ok(Sweep { d, grid, config, dynamics, method, form, base, guards, header, batched: OnceLock::new() })
     }
 
@@ -833,12 +836,7 @@ impl<'a> Sweep<'a> {
 /// The header of a sweep: its columns, and its provenance (every setting that
 /// changes a row; not the threads, which do not).
 fn header(d: &Derivation, grid: &Grid, config: &SweepConfig, method: Method, names: &[String]) -> SweepHeader {
-    let mut columns = vec!["run".to_string()];
-    columns.extend(grid.axes.iter().map(|a| a.name.clone()));
-    columns.push("t_final".into());
-    columns.extend(names.iter().map(|c| format!("final_{c}")));
-    columns.extend(names.iter().map(|c| format!("final_{c}'")));
-    columns.extend(["energy_drift".into(), "lyapunov".into(), "failure".into()]);
+    let columns = columns(&d.model, grid, names).into_iter().map(|c| c.name).collect();
     let model = &d.model;
     let parameters: Vec<String> = model.parameters.iter().map(|p| format!("{}={:?}", p.name, p.value)).collect();
     let mut meta = vec![
@@ -859,6 +857,31 @@ fn header(d: &Derivation, grid: &Grid, config: &SweepConfig, method: Method, nam
         meta.push(("shard".into(), config.shard.to_string()));
     }
     SweepHeader { meta, columns }
+}
+
+/// The columns of a sweep's CSV, each with the name that makes it: `run`, the
+/// grid's axes, `t_final`, `final_q` and `final_q'` per coordinate,
+/// `energy_drift`, `lyapunov`, `failure`.
+fn columns(model: &Model, grid: &Grid, names: &[String]) -> Vec<Column> {
+    let fixed = |name: &str| Column { name: name.into(), origin: "the sweep itself".into(), span: None };
+    let coordinate = |k: usize| model.coordinates.get(k).map(|c| c.span.clone());
+    let mut cols = vec![fixed("run")];
+    for (axis, target) in grid.axes.iter().zip(&grid.targets) {
+        let span = match *target {
+            Target::Coordinate(k) | Target::Velocity(k) => coordinate(k),
+            Target::Parameter(k) => Some(model.parameters[k].span.clone()),
+        };
+        cols.push(Column { name: axis.name.clone(), origin: format!("the grid's axis '{}'", axis.name), span });
+    }
+    cols.push(fixed("t_final"));
+    for prime in ["", "'"] {
+        for (k, c) in names.iter().enumerate() {
+            let origin = format!("coordinate '{c}' (its final value)");
+            cols.push(Column { name: format!("final_{c}{prime}"), origin, span: coordinate(k) });
+        }
+    }
+    cols.extend(["energy_drift", "lyapunov", "failure"].map(fixed));
+    cols
 }
 
 /// Runs the sweep of `grid` (the runs of `config.shard`) and returns its table,

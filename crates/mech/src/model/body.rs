@@ -50,6 +50,8 @@ use toml::Spanned;
 pub struct Body {
     /// Its name (`name`, or `body1`, `body2`, … in file order).
     pub name: String,
+    /// Where its name is written (the table when the name is the default).
+    pub name_span: Range<usize>,
     /// Its mass M (an expression in the parameters).
     pub mass: ExprId,
     /// The inertia tensor about the reference point, body components, symmetric.
@@ -465,6 +467,7 @@ fn read(
     r.check(ValueCheck { kind: tensor, span: inertia_span.clone() })?;
     let body = Body {
         name,
+        name_span: raw.name.as_ref().map_or(b.span(), |n| n.span()),
         mass: mass.expr,
         inertia,
         principal,

@@ -7,19 +7,11 @@ use num::{Direction, Event};
 use sym::ExprId;
 
 /// The CSV column names of the bodies' ω and L: `omega1..3`, `L1..3`, prefixed
-/// with `NAME_` when the model has more than one body.
+/// with `NAME_` when the model has more than one body
+/// ([`crate::model::columns::body_columns`]).
 pub fn column_names(bodies: &[BodyMotion]) -> Vec<String> {
-    let mut cols = Vec::new();
-    for b in bodies {
-        let prefix = if bodies.len() > 1 { format!("{}_", b.name) } else { String::new() };
-        for k in 1..=3 {
-            cols.push(format!("{prefix}omega{k}"));
-        }
-        for k in 1..=3 {
-            cols.push(format!("{prefix}L{k}"));
-        }
-    }
-    cols
+    let names: Vec<&str> = bodies.iter().map(|b| b.name.as_str()).collect();
+    crate::model::columns::body_columns(&names)
 }
 
 /// The smallest |sin β| a run accepts for an Euler-angle body at relative

@@ -64,12 +64,7 @@ pub struct ConstraintAudit {
 pub fn constraint_columns(d: &Derivation) -> Vec<String> {
     let mut cols = Vec::new();
     for c in &d.constraints.list {
-        cols.push(format!("lambda_{}", c.name));
-        cols.push(format!("force_{}", c.name));
-        cols.push(format!("residual_{}", c.name));
-        if c.kind == ConstraintKind::Holonomic {
-            cols.push(format!("residual_{}'", c.name));
-        }
+        cols.extend(crate::model::columns::constraint_columns(&c.name, c.kind));
     }
     if d.constraints.work_balances_h {
         cols.push("W_constraints".into());
