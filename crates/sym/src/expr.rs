@@ -174,6 +174,10 @@ pub struct Pool {
     pub(crate) diff_cache: FxHashMap<(ExprId, ExprId), ExprId>,
     /// Memos of the rewrites of `simplify` (each a pure function of the id).
     pub(crate) rewrite_cache: FxHashMap<(u8, ExprId), ExprId>,
+    /// Nodes built so far, found or new: the work done on the pool.
+    work: u64,
+    /// The work after which the rewrites stop (see [`Pool::set_work_limit`]).
+    work_limit: Option<u64>,
 }
 
 impl Default for Pool {
@@ -189,6 +193,8 @@ impl Default for Pool {
             sym_masks: Vec::new(),
             diff_cache: FxHashMap::default(),
             rewrite_cache: FxHashMap::default(),
+            work: 0,
+            work_limit: None,
         };
         // Fixed ids for the constants used everywhere.
         pool.intern(Node::Num(Number::ZERO));
@@ -251,6 +257,30 @@ impl Pool {
         self.nodes.len()
     }
 
+    /// The work done on the pool: how many nodes its constructors have built
+    /// (an existing node found again counts too). It grows with the time spent
+    /// in building and rewriting, and never depends on the machine.
+    pub fn work(&self) -> u64 {
+        self.work
+    }
+
+    /// Bounds the work: once [`Pool::work`] passes `limit`, the rewrites
+    /// (expansion, trigonometric combination, factoring, quotients) leave what
+    /// they have not rewritten yet as it is, so a caller that checks
+    /// [`Pool::work_exhausted`] between its steps stops soon after. `None`
+    /// lifts the bound. Results rewritten past the bound are still identities,
+    /// only less simplified, and a proof of zero may fail where it would have
+    /// succeeded: a caller that needs the full rewrites must treat an exhausted
+    /// pool as an error.
+    pub fn set_work_limit(&mut self, limit: Option<u64>) {
+        self.work_limit = limit;
+    }
+
+    /// True when a work limit is set and the pool has done more work than it.
+    pub fn work_exhausted(&self) -> bool {
+        self.work_limit.is_some_and(|limit| self.work > limit)
+    }
+
     /// True when no node is stored (never: the constants are preloaded).
     pub fn is_empty(&self) -> bool {
         self.nodes.is_empty()
@@ -262,6 +292,7 @@ impl Pool {
     }
 
     fn intern(&mut self, node: Node) -> ExprId {
+        self.work += 1;
         let hash = hash_node(&node);
         match self.lookup(hash, |n| *n == node) {
             Ok(id) => id,
@@ -272,6 +303,7 @@ impl Pool {
     /// Interns the sum or product of `items` (already canonical), allocating
     /// only when it is new.
     fn intern_seq(&mut self, kind: Seq, items: &[ExprId]) -> ExprId {
+        self.work += 1 + items.len() as u64;
         let hash = hash_seq(kind, items);
         let found = self.lookup(hash, |n| match (kind, n) {
             (Seq::Add, Node::Add(ts)) => **ts == *items,

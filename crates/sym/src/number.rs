@@ -191,6 +191,11 @@ impl fmt::Display for Rational {
     }
 }
 
+/// A float sum smaller than this times the sum of its terms' sizes is round-off
+/// (a few ulps of each term, as floats that came out of a few operations carry)
+/// and is taken as 0.
+pub const CANCELLATION: f64 = 16.0 * f64::EPSILON;
+
 /// A numeric constant: exact, or a floating-point value from the input.
 #[derive(Clone, Copy, Debug)]
 pub enum Number {
@@ -277,7 +282,18 @@ impl Number {
             (Number::Rational(a), Number::Rational(b)) => {
                 a.checked_add(b).map(Number::Rational).unwrap_or_else(|| Number::float(a.to_f64() + b.to_f64()))
             }
-            _ => Number::float(self.to_f64() + o.to_f64()),
+            _ => {
+                let (a, b) = (self.to_f64(), o.to_f64());
+                let sum = a + b;
+                // Terms that cancel to within their own rounding (0.1*3 − 0.3 is
+                // 5.6e-17) leave no digit of information: the sum is 0, not a
+                // residue that would decide a verdict.
+                if sum.abs() <= CANCELLATION * (a.abs() + b.abs()) {
+                    Number::ZERO
+                } else {
+                    Number::float(sum)
+                }
+            }
         }
     }
 
@@ -337,6 +353,20 @@ mod tests {
         assert_eq!(Rational::int(2).exact_root(2), None);
         assert!(Rational::new(1, 0).is_none());
         assert!(Rational::ZERO.pow(-1).is_none());
+    }
+
+    #[test]
+    fn float_sums_that_cancel_to_round_off_are_zero() {
+        let (a, b) = (Number::float(0.1).times(Number::Rational(Rational::int(3))), Number::float(-0.3));
+        assert_ne!(a.to_f64() + b.to_f64(), 0.0, "the f64 sum leaves a residue");
+        assert!(a.plus(b).is_zero());
+        // A small difference that is not round-off stays.
+        let d = Number::float(1.0 + 1e-12).plus(Number::float(-1.0));
+        assert!((d.to_f64() - 1e-12).abs() < 1e-15);
+        // Exact rationals are untouched by the rule.
+        let third = Number::Rational(Rational::new(1, 3).unwrap());
+        assert!(third.plus(third.negated()).is_zero());
+        assert_eq!(third.plus(third), Number::Rational(Rational::new(2, 3).unwrap()));
     }
 
     #[test]

@@ -524,6 +524,9 @@ impl Pool {
     /// cancelled (see the module documentation for what is cancelled).
     /// Subexpressions whose expansion would exceed a budget stay as they are.
     pub fn together(&mut self, e: ExprId) -> ExprId {
+        if self.work_exhausted() {
+            return e;
+        }
         let mut memo = Memo::default();
         self.together_memo(e, &mut memo)
     }
@@ -533,6 +536,9 @@ impl Pool {
     /// identity's two sides' difference has the numerator 0. The form is made
     /// for deciding zero, not for reading.
     pub fn together_trig(&mut self, e: ExprId) -> ExprId {
+        if self.work_exhausted() {
+            return e;
+        }
         let mut memo = Memo { trig: true, ..Memo::default() };
         self.together_memo(e, &mut memo)
     }

@@ -76,7 +76,8 @@ impl Pool {
             let cache = std::mem::take(&mut self.rewrite_cache);
             let rebuilt = self.rebuild(id, |c| cache[&(kind, c)]);
             self.rewrite_cache = cache;
-            let out = f(self, rebuilt);
+            // Past the work limit a node is kept as rebuilt (still equal to `id`).
+            let out = if self.work_exhausted() { rebuilt } else { f(self, rebuilt) };
             self.rewrite_cache.insert((kind, id), out);
         }
         self.rewrite_cache[&(kind, e)]
@@ -99,6 +100,9 @@ impl Pool {
                         for &t in &ts {
                             next.push(self.mul2(a, t));
                         }
+                    }
+                    if self.work_exhausted() {
+                        return id;
                     }
                     acc = next;
                 }
@@ -154,7 +158,8 @@ impl Pool {
             index.entry(t).or_default().push(i);
         }
         let mut i = 0;
-        while i < terms.len() {
+        // Past the work limit the rest stays as it is (the sum is unchanged).
+        while i < terms.len() && !self.work_exhausted() {
             if alive[i] {
                 if let Some((j, with)) = self.trig_partner(terms[i], i, &index, &alive) {
                     alive[i] = false;
@@ -608,6 +613,23 @@ mod tests {
         check_zero("sin(x)^2 - cos(x)^2", false);
         check_zero("exp(-1000000*x^2)*x", false);
         check_zero("sqrt(x^2) - x", false);
+    }
+
+    #[test]
+    fn past_the_work_limit_rewrites_leave_expressions_as_they_are() {
+        let (mut pool, _) = pool_with(&["a", "b", "c"]);
+        let e = pool.parse("(a + b)^2*(b + c)^2 - (a*b + a*c + b^2 + b*c)^2").unwrap();
+        let fresh = pool.clone();
+        assert!(pool.clone().is_identically_zero(e), "within the limit the identity is proven");
+        pool.set_work_limit(Some(pool.work()));
+        assert!(!pool.work_exhausted());
+        let _ = pool.parse("a + b + c").unwrap();
+        assert!(pool.work_exhausted());
+        assert_eq!(pool.expand(e), e);
+        assert!(!pool.is_identically_zero(e), "past it nothing is rewritten");
+        pool.set_work_limit(None);
+        assert!(!pool.work_exhausted());
+        assert!(fresh.work() <= pool.work());
     }
 
     #[test]

@@ -17,6 +17,10 @@ pub(crate) struct Frame {
     pub omega: [ExprId; 3],
     /// The reference point in space.
     pub origin: [ExprId; 3],
+    /// `(axis, angle)` when D is one turn about a coordinate axis (planar
+    /// turns about that axis all the way from the root), so that a child's
+    /// turn about the same axis composes to one angle sum, not a product.
+    pub turn: Option<(usize, ExprId)>,
 }
 
 /// A body-components vector in space components: `Dᵀ v`.
@@ -48,15 +52,34 @@ pub(crate) fn frames(pool: &mut Pool, bodies: &[Body], q: &[ExprId], qd: &[ExprI
             }
             Orientation::Fixed => (None, [zero; 3]),
         };
+        let own_turn = match body.orientation {
+            Orientation::Planar { angle, axis } => Some((axis, q[angle])),
+            _ => None,
+        };
         let frame = match body.parent.map(|p| out[p].clone()) {
             None => {
                 let identity = std::array::from_fn(|i| std::array::from_fn(|j| if i == j { one } else { zero }));
-                Frame { d: d_rel.unwrap_or(identity), omega: w_rel, origin: body.position }
+                Frame { d: d_rel.unwrap_or(identity), omega: w_rel, origin: body.position, turn: own_turn }
             }
             Some(parent) => {
-                let (d, carried) = match &d_rel {
-                    Some(d_rel) => (euler::mat_mul(pool, d_rel, &parent.d), mat_vec(pool, d_rel, &parent.omega)),
-                    None => (parent.d, parent.omega),
+                // Turns about one axis add their angles: R(θ)·R(φ) = R(θ + φ). Kept
+                // as one sum, a chain of k rods has D in cos and sin of one angle
+                // each, where the product's expansion has 2^k terms.
+                let turn = match (own_turn, parent.turn, &d_rel) {
+                    (Some((axis, angle)), Some((parent_axis, parent_angle)), _) if axis == parent_axis => {
+                        Some((axis, pool.add2(parent_angle, angle)))
+                    }
+                    (None, parent_turn, None) => parent_turn,
+                    _ => None,
+                };
+                let (d, carried) = match (&d_rel, turn) {
+                    (Some(d_rel), Some((axis, angle))) => {
+                        (euler::turn_expr(pool, axis, angle), mat_vec(pool, d_rel, &parent.omega))
+                    }
+                    (Some(d_rel), None) => {
+                        (euler::mat_mul(pool, d_rel, &parent.d), mat_vec(pool, d_rel, &parent.omega))
+                    }
+                    (None, _) => (parent.d, parent.omega),
                 };
                 let omega = std::array::from_fn(|k| pool.add2(carried[k], w_rel[k]));
                 let origin = std::array::from_fn(|i| {
@@ -64,7 +87,7 @@ pub(crate) fn frames(pool: &mut Pool, bodies: &[Body], q: &[ExprId], qd: &[ExprI
                     terms.extend((0..3).map(|k| pool.mul2(parent.d[k][i], body.position[k])));
                     pool.add(&terms)
                 });
-                Frame { d, omega, origin }
+                Frame { d, omega, origin, turn }
             }
         };
         out.push(frame);
