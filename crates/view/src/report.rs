@@ -45,44 +45,116 @@ struct Row {
     event: Option<String>,
 }
 
-/// The rows of a run, kept for the page (see the module documentation).
-#[derive(Debug)]
-pub struct Recorder {
-    rows: Vec<Row>,
-}
-
 impl Default for Recorder {
     fn default() -> Self {
         Recorder::new()
     }
 }
 
+/// A row with its place in the run.
+#[derive(Debug, Clone)]
+struct Kept {
+    index: usize,
+    row: Row,
+}
+
+/// The rows of a run that the page may show, chosen while the run streams
+/// (see the module documentation), so that memory stays bounded however long
+/// the run: evenly spaced rows at a stride that doubles whenever they pass
+/// twice the page's budget, the pairs of rows around turning points likewise,
+/// every event row and the last row. [`Recorder::data`] then thins these as
+/// the page's budget says; a run that fits twice the budget keeps every row
+/// until then, and the page shows what it would show had all been kept.
+#[derive(Debug)]
+pub struct Recorder {
+    /// Rows pushed.
+    total: usize,
+    /// Rows each kind may hold before its stride doubles: twice the page's
+    /// budget for a row of this shape (at least; [`Recorder::data`] counts
+    /// the points drawn too), set by the first row.
+    cap: usize,
+    /// Rows whose index is a multiple of `stride`.
+    even: Vec<Kept>,
+    stride: usize,
+    /// Turning points: the pair of rows around the k-th, k a multiple of `turn_every`.
+    turns: Vec<(usize, Kept, Kept)>,
+    turn_count: usize,
+    turn_every: usize,
+    /// Rows at events.
+    events: Vec<Kept>,
+    /// The row before (a turning point's first row; at the end, the last row).
+    last: Option<Kept>,
+}
+
 impl Recorder {
     /// An empty recorder.
     pub fn new() -> Recorder {
-        Recorder { rows: Vec::new() }
+        Recorder {
+            total: 0,
+            cap: 0,
+            even: Vec::new(),
+            stride: 1,
+            turns: Vec::new(),
+            turn_count: 0,
+            turn_every: 1,
+            events: Vec::new(),
+            last: None,
+        }
     }
 
-    /// Keeps one row of the run (`mech::Row`'s fields).
+    /// Takes one row of the run (`mech::Row`'s fields), keeping it if the page may show it.
     pub fn push(&mut self, row: &mech::Row<'_>) {
-        self.rows.push(Row {
-            t: row.t,
-            q: row.q.to_vec(),
-            qd: row.qd.to_vec(),
-            invariants: row.invariants.to_vec(),
-            constraints: row.constraints.to_vec(),
-            event: row.event.map(str::to_string),
-        });
+        let kept = Kept {
+            index: self.total,
+            row: Row {
+                t: row.t,
+                q: row.q.to_vec(),
+                qd: row.qd.to_vec(),
+                invariants: row.invariants.to_vec(),
+                constraints: row.constraints.to_vec(),
+                event: row.event.map(str::to_string),
+            },
+        };
+        self.total += 1;
+        if self.cap == 0 {
+            let numbers = 1 + 2 * kept.row.q.len() + kept.row.invariants.len() + kept.row.constraints.len();
+            self.cap = 2 * budget(numbers);
+        }
+        if kept.row.event.is_some() {
+            self.events.push(kept.clone());
+        } else if let Some(before) = &self.last {
+            if before.row.qd.iter().zip(&kept.row.qd).any(|(x, y)| x.signum() != y.signum()) {
+                let k = self.turn_count;
+                self.turn_count += 1;
+                if k.is_multiple_of(self.turn_every) {
+                    self.turns.push((k, before.clone(), kept.clone()));
+                    if self.turns.len() > self.cap {
+                        self.turn_every *= 2;
+                        let every = self.turn_every;
+                        self.turns.retain(|(k, _, _)| k.is_multiple_of(every));
+                    }
+                }
+            }
+        }
+        if kept.index.is_multiple_of(self.stride) {
+            self.even.push(kept.clone());
+            if self.even.len() > self.cap {
+                self.stride *= 2;
+                let stride = self.stride;
+                self.even.retain(|r| r.index.is_multiple_of(stride));
+            }
+        }
+        self.last = Some(kept);
     }
 
-    /// The number of rows kept.
+    /// The number of rows the run gave.
     pub fn len(&self) -> usize {
-        self.rows.len()
+        self.total
     }
 
-    /// Whether no row was kept.
+    /// Whether the run gave no row.
     pub fn is_empty(&self) -> bool {
-        self.rows.is_empty()
+        self.total == 0
     }
 
     /// The `lagrange.report/1` data of the run: `summary` is the run's
@@ -97,8 +169,7 @@ impl Recorder {
         // A body's axes, and a top's figure axis once more.
         let per_row =
             1 + 2 * names.len() + inv.len() + constraint_columns.len() + points * dim + 12 * mech.bodies().len();
-        let keep = self.decimate(per_row);
-        let rows: Vec<&Row> = keep.iter().map(|&i| &self.rows[i]).collect();
+        let rows = self.decimate(per_row);
 
         let column = |f: &dyn Fn(&Row) -> f64| -> Vec<f64> { rows.iter().map(|r| f(r)).collect() };
         let angles = crate::angles::angles(d);
@@ -173,8 +244,11 @@ impl Recorder {
             Vec::new()
         };
         let springs: Vec<[usize; 2]> = mech.springs().iter().map(|&(a, b)| [a, b]).collect();
-        let events: Vec<Value> =
-            self.rows.iter().filter_map(|r| r.event.as_ref().map(|e| json!({"t": r.t, "label": e}))).collect();
+        let events: Vec<Value> = self
+            .events
+            .iter()
+            .filter_map(|r| r.row.event.as_ref().map(|e| json!({"t": r.row.t, "label": e})))
+            .collect();
 
         let mut analyses = Map::new();
         if let Some(m) = modes(d, &mut mech, extent) {
@@ -206,48 +280,60 @@ impl Recorder {
         })
     }
 
-    /// The indices of the rows shown: evenly spaced rows up to the budget of
+    /// The rows shown, in order: evenly spaced rows up to the budget of
     /// `per_row` numbers each, the ends, the events, and the turning points of
     /// the coordinates (where a velocity changes sign: the rows on both sides),
     /// as many of those as the budget again holds (evenly chosen among them
     /// when there are more: a chain of fifty masses turns all the time).
-    fn decimate(&self, per_row: usize) -> Vec<usize> {
-        let n = self.rows.len();
-        let budget = (NUMBER_BUDGET / per_row.max(1)).clamp(MIN_ROWS, MAX_ROWS);
-        if n <= budget {
-            return (0..n).collect();
+    fn decimate(&self, per_row: usize) -> Vec<&Row> {
+        let budget = budget(per_row);
+        let mut shown: std::collections::BTreeMap<usize, &Row> = std::collections::BTreeMap::new();
+        let stride = self.even.len().div_ceil(budget).max(1);
+        for r in self.even.iter().step_by(stride).chain(&self.events).chain(&self.last) {
+            shown.insert(r.index, &r.row);
         }
-        let mut keep = vec![false; n];
-        keep[0] = true;
-        keep[n - 1] = true;
-        let stride = n.div_ceil(budget);
-        for i in (0..n).step_by(stride) {
-            keep[i] = true;
+        let every = self.turns.len().div_ceil(budget / 2).max(1);
+        for (_, a, b) in self.turns.iter().step_by(every) {
+            shown.insert(a.index, &a.row);
+            shown.insert(b.index, &b.row);
         }
-        let mut turning = Vec::new();
-        for i in 1..n {
-            let (a, b) = (&self.rows[i - 1], &self.rows[i]);
-            if b.event.is_some() {
-                keep[i] = true;
-            } else if a.qd.iter().zip(&b.qd).any(|(x, y)| x.signum() != y.signum()) {
-                turning.push(i);
-            }
-        }
-        let every = turning.len().div_ceil(budget / 2).max(1);
-        for &i in turning.iter().step_by(every) {
-            keep[i - 1] = true;
-            keep[i] = true;
-        }
-        (0..n).filter(|&i| keep[i]).collect()
+        shown.into_values().collect()
     }
+}
+
+/// The rows the page shows evenly spaced, for rows of `per_row` numbers.
+fn budget(per_row: usize) -> usize {
+    (NUMBER_BUDGET / per_row.max(1)).clamp(MIN_ROWS, MAX_ROWS)
 }
 
 /// The page: the template with the style, the script and the data inlined.
 pub fn page(data: &Value) -> String {
     let title = escape(data["name"].as_str().unwrap_or("lagrange report"));
-    // `</` inside a script element would end it: JSON allows `<\/`.
-    let data = data.to_string().replace("</", "<\\/");
+    let data = script_safe_json(data);
     fill(&strip_comments(PAGE), &[("title", &title), ("style", STYLE), ("script", SCRIPT), ("data", &data)])
+}
+
+/// JSON text that is inert inside a `<script>` element. The element's content
+/// ends at the first `</script` and, after a `<!--`, a `<script` puts the HTML
+/// tokenizer in its double-escaped state, where even the element's own end tag
+/// no longer ends it (a model named `<!--<script>x` kept the page's script from
+/// running). Every one of these begins with `<`, so no `<` may appear at all:
+/// JSON has `<` only inside strings, where `\u003c` reads back as the same
+/// character. With no `<`, a `-->` or `&` is plain text in script data, so
+/// they stay (the derivation's MathML holds tens of thousands of `>`). U+2028
+/// and U+2029 are escaped too: older JavaScript parsers take them for line ends.
+fn script_safe_json(data: &Value) -> String {
+    let text = data.to_string();
+    let mut out = String::with_capacity(text.len() + text.len() / 8);
+    for c in text.chars() {
+        match c {
+            '<' => out.push_str("\\u003c"),
+            '\u{2028}' => out.push_str("\\u2028"),
+            '\u{2029}' => out.push_str("\\u2029"),
+            c => out.push(c),
+        }
+    }
+    out
 }
 
 /// The template without its HTML comments (notes for the people who edit it,
@@ -399,6 +485,80 @@ mod tests {
     use super::*;
     use std::ops::ControlFlow;
 
+    /// The rows today's page showed when every row was kept: the same rules
+    /// over the whole run at once.
+    fn shown_from_all(qd: &[f64], events: &[usize], per_row: usize) -> Vec<usize> {
+        let n = qd.len();
+        let budget = budget(per_row);
+        if n <= budget {
+            return (0..n).collect();
+        }
+        let mut keep = vec![false; n];
+        keep[0] = true;
+        keep[n - 1] = true;
+        for i in (0..n).step_by(n.div_ceil(budget)) {
+            keep[i] = true;
+        }
+        let mut turning = Vec::new();
+        for i in 1..n {
+            if events.contains(&i) {
+                keep[i] = true;
+            } else if qd[i - 1].signum() != qd[i].signum() {
+                turning.push(i);
+            }
+        }
+        for &i in turning.iter().step_by(turning.len().div_ceil(budget / 2).max(1)) {
+            keep[i - 1] = true;
+            keep[i] = true;
+        }
+        (0..n).filter(|&i| keep[i]).collect()
+    }
+
+    fn record(qd: &[f64], events: &[usize]) -> Recorder {
+        let mut r = Recorder::new();
+        for (i, v) in qd.iter().enumerate() {
+            let event = events.contains(&i).then_some("x = 0");
+            r.push(&mech::Row {
+                t: i as f64,
+                q: &[0.0],
+                qd: &[*v],
+                invariants: &[],
+                is_event: event.is_some(),
+                event,
+                constraints: &[],
+            });
+            assert!(r.even.len() <= r.cap && r.turns.len() <= r.cap, "row {i}: memory grows");
+        }
+        r
+    }
+
+    #[test]
+    fn rows_are_thinned_while_they_stream_and_a_run_within_twice_the_budget_shows_what_all_rows_show() {
+        let per_row = 3;
+        let cap = 2 * budget(per_row);
+        for n in [10, budget(per_row), budget(per_row) + 1, 3 * budget(per_row) / 2, cap] {
+            for period in [2.0, 7.3, 1000.0] {
+                let qd: Vec<f64> = (0..n).map(|i| (i as f64 * std::f64::consts::TAU / period).cos()).collect();
+                let events = [n / 3, n / 2];
+                let r = record(&qd, &events);
+                let shown: Vec<f64> = r.decimate(per_row).iter().map(|row| row.t).collect();
+                let expected: Vec<f64> = shown_from_all(&qd, &events, per_row).iter().map(|&i| i as f64).collect();
+                assert_eq!(shown, expected, "n = {n}, period {period}");
+            }
+        }
+        // Far past the budget: bounded, the ends and the events kept, and the
+        // page's rows within the budget twice over plus the events.
+        let n = 200 * cap + 17;
+        let qd: Vec<f64> = (0..n).map(|i| (i as f64 * 0.9).sin()).collect();
+        let r = record(&qd, &[5, n - 3]);
+        let shown: Vec<f64> = r.decimate(per_row).iter().map(|row| row.t).collect();
+        assert_eq!((shown[0], *shown.last().unwrap()), (0.0, (n - 1) as f64));
+        assert!(shown.contains(&5.0) && shown.contains(&((n - 3) as f64)));
+        assert!(shown.len() <= 3 * budget(per_row) + 4, "{} rows", shown.len());
+        assert!(shown.len() >= budget(per_row) / 2, "{} rows", shown.len());
+        assert_eq!(r.len(), n);
+    }
+
     const PENDULUM: &str = r#"
 name = "pendulum"
 coordinates = ["th"]
@@ -438,7 +598,7 @@ th = 0.5
         let qd: Vec<f64> =
             data["coordinates"][0]["qd"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
         let shown = qd.windows(2).filter(|w| w[0].signum() != w[1].signum()).count();
-        let all = rec.rows.windows(2).filter(|w| w[0].qd[0].signum() != w[1].qd[0].signum()).count();
+        let all = rec.turn_count;
         assert_eq!(shown, all);
         assert!(all >= 13, "{all} turning points");
     }
@@ -465,9 +625,9 @@ th = 0.5
         let data = json!({"name": "a <b> {{data}}", "x": "</script>"});
         let html = page(&data);
         assert!(html.contains("<title>a &lt;b&gt; {{data}}</title>"), "{html}");
-        assert!(html.contains(r#""x":"<\/script>""#));
+        assert!(html.contains(r#""x":"\u003c/script>""#));
         // The data is inlined once, in its element.
-        assert_eq!(html.matches(r#""x":"<\/script>""#).count(), 1);
+        assert_eq!(html.matches(r#""x":"\u003c/script>""#).count(), 1);
         assert!(html.contains(r#"<script type="application/json" id="lagrange-data">{"#));
         assert!(!html.contains("<!--"));
         assert_eq!(fill("{{a}}{{b}}{{c}}", &[("a", "{{b}}"), ("b", "2")]), "{{b}}2{{c}}");

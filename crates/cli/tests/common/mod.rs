@@ -8,6 +8,8 @@
 // Each test file uses a part of it.
 #![allow(dead_code)]
 
+pub mod html;
+
 use serde_json::Value;
 use std::io::Read;
 use std::path::{Path, PathBuf};
