@@ -45,7 +45,8 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let report = mech::extremal(&problem, &config).map_err(|e| failure(path, &source, e))?;
     if let Some(svg) = &args.plot {
         let text = view::extremal::figure(&report).map_err(|e| Failure::run(format!("cannot draw the plot: {e}")))?;
-        std::fs::write(svg, text).map_err(|e| Failure::run(format!("cannot write the plot {}: {e}", svg.display())))?;
+        crate::files::write_whole(svg, text.as_bytes())
+            .map_err(|e| Failure::run(format!("cannot write the plot {}: {e}", svg.display())))?;
     }
     let out = match args.format {
         ReportFormat::Json => {

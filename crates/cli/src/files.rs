@@ -6,7 +6,7 @@
 //! drawn by `view` and written whole.
 
 use std::fs::{File, OpenOptions, TryLockError};
-use std::io::Read;
+use std::io::{Read, Write};
 use std::path::Path;
 
 /// Largest sweep CSV that `sweep --merge` reads, in bytes: far above any shard
@@ -18,7 +18,15 @@ pub const MAX_CSV_BYTES: u64 = 1 << 30;
 /// names it in the messages ("the plot", "the heat map").
 pub fn write_figure(path: &Path, what: &str, svg: Result<String, view::DrawError>) -> Result<(), String> {
     let svg = svg.map_err(|err| format!("cannot draw {what} {}: {err}", path.display()))?;
-    std::fs::write(path, svg).map_err(|err| format!("cannot write {what} {}: {err}", path.display()))
+    write_whole(path, svg.as_bytes()).map_err(|err| format!("cannot write {what} {}: {err}", path.display()))
+}
+
+/// Writes `bytes` as the whole of the file at `path`, under the same lock a
+/// streamed output holds: a file another run is writing (a CSV being
+/// streamed) is refused and left as it is, never emptied.
+pub fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    let mut file = create_locked(path)?;
+    file.write_all(bytes).and_then(|()| file.flush()).map_err(|e| e.to_string())
 }
 
 /// Why a file could not be read.
@@ -106,11 +114,14 @@ pub fn open_locked(path: &Path) -> Result<File, String> {
 
 /// An error, before anything is computed, when an output path names one of the
 /// inputs (the model file, a shard to merge), whose writing would destroy what
-/// the run reads, or a place no file can be created (a folder, or inside a
-/// folder that does not exist). Such paths are bad input (exit 2); a write
-/// that fails later, after the run (a full disk), is a failed run (exit 1).
+/// the run reads, names the same file as another output, is being written by
+/// another run (it holds the file's lock: a CSV being streamed), or is a place
+/// no file can be created (a folder, or inside a folder that does not exist).
+/// Such paths are bad input (exit 2); a write that fails later, after the run
+/// (a full disk), is a failed run (exit 1).
 pub fn refuse_overwrite(inputs: &[&Path], outputs: &[Option<&Path>]) -> Result<(), String> {
-    for out in outputs.iter().flatten() {
+    let outputs: Vec<&Path> = outputs.iter().flatten().copied().collect();
+    for out in &outputs {
         if out.is_dir() {
             return Err(format!("{} is a folder; an output must name a file", out.display()));
         }
@@ -119,20 +130,74 @@ pub fn refuse_overwrite(inputs: &[&Path], outputs: &[Option<&Path>]) -> Result<(
             return Err(format!("cannot write {}: the folder {} does not exist", out.display(), parent.display()));
         }
     }
-    // Only an output that exists can be an input; both sides as the file system
-    // resolves them (links, `./`, `..`).
-    let inputs: Vec<_> = inputs.iter().filter_map(|p| p.canonicalize().ok()).collect();
-    for out in outputs.iter().flatten() {
-        if let Ok(resolved) = out.canonicalize() {
-            if inputs.contains(&resolved) {
-                return Err(format!(
-                    "{} is an input of this command; it would be overwritten by an output",
-                    out.display()
-                ));
-            }
+    // Only an output that exists can be an input, or locked.
+    for (k, out) in outputs.iter().enumerate() {
+        let Some(id) = FileId::of(out) else { continue };
+        if inputs.iter().any(|input| FileId::of(input).as_ref() == Some(&id)) {
+            return Err(format!("{} is an input of this command; it would be overwritten by an output", out.display()));
+        }
+        if outputs[..k].iter().any(|other| FileId::of(other).as_ref() == Some(&id)) {
+            return Err(format!("{} is named for two outputs of this command; give each its own file", out.display()));
+        }
+        if in_use(out) {
+            return Err(format!("{}: in use by another run (it is being written); choose another file", out.display()));
+        }
+    }
+    // Two outputs not yet created, spelled differently (`a.svg`, `./a.svg`).
+    for (k, out) in outputs.iter().enumerate() {
+        let place = |p: &Path| Some((p.parent().map(absolute_folder)?, p.file_name()?.to_owned()));
+        if place(out).is_some() && outputs[..k].iter().any(|other| place(other) == place(out)) {
+            return Err(format!("{} is named for two outputs of this command; give each its own file", out.display()));
         }
     }
     Ok(())
+}
+
+/// The folder `p` as the file system resolves it (`""` is the working folder).
+fn absolute_folder(p: &Path) -> Option<std::path::PathBuf> {
+    let p = if p.as_os_str().is_empty() { Path::new(".") } else { p };
+    p.canonicalize().ok()
+}
+
+/// What makes two paths one file: on Unix its device and inode, so that a hard
+/// link, a symbolic link or another spelling of a path is the same file;
+/// elsewhere the path as the file system resolves it.
+#[derive(Debug, Clone, PartialEq)]
+enum FileId {
+    #[cfg(unix)]
+    Inode(u64, u64),
+    #[cfg(not(unix))]
+    Path(std::path::PathBuf),
+}
+
+impl FileId {
+    /// The file at `path`, if it exists.
+    fn of(path: &Path) -> Option<FileId> {
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::MetadataExt;
+            let meta = std::fs::metadata(path).ok()?;
+            Some(FileId::Inode(meta.dev(), meta.ino()))
+        }
+        #[cfg(not(unix))]
+        {
+            path.canonicalize().ok().map(FileId::Path)
+        }
+    }
+}
+
+/// Whether another process holds the lock of the regular file at `path` (a
+/// run streaming its rows there). Opened for reading only, which neither
+/// creates nor changes it; the lock taken to find out is let go at once.
+fn in_use(path: &Path) -> bool {
+    // A FIFO would block the open: only regular files are looked at.
+    if !std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
+        return false;
+    }
+    match File::open(path).map(|f| f.try_lock()) {
+        Ok(Err(TryLockError::WouldBlock)) => true,
+        Ok(_) | Err(_) => false,
+    }
 }
 
 #[cfg(test)]
@@ -170,6 +235,39 @@ mod tests {
         let nowhere = std::env::temp_dir().join("lagrange-no-such-folder").join("out.csv");
         assert!(refuse_overwrite(&[], &[Some(&nowhere)]).unwrap_err().contains("does not exist"));
         let _ = std::fs::remove_file(&path);
+    }
+
+    #[test]
+    fn a_hard_link_to_an_input_is_the_input_and_a_locked_output_is_refused_before_the_run() {
+        let dir = std::env::temp_dir().join(format!("lagrange-links-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let model = dir.join("m.toml");
+        std::fs::write(&model, "model").unwrap();
+        let link = dir.join("h.csv");
+        let _ = std::fs::remove_file(&link);
+        std::fs::hard_link(&model, &link).unwrap();
+        assert!(refuse_overwrite(&[&model], &[Some(&link)]).unwrap_err().contains("is an input"));
+        let spelled = dir.join(".").join("m.toml");
+        assert!(refuse_overwrite(&[&model], &[Some(&spelled)]).unwrap_err().contains("is an input"));
+        // Two outputs, one file: existing or not yet.
+        let a = dir.join("a.svg");
+        let _ = std::fs::remove_file(&a);
+        let also_a = dir.join(".").join("a.svg");
+        assert!(refuse_overwrite(&[], &[Some(&a), Some(&also_a)]).unwrap_err().contains("two outputs"));
+        std::fs::write(&a, "").unwrap();
+        assert!(refuse_overwrite(&[], &[Some(&a), Some(&also_a)]).unwrap_err().contains("two outputs"));
+        // A file another run holds.
+        let streamed = dir.join("run.csv");
+        std::fs::write(&streamed, "t,x\n").unwrap();
+        let held = File::open(&streamed).unwrap();
+        held.lock().unwrap();
+        assert!(refuse_overwrite(&[&model], &[Some(&streamed)]).unwrap_err().contains("in use by another run"));
+        assert!(write_whole(&streamed, b"<html>").unwrap_err().contains("in use by another run"));
+        assert_eq!(std::fs::read_to_string(&streamed).unwrap(), "t,x\n");
+        drop(held);
+        assert!(refuse_overwrite(&[&model], &[Some(&streamed)]).is_ok());
+        assert_eq!(std::fs::read_to_string(&model).unwrap(), "model");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

@@ -67,7 +67,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         });
     }
     if let Some(svg) = &args.animate {
-        std::fs::write(svg, view::modes::animation(&d, &modes))
+        crate::files::write_whole(svg, view::modes::animation(&d, &modes).as_bytes())
             .map_err(|e| Failure::run(format!("cannot write the animation {}: {e}", svg.display())))?;
     }
     let text = match args.format {

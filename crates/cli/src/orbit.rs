@@ -38,7 +38,8 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     if let Some(svg) = &args.plot {
         let text =
             view::orbit::figure(&d, &mut orbit).map_err(|e| Failure::run(format!("cannot draw the plot: {e}")))?;
-        std::fs::write(svg, text).map_err(|e| Failure::run(format!("cannot write the plot {}: {e}", svg.display())))?;
+        crate::files::write_whole(svg, text.as_bytes())
+            .map_err(|e| Failure::run(format!("cannot write the plot {}: {e}", svg.display())))?;
     }
     let out = match args.format {
         ReportFormat::Json => {

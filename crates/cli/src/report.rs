@@ -73,7 +73,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let summary = view::simulate::summary_json(&report, &names, &timing, None, &crate::TERMS);
     let data = rows.data(&d, args.until, summary, view::derive::mathml(&d));
     let page = view::report::page(&data);
-    std::fs::write(&args.out, &page)
+    crate::files::write_whole(&args.out, page.as_bytes())
         .map_err(|e| Failure::run(format!("cannot write the report {}: {e}", args.out.display())))?;
     let shown = data["time"].as_array().map_or(0, Vec::len);
     crate::write_stdout(&format!(

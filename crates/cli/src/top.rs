@@ -36,7 +36,8 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let top = Top::new(&d).map_err(|e| Failure::analysis(path, &source, e))?;
     if let Some(svg) = &args.plot {
         let text = view::top::figure(&d, &top).map_err(|e| Failure::run(format!("cannot draw the plot: {e}")))?;
-        std::fs::write(svg, text).map_err(|e| Failure::run(format!("cannot write the plot {}: {e}", svg.display())))?;
+        crate::files::write_whole(svg, text.as_bytes())
+            .map_err(|e| Failure::run(format!("cannot write the plot {}: {e}", svg.display())))?;
     }
     let out = match args.format {
         ReportFormat::Json => {
