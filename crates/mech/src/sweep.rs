@@ -1184,7 +1184,7 @@ impl Plan<'_> {
         let mut qd = vec![0.0; n];
         let mut inv = vec![0.0; sys.n_invariants()];
         if let Err(e) = sys.invariants_at(t, y, &mut qd, &mut inv) {
-            out.failure = Some(format!("at t = {t}: {e}"));
+            out.failure = Some(format!("at t = {t}: {e}", t = num::Shortest(t)));
             return;
         }
         out.q.copy_from_slice(&y[..n]);
@@ -1401,7 +1401,7 @@ fn segment_end(segment: u32, until: f64) -> f64 {
 fn pull_back(main: &[f64], twin: &mut [f64], t: f64) -> Result<f64, String> {
     let dist = distance(main, twin);
     if !(dist > 0.0 && dist.is_finite()) {
-        return Err(format!("the perturbed twin's distance became {dist} at t = {t}"));
+        return Err(format!("the perturbed twin's distance became {dist} at t = {t}", t = num::Shortest(t)));
     }
     for (tk, yk) in twin.iter_mut().zip(main) {
         *tk = yk + (*tk - yk) * (LYAPUNOV_D0 / dist);

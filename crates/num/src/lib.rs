@@ -62,6 +62,7 @@ mod newton;
 mod quadrature;
 mod radau5;
 mod root;
+mod shortest;
 mod solver;
 mod stepsize;
 mod system;
@@ -94,6 +95,7 @@ pub use quadrature::{
 };
 pub use radau5::Radau5;
 pub use root::brent;
+pub use shortest::Shortest;
 pub use solver::{Config, Controller, Solver, SolverState, Statistics, StepOutcome};
 pub use stepsize::{run_fixed, select_step};
 pub use system::{finite_difference_jacobian, OdeSystem, Separable, SeparableSystem};

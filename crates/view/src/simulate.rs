@@ -166,9 +166,9 @@ pub fn summary_text(
                 None => s.push_str(&format!("interrupted before the first row ({signal})\n")),
             }
         }
-        (Some(_), _) => s.push_str(&format!("FAILED after t = {} (see the error below)\n", r.t_final)),
-        (None, Some(why)) => s.push_str(&format!("stopped at t = {} ({why})\n", r.t_final)),
-        (None, None) => s.push_str(&format!("reached t = {}\n", r.t_final)),
+        (Some(_), _) => s.push_str(&format!("FAILED after t = {} (see the error below)\n", num::Shortest(r.t_final))),
+        (None, Some(why)) => s.push_str(&format!("stopped at t = {} ({why})\n", num::Shortest(r.t_final))),
+        (None, None) => s.push_str(&format!("reached t = {}\n", num::Shortest(r.t_final))),
     }
     s.push_str("final state:");
     for (i, name) in names.iter().enumerate() {

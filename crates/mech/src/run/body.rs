@@ -55,6 +55,7 @@ impl GimbalGuard {
 
     /// What happened at time t, in the user's terms.
     pub fn message(&self, t: f64) -> String {
+        let t = num::Shortest(t);
         if !self.sequence.proper() {
             return format!(
                 "body '{}' reached the gimbal singularity of its {} angles at t = {t}: |cos {b}| fell below {:.1e} ({b} near ±π/2), where the first and last turns are about the same axis and the angles' mass matrix (determinant ∝ cos²{b}) is singular, so the accelerations cannot be trusted. {}",

@@ -241,23 +241,23 @@ impl StepBudget {
                 "{method} would take {needed} steps of {} (about {} evaluations of the equations of motion) to reach t = {}, more than the {} steps a run may take, which reach t ≈ {reach}",
                 approx(self.step),
                 approx(self.rhs_evaluations_needed),
-                self.until,
+                num::Shortest(self.until),
                 self.max_steps
             ),
             BudgetStage::Foreseen => format!(
                 "{method} stopped early, at t = {} after {} steps: at its pace (steps of about {}) reaching t = {} would take about {needed} steps, more than {} times the {} steps a run may take, which reach t ≈ {reach}",
-                self.t,
+                num::Shortest(self.t),
                 self.steps,
                 approx(self.step),
-                self.until,
+                num::Shortest(self.until),
                 num::FORESIGHT_MARGIN,
                 self.max_steps
             ),
             BudgetStage::Spent => format!(
                 "{method} took the {} steps a run may take and reached t = {} of {} (its last step {}); at that pace the run needs about {needed} steps",
                 self.max_steps,
-                self.t,
-                self.until,
+                num::Shortest(self.t),
+                num::Shortest(self.until),
                 approx(self.step)
             ),
         };

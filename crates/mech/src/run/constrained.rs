@@ -574,7 +574,8 @@ impl Stepping for Constrained {
     fn describe(&mut self, e: &SolveError, _y0: &[f64], (t_last, _): (f64, Vec<f64>)) -> (RunFailure, String) {
         match e {
             SolveError::Rhs { t, source: RhsError::Singular { detail } } => (RunFailure::Singular { t: *t }, format!(
-                "the constrained equations became singular at t = {t} ({detail}): the constraints are no longer independent there"
+                "the constrained equations became singular at t = {t} ({detail}): the constraints are no longer independent there",
+                t = num::Shortest(*t)
             )),
             other => (RunFailure::Step { t: t_last }, other.to_string()),
         }

@@ -69,7 +69,8 @@ pub(crate) fn propagate(
     let live_lanes = |batch: &Batch| -> [bool; LANES] {
         std::array::from_fn(|l| batch.failure[l].is_none() && batch.t[l] < t_end[l])
     };
-    let not_finite = |t: f64| format!("right-hand side failed at t = {t}: the Taylor series is not finite");
+    let not_finite =
+        |t: f64| format!("right-hand side failed at t = {t}: the Taylor series is not finite", t = num::Shortest(t));
     let mut live = live_lanes(batch);
     while live.contains(&true) {
         let (coefficients, before) = scratch.split_at_mut(len);
@@ -119,7 +120,7 @@ pub(crate) fn propagate(
                     let finite = lanes::finite(coefficients, dim, p, l);
                     batch.failure[l] = Some(if finite {
                         let t = if lands_on_end[l] { t_end[l] } else { batch.t[l] + h[l] };
-                        format!("the state became non-finite at t = {t}")
+                        format!("the state became non-finite at t = {t}", t = num::Shortest(t))
                     } else {
                         not_finite(batch.t[l])
                     });

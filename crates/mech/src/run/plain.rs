@@ -270,7 +270,12 @@ fn diagnose(
         let failure = RunFailure::BlowUp { t, component: component_symbol(k, names, form) };
         (
             failure,
-            format!("the motion blew up at t = {t}: {} has grown to {:.3e}", component_name(k, names, form), y[k]),
+            format!(
+                "the motion blew up at t = {t}: {} has grown to {:.3e}",
+                component_name(k, names, form),
+                y[k],
+                t = num::Shortest(t)
+            ),
         )
     })
 }
@@ -339,15 +344,22 @@ fn describe_failure(
     match e {
         SolveError::NonFiniteState { t, index } => (
             RunFailure::BlowUp { t: *t, component: symbol(*index) },
-            format!("the motion blew up at t = {t}: {} is no longer finite", component(*index)),
+            format!("the motion blew up at t = {t}: {} is no longer finite", component(*index), t = num::Shortest(*t)),
         ),
         SolveError::Rhs { t, source: num::RhsError::NonFinite { index } } => (
             RunFailure::NonFiniteRate { t: *t, component: symbol(*index) },
-            format!("the equations of motion gave a non-finite rate of change of {} at t = {t}", component(*index)),
+            format!(
+                "the equations of motion gave a non-finite rate of change of {} at t = {t}",
+                component(*index),
+                t = num::Shortest(*t)
+            ),
         ),
         SolveError::Rhs { t, source: num::RhsError::Singular { detail } } => (
             RunFailure::Singular { t: *t },
-            format!("the mass matrix became singular at t = {t} ({detail}): the accelerations are undetermined there"),
+            format!(
+                "the mass matrix became singular at t = {t} ({detail}): the accelerations are undetermined there",
+                t = num::Shortest(*t)
+            ),
         ),
         // A step that cannot be taken (too small, or implicit stages that do not
         // converge): say why from the last good state when it can be told.
