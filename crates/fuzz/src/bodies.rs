@@ -445,4 +445,68 @@ mod tests {
         }
         assert!(derived > 30, "{derived}");
     }
+
+    #[test]
+    fn an_undecided_energy_verdict_is_no_finding() {
+        // A tree whose h − (T + U₀) is zero but not proven so by rewriting:
+        // derive says "undecided" (EnergyUndecided), which the oracle took
+        // for a wrong answer.
+        let text = "# intact tree\n\
+name = \"random body tree\"\n\
+coordinates = [\"al0\", \"be0\", \"ga0\", \"x0\", \"th1\", \"th2\", \"x2\"]\n\
+[parameters]\n\
+m = 1.0\n\
+A = 1.0\n\
+B = 2.0\n\
+C = 2.5\n\
+R = 0.5\n\
+l = 1.0\n\
+g = 9.81\n\
+k = 0.2\n\
+[[bodies]]\n\
+name = \"b0\"\n\
+angles = [\"al0\", \"be0\", \"ga0\"]\n\
+inertia = [\"A\", \"B\", \"C\"]\n\
+mass = \"m\"\n\
+position = [\"0.3\", \"x0\", \"0.3\"]\n\
+[[bodies]]\n\
+name = \"b1\"\n\
+parent = \"b0\"\n\
+angle = \"th1\"\n\
+axis = \"z\"\n\
+inertia = [\"A\", \"B\", \"C\"]\n\
+mass = 1.5\n\
+position = [\"0.3\", \"0.3\", \"0.3\"]\n\
+[[bodies]]\n\
+name = \"b2\"\n\
+angle = \"th2\"\n\
+axis = \"x\"\n\
+inertia = \"A\"\n\
+mass = 1.5\n\
+position = [\"0.3\", \"-l/2\", \"l*x2\"]\n\
+center_of_mass = [\"0\", \"0.2\", \"0.2\"]\n\
+[[constraints]]\n\
+name = \"roll\"\n\
+rolling = \"b0\"\n\
+radius = \"R\"\n\
+contact = \"constraint\"\n\
+[initial]\n\
+al0 = 0.3\n\
+\"al0'\" = 0.5\n\
+be0 = 0.7\n\
+\"be0'\" = 0\n\
+ga0 = -0.2\n\
+\"ga0'\" = -1.5\n\
+x0 = 0.1\n\
+\"x0'\" = -0.2\n\
+th1 = 0.4\n\
+\"th1'\" = 0.3\n\
+th2 = 0.4\n\
+\"th2'\" = 0.3\n\
+x2 = 0.1\n\
+\"x2'\" = -0.2\n";
+        let outcome = check_bodies(text);
+        assert!(outcome.problem.is_none(), "{outcome:?}");
+        assert!(outcome.signature.contains("energy None"), "{outcome:?}");
+    }
 }
