@@ -405,6 +405,9 @@ fn check_flags(d: &Derivation, o: &Oracle, flags: &Flags) -> Option<Outcome> {
     }
     let wrong = match (d.hamiltonian_is_energy(), o.energy_gap) {
         (None, None) => false,
+        // An honest "could not decide" (a body tree's h − (T + U₀) is rarely
+        // proven zero by rewriting): no claim to contradict.
+        (None, Some(_)) if d.verdicts().energy.contains(&mech::EnergyReason::EnergyUndecided) => false,
         (Some(is_energy), Some(_)) => contradicts(is_energy, flags.energy_gap),
         _ => true,
     };

@@ -1,6 +1,6 @@
 //! `fuzz`: fuzzing of lagrange on stable Rust, without instrumentation.
 //!
-//! Three targets, each a [`Target`] that makes an input and checks what the
+//! Six targets, each a [`Target`] that makes an input and checks what the
 //! library does with it:
 //!
 //! - [`ExprTarget`]: the expression parser on text mutated from the corpus's
@@ -15,7 +15,14 @@
 //!   ([`generate`]): never a panic, bounded time, and the derivation checked
 //!   against an independent one ([`oracle`]) at random points: M symmetric, the
 //!   Euler–Lagrange residual, momenta, H, Hamilton's equations, cyclic
-//!   coordinates and the verdicts on H.
+//!   coordinates and the verdicts on H;
+//! - [`BodiesTarget`]: the body-tree loader on random `[[bodies]]` trees with
+//!   loads, inputs and rolling contacts, edited hostilely (spans, derive or a
+//!   refusal, the oracle, T ≥ 0 on intact trees);
+//! - [`LinearizeTarget`]: `linearize` on quadratic systems built from known
+//!   modes (the eigenvalues to a tolerance from their conditioning, the verdict);
+//! - [`ReportTarget`]: the report page on models with hostile names, read by
+//!   a model of the HTML tokenizer's script states ([`scripts`]).
 //!
 //! [`run`] drives a target for a budget of iterations or seconds, catches
 //! panics, times each case and keeps the mutants whose outcome is new (a crude
@@ -29,21 +36,29 @@
 //! assert!(stats.findings.is_empty(), "{:?}", stats.findings);
 //! ```
 
+mod bodies;
 mod corpus;
 mod derive;
 mod expr;
 pub mod generate;
+mod linearize;
 mod loader;
 mod mutate;
 pub mod oracle;
+mod report;
 mod rng;
 mod run;
+mod script_data;
 mod spans;
 
+pub use bodies::{check_bodies, BodiesTarget};
 pub use corpus::{Corpus, FileKind, Inputs, Seed, EXPRESSIONS, SEED_DIRS};
 pub use derive::{check_derivation, DeriveTarget};
 pub use expr::{check_expression, ExprTarget};
+pub use linearize::{check_linearization, LinearizeTarget};
 pub use loader::{check_file, LoaderTarget};
 pub use mutate::{mutate, DICTIONARY, MAX_LEN};
+pub use report::{check_page, check_report, report_page, ReportTarget};
 pub use rng::Rng;
 pub use run::{run, Config, Event, Finding, FindingKind, Outcome, Stats, Target};
+pub use script_data::{scripts, Script};

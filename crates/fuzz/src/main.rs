@@ -1,23 +1,29 @@
 //! `lagrange-fuzz`: long fuzz runs outside CI, and the re-check of one saved input.
 //!
 //! ```text
-//! lagrange-fuzz expr|loader|derive|all [--seconds N] [--iterations N] [--seed S]
+//! lagrange-fuzz expr|loader|derive|bodies|linearize|report|all [--seconds N] [--iterations N] [--seed S]
 //!               [--out DIR] [--slow SECONDS] [--hang SECONDS]
-//! lagrange-fuzz check expr|loader|derive FILE
+//! lagrange-fuzz check TARGET FILE
 //! ```
 //!
 //! A run prints each finding to stderr as it comes, writes its input to
 //! `DIR/TARGET-N.txt` (default DIR: `fuzz-findings`), and ends with one JSON
 //! line per target on stdout (iterations, seconds, findings). `all` splits
-//! `--seconds` evenly over the three targets. A case running longer than
+//! `--seconds` evenly over the six targets. A case running longer than
 //! `--hang` seconds (default 120) is a hang: a watchdog writes its input to
 //! `DIR/TARGET-hang.txt` and ends the process with exit code 3. Exit 1 when
 //! anything was found, 2 for bad arguments.
 
-use fuzz::{Config, Corpus, DeriveTarget, Event, ExprTarget, LoaderTarget, Stats, Target};
+use fuzz::{
+    BodiesTarget, Config, Corpus, DeriveTarget, Event, ExprTarget, LinearizeTarget, LoaderTarget, ReportTarget, Stats,
+    Target,
+};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
+
+/// The targets, in the order `all` runs them.
+const TARGETS: [&str; 6] = ["expr", "loader", "derive", "bodies", "linearize", "report"];
 
 /// What the command line asks for.
 struct Args {
@@ -29,7 +35,7 @@ struct Args {
 
 fn usage() -> ! {
     eprintln!(
-        "usage: lagrange-fuzz expr|loader|derive|all [--seconds N] [--iterations N] [--seed S] [--out DIR] [--slow S] [--hang S]\n       lagrange-fuzz check expr|loader|derive FILE"
+        "usage: lagrange-fuzz expr|loader|derive|bodies|linearize|report|all [--seconds N] [--iterations N] [--seed S] [--out DIR] [--slow S] [--hang S]\n       lagrange-fuzz check TARGET FILE"
     );
     std::process::exit(2)
 }
@@ -43,8 +49,8 @@ fn parse_args(args: &[String]) -> Args {
     };
     let mut it = args.iter();
     match it.next().map(String::as_str) {
-        Some("all") => parsed.targets = vec!["expr".into(), "loader".into(), "derive".into()],
-        Some(t @ ("expr" | "loader" | "derive")) => parsed.targets = vec![t.into()],
+        Some("all") => parsed.targets = TARGETS.iter().map(|t| t.to_string()).collect(),
+        Some(t) if TARGETS.contains(&t) => parsed.targets = vec![t.into()],
         _ => usage(),
     }
     while let Some(flag) = it.next() {
@@ -73,6 +79,9 @@ fn make_target(name: &str, corpus: &Corpus) -> Box<dyn Target> {
     match name {
         "expr" => Box::new(ExprTarget::new(corpus)),
         "loader" => Box::new(LoaderTarget::new(corpus)),
+        "bodies" => Box::new(BodiesTarget),
+        "linearize" => Box::new(LinearizeTarget),
+        "report" => Box::new(ReportTarget),
         _ => Box::new(DeriveTarget),
     }
 }
@@ -90,6 +99,9 @@ fn check(target: &str, file: &Path, corpus: &Corpus) -> i32 {
         "expr" => fuzz::check_expression(&input),
         "loader" => fuzz::check_file(&input, &corpus.body_files()),
         "derive" => fuzz::check_derivation(&input),
+        "bodies" => fuzz::check_bodies(&input),
+        "linearize" => fuzz::check_linearization(&input),
+        "report" => fuzz::check_report(&input),
         _ => usage(),
     };
     match outcome.problem {

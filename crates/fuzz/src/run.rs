@@ -18,6 +18,8 @@ pub enum FindingKind {
     RoundTrip,
     /// A derivation (or a simplification) disagrees with an independent one.
     Invariant,
+    /// A page a browser would read otherwise than it was written.
+    Page,
     /// One case took longer than [`Config::slow_seconds`].
     Slow,
 }

@@ -3,7 +3,10 @@
 //! same cases and fails on any finding. Long runs: the `lagrange-fuzz` binary
 //! (see the guide's development chapter).
 
-use fuzz::{run, Config, Corpus, DeriveTarget, ExprTarget, LoaderTarget, Stats, Target};
+use fuzz::{
+    run, BodiesTarget, Config, Corpus, DeriveTarget, ExprTarget, LinearizeTarget, LoaderTarget, ReportTarget, Stats,
+    Target,
+};
 
 fn smoke(target: &mut dyn Target, iterations: u64) -> Stats {
     let config = Config { iterations: Some(iterations), seed: 0x5eed, ..Config::default() };
@@ -37,4 +40,23 @@ fn derive_agrees_with_the_oracle_on_generated_models() {
     let stats = smoke(&mut DeriveTarget, 200);
     // Models that derive, with and without H, cyclic coordinates, conserved H.
     assert!(stats.signatures > 10, "{stats:?}");
+}
+
+#[test]
+fn body_trees_load_or_are_refused_at_a_place() {
+    let stats = smoke(&mut BodiesTarget, 40);
+    // Trees that derive and edits refused in many ways.
+    assert!(stats.signatures > 15, "{stats:?}");
+}
+
+#[test]
+fn linearize_finds_the_known_spectra_of_quadratic_systems() {
+    let stats = smoke(&mut LinearizeTarget, 300);
+    // Every verdict, on systems of several sizes.
+    assert!(stats.signatures > 10, "{stats:?}");
+}
+
+#[test]
+fn report_pages_keep_hostile_names_inside_their_scripts() {
+    smoke(&mut ReportTarget, 300);
 }
