@@ -509,4 +509,37 @@ x2 = 0.1\n\
         assert!(outcome.problem.is_none(), "{outcome:?}");
         assert!(outcome.signature.contains("energy None"), "{outcome:?}");
     }
+
+    #[test]
+    fn an_undecided_cyclic_coordinate_is_no_finding() {
+        // th0 turns the whole tree about a fixed axis without gravity: ∂L/∂th0
+        // is zero, but derive cannot prove it and says so (CyclicReason::Undecided).
+        let text = "# intact tree\n\
+coordinates = [\"th0\", \"al1\", \"be1\", \"ga1\"]\n\
+[[bodies]]\n\
+name = \"b0\"\n\
+angle = \"th0\"\n\
+axis = [1, 2, 2]\n\
+inertia = [1, 2, 2.5]\n\
+mass = 1\n\
+[[bodies]]\n\
+name = \"b1\"\n\
+parent = \"b0\"\n\
+angles = [\"al1\", \"be1\", \"ga1\"]\n\
+inertia = [1, 2, 2.5]\n\
+mass = 1.5\n\
+position = [1, -0.5, 0]\n\
+[initial]\n\
+th0 = 0.4\n\
+al1 = 0.3\n\
+be1 = 0.7\n\
+ga1 = -0.2\n\
+\"th0'\" = 0.3\n\
+\"al1'\" = 0.5\n\
+\"be1'\" = 0\n\
+\"ga1'\" = -1.5\n";
+        let outcome = check_bodies(text);
+        assert!(outcome.problem.is_none(), "{outcome:?}");
+        assert!(outcome.signature.contains("cyclic 0"), "{outcome:?}");
+    }
 }

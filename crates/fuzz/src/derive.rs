@@ -389,7 +389,13 @@ fn check_flags(d: &Derivation, o: &Oracle, flags: &Flags) -> Option<Outcome> {
     let names = d.coordinate_names();
     for (i, name) in names.iter().enumerate() {
         let cyclic = d.cyclic().contains(&i);
-        if contradicts(cyclic, flags.dl_dq[i]) {
+        // "Could not decide" (said as a reason) claims nothing either way.
+        let undecided = d
+            .verdicts()
+            .cyclic
+            .iter()
+            .any(|r| matches!(r, mech::CyclicReason::Undecided { coordinate } if coordinate == name));
+        if !undecided && contradicts(cyclic, flags.dl_dq[i]) {
             let (is, seen) = if cyclic { ("", "not zero") } else { ("not ", "zero") };
             let message = format!("{name} is {is}cyclic, but ∂L/∂{name} is {seen} at the points");
             return Some(Outcome::problem(FindingKind::Invariant, message));

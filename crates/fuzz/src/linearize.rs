@@ -299,31 +299,37 @@ pub fn check_linearization(text: &str) -> Outcome {
             expected.push((l, tol, tol.max(AXIS * size)));
         }
     }
-    // The tightest first, each to its nearest unused computed eigenvalue.
+    // Two passes, the tightest first, each to its nearest unused computed
+    // eigenvalue: as computed, then with a real part within the axis band
+    // read as zero (so that a zero snapped from a small real part does not
+    // take the place of an exact zero).
     expected.sort_by(|a, b| a.1.total_cmp(&b.1));
     let mut used = vec![false; n2];
-    for &(l, tol, band) in &expected {
-        let distance = |c: (f64, f64)| {
-            // A real part within the axis band may be read as zero.
-            let re = if c.0 == 0.0 && l.0.abs() <= band { 0.0 } else { c.0 - l.0 };
-            re.hypot(c.1 - l.1)
-        };
-        let best = (0..n2)
-            .filter(|&j| !used[j])
-            .min_by(|&a, &b| distance(lin.eigenvalues[a]).total_cmp(&distance(lin.eigenvalues[b])));
-        match best {
-            Some(j) if distance(lin.eigenvalues[j]) <= tol => used[j] = true,
-            _ => {
-                return Outcome::problem(
-                    FindingKind::Invariant,
-                    format!(
-                        "the eigenvalue {} ± {tol:.1e} is not among those computed: {:?}",
-                        show(l),
-                        lin.eigenvalues
-                    ),
-                )
+    let mut matched = vec![false; expected.len()];
+    for snapped in [false, true] {
+        for (k, &(l, tol, band)) in expected.iter().enumerate() {
+            if matched[k] {
+                continue;
+            }
+            let distance = |c: (f64, f64)| {
+                let re = if snapped && c.0 == 0.0 && l.0.abs() <= band { 0.0 } else { c.0 - l.0 };
+                re.hypot(c.1 - l.1)
+            };
+            let best = (0..n2)
+                .filter(|&j| !used[j])
+                .min_by(|&a, &b| distance(lin.eigenvalues[a]).total_cmp(&distance(lin.eigenvalues[b])));
+            if let Some(j) = best.filter(|&j| distance(lin.eigenvalues[j]) <= tol) {
+                used[j] = true;
+                matched[k] = true;
             }
         }
+    }
+    if let Some(k) = matched.iter().position(|m| !m) {
+        let (l, tol, _) = expected[k];
+        return Outcome::problem(
+            FindingKind::Invariant,
+            format!("the eigenvalue {} ± {tol:.1e} is not among those computed: {:?}", show(l), lin.eigenvalues),
+        );
     }
     // The verdicts the known real parts allow.
     let options: Vec<(bool, bool, bool)> = expected
@@ -428,5 +434,30 @@ mod tests {
         assert!(check_linearization(pendulum).problem.is_none(), "{:?}", check_linearization(pendulum));
         let wrong = pendulum.replace("# mode 4.0", "# mode 9.0");
         assert!(check_linearization(&wrong).problem.is_some());
+    }
+
+    #[test]
+    fn a_small_real_part_does_not_take_the_place_of_an_exact_zero() {
+        // Zeros (free coordinates) beside −0.0318 (a damped free one), inside the
+        // band where a real part may be read as zero: computed exactly, each must
+        // still find its own.
+        let text = "# A quadratic system with known modes (lagrange-fuzz linearize).\n\
+# mode 285774.5005304711 0.0\n\
+# mode 0.02977566436209067 0.0\n\
+# mode 0.6728322416838243 1.640527039318553\n\
+# mode 0.0 0.03177174852980577\n\
+# mode 0.0 0.0\n\
+# kappa 4.0\n\
+coordinates = [\"q1\", \"q2\", \"q3\", \"q4\", \"q5\"]\n\
+lagrangian = \"1/2*(4/1*q1'^2 + 1/4*q2'^2 + 1/1*q3'^2 + 4/1*q4'^2 + 1/4*q5'^2) - 1/2*((285774.5005304711)*((2/1)*q1)^2 + (0.02977566436209067)*((1/2)*q2)^2 + (0.6728322416838243)*((1/1)*q3)^2 + (0.0)*((2/1)*q4)^2 + (0.0)*((1/2)*q5)^2)\"\n\
+dissipation = \"1/2*((1.640527039318553)*((1/1)*q3')^2 + (0.03177174852980577)*((2/1)*q4')^2)\"\n\
+[initial]\n\
+q1 = 0\n\
+q2 = 0\n\
+q3 = 0\n\
+q4 = 0\n\
+q5 = 0\n";
+        let outcome = check_linearization(text);
+        assert!(outcome.problem.is_none(), "{outcome:?}");
     }
 }

@@ -95,7 +95,7 @@ fn check(target: &str, file: &Path, corpus: &Corpus) -> i32 {
             return 2;
         }
     };
-    let outcome = match target {
+    let check = || match target {
         "expr" => fuzz::check_expression(&input),
         "loader" => fuzz::check_file(&input, &corpus.body_files()),
         "derive" => fuzz::check_derivation(&input),
@@ -104,6 +104,15 @@ fn check(target: &str, file: &Path, corpus: &Corpus) -> i32 {
         "report" => fuzz::check_report(&input),
         _ => usage(),
     };
+    // A panic is a finding like any other (the hook has printed where it was).
+    let outcome = std::panic::catch_unwind(check).unwrap_or_else(|payload| {
+        let message = payload
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| payload.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "a panic".into());
+        fuzz::Outcome::problem(fuzz::FindingKind::Panic, message)
+    });
     match outcome.problem {
         Some((kind, message)) => {
             println!("{kind:?}: {message}");

@@ -105,7 +105,11 @@ fn toml_string(rng: &mut Rng, s: &str) -> String {
             '\\' => out.push_str("\\\\"),
             '\n' => out.push_str("\\n"),
             c if c.is_control() || (c as u32 >= 0x2028 && rng.chance(0.5)) => {
-                out.push_str(&format!("\\u{:04X}", c as u32))
+                if (c as u32) > 0xffff {
+                    out.push_str(&format!("\\U{:08X}", c as u32))
+                } else {
+                    out.push_str(&format!("\\u{:04X}", c as u32))
+                }
             }
             c => out.push(c),
         }
@@ -301,5 +305,16 @@ mod tests {
         let closed = page.replacen("\"name\":\"ok\"", "\"name\":\"<!--<script>-->\"", 1);
         assert!(check_page(&closed, &data).unwrap_err().contains("double-escaped"));
         assert_eq!(decode("a&lt;b&#x41;&#66;&amp;&zz;"), "a<bAB&&zz;");
+    }
+
+    #[test]
+    fn hostile_names_read_back_from_their_toml() {
+        let mut rng = Rng::new(8);
+        for _ in 0..500 {
+            let name = hostile_name(&mut rng);
+            let text = format!("name = {}", toml_string(&mut rng, &name));
+            let table: toml::Table = text.parse().unwrap_or_else(|e| panic!("{text}: {e}"));
+            assert_eq!(table["name"].as_str(), Some(name.as_str()), "{text}");
+        }
     }
 }
