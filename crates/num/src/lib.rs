@@ -36,6 +36,7 @@
 //! - [`Method`] names them for the command line and builds any of them;
 //!   [`select_step`] picks a fixed step from a tolerance.
 //! - [`integrate`] drives a solver with output sampling and [`Event`]s.
+//! - [`eigenvalues`] of a general matrix, [`symmetric_definite`] of K v = μ M v.
 //! - [`LinearSolver`] solves `M x = f` (dense or banded LU); [`brent`] finds roots
 //!   of a function of one variable, [`newton`] and [`newton_fd`] of small systems.
 //! - Quadrature: the [`midpoint`] rule (Gauss–Chebyshev after `x = cos φ`),
@@ -52,6 +53,7 @@ mod adaptive;
 mod composition;
 mod dop853;
 mod dopri5;
+mod eigen;
 mod error;
 mod gauss;
 mod integrate;
@@ -78,6 +80,7 @@ extern crate self as num;
 pub use composition::{Composition, Scheme};
 pub use dop853::Dop853;
 pub use dopri5::Dopri5;
+pub use eigen::{eigenvalue_rounding, eigenvalues, symmetric_definite, symmetric_rounding, EigenError};
 pub use error::{LinalgError, NewtonError, QuadratureError, RhsError, SolveError};
 pub use gauss::{Gauss, Subdivisions};
 pub use integrate::{
