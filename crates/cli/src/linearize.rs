@@ -48,6 +48,16 @@ pub struct Args {
 /// Runs the command.
 pub fn run(args: &Args) -> Result<(), Failure> {
     let path = &args.model;
+    // A coordinate named twice would silently keep its last value.
+    for (flag, pairs) in [("--at", &args.at), ("--rate", &args.rate)] {
+        for (k, (name, value)) in pairs.iter().enumerate() {
+            if let Some((_, first)) = pairs[..k].iter().find(|(other, _)| other == name) {
+                return Err(Failure::usage(format!(
+                    "{flag} {name}: given twice ({name}={first}, then {name}={value}); give each coordinate once"
+                )));
+            }
+        }
+    }
     // The inputs stay symbols: B is the response to them.
     let source = crate::read_source(path)?;
     let model = crate::parse_model(path, &source, &args.set)?;

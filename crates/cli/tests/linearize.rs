@@ -217,3 +217,63 @@ fn bad_flags_name_the_flag_and_exit_2() {
     assert_eq!(code, Some(2), "{stderr}");
     assert!(stderr.contains("examples/driven_oscillator.toml:") && stderr.contains("time t"), "{stderr}");
 }
+
+/// A model of one coordinate x with kinetic energy x'²/2 and this potential.
+fn one_coordinate(tag: &str, potential: &str, damping: &str) -> std::path::PathBuf {
+    let path = common::scratch("linearize-issue29", &format!("{tag}.toml"));
+    let text = format!(
+        "coordinates = [\"x\"]\nkinetic = \"x'^2/2\"\npotential = \"{potential}\"\ndissipation = \"{damping}\"\n[initial]\nx = -0.5\n\"x'\" = 0\n"
+    );
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn every_example_linearizes_or_says_why() {
+    let root = common::repo_root();
+    for dir in ["examples", "examples/constraints", "examples/tops", "examples/bicycle"] {
+        for entry in std::fs::read_dir(root.join(dir)).unwrap() {
+            let path = entry.unwrap().path();
+            let text = std::fs::read_to_string(&path).unwrap_or_default();
+            if path.extension().is_none_or(|e| e != "toml") || !text.lines().any(|l| l.starts_with("coordinates")) {
+                continue;
+            }
+            let r = run(&["linearize", path.to_str().unwrap()]);
+            assert!(r.code == Some(0) || (r.code == Some(2) && r.stderr.contains("error:")), "{}", r.describe());
+        }
+    }
+}
+
+#[test]
+fn nilpotent_degenerate_and_widely_spread_spectra_are_found() {
+    // Free particle and U = x³ from x = −0.5 (Newton to the double root 0):
+    // A = [[0, 1], [0, 0]], s = 0 twice, marginal.
+    for (tag, potential) in [("free", "0"), ("cubic", "x^3")] {
+        let v = json(&["linearize", one_coordinate(tag, potential, "0").to_str().unwrap(), "--format", "json"]);
+        assert_eq!(eigenvalues(&v), vec![(0.0, 0.0), (0.0, 0.0)], "{tag}");
+        assert_eq!(v["stability"], "marginal", "{tag}");
+    }
+    // Overdamped, m = k = 1, b = 1e4: s = (−b ± √(b² − 4))/2.
+    let v = json(&["linearize", one_coordinate("over", "x^2/2", "1e4*x'^2/2").to_str().unwrap(), "--format", "json"]);
+    // The slow root as 2c/(−b − √(b² − 4c)), free of cancellation.
+    let b: f64 = 1e4;
+    let slow = -2.0 / (b + (b * b - 4.0).sqrt());
+    let got = eigenvalues(&v);
+    assert_eq!(got.len(), 2, "{got:?}");
+    assert!((got[0].0 - slow).abs() <= 1e-9 * slow.abs() && got[0].1 == 0.0, "{got:?}");
+    assert!((got[1].0 - (-b - slow)).abs() <= 1e-9 * b && got[1].1 == 0.0, "{got:?}");
+    assert_eq!(v["stability"], "stable");
+    // No equilibrium: U = exp(x), and a constant force of 1 or of 1e-13.
+    for (tag, potential) in [("exp", "exp(x)"), ("one", "x"), ("tiny", "1e-13*x")] {
+        let r = run(&["linearize", one_coordinate(tag, potential, "0").to_str().unwrap()]);
+        assert_eq!(r.code, Some(2), "{}", r.describe());
+        assert!(r.stderr.contains("no equilibrium"), "{}", r.describe());
+    }
+}
+
+#[test]
+fn a_coordinate_given_twice_is_refused() {
+    let r = run(&["linearize", "examples/pendulum.toml", "--at", "ph=1", "--at", "ph=2"]);
+    assert_eq!(r.code, Some(2), "{}", r.describe());
+    assert!(r.stderr.contains("--at ph: given twice"), "{}", r.describe());
+}

@@ -28,6 +28,8 @@
 //! and B = ∂x'/∂u follows from `K [∂q''/∂u; ∂λ/∂u] = [∂f/∂u; 0]`, reduced to the
 //! same state as A.
 
+mod spectrum;
+
 use crate::derive::Derivation;
 use crate::equilibria::{self, Assessment, Equilibrium, EquilibriumReport, Landscape, Solved, Stability};
 use crate::error::ModelError;
@@ -46,9 +48,13 @@ const MAX_ITERATIONS: usize = 100;
 const JACOBIAN_STEP: f64 = 1e-7;
 /// Converged when a step is below this, relative to (1 + |x|).
 const STEP_TOL: f64 = 1e-13;
-/// A point is an operating point when the residual (accelerations and
-/// holonomic constraints) is below this, relative to (1 + the residual at the
-/// start and the size of q'' terms there): eight digits.
+/// A point is an operating point when Newton's step from it is below this,
+/// relative to (1 + |x|), and what of the residual (accelerations and
+/// holonomic constraints) that step cannot remove is below this fraction of
+/// the size of the terms it is a sum of (Σ|terms| of f, c and the constraints,
+/// through |K⁻¹|): eight digits either way. A lone force of 1e-13 is not
+/// cancelled by anything and is not zero; a residual that a step of 1e-20
+/// removes is.
 const ACCEPT: f64 = 1e-8;
 /// Singular values of the search's Jacobian below this fraction of the largest
 /// are zero (a flat direction gets no step).
@@ -56,10 +62,6 @@ const SINGULAR: f64 = 1e-10;
 /// A column of the constraint Jacobian is a pivot only when its part outside
 /// the pivots already chosen is above this fraction of the largest column.
 const PIVOT: f64 = 1e-9;
-/// Eigenvalues whose real part is below this fraction of max |A| have Re = 0:
-/// rounding in a defective zero eigenvalue (a cyclic coordinate's Jordan
-/// block) splits it by about the square root of the rounding error.
-const ZERO_REAL: f64 = 1e-7;
 
 /// What to linearize about.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
@@ -115,6 +117,14 @@ pub enum LinearizeError {
         /// What went wrong.
         why: String,
     },
+    /// A or its eigenvalues cannot be computed at the point.
+    #[error("no linearization at {at}: {why}")]
+    Spectrum {
+        /// The point, as `q=v` pairs.
+        at: String,
+        /// Why.
+        why: String,
+    },
     /// The equations cannot be solved for q'' and λ at the point.
     #[error("the equations cannot be solved for q'' at {at}: M (with the constraints) is singular there")]
     Singular {
@@ -135,6 +145,7 @@ impl LinearizeError {
             LinearizeError::NoPoint { .. } => {
                 Some("start elsewhere (give the coordinates other starting values) or change the rates".into())
             }
+            LinearizeError::Spectrum { .. } => None,
             LinearizeError::Singular { .. } => {
                 Some("the coordinates are singular there (like Euler angles at β = 0); choose others".into())
             }
@@ -233,6 +244,10 @@ struct Numbers {
     mq: Vec<DMatrix<f64>>,
     /// ∂f/∂u (n × inputs).
     fu: DMatrix<f64>,
+    /// Σ|terms| of f, of c and of the holonomic constraints.
+    f_terms: DVector<f64>,
+    c_terms: DVector<f64>,
+    phi_terms: DVector<f64>,
 }
 
 impl Compiled {
@@ -300,6 +315,28 @@ impl Compiled {
         for &i in &act {
             roots.extend(d.input_matrix[i].iter().copied());
         }
+        // The size of each residual's terms: Σ|terms| of f, of c and of the
+        // holonomic constraints (the scale their rounding and cancellation live on).
+        let abs_terms = |pool: &mut Pool, e: ExprId| -> ExprId {
+            let terms: Vec<ExprId> = match pool.node(e) {
+                sym::Node::Add(t) => t.to_vec(),
+                _ => vec![e],
+            };
+            let abs: Vec<ExprId> = terms.into_iter().map(|t| pool.func(sym::Func::Abs, t)).collect();
+            pool.add(&abs)
+        };
+        for &i in &act {
+            let e = abs_terms(&mut pool, d.forcing[i]);
+            roots.push(e);
+        }
+        for c in cons {
+            let e = abs_terms(&mut pool, c.acceleration_rhs);
+            roots.push(e);
+        }
+        for &k in &hol {
+            let e = abs_terms(&mut pool, cons[k].expr);
+            roots.push(e);
+        }
         let n_u = d.inputs.len();
         if n_u > 0 {
             let u0 = input_values(d)?;
@@ -341,7 +378,10 @@ impl Compiled {
         let phi = take(self.hol.len(), 1).column(0).into_owned();
         let mq: Vec<DMatrix<f64>> = if self.with_mq { (0..n).map(|_| take(n, n)).collect() } else { Vec::new() };
         let fu = take(n, self.n_u);
-        Numbers { m: mm, f, fq, fv, b, bq, c, cq, cv, phi, mq, fu }
+        let f_terms = take(n, 1).column(0).into_owned();
+        let c_terms = take(m, 1).column(0).into_owned();
+        let phi_terms = take(self.hol.len(), 1).column(0).into_owned();
+        Numbers { m: mm, f, fq, fv, b, bq, c, cq, cv, phi, mq, fu, f_terms, c_terms, phi_terms }
     }
 }
 
@@ -436,6 +476,11 @@ struct AtPoint {
     b: DMatrix<f64>,
     eigenvalues: Vec<(f64, f64)>,
     stability: Stability,
+    /// M and F_q (∂f/∂q with the constraints' terms) at the point.
+    mm: DMatrix<f64>,
+    fq: DMatrix<f64>,
+    /// Whether K v = ω² M v gives the spectrum (no constraints, no velocity terms).
+    symmetric: bool,
     independent_q: Vec<usize>,
     independent_v: Vec<usize>,
     dependent_q: Vec<usize>,
@@ -446,8 +491,6 @@ struct Problem<'a> {
     c: Compiled,
     setup: Setup,
     names: &'a [String],
-    /// The residual's size at the start, the scale for "zero".
-    scale: f64,
 }
 
 impl Problem<'_> {
@@ -509,47 +552,137 @@ impl Problem<'_> {
         rows.iter().all(|v| v.is_finite()).then(|| DVector::from_vec(rows))
     }
 
+    /// The size of the terms each residual row is a sum of: Σ|terms| of the
+    /// holonomic constraints, and of f and c carried through |K⁻¹| for the
+    /// accelerations.
+    fn residual_scale(&mut self, x: &[f64]) -> Option<DVector<f64>> {
+        let (q, qd) = self.state(x)?;
+        let (nb, qdd, lam) = self.accelerations(&q, &qd)?;
+        let n = nb.m.nrows();
+        let kinv = kkt(&nb).try_inverse()?;
+        // The terms of M q'' − Bᵀλ = f and B q'' = c: the constraint forces
+        // balance f, so their size is part of the scale.
+        let mut terms = DVector::zeros(n + self.c.m);
+        let f_side = &nb.f_terms + nb.b.abs().transpose() * lam.abs() + nb.m.abs() * qdd.abs();
+        let c_side = &nb.c_terms + nb.b.abs() * qdd.abs();
+        terms.rows_mut(0, n).copy_from(&f_side);
+        terms.rows_mut(n, self.c.m).copy_from(&c_side);
+        // Rounding in the solve spreads across rows (a normal acceleration
+        // on a constraint is the difference of f and Bᵀλ, both large): every
+        // acceleration's scale is at least the largest of these.
+        let mut acc = kinv.abs() * terms;
+        let floor = acc.amax();
+        acc.iter_mut().for_each(|v| *v = v.max(floor));
+        let dep = &self.setup.dependent;
+        let rows: Vec<f64> = nb
+            .phi_terms
+            .iter()
+            .copied()
+            .chain((0..n).filter(|j| !dep.contains(j) || self.setup.unknown.contains(j)).map(|j| acc[j]))
+            .collect();
+        rows.iter().all(|v| v.is_finite()).then(|| DVector::from_vec(rows))
+    }
+
+    /// The forward-difference Jacobian at x (residual r there) and the
+    /// Gauss–Newton step; flat directions (singular values below [`SINGULAR`]
+    /// of the largest) get none.
+    fn newton_step(&mut self, x: &[f64], r: &DVector<f64>) -> Result<(DMatrix<f64>, DVector<f64>), String> {
+        let nx = x.len();
+        let mut jac = DMatrix::zeros(r.len(), nx);
+        for j in 0..nx {
+            let h = JACOBIAN_STEP * (1.0 + x[j].abs());
+            let mut xp = x.to_vec();
+            xp[j] += h;
+            let rp = self.residual(&xp).ok_or_else(|| "the equations cannot be evaluated".to_string())?;
+            jac.set_column(j, &((rp - r) / h));
+        }
+        if nx == 0 {
+            return Ok((jac, DVector::zeros(0)));
+        }
+        let svd = jac.clone().svd(true, true);
+        let smax = svd.singular_values.amax();
+        let step = svd
+            .solve(&(-r), SINGULAR * smax.max(f64::MIN_POSITIVE))
+            .map_err(|e| format!("the Jacobian cannot be solved: {e}"))?;
+        Ok((jac, step))
+    }
+
+    /// Whether x (residual r, Jacobian, step) is an operating point: the step
+    /// is below [`ACCEPT`] of (1 + |x|), and the residual the step leaves is
+    /// below [`ACCEPT`] of the size of its terms. The error says why not.
+    fn accept(&mut self, x: &[f64], r: &DVector<f64>, jac: &DMatrix<f64>, step: &DVector<f64>) -> Result<(), String> {
+        let scale = self.residual_scale(x).ok_or_else(|| "the equations cannot be evaluated there".to_string())?;
+        let left = r + jac * step;
+        let size = |v: f64| 1.0 + v.abs();
+        let small_step = step.iter().zip(x).all(|(s, v)| s.abs() <= ACCEPT * size(*v));
+        let small_left = left.iter().zip(scale.iter()).all(|(l, t)| l.abs() <= ACCEPT * t);
+        if small_step && small_left {
+            return Ok(());
+        }
+        let k = (0..r.len())
+            .max_by(|&a, &b| {
+                (left[a].abs() / scale[a].max(f64::MIN_POSITIVE))
+                    .total_cmp(&(left[b].abs() / scale[b].max(f64::MIN_POSITIVE)))
+            })
+            .unwrap_or(0);
+        let at = self.point_text(x);
+        if !small_left {
+            Err(format!(
+                "the forces do not balance at {at}: a residual acceleration of {} remains that no nearby point removes, against terms of size {}",
+                equilibria::short(left[k].abs()),
+                equilibria::short(scale[k])
+            ))
+        } else {
+            Err(format!(
+                "the forces do not vanish near {at}: Newton's method still moves by {} there",
+                equilibria::short(step.amax())
+            ))
+        }
+    }
+
+    fn point_text(&self, x: &[f64]) -> String {
+        let at: Vec<String> = self
+            .setup
+            .unknown
+            .iter()
+            .zip(x)
+            .map(|(&i, v)| format!("{}={}", self.names[self.c.act[i]], equilibria::short(*v)))
+            .collect();
+        format!("({})", at.join(", "))
+    }
+
     /// Gauss–Newton on the residual with a forward-difference Jacobian and
-    /// backtracking on |r|².
+    /// backtracking on |r|², then the test of [`Problem::accept`].
     fn gauss_newton(&mut self, x0: &[f64]) -> Result<Solved, String> {
         let mut x = x0.to_vec();
-        let fail_at = |x: &[f64], names: &[String], unknown: &[usize], act: &[usize], why: &str| {
-            let at: Vec<String> =
-                unknown.iter().zip(x).map(|(&i, v)| format!("{}={}", names[act[i]], equilibria::short(*v))).collect();
-            format!("{why} at ({})", at.join(", "))
-        };
         let mut r = self.residual(&x).ok_or_else(|| "the equations cannot be evaluated at the start".to_string())?;
-        let tol = ACCEPT * (1.0 + self.scale);
-        for it in 0..=MAX_ITERATIONS {
-            if x.is_empty() {
-                return if r.amax() <= tol {
-                    Ok(Solved { x, iterations: 0, residual: r.norm() })
-                } else {
-                    Err(format!("the accelerations do not vanish (|q''| = {})", equilibria::short(r.amax())))
-                };
-            }
-            let nx = x.len();
-            let mut jac = DMatrix::zeros(r.len(), nx);
-            for j in 0..nx {
-                let h = JACOBIAN_STEP * (1.0 + x[j].abs());
-                let mut xp = x.clone();
-                xp[j] += h;
-                let rp = self.residual(&xp).ok_or_else(|| "the equations cannot be evaluated".to_string())?;
-                jac.set_column(j, &((rp - &r) / h));
-            }
-            let svd = jac.svd(true, true);
-            let smax = svd.singular_values.amax();
-            let step = svd
-                .solve(&(-&r), SINGULAR * smax.max(f64::MIN_POSITIVE))
-                .map_err(|e| format!("the Jacobian cannot be solved: {e}"))?;
+        let mut it = 0;
+        loop {
+            let (jac, step) = self.newton_step(&x, &r)?;
             let size = 1.0 + x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            if step.amax() <= STEP_TOL * size || (r.amax() <= tol * 1e-4) {
-                return if r.amax() <= tol {
-                    Ok(Solved { x, iterations: it, residual: r.norm() })
-                } else {
-                    Err(fail_at(&x, self.names, &self.setup.unknown, &self.c.act, "Newton's method stalls"))
-                };
+            let done = x.is_empty() || step.amax() <= STEP_TOL * size || r.amax() == 0.0 || it == MAX_ITERATIONS;
+            // Stop as soon as the point passes the test (or at the end, with its verdict).
+            if !done && step.amax() <= ACCEPT * size && self.accept(&x, &r, &jac, &step).is_ok() {
+                // One more step (quadratic convergence: to rounding) when it does not worsen r.
+                let xt: Vec<f64> = x.iter().zip(step.iter()).map(|(a, s)| a + s).collect();
+                if let Some(rt) = self.residual(&xt).filter(|rt| rt.norm() <= r.norm()) {
+                    return Ok(Solved { x: xt, iterations: it + 1, residual: rt.norm() });
+                }
+                return Ok(Solved { x, iterations: it, residual: r.norm() });
             }
+            if done {
+                // Forces that vanish only by underflow (e^x far out) leave a
+                // zero residual and a zero Jacobian after real steps.
+                if it > 0 && r.amax() == 0.0 && jac.amax() == 0.0 {
+                    return Err(format!(
+                        "the forces only underflow to zero at {}, far from where Newton's method started",
+                        self.point_text(&x)
+                    ));
+                }
+                self.accept(&x, &r, &jac, &step)?;
+                return Ok(Solved { x, iterations: it, residual: r.norm() });
+            }
+            it += 1;
             let mut t = 1.0;
             loop {
                 let xt: Vec<f64> = x.iter().zip(step.iter()).map(|(a, s)| a + t * s).collect();
@@ -562,17 +695,61 @@ impl Problem<'_> {
                 }
                 t *= 0.5;
                 if t < 1e-6 {
-                    return Err(fail_at(&x, self.names, &self.setup.unknown, &self.c.act, "Newton's method stalls"));
+                    return Err(format!("Newton's method stalls at {}", self.point_text(&x)));
                 }
             }
             if x.iter().zip(x0).any(|(a, b)| (a - b).abs() > 1e3 * (1.0 + b.abs())) {
-                return Err(fail_at(&x, self.names, &self.setup.unknown, &self.c.act, "Newton's method runs away"));
+                return Err(format!("Newton's method runs away at {}", self.point_text(&x)));
             }
         }
-        if r.amax() <= tol {
-            return Ok(Solved { x, iterations: MAX_ITERATIONS, residual: r.norm() });
+    }
+
+    /// How well the point x is known, per unknown: four Newton steps (a
+    /// double root's error is twice its step), and at least [`ACCEPT`] of
+    /// (1 + |x|), the accuracy the acceptance test asks for.
+    fn uncertainty(&mut self, x: &[f64]) -> Vec<f64> {
+        let floor: Vec<f64> = x.iter().map(|v| ACCEPT * (1.0 + v.abs())).collect();
+        let Some(r) = self.residual(x) else { return floor };
+        let Ok((_, step)) = self.newton_step(x, &r) else { return floor };
+        floor.iter().zip(step.iter()).map(|(f, s)| f.max(4.0 * s.abs())).collect()
+    }
+
+    /// The linearization at x with its eigenvalues: entries of A (and of
+    /// ∂f/∂q) that change by more than their own size when x moves within its
+    /// uncertainty are noise and set to zero (at a degenerate point, U = x³ at
+    /// 0, Newton stops where A's entry is only its distance from the root).
+    fn settle(&mut self, x: &[f64]) -> Result<AtPoint, String> {
+        let mut p = self.at(x).ok_or_else(|| "the equations cannot be solved for q'' there".to_string())?;
+        let delta = self.uncertainty(x);
+        let mut noise_a = DMatrix::<f64>::zeros(p.a.nrows(), p.a.ncols());
+        let mut noise_fq = DMatrix::<f64>::zeros(p.fq.nrows(), p.fq.ncols());
+        for j in 0..x.len() {
+            for sign in [1.0, -1.0] {
+                let mut xp = x.to_vec();
+                xp[j] += sign * delta[j];
+                let Some(pp) = self.at(&xp) else { continue };
+                if pp.independent_q != p.independent_q || pp.independent_v != p.independent_v {
+                    continue;
+                }
+                noise_a += (&pp.a - &p.a).abs();
+                noise_fq += (&pp.fq - &p.fq).abs();
+            }
         }
-        Err(format!("Newton's method did not converge in {MAX_ITERATIONS} iterations"))
+        p.a.zip_apply(&noise_a, |v, e| {
+            if v.abs() <= e {
+                *v = 0.0
+            }
+        });
+        p.fq.zip_apply(&noise_fq, |v, e| {
+            if v.abs() <= e {
+                *v = 0.0
+            }
+        });
+        let second = p.symmetric.then_some(spectrum::SecondOrder { m: &p.mm, fq: &p.fq });
+        let (eigenvalues, stability) = spectrum::spectrum(&p.a, second)?;
+        p.eigenvalues = eigenvalues;
+        p.stability = stability;
+        Ok(p)
     }
 
     /// A and its eigenvalues at the unknowns x.
@@ -674,16 +851,20 @@ impl Problem<'_> {
         if !a.iter().all(|v| v.is_finite()) {
             return None;
         }
-        let (eigenvalues, stability) = spectrum(&a);
+        // The second-order problem applies without constraints or velocity terms.
+        let symmetric = m == 0 && nb.fv.iter().all(|&v| v == 0.0);
         Some(AtPoint {
+            mm: nb.m.clone(),
+            fq: fq.clone(),
+            symmetric,
             q,
             qd,
             qdd: qdd.iter().copied().collect(),
             lambda: lam.iter().copied().collect(),
             a,
             b,
-            eigenvalues,
-            stability,
+            eigenvalues: Vec::new(),
+            stability: Stability::Marginal,
             independent_q: iq,
             independent_v: iv,
             dependent_q: dq.clone(),
@@ -692,82 +873,13 @@ impl Problem<'_> {
     }
 }
 
-/// Entries of A below this fraction of max |A| count as zero when a zero row
-/// or column is deflated (structural zeros come out exact; this is round-off).
-const DEFLATE: f64 = 1e-14;
-/// Most QR sweeps of one Schur decomposition: nalgebra's own
-/// `complex_eigenvalues` has no bound and cycles on some matrices with exact
-/// zero blocks (a sleeping top's cyclic spin).
-const MAX_SCHUR: usize = 10_000;
-
-/// The eigenvalues of A: a bounded Schur decomposition of A, else of a
-/// similar matrix H A H (H a fixed Householder reflection, so the eigenvalues
-/// are the same) that breaks the exact structure the iteration cycles on.
-fn eigenvalues(a: &DMatrix<f64>) -> Vec<nalgebra::Complex<f64>> {
-    let n = a.nrows();
-    for k in 0..4 {
-        let m = if k == 0 {
-            a.clone()
-        } else {
-            let v = DVector::from_fn(n, |i, _| 1.0 + ((i * (k + 2)) % 7) as f64).normalize();
-            let h = DMatrix::identity(n, n) - &v * v.transpose() * 2.0;
-            &h * a * &h
-        };
-        if let Some(schur) = nalgebra::Schur::try_new(m, f64::EPSILON, MAX_SCHUR) {
-            return schur.complex_eigenvalues().iter().copied().collect();
-        }
-    }
-    vec![nalgebra::Complex::new(f64::NAN, f64::NAN); n]
-}
-
-/// The eigenvalues of A, sorted, and the verdict.
-fn spectrum(a: &DMatrix<f64>) -> (Vec<(f64, f64)>, Stability) {
-    if a.is_empty() {
-        return (Vec::new(), Stability::Marginal);
-    }
-    let scale = a.amax().max(f64::MIN_POSITIVE);
-    // A zero row or column (a cyclic coordinate, a rate nothing changes) is an
-    // exact zero eigenvalue: deflate it before the iteration, which would split
-    // a defective zero by the k-th root of the rounding error.
-    let mut keep: Vec<usize> = (0..a.nrows()).collect();
-    let mut zeros = 0;
-    let tiny = DEFLATE * scale;
-    while let Some(pos) = (0..keep.len()).find(|&p| {
-        let i = keep[p];
-        keep.iter().all(|&j| a[(i, j)].abs() <= tiny) || keep.iter().all(|&j| a[(j, i)].abs() <= tiny)
-    }) {
-        keep.remove(pos);
-        zeros += 1;
-    }
-    let rest = a.select_rows(keep.iter()).select_columns(keep.iter());
-    let mut ev: Vec<(f64, f64)> = eigenvalues(&rest)
-        .iter()
-        .map(|s| {
-            let re = if s.re.abs() <= ZERO_REAL * scale { 0.0 } else { s.re };
-            let im = if s.im.abs() <= ZERO_REAL * scale { 0.0 } else { s.im };
-            (re, im)
-        })
-        .collect();
-    ev.extend(std::iter::repeat_n((0.0, 0.0), zeros));
-    // By decay rate, then frequency descending, a conjugate pair + before −.
-    ev.sort_by(|x, y| (-x.0).total_cmp(&-y.0).then(y.1.abs().total_cmp(&x.1.abs())).then(y.1.total_cmp(&x.1)));
-    let stability = if ev.iter().any(|e| e.0 > 0.0 || !e.0.is_finite()) {
-        Stability::Unstable
-    } else if ev.iter().all(|e| e.0 < 0.0) {
-        Stability::Stable
-    } else {
-        Stability::Marginal
-    };
-    (ev, stability)
-}
-
 impl Landscape for Problem<'_> {
     fn solve(&mut self, x0: &[f64]) -> Result<Solved, String> {
         self.gauss_newton(x0)
     }
 
     fn assess(&mut self, x: &[f64]) -> Assessment {
-        let stability = self.at(x).map_or(Stability::Unstable, |p| p.stability);
+        let stability = self.settle(x).map_or(Stability::Unstable, |p| p.stability);
         Assessment { stability, unstable_directions: Vec::new() }
     }
 }
@@ -960,21 +1072,18 @@ pub fn linearize(d: &Derivation, config: &LinearizeConfig) -> Result<Linearizati
     let unknown_names: Vec<String> = unknown.iter().map(|&k| names[act[k]].clone()).collect();
     let start: Vec<f64> = unknown.iter().map(|&k| q_start[act[k]]).collect();
     let setup = Setup { unknown: unknown.clone(), base_q: q_start.clone(), speeds, dependent, avoid };
-    let mut problem = Problem { c: compiled, setup, names: &names, scale: 0.0 };
+    let mut problem = Problem { c: compiled, setup, names: &names };
     let what = match config.about {
         About::Equilibrium => "equilibrium",
         About::Steady => "steady motion",
     };
-    let r0 = problem.residual(&start).ok_or_else(|| LinearizeError::NoPoint {
-        what,
-        start: pairs(&unknown_names, &start),
-        why: "the equations cannot be evaluated there".into(),
-    })?;
-    problem.scale = r0.amax();
     let search = equilibria::search(&mut problem, &start, !config.keep_unstable)
         .map_err(|why| LinearizeError::NoPoint { what, start: pairs(&unknown_names, &start), why })?;
     let x = search.found[search.chosen].x.clone();
-    let point = problem.at(&x).ok_or_else(|| LinearizeError::Singular { at: pairs(&unknown_names, &x) })?;
+    if problem.at(&x).is_none() {
+        return Err(LinearizeError::Singular { at: pairs(&unknown_names, &x) });
+    }
+    let point = problem.settle(&x).map_err(|why| LinearizeError::Spectrum { at: pairs(&unknown_names, &x), why })?;
     for &j in &point.dependent_v {
         if flagged.contains(&act[j]) {
             notes.push(format!(
