@@ -585,14 +585,7 @@ fn within_work_limit(pool: &Pool, model: &Model) -> Result<(), ModelError> {
     if !pool.work_exhausted() {
         return Ok(());
     }
-    let span = model.bodies.first().map(|b| b.span.clone()).or_else(|| {
-        model
-            .lagrangian
-            .as_ref()
-            .or(model.kinetic.as_ref())
-            .map(|l| l.span.clone())
-            .or_else(|| model.particles.first().map(|p| p.span.clone()))
-    });
+    let span = model.bodies.first().map(|b| b.span.clone()).or_else(|| energy_span(model));
     let message = format!(
         "the derivation stopped at its bound of {} million steps of expression building: the expressions of this model grow too long to derive in reasonable time and memory",
         WORK_LIMIT / 1_000_000
@@ -738,15 +731,10 @@ fn check_regular(pool: &mut Pool, model: &Model, mass_matrix: &[Vec<ExprId>]) ->
         .collect();
     let names: Vec<String> = idle.iter().map(|&i| format!("'{}'", model.coordinates[i].name)).collect();
     let body = model.bodies.iter().find(|b| b.orientation.angles().iter().any(|a| idle.contains(a)));
-    let span = body.map(|b| b.span.clone()).or_else(|| {
-        model
-            .lagrangian
-            .as_ref()
-            .or(model.kinetic.as_ref())
-            .map(|l| l.span.clone())
-            .or_else(|| model.particles.first().map(|p| p.span.clone()))
-            .or_else(|| model.bodies.first().map(|b| b.span.clone()))
-    });
+    let span = body
+        .map(|b| b.span.clone())
+        .or_else(|| energy_span(model))
+        .or_else(|| model.bodies.first().map(|b| b.span.clone()));
     let message = match names.as_slice() {
         [] => "the mass matrix ∂²L/∂q'∂q' is singular: the equations of motion do not determine every acceleration"
             .to_string(),
@@ -1299,6 +1287,17 @@ fn explain_energy(
         Some(false) => EnergyReason::NotEnergy,
         None => EnergyReason::EnergyUndecided,
     });
+}
+
+/// Where the model states its energy: the Lagrangian, else the kinetic
+/// energy, else its first particle.
+fn energy_span(model: &Model) -> Option<std::ops::Range<usize>> {
+    model
+        .lagrangian
+        .as_ref()
+        .or(model.kinetic.as_ref())
+        .map(|l| l.span.clone())
+        .or_else(|| model.particles.first().map(|p| p.span.clone()))
 }
 
 #[cfg(test)]
