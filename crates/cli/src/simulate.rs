@@ -56,7 +56,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     // and, for fixed-step methods, the pilot runs that choose the step.
     let started = Instant::now();
     let path = &opts.model;
-    let (source, derivation) = crate::derive_file(path, &opts.set)?;
+    let (source, derivation) = crate::derive_file(path, &opts.set, &[opts.out.as_deref(), opts.plot.as_deref()])?;
     let derived = started.elapsed().as_secs_f64();
     let mut first_row: Option<f64> = None;
 

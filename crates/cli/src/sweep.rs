@@ -119,7 +119,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         Some(name) => Some(name.parse::<Method>().map_err(|e| Failure::usage(e.to_string()))?),
         None => None,
     };
-    let (source, derivation) = crate::derive_file(path, &args.set)?;
+    let (source, derivation) = crate::derive_file(path, &args.set, &[args.out.as_deref(), args.heatmap.as_deref()])?;
     derivation.reject_constraints("`lagrange sweep`").map_err(|e| Failure::model(path, &source, e))?;
     let grid = Grid::parse(args.grid.as_deref().unwrap_or_default(), derivation.model()).map_err(usage)?;
     let rtol = args.rtol.unwrap_or(mech::DEFAULT_RTOL);
