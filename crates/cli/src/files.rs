@@ -2,12 +2,15 @@
 //! (a FIFO or a device such as /dev/zero would block or never end), and never
 //! more than a limit, checked while reading rather than after. Streamed outputs
 //! are locked while written, so two runs cannot interleave their rows in one
-//! file, and no output may replace an input of the same command. Figures are
-//! drawn by `view` and written whole.
+//! file, and no output may replace an input of the same command: every file
+//! read is remembered (device and inode), the model's own and those it names,
+//! and every output is compared with them, both before the run and when it is
+//! opened. Figures are drawn by `view` and written whole.
 
 use std::fs::{File, OpenOptions, TryLockError};
 use std::io::{Read, Write};
 use std::path::Path;
+use std::sync::Mutex;
 
 /// Largest sweep CSV that `sweep --merge` reads, in bytes: far above any shard
 /// of the largest allowed sweep at a few hundred bytes a row that fits in memory
@@ -69,7 +72,17 @@ impl ReadError {
     }
 }
 
+/// Every file this process has read: no output may replace one of them, the
+/// model or a file it names (a body file), whichever path or link names it.
+static READ: Mutex<Vec<FileId>> = Mutex::new(Vec::new());
+
+/// Whether the file `id` is one this process has read.
+fn was_read(id: &FileId) -> bool {
+    READ.lock().unwrap_or_else(std::sync::PoisonError::into_inner).contains(id)
+}
+
 /// The text of the regular file at `path`, if it has at most `limit` bytes.
+/// The file is remembered as an input of this command.
 pub fn read_text(path: &Path, limit: u64) -> Result<String, ReadError> {
     // Opening a FIFO for reading blocks until a writer comes: its type is
     // checked before opening, and again on the open file (it may have changed).
@@ -82,9 +95,12 @@ pub fn read_text(path: &Path, limit: u64) -> Result<String, ReadError> {
         return Err(ReadError::NotRegular);
     }
     let mut bytes = Vec::with_capacity(meta.len().min(limit) as usize);
-    file.take(limit + 1).read_to_end(&mut bytes).map_err(ReadError::Io)?;
+    (&file).take(limit + 1).read_to_end(&mut bytes).map_err(ReadError::Io)?;
     if bytes.len() as u64 > limit {
         return Err(ReadError::TooLarge { limit });
+    }
+    if let Some(id) = FileId::of_open(&file, path) {
+        READ.lock().unwrap_or_else(std::sync::PoisonError::into_inner).push(id);
     }
     String::from_utf8(bytes).map_err(ReadError::NotText)
 }
@@ -101,10 +117,15 @@ pub fn create_locked(path: &Path) -> Result<File, String> {
 
 /// Opens (or creates) the output file at `path` for reading and writing by
 /// this run alone, keeping what it holds (the partial output a resumed run
-/// continues), and locks it as [`create_locked`] says.
+/// continues), and locks it as [`create_locked`] says. A file this process
+/// has read (an input) is refused as it is opened, before anything is written
+/// (the commands refuse it before the run too; this is the last word).
 pub fn open_locked(path: &Path) -> Result<File, String> {
     let file =
         OpenOptions::new().read(true).write(true).create(true).truncate(false).open(path).map_err(|e| e.to_string())?;
+    if FileId::of_open(&file, path).is_some_and(|id| was_read(&id)) {
+        return Err(INPUT.into());
+    }
     match file.try_lock() {
         Ok(()) => Ok(file),
         Err(TryLockError::WouldBlock) => Err("in use by another run (it is being written); choose another file".into()),
@@ -112,8 +133,12 @@ pub fn open_locked(path: &Path) -> Result<File, String> {
     }
 }
 
+/// Why an output that is an input is refused.
+const INPUT: &str = "is an input of this command; it would be overwritten by an output";
+
 /// An error, before anything is computed, when an output path names one of the
-/// inputs (the model file, a shard to merge), whose writing would destroy what
+/// inputs (`inputs`: the model file, a shard to merge; and every file read so
+/// far: the files the model names), whose writing would destroy what
 /// the run reads, names the same file as another output, is being written by
 /// another run (it holds the file's lock: a CSV being streamed), or is a place
 /// no file can be created (a folder, or inside a folder that does not exist).
@@ -133,8 +158,8 @@ pub fn refuse_overwrite(inputs: &[&Path], outputs: &[Option<&Path>]) -> Result<(
     // Only an output that exists can be an input, or locked.
     for (k, out) in outputs.iter().enumerate() {
         let Some(id) = FileId::of(out) else { continue };
-        if inputs.iter().any(|input| FileId::of(input).as_ref() == Some(&id)) {
-            return Err(format!("{} is an input of this command; it would be overwritten by an output", out.display()));
+        if was_read(&id) || inputs.iter().any(|input| FileId::of(input).as_ref() == Some(&id)) {
+            return Err(format!("{} {INPUT}", out.display()));
         }
         if outputs[..k].iter().any(|other| FileId::of(other).as_ref() == Some(&id)) {
             return Err(format!("{} is named for two outputs of this command; give each its own file", out.display()));
@@ -182,6 +207,23 @@ impl FileId {
         #[cfg(not(unix))]
         {
             path.canonicalize().ok().map(FileId::Path)
+        }
+    }
+
+    /// The file `file`, open at `path`: on Unix the open file itself, so that
+    /// what was read or is about to be written is the file compared.
+    fn of_open(file: &File, path: &Path) -> Option<FileId> {
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::MetadataExt;
+            let _ = path;
+            let meta = file.metadata().ok()?;
+            Some(FileId::Inode(meta.dev(), meta.ino()))
+        }
+        #[cfg(not(unix))]
+        {
+            let _ = file;
+            FileId::of(path)
         }
     }
 }
@@ -272,10 +314,23 @@ mod tests {
 
     #[test]
     fn a_file_over_the_limit_is_refused() {
-        let path = std::env::temp_dir().join(format!("lagrange-input-{}.txt", std::process::id()));
-        std::fs::write(&path, "x".repeat(101)).unwrap();
-        assert!(matches!(read_text(&path, 100), Err(ReadError::TooLarge { limit: 100 })));
-        assert_eq!(read_text(&path, 101).unwrap().len(), 101);
-        let _ = std::fs::remove_file(&path);
+        // A file that stays: a file read is an input for the rest of the
+        // process, and a deleted one's inode could come back as another
+        // test's output.
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("Cargo.toml");
+        let len = std::fs::metadata(&path).unwrap().len();
+        assert!(matches!(read_text(&path, len - 1), Err(ReadError::TooLarge { limit }) if limit == len - 1));
+        assert_eq!(read_text(&path, len).unwrap().len() as u64, len);
+    }
+
+    #[test]
+    fn a_file_read_is_an_input_whatever_names_it() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("src").join("main.rs");
+        let text = read_text(&path, 1 << 20).unwrap();
+        let spelled = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/../src/main.rs");
+        assert!(refuse_overwrite(&[], &[Some(&spelled)]).unwrap_err().contains("is an input"));
+        assert!(open_locked(&spelled).unwrap_err().contains("is an input"));
+        assert!(write_whole(&path, b"").unwrap_err().contains("is an input"));
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), text, "left as it was");
     }
 }

@@ -233,10 +233,17 @@ pub(crate) fn parse_model(path: &Path, source: &str, set: &[(String, f64)]) -> R
 /// Reads, parses and derives a model file; its text comes back too, for the
 /// diagnostics of what the command does next.
 /// The model's inputs take their values (runs need numbers; `derive` keeps them
-/// as symbols).
-pub(crate) fn derive_file(path: &Path, set: &[(String, f64)]) -> Result<(String, mech::Derivation), Failure> {
+/// as symbols). Once the model is read, the command's `outputs` are checked
+/// again, now against the files it names too (a body file), before the
+/// derivation: none may be one of them.
+pub(crate) fn derive_file(
+    path: &Path,
+    set: &[(String, f64)],
+    outputs: &[Option<&Path>],
+) -> Result<(String, mech::Derivation), Failure> {
     let source = read_source(path)?;
     let model = parse_model(path, &source, set)?.with_inputs_applied();
+    files::refuse_overwrite(&[path], outputs).map_err(Failure::usage)?;
     let derivation = mech::Derivation::new(model).map_err(|e| Failure::model(path, &source, e))?;
     Ok((source, derivation))
 }

@@ -41,7 +41,7 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<(), Failure> {
     crate::files::refuse_overwrite(&[&args.model], &[args.animate.as_deref()]).map_err(Failure::usage)?;
     let path = &args.model;
-    let (source, d) = crate::derive_file(path, &args.set)?;
+    let (source, d) = crate::derive_file(path, &args.set, &[args.animate.as_deref()])?;
     d.reject_constraints("`lagrange modes`").map_err(|e| Failure::model(path, &source, e))?;
     let config = ModesConfig { at: args.at.clone(), keep_unstable: args.allow_unstable };
     let modes = mech::normal_modes(&d, &config).map_err(|e| Failure::analysis(path, &source, e))?;

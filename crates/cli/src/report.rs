@@ -39,7 +39,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     crate::files::refuse_overwrite(&[&args.model], &[Some(args.out.as_path())]).map_err(Failure::usage)?;
     let started = Instant::now();
     let path = &args.model;
-    let (source, d) = crate::derive_file(path, &args.set)?;
+    let (source, d) = crate::derive_file(path, &args.set, &[Some(args.out.as_path())])?;
     let derived = started.elapsed().as_secs_f64();
     let settings = crate::simulate::RunSettings {
         until: args.until,

@@ -56,7 +56,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     // and, for fixed-step methods, the pilot runs that choose the step.
     let started = Instant::now();
     let path = &opts.model;
-    let (source, derivation) = crate::derive_file(path, &opts.set)?;
+    let (source, derivation) = crate::derive_file(path, &opts.set, &[opts.out.as_deref(), opts.plot.as_deref()])?;
     let derived = started.elapsed().as_secs_f64();
     let mut first_row: Option<f64> = None;
 
@@ -249,7 +249,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     }
     let keeps = |what: &str| opts.out.as_ref().map_or(String::new(), |p| format!(" ({} keeps {what})", p.display()));
     if let Some(signal) = stopped_by {
-        let at = last_row.map_or("before the first row".to_string(), |t| format!("at t = {t}"));
+        let at = last_row.map_or("before the first row".to_string(), |t| format!("at t = {}", num::Shortest(t)));
         return Err(Failure::Interrupted {
             signal,
             message: format!("interrupted by {} {at}{}", signal.name(), keeps("every row up to there, each whole")),
@@ -297,7 +297,7 @@ pub(crate) fn run_config(path: &Path, s: &RunSettings<'_>) -> Result<RunConfig, 
     for (name, v) in [("--rtol", s.rtol), ("--atol", s.atol), ("--dt", s.dt)] {
         if let Some(v) = v {
             if !(v.is_finite() && v > 0.0) {
-                return Err(Failure::usage(format!("{name} must be a positive number, not {v}")));
+                return Err(Failure::usage(format!("{name} must be a positive number, not {}", num::Shortest(v))));
             }
         }
     }
@@ -323,7 +323,7 @@ pub(crate) fn run_config(path: &Path, s: &RunSettings<'_>) -> Result<RunConfig, 
 /// A run that could not start, in the CLI's terms (exit 2).
 pub(crate) fn input_failure(path: &Path, source: &str, e: RunError) -> Failure {
     match e {
-        RunError::Until { until } => Failure::usage(format!("--until must be a positive time, not {until}")),
+        RunError::Until { until } => Failure::usage(format!("--until must be a positive time, not {}", num::Shortest(until))),
         RunError::TooManySamples { samples, max } => {
             Failure::usage(format!("--samples {samples} is more rows than a run writes ({max} at most)"))
         }
@@ -357,6 +357,6 @@ fn progress_bar(until: f64) -> Option<indicatif::ProgressBar> {
         indicatif::ProgressStyle::with_template("{bar:40} {percent:>3}% t of {msg}  {elapsed}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    pb.set_message(format!("{until}"));
+    pb.set_message(num::Shortest(until).to_string());
     Some(pb)
 }

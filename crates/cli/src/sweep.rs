@@ -101,7 +101,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     for (name, v) in [("--rtol", args.rtol), ("--atol", args.atol)] {
         if let Some(v) = v {
             if !(v.is_finite() && v > 0.0) {
-                return Err(Failure::usage(format!("{name} must be a positive number, not {v}")));
+                return Err(Failure::usage(format!("{name} must be a positive number, not {}", num::Shortest(v))));
             }
         }
     }
@@ -119,7 +119,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         Some(name) => Some(name.parse::<Method>().map_err(|e| Failure::usage(e.to_string()))?),
         None => None,
     };
-    let (source, derivation) = crate::derive_file(path, &args.set)?;
+    let (source, derivation) = crate::derive_file(path, &args.set, &[args.out.as_deref(), args.heatmap.as_deref()])?;
     derivation.reject_constraints("`lagrange sweep`").map_err(|e| Failure::model(path, &source, e))?;
     let grid = Grid::parse(args.grid.as_deref().unwrap_or_default(), derivation.model()).map_err(usage)?;
     let rtol = args.rtol.unwrap_or(mech::DEFAULT_RTOL);
@@ -301,7 +301,9 @@ fn usage(e: SweepError) -> Failure {
         SweepError::ShardSyntax { text } => {
             Failure::usage(format!("--shard must be I/N with 0 <= I < N (the I-th of N slices), not '{text}'"))
         }
-        SweepError::Until { until } => Failure::usage(format!("--until must be a positive time, not {until}")),
+        SweepError::Until { until } => {
+            Failure::usage(format!("--until must be a positive time, not {}", num::Shortest(until)))
+        }
         other => Failure::usage(other.to_string()),
     }
 }

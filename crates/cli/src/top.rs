@@ -32,7 +32,7 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<(), Failure> {
     crate::files::refuse_overwrite(&[&args.model], &[args.plot.as_deref()]).map_err(Failure::usage)?;
     let path = &args.model;
-    let (source, d) = crate::derive_file(path, &args.set)?;
+    let (source, d) = crate::derive_file(path, &args.set, &[args.plot.as_deref()])?;
     let top = Top::new(&d).map_err(|e| Failure::analysis(path, &source, e))?;
     if let Some(svg) = &args.plot {
         let text = view::top::figure(&d, &top).map_err(|e| Failure::run(format!("cannot draw the plot: {e}")))?;

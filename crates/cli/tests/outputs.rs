@@ -1,6 +1,7 @@
 //! Outputs never clobber: a file another run is writing (it holds the lock a
-//! streamed CSV holds) and a hard link to the model are refused by every
-//! output of every command, with exit 2, before anything is written.
+//! streamed CSV holds), a hard link to the model and a file the model names (a
+//! body file, by its path or a link) are refused by every output of every
+//! command, with exit 2, before anything is written.
 
 mod common;
 
@@ -66,6 +67,39 @@ fn a_hard_link_to_the_model_is_the_model() {
         assert_eq!(std::fs::read_to_string(&model).unwrap(), text, "{command:?} changed the model");
     }
     assert!(Path::new(&model).exists());
+}
+
+#[test]
+fn a_file_the_model_names_is_an_input_too() {
+    // The cone top reads its mass and inertia from a body file beside it.
+    let model = scratch("outputs-named", "cone_top.toml");
+    let body = model.with_file_name("cone_top_body.toml");
+    for (from, to) in [("examples/tops/cone_top.toml", &model), ("examples/tops/cone_top_body.toml", &body)] {
+        std::fs::copy(common::repo_root().join(from), to).unwrap();
+    }
+    let text = std::fs::read_to_string(&body).unwrap();
+    let link = body.with_file_name("b.svg");
+    let spelled = body.with_file_name(".").join("cone_top_body.toml");
+    for out in [&body, &spelled, &link] {
+        for command in [
+            ["simulate", "{m}", "--until", "0.1", "--out", "{}"].as_slice(),
+            &["simulate", "{m}", "--until", "0.1", "--plot", "{}"],
+            &["report", "{m}", "--until", "0.1", "-o", "{}"],
+            &["top", "{m}", "--plot", "{}"],
+            &["modes", "{m}", "--animate", "{}"],
+        ] {
+            let _ = std::fs::remove_file(&link);
+            std::fs::hard_link(&body, &link).unwrap();
+            let args: Vec<&str> = with_output(command, out.to_str().unwrap())
+                .into_iter()
+                .map(|a| if a == "{m}" { model.to_str().unwrap() } else { a })
+                .collect();
+            let r = run(&args);
+            assert_eq!(r.code, Some(2), "{}", r.describe());
+            assert!(r.stderr.contains("is an input of this command"), "{}", r.describe());
+            assert_eq!(std::fs::read_to_string(&body).unwrap(), text, "{args:?} changed the body file");
+        }
+    }
 }
 
 #[test]

@@ -336,7 +336,7 @@ impl RunFailure {
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {
     /// The end time is not a positive, finite number.
-    #[error("the end time must be positive and finite, not {until}")]
+    #[error("the end time must be positive and finite, not {}", num::Shortest(*.until))]
     Until {
         /// The end time asked for.
         until: f64,

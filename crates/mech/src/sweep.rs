@@ -150,7 +150,7 @@ pub enum SweepError {
         text: String,
     },
     /// An end time that is not positive.
-    #[error("the end time must be positive and finite, not {until}")]
+    #[error("the end time must be positive and finite, not {}", num::Shortest(*.until))]
     Until {
         /// The value found.
         until: f64,

@@ -162,7 +162,7 @@ pub fn summary_text(
         _ if interrupted.is_some() => {
             let Interrupted { signal, t } = interrupted.expect("matched");
             match t {
-                Some(t) => s.push_str(&format!("interrupted at t = {t} ({signal})\n")),
+                Some(t) => s.push_str(&format!("interrupted at t = {} ({signal})\n", num::Shortest(*t))),
                 None => s.push_str(&format!("interrupted before the first row ({signal})\n")),
             }
         }

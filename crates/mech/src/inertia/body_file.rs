@@ -501,7 +501,11 @@ impl Reader<'_> {
             if lo >= hi {
                 return Err(ModelError::at(
                     range.span(),
-                    format!("the range of {var} is [{lo}, {hi}]: expected lower < upper"),
+                    format!(
+                        "the range of {var} is [{}, {}]: expected lower < upper",
+                        num::Shortest(lo),
+                        num::Shortest(hi)
+                    ),
                 ));
             }
             region[axis] = [ends[0].0, ends[1].0];
@@ -518,7 +522,8 @@ fn check_tensor(t: &[[f64; 3]; 3]) -> Result<(), String> {
     let mut moments: Vec<f64> = nalgebra::SymmetricEigen::new(m).eigenvalues.iter().copied().collect();
     moments.sort_by(f64::total_cmp);
     let slack = TENSOR_RTOL * (t[0][0] + t[1][1] + t[2][2]).abs();
-    let shown = || format!("({}, {}, {})", moments[0], moments[1], moments[2]);
+    let shown =
+        || format!("({})", moments.iter().map(|&m| num::Shortest(m).to_string()).collect::<Vec<_>>().join(", "));
     if moments[0] < -slack {
         return Err(format!(
             "the inertia tensor is not positive semi-definite: its principal moments are {}, and a moment of inertia is ≥ 0",

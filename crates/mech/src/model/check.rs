@@ -60,14 +60,14 @@ impl ValueCheck {
         match &self.kind {
             CheckKind::Mass(m) => match value(*m) {
                 Some(m) if m.is_nan() || m <= 0.0 => {
-                    Err(ModelError::at(at(), format!("the body's mass must be positive, not {m}")))
+                    Err(ModelError::at(at(), format!("the body's mass must be positive, not {}", num::Shortest(m))))
                 }
                 _ => Ok(()),
             },
             CheckKind::Moment(i) => {
                 let m = value(*i).unwrap_or(f64::NAN);
                 if m.is_nan() || m < 0.0 {
-                    return Err(ModelError::at(at(), format!("the moment of inertia must be ≥ 0, not {m}")));
+                    return Err(ModelError::at(at(), format!("the moment of inertia must be ≥ 0, not {}", num::Shortest(m))));
                 }
                 Ok(())
             }
@@ -128,13 +128,14 @@ fn physical(m: &[[f64; 3]; 3]) -> Result<(), String> {
     let moments = nalgebra::Matrix3::from_fn(|i, j| m[i][j]).symmetric_eigenvalues();
     let (a, b, c) = (moments[0], moments[1], moments[2]);
     if let Some(&negative) = [a, b, c].iter().find(|&&x| x < -tol) {
-        return Err(format!("a principal moment is negative ({negative})"));
+        return Err(format!("a principal moment is negative ({})", num::Shortest(negative)));
     }
     if scale == 0.0 {
         return Ok(());
     }
     for (x, y, z) in [(a, b, c), (b, c, a), (c, a, b)] {
         if x > y + z + tol {
+            let [x, y, z] = [x, y, z].map(num::Shortest);
             return Err(format!("the principal moment {x} exceeds the sum of the other two ({y} + {z})"));
         }
     }

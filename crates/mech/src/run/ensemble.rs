@@ -99,15 +99,21 @@ pub(crate) fn propagate(
                 continue;
             }
             if batch.steps[l] >= config.max_steps {
-                batch.failure[l] =
-                    Some(format!("maximal number of steps ({}) reached at t = {}", config.max_steps, batch.t[l]));
+                batch.failure[l] = Some(format!(
+                    "maximal number of steps ({}) reached at t = {}",
+                    config.max_steps,
+                    num::Shortest(batch.t[l])
+                ));
                 continue;
             }
             // The step rule of `num::Taylor`, so that a lane takes a single run's steps.
             let step = taylor_step(p, before_last[l], last[l]);
             match taylor_advance(step, batch.t[l], config.h_max.unwrap_or(f64::INFINITY), Some(t_end[l])) {
                 Ok((step, lands)) => (h[l], lands_on_end[l]) = (step, lands),
-                Err(step) => batch.failure[l] = Some(format!("step size {step:e} too small at t = {}", batch.t[l])),
+                Err(step) => {
+                    batch.failure[l] =
+                        Some(format!("step size {step:e} too small at t = {}", num::Shortest(batch.t[l])))
+                }
             }
         }
         // Horner's rule on every lane; a lane that does not step (h = 0) keeps
