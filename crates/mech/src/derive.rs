@@ -225,7 +225,6 @@ impl Derivation {
         }
         let (hamiltonian, velocities, hamilton) =
             hamiltonian(pool, &s, &energies, &motion, &ext, &mut judged.verdicts, &is_var);
-
         let inputs: Vec<ExprId> = model.inputs.iter().map(|u| pool.symbol(&u.name)).collect();
         let input_matrix: Vec<Vec<ExprId>> = motion
             .forcing
@@ -506,14 +505,18 @@ fn energies(
                 u_terms.push(u);
             }
         }
-        // Rigid bodies' T is small and quadratic in the rates: it joins `kinetic`.
+        // The bodies' T enters the form coefficient by coefficient; its sum,
+        // with the model's own `kinetic`, is what the model's T is shown as.
         let mut k_terms = Vec::new();
+        let mut body_parts = quadratic::Parts::new(s.n());
         for (body, frame) in model.bodies.iter().zip(frames) {
             let terms = body::terms(pool, body, frame, q, qd, t, model.gravity.as_ref());
             k_terms.push(terms.kinetic);
             u_terms.extend(terms.potential);
+            body::kinetic_form(pool, body, frame, &vars_q, &mut body_parts);
             bodies.push(body::motion(pool, body, frame, &terms, is_var));
         }
+        let body_form = (!model.bodies.is_empty()).then(|| body_parts.finish(pool, is_var));
         if let Some(k) = &model.kinetic {
             k_terms.push(k.expr);
         }
@@ -528,6 +531,10 @@ fn energies(
             let k = pool.add(&k_terms);
             Some(pool.simplify_in(k, is_var))
         };
+        // The parts of L not yet in a form: the model's `kinetic`, and −U.
+        let user_kinetic = model.kinetic.as_ref().map_or_else(|| pool.zero(), |k| k.expr);
+        let rest = pool.sub(user_kinetic, uu);
+        let rest = pool.simplify_in(rest, is_var);
         if pool.work_exhausted() {
             // The derivation stops at its next check; nothing more is worth building.
             let tt = k.unwrap_or_else(|| pool.zero());
@@ -537,7 +544,12 @@ fn energies(
             let tt = k.unwrap_or_else(|| pool.zero());
             let l = pool.sub(tt, uu);
             let l = pool.simplify_in(l, is_var);
-            let form = Quadratic::split(pool, l, &vars_q);
+            let form = Quadratic::split(pool, rest, &vars_q).map(|mut f| {
+                if let Some(body_form) = &body_form {
+                    f.add(pool, body_form, is_var);
+                }
+                f
+            });
             (Some(tt), Some(uu), l, form)
         } else {
             let masses: Vec<(ExprId, Vec<ExprId>)> =
@@ -548,11 +560,11 @@ fn energies(
                 Some(k) => pool.add2(t_particles, k),
                 None => t_particles,
             };
-            // The rest of L (T from `kinetic`, minus U) is small: split it.
-            let k0 = k.unwrap_or_else(|| pool.zero());
-            let rest = pool.sub(k0, uu);
             let form = Quadratic::split(pool, rest, &vars_q).map(|rest_form| {
                 let mut f = particle_form;
+                if let Some(body_form) = &body_form {
+                    f.add(pool, body_form, is_var);
+                }
                 f.add(pool, &rest_form, is_var);
                 f
             });
@@ -867,9 +879,21 @@ fn judge(
             let zero_vel: Subst = qd.iter().map(|&v| (v, pool.zero())).collect();
             let u0 = pool.substitute(uu, &zero_vel);
             let en = pool.add2(tt, u0);
-            let en = if model.particles.is_empty() { pool.simplify_in(en, is_var) } else { en };
-            let same = probe::decide_equal(pool, energy_function, en).known();
-            explain_energy(pool, &mut verdicts, same, tt, uu, u0, qd);
+            // T and U are simplified each; their sum is, too, while it is small.
+            let en = if model.particles.is_empty() { simplify_bounded(pool, en, is_var) } else { en };
+            // With U free of the velocities, L's form holds T's b and L₀ = T₀ − U:
+            // T is homogeneous of degree 2 exactly when b = 0 and T₀ = L₀ + U = 0,
+            // and h − E = −bᵀq' − 2T₀, so h = E exactly then. Deciding that on the
+            // form's simplified coefficients spares proving two long sums equal.
+            let homogeneous = match &e.form {
+                Some(form) if qd.iter().all(|&v| pool.free_of(uu, v)) => Some(homogeneity(pool, form, uu)),
+                _ => None,
+            };
+            let same = match homogeneous {
+                Some(decision) => decision.known(),
+                None => probe::decide_equal(pool, energy_function, en).known(),
+            };
+            explain_energy(pool, &mut verdicts, same, homogeneous, tt, uu, u0, qd);
             (Some(en), same)
         }
         _ => {
@@ -1251,28 +1275,53 @@ fn elimination_solve(pool: &mut Pool, mut a: Vec<Vec<ExprId>>, mut r: Vec<ExprId
 /// Explains whether h equals T + U₀, the way the notes do: a time-dependent
 /// transformation x(q, t) makes T inhomogeneous in q'; a velocity-dependent
 /// potential adds terms to h.
+/// Whether T is homogeneous of degree 2 in the velocities, read from L's
+/// form when U is free of them: b = 0 and T₀ = L₀ + U = 0, each coefficient
+/// decided on its own.
+fn homogeneity(pool: &mut Pool, form: &Quadratic, potential: ExprId) -> Decision {
+    let t0 = pool.add2(form.l0, potential);
+    let mut decisions = Vec::with_capacity(form.b.len() + 1);
+    for &b in form.b.iter().chain([&t0]) {
+        let d = probe::decide_zero(pool, b);
+        if d.is_nonzero() {
+            return d;
+        }
+        decisions.push(d);
+    }
+    if decisions.iter().all(|d| d.is_zero()) {
+        Decision::Zero
+    } else {
+        Decision::Undecided
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
 fn explain_energy(
     pool: &mut Pool,
     verdicts: &mut Verdicts,
     same: Option<bool>,
+    homogeneous: Option<Decision>,
     kinetic: ExprId,
     potential: ExprId,
     u0: ExprId,
     qd: &[ExprId],
 ) {
     // T homogeneous of degree 2 in q' ⇔ Σ q' ∂T/∂q' = 2T.
-    let mut terms: Vec<ExprId> = qd
-        .iter()
-        .map(|&v| {
-            let d = pool.diff(kinetic, v);
-            pool.mul2(v, d)
-        })
-        .collect();
-    let two = pool.int(2);
-    let two_t = pool.mul2(two, kinetic);
-    terms.push(pool.neg(two_t));
-    let euler = pool.add(&terms);
-    verdicts.energy.push(match probe::decide_zero(pool, euler) {
+    let homogeneous = homogeneous.unwrap_or_else(|| {
+        let mut terms: Vec<ExprId> = qd
+            .iter()
+            .map(|&v| {
+                let d = pool.diff(kinetic, v);
+                pool.mul2(v, d)
+            })
+            .collect();
+        let two = pool.int(2);
+        let two_t = pool.mul2(two, kinetic);
+        terms.push(pool.neg(two_t));
+        let euler = pool.add(&terms);
+        probe::decide_zero(pool, euler)
+    });
+    verdicts.energy.push(match homogeneous {
         Decision::Zero => EnergyReason::KineticHomogeneous,
         Decision::NonZero => EnergyReason::KineticNotHomogeneous,
         Decision::Undecided => EnergyReason::HomogeneityUndecided,

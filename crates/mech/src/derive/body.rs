@@ -2,6 +2,7 @@
 //! and body-frame angular velocity and angular momentum, as expressions in
 //! (q, q', t). See [`crate::model::body`] for the formulas and the reading.
 
+use crate::derive::quadratic::{Parts, Vars};
 use crate::euler;
 use crate::model::frames::Frame;
 use crate::model::{Body, Gravity};
@@ -128,6 +129,88 @@ pub(crate) fn terms(
     BodyTerms { kinetic, potential, omega, angular_momentum: l, center }
 }
 
+/// Adds a body's kinetic energy to the quadratic form `parts`, coefficient by
+/// coefficient, with the body's velocity columns J_i = ∂x_ref/∂q_i (space),
+/// u_i = D J_i (body components) and ω = Σ W_i q_i' (body components):
+///
+/// ```text
+/// M_ij += M J_i·J_j + M (u_i·(W_j × c) + u_j·(W_i × c)) + W_iᵀ I W_j
+/// b_i  += M J_i·J_t + M u_t·(W_i × c)
+/// T₀   += ½ M J_t·J_t
+/// ```
+///
+/// which is T of the module text written out. Built this way, no coefficient
+/// ever holds more than its own terms: the whole T, expanded and collected
+/// again, grows with the product of a chain's depth and its coordinates.
+pub(crate) fn kinetic_form(pool: &mut Pool, body: &Body, frame: &Frame, v: &Vars, parts: &mut Parts) {
+    let n = v.q.len();
+    let zero = pool.zero();
+    let d = &frame.d;
+    let column = |pool: &mut Pool, x: ExprId| -> [ExprId; 3] { frame.origin.map(|o| pool.diff(o, x)) };
+    let jac: Vec<[ExprId; 3]> = v.q.iter().map(|&qi| column(pool, qi)).collect();
+    let jt = column(pool, v.t);
+    let body_components = |pool: &mut Pool, j: &[ExprId; 3]| -> [ExprId; 3] {
+        std::array::from_fn(|i| {
+            let terms: Vec<ExprId> = (0..3).map(|k| pool.mul2(d[i][k], j[k])).collect();
+            pool.add(&terms)
+        })
+    };
+    let u: Vec<[ExprId; 3]> = jac.iter().map(|j| body_components(pool, j)).collect();
+    let ut = body_components(pool, &jt);
+    let w: Vec<[ExprId; 3]> = v.qd.iter().map(|&x| frame.omega.map(|o| pool.diff(o, x))).collect();
+    let c = body.center_of_mass;
+    let offset = c.iter().any(|&x| !pool.is_zero(x));
+    let w_x_c: Vec<[ExprId; 3]> = w.iter().map(|wi| if offset { cross(pool, wi, &c) } else { [zero; 3] }).collect();
+    let i_w: Vec<[ExprId; 3]> = w
+        .iter()
+        .map(|wi| {
+            std::array::from_fn(|a| {
+                let terms: Vec<ExprId> = (0..3).map(|b| pool.mul2(body.inertia[a][b], wi[b])).collect();
+                pool.add(&terms)
+            })
+        })
+        .collect();
+    let moves = |k: usize| jac[k] != [zero; 3] || w[k] != [zero; 3];
+    let active: Vec<usize> = (0..n).filter(|&k| moves(k)).collect();
+    let dot = |pool: &mut Pool, a: &[ExprId; 3], b: &[ExprId; 3]| -> ExprId {
+        let terms: Vec<ExprId> = (0..3).map(|k| pool.mul2(a[k], b[k])).collect();
+        pool.add(&terms)
+    };
+    for (x, &i) in active.iter().enumerate() {
+        for &j in &active[x..] {
+            let mut terms = vec![dot(pool, &jac[i], &jac[j])];
+            if offset {
+                terms.push(dot(pool, &u[i], &w_x_c[j]));
+                terms.push(dot(pool, &u[j], &w_x_c[i]));
+            }
+            let translation = pool.add(&terms);
+            let translation = pool.mul2(body.mass, translation);
+            let rotation = dot(pool, &w[i], &i_w[j]);
+            let entry = pool.add2(translation, rotation);
+            if !pool.is_zero(entry) {
+                parts.push_m(i, j, entry);
+            }
+        }
+        if jt != [zero; 3] {
+            let mut terms = vec![dot(pool, &jac[i], &jt)];
+            if offset {
+                terms.push(dot(pool, &ut, &w_x_c[i]));
+            }
+            let sum = pool.add(&terms);
+            let entry = pool.mul2(body.mass, sum);
+            if !pool.is_zero(entry) {
+                parts.push_b(i, entry);
+            }
+        }
+    }
+    if jt != [zero; 3] {
+        let half = pool.rational(1, 2);
+        let sq = dot(pool, &jt, &jt);
+        let entry = pool.mul(&[half, body.mass, sq]);
+        parts.push_l0(entry);
+    }
+}
+
 fn cross(pool: &mut Pool, a: &[ExprId; 3], b: &[ExprId; 3]) -> [ExprId; 3] {
     let mut c = [pool.zero(); 3];
     for (k, (i, j)) in [(1, 2), (2, 0), (0, 1)].into_iter().enumerate() {
@@ -240,6 +323,18 @@ mod tests {
             ] {
                 let (a, b) = (body.pool().eval(a, &e).unwrap(), parts.pool().eval(b, &e).unwrap());
                 assert!((a - b).abs() < 1e-10 * (1.0 + b.abs()), "{what}: body {a} vs particles {b}");
+            }
+            // The body's form (M, b, T₀ built coefficient by coefficient) gives
+            // the equations of motion of the particles' T written out.
+            for i in 0..4 {
+                let mut pairs = vec![(format!("f_{i}"), body.forcing()[i], parts.forcing()[i])];
+                for j in 0..4 {
+                    pairs.push((format!("M_{i}{j}"), body.mass_matrix()[i][j], parts.mass_matrix()[i][j]));
+                }
+                for (what, a, b) in pairs {
+                    let (a, b) = (body.pool().eval(a, &e).unwrap(), parts.pool().eval(b, &e).unwrap());
+                    assert!((a - b).abs() < 1e-10 * (1.0 + b.abs()), "{what}: body {a} vs particles {b}");
+                }
             }
             // L about the reference point, body components: Σ m r_k × v_k with
             // v_k = D v_ref + ω × r_k (body components), v_ref = (x' + 0.2 cos β β', 0.6 x x', 1).

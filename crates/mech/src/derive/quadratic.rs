@@ -307,6 +307,59 @@ impl Quadratic {
     }
 }
 
+/// A quadratic form gathered term by term (the rigid bodies' parts), each
+/// coefficient simplified once when the form is finished.
+pub struct Parts {
+    m: Vec<Vec<Vec<ExprId>>>,
+    b: Vec<Vec<ExprId>>,
+    l0: Vec<ExprId>,
+}
+
+impl Parts {
+    /// No terms yet, for `n` coordinates.
+    pub fn new(n: usize) -> Parts {
+        Parts { m: vec![vec![Vec::new(); n]; n], b: vec![Vec::new(); n], l0: Vec::new() }
+    }
+
+    /// Adds `e` to M_ij (and M_ji).
+    pub fn push_m(&mut self, i: usize, j: usize, e: ExprId) {
+        self.m[i.min(j)][i.max(j)].push(e);
+    }
+
+    /// Adds `e` to b_i.
+    pub fn push_b(&mut self, i: usize, e: ExprId) {
+        self.b[i].push(e);
+    }
+
+    /// Adds `e` to L₀.
+    pub fn push_l0(&mut self, e: ExprId) {
+        self.l0.push(e);
+    }
+
+    /// The form, each coefficient the simplified sum of its terms.
+    pub fn finish(self, pool: &mut Pool, is_var: &dyn Fn(Symbol) -> bool) -> Quadratic {
+        let n = self.b.len();
+        let sum = |pool: &mut Pool, terms: &[ExprId]| -> ExprId {
+            if terms.is_empty() {
+                return pool.zero();
+            }
+            let s = pool.add(terms);
+            pool.simplify_in(s, is_var)
+        };
+        let mut form = Quadratic::zero(pool, n);
+        for i in 0..n {
+            for j in i..n {
+                let e = sum(pool, &self.m[i][j]);
+                form.m[i][j] = e;
+                form.m[j][i] = e;
+            }
+            form.b[i] = sum(pool, &self.b[i]);
+        }
+        form.l0 = sum(pool, &self.l0);
+        form
+    }
+}
+
 /// Coordinate symbol → its index.
 fn coordinate_index(q: &[ExprId]) -> FxHashMap<ExprId, usize> {
     q.iter().enumerate().map(|(i, &x)| (x, i)).collect()
