@@ -11,6 +11,7 @@ mod decimal;
 mod diagnostics;
 mod extremal;
 mod files;
+mod import;
 mod inertia;
 mod interrupt;
 mod linearize;
@@ -119,6 +120,8 @@ enum Command {
     Extremal(extremal::Args),
     /// One HTML page that opens offline: the derivation typeset, the mechanism animated, plots, the audit and the analyses.
     Report(report::Args),
+    /// A URDF robot as a model file: a body per moving joint, fixed joints merged, limits and meshes left out.
+    Import(import::Args),
 }
 
 /// Summary formats of `simulate`.
@@ -169,6 +172,7 @@ fn main() -> ExitCode {
         Command::Top(args) => top::run(&args),
         Command::Extremal(args) => extremal::run(&args),
         Command::Report(args) => report::run(&args),
+        Command::Import(args) => import::run(&args),
         Command::Simulate { list_methods: true, .. } => write_stdout(&simulate::list_methods()),
         Command::Simulate {
             model,

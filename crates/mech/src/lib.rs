@@ -100,9 +100,10 @@ pub use extremal::{
 };
 pub use linearize::{linearize, About, Eigenvalue, Linearization, LinearizeConfig, LinearizeError, LinearizeReport};
 pub use mechanism::{Mechanism, Point, PointKind};
+pub use model::urdf_to_model;
 pub use model::{
     Body, CheckKind, ConstraintKind, ConstraintSpec, Coordinate, Gravity, InitialValue, Input, Load, LoadKind, Located,
-    Model, Orientation, Parameter, Particle, ValueCheck,
+    Model, Orientation, Parameter, Particle, UrdfConfig, ValueCheck,
 };
 pub use modes::{
     normal_modes, DampedRoot, Damping, Mode, ModeKind, Modes, ModesConfig, ModesError, ModesReport, SymbolicModes,

@@ -24,6 +24,7 @@ pub(crate) mod constraint;
 pub(crate) mod frames;
 pub(crate) mod gravity;
 pub(crate) mod load;
+pub(crate) mod urdf;
 
 pub use crate::source::Parameter;
 pub use body::{Body, Orientation};
@@ -31,6 +32,7 @@ pub use check::{CheckKind, ValueCheck};
 pub use constraint::{ConstraintKind, ConstraintSpec};
 pub use gravity::Gravity;
 pub use load::{Load, LoadKind};
+pub use urdf::{urdf_to_model, UrdfConfig};
 
 /// A generalized coordinate.
 #[derive(Debug, Clone)]

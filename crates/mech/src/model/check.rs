@@ -117,7 +117,7 @@ const MIN_AXLE_TILT: f64 = 1e-12;
 
 /// Whether `m` is a rigid body's inertia tensor: symmetric, its principal
 /// moments ≥ 0 and each at most the sum of the other two (to rounding).
-fn physical(m: &[[f64; 3]; 3]) -> Result<(), String> {
+pub(crate) fn physical(m: &[[f64; 3]; 3]) -> Result<(), String> {
     let scale = m.iter().flatten().fold(0.0f64, |a, &x| a.max(x.abs()));
     let tol = 1e-12 * scale;
     for (i, j) in [(0, 1), (0, 2), (1, 2)] {
