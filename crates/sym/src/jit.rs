@@ -18,7 +18,10 @@
 //! within 1 ulp of libm; `sin(u)` and `cos(u)` share one reduction; the tape
 //! and every other evaluation use the same arithmetic, `trig::sin_cos_f64`), for
 //! arguments below 2¹⁹·π/2; larger and non-finite ones go to the library in
-//! a cold block at each call site. (A variant that compiled a second, call-free
+//! a cold block at each call site. A tape with more than [`OUTLINE_TRIG`] of
+//! them calls one wrapper of `trig::sin_cos_f64` for each pair instead, which
+//! keeps a long trigonometric tape's compile time in proportion to its length.
+//! (A variant that compiled a second, call-free
 //! copy of the function for the hot path was measured 10 ns faster per
 //! double-pendulum call, but doubled compile time, which a run of 10⁵ calls
 //! does not win back.) Tapes with them are compiled without cranelift's
@@ -30,9 +33,10 @@
 //! exponentiation (the same multiplications as `f64::powi`).
 
 // Running JIT-compiled code can only be done through a raw function pointer.
-// The unsafe surface is three small blocks, each with its safety argument:
+// The unsafe surface is four small blocks, each with its safety argument:
 // the pointer cast in `Compiled::new`, the call in `Compiled::eval` (buffer
-// lengths checked just before), and freeing the code in `Drop`.
+// lengths checked just before), freeing the code in `Drop`, and the two
+// stores of `lagrange_sin_cos` into the slot its caller passes.
 #![allow(unsafe_code)]
 
 pub(crate) mod shared;
@@ -43,7 +47,8 @@ use crate::expr::Func;
 pub(crate) use crate::native::JitError;
 use cranelift_codegen::ir::condcodes::FloatCC;
 use cranelift_codegen::ir::{
-    types, AbiParam, BlockArg, FuncRef, InstBuilder, MemFlagsData, Signature, UserFuncName, Value,
+    types, AbiParam, BlockArg, FuncRef, InstBuilder, MemFlagsData, Signature, StackSlot, StackSlotData, StackSlotKind,
+    UserFuncName, Value,
 };
 use cranelift_codegen::isa::OwnedTargetIsa;
 use cranelift_codegen::settings::{self, Configurable};
@@ -193,7 +198,39 @@ struct Translator<'a, 'b> {
 
 /// The wrappers a function calls, each declared in it once.
 #[derive(Default)]
-pub(crate) struct Imports(FxHashMap<&'static str, FuncRef>);
+pub(crate) struct Imports {
+    functions: FxHashMap<&'static str, FuncRef>,
+    /// Whether `sin` and `cos` are calls to [`lagrange_sin_cos`] instead of
+    /// inline code ([`OUTLINE_TRIG`]), and the slot it writes them to.
+    outline_trig: Option<Option<StackSlot>>,
+}
+
+/// Above this many sines and cosines a tape calls [`lagrange_sin_cos`]
+/// instead of writing each inline. Inline, one is some seventy instructions
+/// in three blocks, and a long trigonometric tape (a chain of fifty links has
+/// 1275 angle differences, each with its sine and cosine) spends seconds in
+/// cranelift for them; the call is the same arithmetic (the interpreter's
+/// [`trig::sin_cos_f64`]), so the numbers are the tape's bit for bit, at a
+/// few nanoseconds more per pair.
+pub const OUTLINE_TRIG: usize = 256;
+
+/// `sin x` and `cos x` from one argument reduction, written to `out[0]` and
+/// `out[1]`: the call a long tape makes ([`OUTLINE_TRIG`]).
+///
+/// # Safety
+///
+/// `out` points to two writable, aligned `f64`s (the compiled code passes a
+/// 16-byte stack slot of its own).
+pub(crate) unsafe extern "C" fn lagrange_sin_cos(x: f64, out: *mut f64) {
+    let (s, c) = trig::sin_cos_f64(x);
+    // SAFETY: the caller passes two writable, aligned f64s (see above).
+    unsafe {
+        out.write(s);
+        out.add(1).write(c);
+    }
+}
+
+pub(crate) const SIN_COS: &str = "lagrange_sin_cos";
 
 impl Imports {
     /// Calls the wrapper `name` taking `args.len()` floats and returning one.
@@ -204,7 +241,7 @@ impl Imports {
         name: &'static str,
         args: &[Value],
     ) -> Result<Value, JitError> {
-        let f = match self.0.get(name) {
+        let f = match self.functions.get(name) {
             Some(&f) => f,
             None => {
                 let mut sig = module.make_signature();
@@ -212,7 +249,7 @@ impl Imports {
                 sig.returns.push(AbiParam::new(types::F64));
                 let id = module.declare_function(name, Linkage::Import, &sig).map_err(codegen)?;
                 let f = module.declare_func_in_func(id, b.func);
-                self.0.insert(name, f);
+                self.functions.insert(name, f);
                 f
             }
         };
@@ -230,6 +267,28 @@ impl Imports {
         x: Value,
         want: [bool; 2],
     ) -> Result<[Option<Value>; 2], JitError> {
+        if let Some(slot) = &mut self.outline_trig {
+            let slot = *slot.get_or_insert_with(|| {
+                b.create_sized_stack_slot(StackSlotData::new(StackSlotKind::ExplicitSlot, 16, 3))
+            });
+            let ptr = module.target_config().pointer_type();
+            let out = b.ins().stack_addr(ptr, slot, 0);
+            let f = match self.functions.get(SIN_COS) {
+                Some(&f) => f,
+                None => {
+                    let mut sig = module.make_signature();
+                    sig.params.push(AbiParam::new(types::F64));
+                    sig.params.push(AbiParam::new(ptr));
+                    let id = module.declare_function(SIN_COS, Linkage::Import, &sig).map_err(codegen)?;
+                    let f = module.declare_func_in_func(id, b.func);
+                    self.functions.insert(SIN_COS, f);
+                    f
+                }
+            };
+            b.ins().call(f, &[x, out]);
+            let load = |b: &mut FunctionBuilder<'_>, k: i32| b.ins().stack_load(ptr, types::F64, slot, 8 * k);
+            return Ok([want[0].then(|| load(b, 0)), want[1].then(|| load(b, 1))]);
+        }
         let (inline, library, done) = (b.create_block(), b.create_block(), b.create_block());
         let results: Vec<Value> = want.iter().filter(|&&w| w).map(|_| b.append_block_param(done, types::F64)).collect();
         let ax = b.ins().fabs(x);
@@ -500,6 +559,7 @@ pub(crate) fn new_module(codegen: Codegen) -> Result<JITModule, JitError> {
     }
     jb.symbol(POWF, lagrange_powf as *const u8);
     jb.symbol(ATAN2, lagrange_atan2 as *const u8);
+    jb.symbol(SIN_COS, lagrange_sin_cos as *const u8);
     Ok(JITModule::new(jb))
 }
 
@@ -538,7 +598,9 @@ pub(crate) fn define_function(
 /// Defines function `id` of `module` with signature `sig` as the code of `tape`.
 fn define(module: &mut JITModule, id: FuncId, sig: &Signature, tape: &Tape) -> Result<(), JitError> {
     define_function(module, id, sig, |module, b, params| {
-        let mut t = Translator { module, b, imports: Imports::default() };
+        let trig = tape.ops().iter().filter(|op| matches!(op, Op::Func(Func::Sin | Func::Cos, _))).count();
+        let imports = Imports { outline_trig: (trig > OUTLINE_TRIG).then_some(None), ..Imports::default() };
+        let mut t = Translator { module, b, imports };
         t.body(tape, params[0], params[1])?;
         Ok(t.b)
     })
@@ -766,6 +828,31 @@ mod tests {
         tape.eval(&values, &mut by_tape);
         native.eval(&values, &mut by_jit);
         assert_eq!(by_tape[0].to_bits(), by_jit[0].to_bits(), "{by_tape:?} {by_jit:?}");
+    }
+
+    /// A tape with more than [`OUTLINE_TRIG`] sines and cosines calls
+    /// `lagrange_sin_cos` for them and still gives the tape's numbers bit for
+    /// bit, for small, huge and non-finite arguments alike.
+    #[test]
+    fn many_sines_are_calls_with_the_tapes_numbers() {
+        let terms: Vec<String> =
+            (1..=OUTLINE_TRIG).map(|k| format!("sin(x*{k})*cos(y - {k}) + cos(x*z*{k})")).collect();
+        let text = format!("{}; sin(z*1e9) + cos(z*1e9); sin(log(y)); cos(exp(z*1000))", terms.join(" + "));
+        let mut pool = Pool::default();
+        let roots: Vec<_> = text.split(';').map(|r| pool.parse(r).unwrap()).collect();
+        let inputs: Vec<_> = INPUTS.iter().map(|(n, _)| pool.parse(n).unwrap()).collect();
+        let values: Vec<f64> = INPUTS.iter().map(|&(_, v)| v).collect();
+        let mut tape = Tape::compile(&pool, &roots, &inputs).unwrap();
+        let trig = tape.ops().iter().filter(|op| matches!(op, Op::Func(Func::Sin | Func::Cos, _))).count();
+        assert!(trig > OUTLINE_TRIG, "{trig} sines and cosines");
+        let native = Compiled::new(&tape).unwrap();
+        let (mut by_tape, mut by_jit) = ([0.0; 4], [0.0; 4]);
+        tape.eval(&values, &mut by_tape);
+        native.eval(&values, &mut by_jit);
+        for (a, b) in by_tape.into_iter().zip(by_jit) {
+            assert!(a.to_bits() == b.to_bits() || a.is_nan() && b.is_nan(), "{by_tape:?} {by_jit:?}");
+        }
+        assert!(by_jit[2].is_nan() && by_jit[3].is_nan(), "{by_jit:?}");
     }
 
     #[test]
