@@ -17,12 +17,14 @@ mod body;
 pub(crate) mod constraint;
 mod layout;
 mod load;
+mod no_inertia;
 mod quadratic;
 mod verdict;
 
 pub use body::BodyMotion;
 pub use constraint::{Constraint, Constraints};
 pub use layout::Layout;
+pub use no_inertia::NoInertia;
 pub use verdict::{
     ConservationReason, ConservedReason, CyclicReason, EnergyReason, HamiltonianReason, RateTerm, Verdicts,
 };

@@ -87,7 +87,7 @@ mod test_models;
 #[cfg(test)]
 extern crate self as mech;
 
-pub use derive::{BodyMotion, Constraint, Constraints};
+pub use derive::{BodyMotion, Constraint, Constraints, NoInertia};
 pub use derive::{
     ConservationReason, Conserved, ConservedReason, CyclicReason, Derivation, EnergyReason, HamiltonianReason, Layout,
     RateTerm, Verdicts,

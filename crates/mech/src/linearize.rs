@@ -1009,6 +1009,10 @@ pub fn linearize(d: &Derivation, config: &LinearizeConfig) -> Result<Linearizati
         .into());
     }
     let (mut q_start, qd_start) = initial(d, &config.at)?;
+    // What every command checks of its start: inputs finite at t = 0, the
+    // constraints defined, holding and with a gradient there.
+    d.model.check_values(Some((&q_start, &qd_start)))?;
+    d.check_constraints_at(&q_start, &qd_start)?;
     // Rates: cyclic coordinates move in a steady motion.
     let cyclic: Vec<usize> = d.cyclic.iter().copied().filter(|i| act.contains(i)).collect();
     let mut rate = vec![0.0; big_n];
@@ -1077,6 +1081,17 @@ pub fn linearize(d: &Derivation, config: &LinearizeConfig) -> Result<Linearizati
         About::Equilibrium => "equilibrium",
         About::Steady => "steady motion",
     };
+    // Nothing to solve at the start: a coordinate without inertia there
+    // because a parameter is 0 (or, without constraints, M singular) is the
+    // cause to name, not the search.
+    if problem.residual(&start).is_none() {
+        if let Some(idle) = d.no_inertia_at(&act, &q_start, &|p| d.model.parameter(p)) {
+            if d.constraints.is_empty() || !idle.zero_parameters.is_empty() {
+                let at = format!("the start {}", pairs(&names, &q_start));
+                return Err(ModelError::whole(idle.message(&at)).with_help(idle.help()).into());
+            }
+        }
+    }
     let search = equilibria::search(&mut problem, &start, !config.keep_unstable)
         .map_err(|why| LinearizeError::NoPoint { what, start: pairs(&unknown_names, &start), why })?;
     let x = search.found[search.chosen].x.clone();

@@ -487,6 +487,10 @@ impl Model {
             }
             let value = r.num_or_expr(v, Scope::Time, &format!("the value of input '{name}'"))?;
             r.pool.set_rank(name, RANK_PARAMETER);
+            r.check(ValueCheck {
+                kind: CheckKind::Input { name: name.clone(), value: value.expr },
+                span: value.span.clone(),
+            })?;
             r.inputs.push(name.clone());
             inputs.push(Input { name: name.clone(), value, span: k.span() });
         }

@@ -201,6 +201,15 @@ pub enum ModesError {
         /// The equilibrium, as `q=v` pairs.
         at: String,
     },
+    /// A coordinate has no inertia at the equilibrium because a parameter is 0
+    /// (a mass, a moment, a length): the kinetic-energy matrix is singular.
+    #[error("{message}")]
+    NoInertia {
+        /// The sentence ([`crate::NoInertia::message`]).
+        message: String,
+        /// What to do ([`crate::NoInertia::help`]).
+        help: String,
+    },
     /// A zero mode along which U is not constant: the oscillation is not harmonic.
     #[error("the equilibrium at {at} is degenerate: U has no curvature along the mode {shape}, yet U changes along it, so small oscillations there are not harmonic")]
     Degenerate {
@@ -220,6 +229,7 @@ impl ModesError {
             ModesError::NoEquilibrium { .. } => Some(
                 "start elsewhere (give the coordinates other starting values), or check that U has a minimum".into(),
             ),
+            ModesError::NoInertia { help, .. } => Some(help.clone()),
             ModesError::SingularKinetic { .. } => {
                 Some("the coordinates are singular there (like polar coordinates at r = 0); choose others".into())
             }
@@ -265,6 +275,19 @@ impl Potential {
 
     fn value(&mut self, q: &[f64]) -> f64 {
         self.eval(q).0
+    }
+}
+
+/// T = M(q₀) is not positive definite at q₀ (`at`, as text): a coordinate
+/// without inertia because a parameter is 0 when that is the cause, else the
+/// coordinates' singularity.
+fn singular_kinetic(d: &Derivation, q0: &[f64], at: &str) -> ModesError {
+    let all: Vec<usize> = (0..d.q.len()).collect();
+    match d.no_inertia_at(&all, q0, &|p| d.model.parameter(p)) {
+        Some(idle) if !idle.zero_parameters.is_empty() => {
+            ModesError::NoInertia { message: idle.message(&format!("the equilibrium {at}")), help: idle.help() }
+        }
+        _ => ModesError::SingularKinetic { at: at.to_string() },
     }
 }
 
@@ -426,9 +449,9 @@ pub fn normal_modes(d: &Derivation, config: &ModesConfig) -> Result<Modes, Modes
     }
 
     // U a = λ T a  ⇔  (L⁻¹ U L⁻ᵀ) y = λ y with T = L Lᵀ and a = L⁻ᵀ y.
-    let chol = tmat.clone().cholesky().ok_or_else(|| ModesError::SingularKinetic { at: at.clone() })?;
+    let chol = tmat.clone().cholesky().ok_or_else(|| singular_kinetic(d, &q0, &at))?;
     let l = chol.l();
-    let l_inv = l.clone().try_inverse().ok_or_else(|| ModesError::SingularKinetic { at: at.clone() })?;
+    let l_inv = l.clone().try_inverse().ok_or_else(|| singular_kinetic(d, &q0, &at))?;
     let s = &l_inv * &hmat * l_inv.transpose();
     let s = (&s + s.transpose()) * 0.5;
     let eig = s.symmetric_eigen();
@@ -602,7 +625,7 @@ fn damped(
             start: at(), why: format!("∂²R/∂q'∂q' is not finite at {}", at())
         });
     }
-    let t_inv = tmat.clone().try_inverse().ok_or_else(|| ModesError::SingularKinetic { at: at() })?;
+    let t_inv = tmat.clone().try_inverse().ok_or_else(|| singular_kinetic(d, q0, &at()))?;
     let mut a = nalgebra::DMatrix::<f64>::zeros(2 * n, 2 * n);
     for i in 0..n {
         a[(i, n + i)] = 1.0;

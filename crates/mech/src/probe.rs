@@ -199,6 +199,60 @@ fn refuted_at_points(pool: &Pool, e: ExprId) -> bool {
     false
 }
 
+/// Whether `e` is zero to rounding at one point (symbols valued by `env`, by
+/// their text): its value is within [`REFUTING_MARGIN`] times its
+/// rounding-error bound, as a value that is not a refutation of zero. None
+/// when a symbol has no value or the value or bound is not finite. A test at a
+/// point, used to explain a refusal, never to claim a zero.
+pub fn zero_to_rounding_at(pool: &Pool, e: ExprId, env: &dyn Fn(&str) -> Option<f64>) -> Option<bool> {
+    let order = pool.reachable(&[e]);
+    let slot: FxHashMap<ExprId, usize> = order.iter().enumerate().map(|(k, &id)| (id, k)).collect();
+    let mut values = vec![Bounded::EXACT_ZERO; order.len()];
+    for (k, &id) in order.iter().enumerate() {
+        values[k] = match pool.as_symbol(id) {
+            Some(s) => Bounded { value: env(&pool.symbol_text(s))?, error: 0.0 },
+            None => bounded_node(pool, id, |c| values[slot[&c]]),
+        };
+    }
+    let Bounded { value, error } = values[slot[&e]];
+    (value.is_finite() && error.is_finite()).then_some(value.abs() <= REFUTING_MARGIN * error)
+}
+
+/// The size of the terms `e` is made of at one point: a sum's is the sum of
+/// its terms' sizes, a product's the product of its factors', a positive
+/// power's the power of its base's, anything else its absolute value. The
+/// scale against which a residual that should be 0 is judged: (x² + y² − l²)²
+/// at x² + y² ≈ l² has size (x² + y² + l²)², not its own tiny value. None as
+/// for [`zero_to_rounding_at`].
+pub fn terms_size_at(pool: &Pool, e: ExprId, env: &dyn Fn(&str) -> Option<f64>) -> Option<f64> {
+    let order = pool.reachable(&[e]);
+    let slot: FxHashMap<ExprId, usize> = order.iter().enumerate().map(|(k, &id)| (id, k)).collect();
+    // (value, size) per node.
+    let mut nodes = vec![(0.0f64, 0.0f64); order.len()];
+    for (k, &id) in order.iter().enumerate() {
+        let at = |c: ExprId| nodes[slot[&c]];
+        nodes[k] = match pool.node(id) {
+            Node::Sym(s) => {
+                let v = env(&pool.symbol_text(*s))?;
+                (v, v.abs())
+            }
+            Node::Add(ts) => ts.iter().fold((0.0, 0.0), |(v, z), &t| (v + at(t).0, z + at(t).1)),
+            Node::Mul(fs) => fs.iter().fold((1.0, 1.0), |(v, z), &f| (v * at(f).0, z * at(f).1)),
+            &Node::Pow(b, x) => {
+                let ((bv, bz), (xv, _)) = (at(b), at(x));
+                let v = bv.powf(xv);
+                (v, if pool.as_number(x).is_some() && xv > 0.0 { bz.powf(xv) } else { v.abs() })
+            }
+            _ => {
+                let v = bounded_node(pool, id, |c| Bounded { value: at(c).0, error: 0.0 }).value;
+                (v, v.abs())
+            }
+        };
+    }
+    let size = nodes[slot[&e]].1;
+    size.is_finite().then_some(size)
+}
+
 /// A computed value and a bound on its absolute error (first order).
 #[derive(Debug, Clone, Copy)]
 struct Bounded {

@@ -527,6 +527,7 @@ pub fn simulate(
     let (mut q0, mut qd0) = d.model.initial_state().map_err(RunError::Input)?;
     override_initial(d, &config.initial, &mut q0, &mut qd0)?;
     d.model.check_values(Some((&q0, &qd0))).map_err(RunError::Input)?;
+    d.check_constraints_at(&q0, &qd0).map_err(RunError::Input)?;
     // Rigid bodies: a terminal event before the Euler angles' gimbal singularity.
     let guards = body::gimbal_guards(d, config.rtol);
     if let Some(g) = guards.iter().find(|g| g.violated(&q0)) {

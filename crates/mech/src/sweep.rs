@@ -964,16 +964,47 @@ fn start_of(
                 // What reading the file with --set checks at these values, and
                 // what a run checks of its start: refused here, the row's failure.
                 model.check_values(Some((&q, &qd)))?;
+                no_inertia(d, model, &q)?;
                 let values = model.parameters.iter().map(|p| p.value).collect();
                 Ok((q, qd, values))
             })
         }
         None => complete(base, grid, inputs, &d.model).and_then(|(q, qd)| {
             d.model.check_values(Some((&q, &qd)))?;
+            no_inertia(d, &d.model, &q)?;
             Ok((q, qd, d.model.parameters.iter().map(|p| p.value).collect()))
         }),
     };
     start.map_err(|e| e.message)
+}
+
+/// A row whose start leaves a coordinate without inertia because a parameter
+/// is 0 (`m = 0`), refused with that cause as a run refuses it. Looked for only
+/// when a parameter is 0 and a diagonal entry of M vanishes at the start, so
+/// that other rows pay nothing.
+fn no_inertia(d: &Derivation, model: &Model, q: &[f64]) -> Result<(), ModelError> {
+    if !d.constraints.is_empty() || !model.parameters.iter().any(|p| p.value == 0.0) {
+        return Ok(());
+    }
+    let names: Vec<&str> = model.coordinates.iter().map(|c| c.name.as_str()).collect();
+    let env = |name: &str| match names.iter().position(|&c| c == name) {
+        Some(k) => Some(q[k]),
+        None if name == "t" => Some(0.0),
+        None => model.parameter(name),
+    };
+    let idle_diagonal = (0..q.len()).any(|i| d.pool().eval(d.mass_matrix[i][i], &env) == Ok(0.0));
+    if !idle_diagonal {
+        return Ok(());
+    }
+    let all: Vec<usize> = (0..q.len()).collect();
+    match d.no_inertia_at(&all, q, &|p| model.parameter(p)) {
+        Some(idle) if !idle.zero_parameters.is_empty() => {
+            let start = names.iter().zip(q).map(|(c, v)| format!("{c} = {}", num::Shortest(*v)));
+            let at = format!("the start ({})", start.collect::<Vec<_>>().join(", "));
+            Err(ModelError::whole(idle.message(&at)).with_help(idle.help()))
+        }
+        _ => Ok(()),
+    }
 }
 
 /// The `[initial]` values of a model at its current parameter values (None where not given).

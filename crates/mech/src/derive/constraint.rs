@@ -109,6 +109,118 @@ impl Derivation {
     }
 }
 
+/// The largest residual of a holonomic constraint at the start, relative to
+/// the size of its terms ([`probe::terms_size_at`]), that is taken for
+/// round-off (and projected away by a run); beyond it the start is refused.
+pub const INITIAL_TOLERANCE: f64 = 1e-9;
+
+impl Derivation {
+    /// Checks the constraints at a start (q, q') at t = 0 with the parameters at
+    /// their values, before anything is solved there: every constraint has a
+    /// real value (its row of A too), each holonomic one holds to
+    /// [`INITIAL_TOLERANCE`] of its terms' size, and its gradient ∂f/∂q does not
+    /// vanish there (a squared constraint's does wherever it holds, which
+    /// leaves its force undetermined). Every command that starts from a point
+    /// runs this (`simulate`, `report`, `linearize`).
+    /// Constraints that are not independent are left to the commands' own
+    /// diagnosis, which tells a repeated constraint from a contradiction.
+    pub fn check_constraints_at(&self, q: &[f64], qd: &[f64]) -> Result<(), ModelError> {
+        if self.constraints.independent < self.constraints.list.len() {
+            return Ok(());
+        }
+        let model = &self.model;
+        let names: Vec<&str> = model.coordinates.iter().map(|c| c.name.as_str()).collect();
+        let env = |name: &str| {
+            if name == "t" {
+                return Some(0.0);
+            }
+            if let Some(k) = names.iter().position(|&c| c == name) {
+                return Some(q[k]);
+            }
+            if let Some(k) = name.strip_suffix('\'').and_then(|c| names.iter().position(|&n| n == c)) {
+                return Some(qd[k]);
+            }
+            model.parameter(name)
+        };
+        let pool = self.pool();
+        let point = || {
+            let parts: Vec<String> = names.iter().zip(q).map(|(n, v)| format!("{n} = {}", num::Shortest(*v))).collect();
+            format!("({})", parts.join(", "))
+        };
+        for c in &self.constraints.list {
+            let value = |e: ExprId| pool.eval(e, &env).unwrap_or(f64::NAN);
+            let holonomic = c.kind == ConstraintKind::Holonomic;
+            let f = if holonomic { value(c.expr) } else { 0.0 };
+            let row: Vec<f64> = c.jacobian.iter().map(|&e| value(e)).collect();
+            let time_term = value(c.time_term);
+            let what = if holonomic { "its gradient ∂f/∂q" } else { "its coefficients of the velocities" };
+            let (subject, bad) = if !f.is_finite() {
+                (format!("the constraint '{}'", c.name), f)
+            } else if let Some(&v) = row.iter().chain([&time_term]).find(|v| !v.is_finite()) {
+                (format!("{what} of the constraint '{}'", c.name), v)
+            } else {
+                (String::new(), 0.0)
+            };
+            if !subject.is_empty() {
+                let how = if bad.is_nan() { "has no real value" } else { "is infinite" };
+                return Err(ModelError::at(c.span.clone(), format!("{subject} {how} at the start {}", point()))
+                    .with_help("a square root or logarithm of a negative number, or a division by zero, at the start: give [initial] values where the constraint is defined, or write it so that it is"));
+            }
+            if !holonomic {
+                continue;
+            }
+            let size = probe::terms_size_at(pool, c.expr, &env).unwrap_or(f.abs());
+            if f.abs() > INITIAL_TOLERANCE * size {
+                return Err(ModelError::at(
+                    c.span.clone(),
+                    format!(
+                        "the initial values violate the constraint '{}': its value at the start {} is {f:.3e}, not 0 (the tolerance is {:.3e}: {INITIAL_TOLERANCE:e} of the size of its terms, {size:.3e})",
+                        c.name,
+                        point(),
+                        INITIAL_TOLERANCE * size,
+                    ),
+                )
+                .with_help("give [initial] values that satisfy the constraint (velocities too: A q' + a_t = 0); residuals within the tolerance are round-off and projected away"));
+            }
+            let vanishes = c.jacobian.iter().all(|&e| probe::zero_to_rounding_at(pool, e, &env).unwrap_or(false));
+            if vanishes {
+                let power = power_base(pool, c.expr);
+                let mut err = ModelError::at(
+                    c.span.clone(),
+                    format!(
+                        "the gradient ∂f/∂q of the constraint '{}' vanishes at the start {}, where the constraint holds: it fixes no direction there, so its force is undetermined",
+                        c.name,
+                        point()
+                    ),
+                );
+                err = match power {
+                    Some(base) => err.with_help(format!(
+                        "the constraint is a power of {}, whose gradient is zero wherever it holds: write it unsquared, holonomic = \"{}\"",
+                        pool.display(base),
+                        pool.display(base)
+                    )),
+                    None => err.with_help("write the constraint so that its gradient is not zero where it holds (not as a square, a product with a repeated factor or a sum of squares), or start where it is not zero"),
+                };
+                return Err(err);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The base g of a constraint written as a power g^n (n > 1), or as a product
+/// with such a factor: its gradient n g^(n−1) ∇g vanishes wherever g = 0.
+fn power_base(pool: &Pool, e: ExprId) -> Option<ExprId> {
+    let repeated = |f: ExprId| match pool.node(f) {
+        &sym::Node::Pow(b, x) if pool.as_number(x).is_some_and(|n| n.to_f64() > 1.0) => Some(b),
+        _ => None,
+    };
+    match pool.node(e) {
+        sym::Node::Mul(fs) => fs.iter().find_map(|&f| repeated(f)),
+        _ => repeated(e),
+    }
+}
+
 /// Derives the constraints of `d.model` and amends the verdicts: a constraint
 /// whose force does work makes H not conserved; a momentum on which a
 /// constraint force acts is not conserved.

@@ -1,10 +1,12 @@
 //! What a model must be at numbers: the checks that depend on the parameters'
 //! values (a body's mass is positive, its inertia a rigid body's, a hinge axis
-//! has a direction) and on the start (a rolling wheel's axle is not vertical).
+//! has a direction) and on the start (a rolling wheel's axle is not vertical,
+//! an input is finite at t = 0).
 //!
 //! Reading a model records each check with its place ([`ValueCheck`]) and runs
 //! it at the file's values (with `--set` applied); a run runs the start
-//! checks at its start (`simulate`, after `--start`); a sweep runs
+//! checks at its start (`simulate`, after `--start`; `linearize` at its
+//! start); a sweep runs
 //! them all again for each row's parameter values and start
 //! ([`crate::Model::check_values`]), so that a value `--set` refuses is that
 //! row's failure rather than a run of a model that is not one.
@@ -43,12 +45,20 @@ pub enum CheckKind {
         /// 1 − e_z².
         tilt: ExprId,
     },
+    /// At the start: the input `name` (`[inputs]`) is finite at t = 0, where
+    /// every run starts and about which linearize holds it.
+    Input {
+        /// The input's name.
+        name: String,
+        /// Its value, an expression of t and the parameters.
+        value: ExprId,
+    },
 }
 
 impl ValueCheck {
     /// Whether the check needs the start (coordinates and t), not only the parameters.
     pub fn at_start(&self) -> bool {
-        matches!(self.kind, CheckKind::Axle { .. })
+        matches!(self.kind, CheckKind::Axle { .. } | CheckKind::Input { .. })
     }
 
     /// Runs the check; `env` gives the parameters (and, for a start check,
@@ -102,6 +112,20 @@ impl ValueCheck {
                 .with_help("start the wheel upright or leaning (axle not along z); a wheel lying flat does not roll")),
                 _ => Ok(()),
             },
+            CheckKind::Input { name, value: u } => {
+                let v = pool.eval(*u, env).unwrap_or(f64::NAN);
+                if v.is_finite() {
+                    return Ok(());
+                }
+                let how = if v.is_nan() { "has no real value" } else { "is infinite" };
+                Err(ModelError::at(
+                    at(),
+                    format!(
+                        "the input '{name}' {how} at t = 0: runs start at t = 0 and linearize holds the inputs at their values there (no option starts later)"
+                    ),
+                )
+                .with_help("give the input a value that is finite at t = 0, e.g. shifted in time: 1/(t + 1) rather than 1/t"))
+            }
         }
     }
 }

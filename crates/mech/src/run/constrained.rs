@@ -35,8 +35,9 @@ use sym::{ExprId, Tape};
 
 /// The largest initial residual (relative to the size of the constraint's
 /// terms) that is taken for round-off and projected away; beyond it the
-/// initial values are rejected.
-pub const INITIAL_TOLERANCE: f64 = 1e-9;
+/// initial values are rejected (the start's own check,
+/// [`crate::Derivation::check_constraints_at`], uses the same).
+pub use crate::derive::constraint::INITIAL_TOLERANCE;
 
 /// The audit of one constraint along a run.
 #[derive(Debug, Clone)]
@@ -434,9 +435,10 @@ impl Constrained {
         let (mut pos, mut vel, mut scale) = (vec![0.0; m], vec![0.0; m], vec![(0.0, 0.0); m]);
         system.residuals(0.0, &y0, &mut pos, &mut vel, &mut scale);
         for k in 0..m {
-            let (what, r) = if pos[k].abs() > INITIAL_TOLERANCE * scale[k].0 {
+            // A residual that is not a number (NaN) does not hold either.
+            let (what, r) = if pos[k].is_nan() || pos[k].abs() > INITIAL_TOLERANCE * scale[k].0 {
                 ("", pos[k])
-            } else if vel[k].abs() > INITIAL_TOLERANCE * scale[k].1 {
+            } else if vel[k].is_nan() || vel[k].abs() > INITIAL_TOLERANCE * scale[k].1 {
                 (" at velocity level (A q' + a_t)", vel[k])
             } else {
                 continue;

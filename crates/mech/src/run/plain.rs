@@ -51,6 +51,16 @@ impl Plain {
         let mut system = dynamics.system(form);
         let y0 = system.initial_state(0.0, q0, qd0).map_err(RunError::Input)?;
         if let Some(e) = singular_start(&mut system, dynamics.coordinate_names(), q0, &y0) {
+            // A parameter at 0 that leaves a coordinate without inertia is the cause to name.
+            let all: Vec<usize> = (0..n).collect();
+            let e = match d.no_inertia_at(&all, q0, &|p| d.model.parameter(p)) {
+                Some(idle) if !idle.zero_parameters.is_empty() => {
+                    let start = dynamics.coordinate_names().iter().zip(q0).map(|(c, v)| format!("{c} = {v}"));
+                    let at = format!("the start ({})", start.collect::<Vec<_>>().join(", "));
+                    ModelError::whole(idle.message(&at)).with_help(idle.help())
+                }
+                _ => e,
+            };
             return Err(RunError::Input(e));
         }
         let mut probe_system = system.clone();
