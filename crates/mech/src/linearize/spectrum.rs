@@ -391,4 +391,16 @@ mod tests {
         assert_eq!(ev.iter().filter(|e| e.1 == 0.0 && (e.0 + k.sqrt()).abs() < 1e-6).count(), 2, "{ev:?}");
         assert_eq!(st, Stability::Stable);
     }
+
+    #[test]
+    fn a_very_slow_overdamped_root_is_refined_to_its_own_accuracy() {
+        // k = 4.74e-6, b = 861.6 (a fuzz case, seed 7): s ≈ −5.5e-9 came out
+        // of QR with a relative error of 1.6e-5, more than Newton was let move.
+        let (k, b) = (4.740183e-6f64, 861.6331083652605);
+        let (ev, st) = spectrum(&a(&[&[0.0, 1.0], &[-k, -b]]), None).unwrap();
+        let fast = (-b - (b * b - 4.0 * k).sqrt()) / 2.0;
+        let slow = k / fast;
+        assert!((ev[0].0 - slow).abs() <= 1e-12 * slow.abs(), "{ev:?} vs {slow}");
+        assert_eq!(st, Stability::Stable);
+    }
 }
