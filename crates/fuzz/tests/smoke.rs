@@ -51,11 +51,9 @@ fn body_trees_load_or_are_refused_at_a_place() {
 
 #[test]
 fn linearize_finds_the_known_spectra_of_quadratic_systems() {
-    // Cases 94 (a gyroscopic pair beside zero modes: verdict unstable, every
-    // Re s <= 0) and 118 (a slow pair lost beside ±506i) of this seed are
-    // still found; they are open work (issue 29), so the smoke run stops
-    // before them rather than fail CI on known findings.
-    let stats = smoke(&mut LinearizeTarget, 90);
+    // Past cases 94 (a gyroscopic pair beside zero modes, once read as
+    // unstable) and 118 (a slow pair once lost beside ±506i) of this seed.
+    let stats = smoke(&mut LinearizeTarget, 200);
     // Every verdict, on systems of several sizes.
     assert!(stats.signatures > 10, "{stats:?}");
 }

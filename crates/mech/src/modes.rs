@@ -218,6 +218,15 @@ pub enum ModesError {
         /// The flat direction, as `q=v` pairs.
         shape: String,
     },
+    /// The eigenvalues of the damped system could not be computed (the QR
+    /// iteration did not converge within its bound).
+    #[error("the eigenvalues of the damped system at {at} cannot be computed: {why}")]
+    NoEigenvalues {
+        /// The equilibrium, as `q=v` pairs.
+        at: String,
+        /// Why not.
+        why: num::EigenError,
+    },
 }
 
 impl ModesError {
@@ -236,6 +245,7 @@ impl ModesError {
             ModesError::Degenerate { .. } => {
                 Some("the leading term of U about this point is of higher than second order (like q^4)".into())
             }
+            ModesError::NoEigenvalues { .. } => None,
         }
     }
 }
@@ -634,13 +644,16 @@ fn damped(
     a.view_mut((n, 0), (n, n)).copy_from(&k);
     a.view_mut((n, n), (n, n)).copy_from(&damp);
     let scale = a.amax().max(f64::MIN_POSITIVE);
-    let mut eigenvalues: Vec<(f64, f64)> = a
-        .complex_eigenvalues()
-        .iter()
-        .map(|s| {
+    // Our QR iteration (num::eigenvalues), not nalgebra's Schur, which panics
+    // on a nilpotent A (a free coordinate without damping).
+    let rows_a: Vec<f64> = (0..2 * n).flat_map(|i| (0..2 * n).map(move |j| (i, j))).map(|(i, j)| a[(i, j)]).collect();
+    let computed = num::eigenvalues(2 * n, &rows_a).map_err(|why| ModesError::NoEigenvalues { at: at(), why })?;
+    let mut eigenvalues: Vec<(f64, f64)> = computed
+        .into_iter()
+        .map(|(re, im)| {
             // Rounding noise about a real root (or a zero decay) is zero.
-            let im = if s.im.abs() <= 1e-12 * scale { 0.0 } else { s.im };
-            let re = if s.re.abs() <= 1e-12 * scale { 0.0 } else { s.re };
+            let im = if im.abs() <= 1e-12 * scale { 0.0 } else { im };
+            let re = if re.abs() <= 1e-12 * scale { 0.0 } else { re };
             (re, im)
         })
         .collect();
@@ -1077,6 +1090,23 @@ mod tests {
         assert_eq!(got.len(), expect.len());
         for (g, e) in got.iter().zip(expect) {
             assert!((g - e).abs() <= 1e-10 * (1.0 + e.abs()), "got {got:?}, expected {expect:?}");
+        }
+    }
+
+    #[test]
+    fn a_free_undamped_coordinate_beside_a_damped_one_has_its_double_zero() {
+        // C vanishes along x (R = x'^4/4): A has the nilpotent block of a free
+        // particle, which nalgebra's Schur could not take.
+        let text = "coordinates = [\"x\", \"y\"]\nlagrangian = \"x'^2/2 + y'^2/2 - y^2/2\"\ndissipation = \"x'^4/4 + y'^2/10\"\n";
+        let d = derive(text, &[]);
+        let m = normal_modes(&d, &ModesConfig::default()).unwrap();
+        let ev = m.damping.expect("damped").eigenvalues;
+        let zeros = ev.iter().filter(|e| e.0.hypot(e.1) <= 1e-6).count();
+        assert_eq!(zeros, 2, "{ev:?}");
+        // y: s² + 0.2 s + 1 = 0.
+        let w = (1.0f64 - 0.01).sqrt();
+        for want in [(-0.1, w), (-0.1, -w)] {
+            assert!(ev.iter().any(|e| (e.0 - want.0).hypot(e.1 - want.1) <= 1e-12), "{ev:?}");
         }
     }
 

@@ -80,7 +80,7 @@ extern crate self as num;
 pub use composition::{Composition, Scheme};
 pub use dop853::Dop853;
 pub use dopri5::Dopri5;
-pub use eigen::{eigenvalue_rounding, eigenvalues, symmetric_definite, symmetric_rounding, EigenError};
+pub use eigen::{balanced, eigenvalue_rounding, eigenvalues, symmetric_definite, symmetric_rounding, EigenError};
 pub use error::{LinalgError, NewtonError, QuadratureError, RhsError, SolveError};
 pub use gauss::{Gauss, Subdivisions};
 pub use integrate::{
