@@ -107,3 +107,78 @@ fn import_refuses_to_overwrite_its_input() {
     assert_eq!(r.code, Some(2), "{}", r.describe());
     assert!(r.stderr.contains("is an input of this command"), "{}", r.describe());
 }
+
+/// A model naming `urdf` (path relative to the model file) with the example URDF.
+fn naming_model(urdf: &str, rest: &str) -> TempFile {
+    let path = common::repo_root().join("examples/urdf").join(urdf);
+    TempFile::with_text("named", &format!("urdf = {:?}\n{rest}", path.display().to_string()))
+}
+
+#[test]
+fn a_model_naming_a_urdf_derives_as_the_imported_model() {
+    for name in EXAMPLES {
+        let floating = if *name == "floating_body" { "" } else { "floating_base = false\n" };
+        let named = naming_model(&format!("{name}.urdf"), floating);
+        let imported = import(name);
+        let a = json(&["derive", named.path(), "--format", "json"]);
+        let b = json(&["derive", imported.path(), "--format", "json"]);
+        for key in ["coordinates", "mass_matrix", "forcing", "parameters", "lagrangian"] {
+            assert_eq!(a[key], b[key], "{name}: {key}");
+        }
+    }
+    // The example adds a spring at the elbow, sets g and starts the shoulder at 0.5.
+    let imported = import("planar_arm");
+    let text = std::fs::read_to_string(&imported.0).unwrap();
+    let text = text.replace("g = 9.81\n", "g = 9.81\nk = 2\n").replace("shoulder = 0\n", "shoulder = 0.5\n")
+        + "\n[forces]\nelbow = \"-k*elbow\"\n";
+    let by_hand = TempFile::with_text("by_hand", &text);
+    let a = json(&["derive", "examples/urdf/planar_arm_model.toml", "--format", "json"]);
+    let b = json(&["derive", by_hand.path(), "--format", "json"]);
+    for key in ["mass_matrix", "forcing", "parameters"] {
+        assert_eq!(a[key], b[key], "{key}");
+    }
+    // Same start, same motion; the model's g wins over the URDF's.
+    let args =
+        |m: &str| json(&["simulate", m, "--until", "1", "--summary", "json", "--set", "g=1.62"])["final"].to_string();
+    assert_eq!(args("examples/urdf/planar_arm_model.toml"), args(by_hand.path()));
+}
+
+#[test]
+fn a_model_naming_a_urdf_refuses_at_the_place() {
+    let arm = "planar_arm.urdf";
+    let cases: Vec<(TempFile, &str, &str)> = vec![
+        (naming_model("missing.urdf", ""), "1:8", "cannot read the URDF file"),
+        (naming_model("../../crates/cli/tests/bad_urdf/bad_number.urdf", ""), "1:8", "in the URDF file"),
+        (naming_model(arm, "[initial]\nwrist = 1\n"), "3:1", "[initial] names 'wrist'"),
+        (naming_model(arm, "coordinates = [\"a\"]\n"), "2:15", "takes its `coordinates` from it"),
+        (naming_model(arm, "lagrangian = \"a\"\n"), "2:14", "give either `lagrangian` or `urdf`"),
+        (naming_model(arm, "[[bodies]]\nmass = 1\nposition = [0, 0]\n"), "2:1", "takes its [[bodies]] from it"),
+        (naming_model(arm, "[parameters]\nelbow = 1\n"), "3:1", "parameter 'elbow' has the name of a coordinate"),
+        (naming_model(arm, "floating_base = 1\n"), "2:17", ""),
+    ];
+    for (model, at, message) in &cases {
+        let r = run(&["derive", model.path()]);
+        assert_eq!(r.code, Some(2), "{}", r.describe());
+        assert!(r.stderr.starts_with(&format!("error: {}:{at}: ", model.path())), "{}", r.describe());
+        assert!(r.stderr.lines().next().unwrap().contains(message), "{}", r.describe());
+    }
+    // The bad URDF's own place is named too.
+    let r = run(&["derive", cases[1].0.path()]);
+    assert!(r.stderr.contains("bad_number.urdf:5:18: `xyz` is \"0 0 one\""), "{}", r.describe());
+    // floating_base without urdf.
+    let lone = TempFile::with_text("lone", "floating_base = true\ncoordinates = [\"a\"]\nkinetic = \"a'^2\"\n");
+    let r = run(&["derive", lone.path()]);
+    assert_eq!(r.code, Some(2), "{}", r.describe());
+    assert!(r.stderr.contains("1:17: `floating_base` belongs to a model that names a `urdf`"), "{}", r.describe());
+    // The URDF is an input: no output may replace it.
+    let r = run(&[
+        "simulate",
+        "examples/urdf/planar_arm_model.toml",
+        "--until",
+        "0.1",
+        "--out",
+        "examples/urdf/planar_arm.urdf",
+    ]);
+    assert_eq!(r.code, Some(2), "{}", r.describe());
+    assert!(r.stderr.contains("is an input of this command"), "{}", r.describe());
+}

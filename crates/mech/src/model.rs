@@ -129,10 +129,14 @@ pub struct Input {
     pub span: Range<usize>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Default)]
 #[serde(deny_unknown_fields)]
-struct RawModel {
+pub(crate) struct RawModel {
     name: Option<String>,
+    /// A URDF file whose robot the model takes its coordinates and bodies from.
+    urdf: Option<Spanned<String>>,
+    /// With `urdf`: give the root link six coordinates.
+    floating_base: Option<Spanned<bool>>,
     coordinates: Option<Spanned<Vec<Spanned<String>>>>,
     gravity: Option<Spanned<gravity::RawGravity>>,
     lagrangian: Option<Spanned<String>>,
@@ -393,6 +397,21 @@ impl Model {
     /// `[[bodies]]`), which `files` reads.
     pub fn parse_with(source: &str, overrides: &[(String, f64)], files: &FileReader) -> Result<Model, ModelError> {
         let raw: RawModel = read_toml(source, "model")?;
+        let imported = match &raw.urdf {
+            Some(u) => Some(urdf::named::import(u, raw.floating_base.as_ref(), files)?),
+            None => {
+                if let Some(f) = &raw.floating_base {
+                    return Err(ModelError::at(
+                        f.span(),
+                        "`floating_base` belongs to a model that names a `urdf` file",
+                    ));
+                }
+                None
+            }
+        };
+        if let Some(i) = &imported {
+            urdf::named::refuse_clashes(&raw, i)?;
+        }
         let mut r = Reader {
             source,
             files,
@@ -404,21 +423,38 @@ impl Model {
         };
 
         // Coordinates.
-        let coords = raw.coordinates.as_ref().ok_or_else(|| {
+        let coords = imported.as_ref().map_or(raw.coordinates.as_ref(), |i| i.raw.coordinates.as_ref());
+        let coords = coords.ok_or_else(|| {
             ModelError::whole("the model has no `coordinates`")
                 .with_help("list the generalized coordinates before the first table, e.g. coordinates = [\"th\"]")
         })?;
         if coords.get_ref().is_empty() {
             return Err(ModelError::at(coords.span(), "`coordinates` is empty: expected at least one name"));
         }
+        let nest = |e: ModelError| imported.as_ref().map_or_else(|| e.clone(), |i| i.nest(e.clone()));
         for c in coords.get_ref() {
-            check_identifier(c, "coordinate")?;
-            check_not_generated(c, "coordinate", true)?;
+            check_identifier(c, "coordinate").map_err(nest)?;
+            check_not_generated(c, "coordinate", true).map_err(nest)?;
             if let Some(prev) = r.coordinates.iter().find(|p| &p.name == c.get_ref()) {
                 let _ = prev;
-                return Err(ModelError::at(c.span(), format!("coordinate '{}' is listed twice", c.get_ref())));
+                return Err(nest(ModelError::at(c.span(), format!("coordinate '{}' is listed twice", c.get_ref()))));
             }
-            r.coordinates.push(Coordinate { name: c.get_ref().clone(), span: c.span() });
+            let span = imported.as_ref().map_or(c.span(), |i| i.span.clone());
+            r.coordinates.push(Coordinate { name: c.get_ref().clone(), span });
+        }
+        // The imported parameters (g) that the model does not set itself.
+        if let Some(i) = &imported {
+            let mut params: Vec<(&Spanned<String>, &Spanned<f64>)> = i.raw.parameters.iter().collect();
+            params.sort_by_key(|(k, _)| k.span().start);
+            for (k, v) in params {
+                if !raw.parameters.keys().any(|m| m.get_ref() == k.get_ref()) {
+                    r.parameters.push(Parameter {
+                        name: k.get_ref().clone(),
+                        value: *v.get_ref(),
+                        span: i.span.clone(),
+                    });
+                }
+            }
         }
 
         // Parameters, in file order.
@@ -496,7 +532,13 @@ impl Model {
         }
 
         // What the system is made of.
-        let gravity = raw.gravity.as_ref().map(|g| gravity::read(&mut r, g)).transpose()?;
+        let gravity = match (&raw.gravity, &imported) {
+            (None, Some(i)) => {
+                urdf::named::within(&mut r, i, |r| i.raw.gravity.as_ref().map(|g| gravity::read(r, g)).transpose())?
+                    .map(|g| urdf::named::gravity_at(g, &i.span))
+            }
+            _ => raw.gravity.as_ref().map(|g| gravity::read(&mut r, g)).transpose()?,
+        };
         let mut particles = Vec::new();
         for p in &raw.particles {
             let mass = r.num_or_expr(&p.get_ref().mass, Scope::Parameters, "the particle's mass")?.expr;
@@ -536,7 +578,13 @@ impl Model {
             }
             particles.push(Particle { mass, position, potential, span: p.span() });
         }
-        let bodies = body::read_all(&mut r, &raw.bodies)?;
+        let bodies = match &imported {
+            Some(i) => urdf::named::within(&mut r, i, |r| body::read_all(r, &i.raw.bodies))?
+                .into_iter()
+                .map(|b| urdf::named::body_at(b, &i.span))
+                .collect(),
+            None => body::read_all(&mut r, &raw.bodies)?,
+        };
         if let (Some(g), Some(b)) = (&gravity, bodies.first()) {
             let n = b.dimension;
             if g.dimension().is_some_and(|d| d != n) {
@@ -629,6 +677,22 @@ impl Model {
             let value = r.num_or_expr(v, Scope::Parameters, &format!("the initial value of '{key}'"))?;
             initial.push(InitialValue { coord, order, value });
         }
+        // The imported rest state, for what the model leaves out.
+        if let Some(i) = &imported {
+            for (k, v) in &i.raw.initial {
+                let key = k.get_ref();
+                let base = key.trim_end_matches('\'');
+                let order = (key.len() - base.len()) as u8;
+                let Some(coord) = r.coordinates.iter().position(|c| c.name == base) else { continue };
+                if initial.iter().any(|x: &InitialValue| x.coord == coord && x.order == order) {
+                    continue;
+                }
+                let mut value =
+                    r.num_or_expr(v, Scope::Parameters, "an imported initial value").map_err(|e| i.nest(e))?;
+                value.span = i.span.clone();
+                initial.push(InitialValue { coord, order, value });
+            }
+        }
 
         // Constraints (read by `model/constraint.rs`).
         let mut constraints = Vec::new();
@@ -658,7 +722,10 @@ impl Model {
 
         let model = Model {
             pool: r.pool,
-            name: raw.name.unwrap_or_else(|| "unnamed model".into()),
+            name: raw
+                .name
+                .or_else(|| imported.as_ref().and_then(|i| i.raw.name.clone()))
+                .unwrap_or_else(|| "unnamed model".into()),
             coordinates: r.coordinates,
             parameters: r.parameters,
             particles,

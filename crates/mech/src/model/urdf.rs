@@ -3,11 +3,13 @@
 //! coordinates and bodies from it.
 //!
 //! Entry: [`urdf_to_model`], the URDF's text in and a model file's text out.
+//! A model naming a URDF is read by `urdf/named.rs` from `Model::parse_with`.
 //! Three steps, one file each: `urdf/xml.rs` reads the XML (roxmltree, so every
 //! error has its place in the URDF file), `urdf/tree.rs` turns the link tree
 //! into bodies (fixed rotations carried into axes and inertias, fixed joints
 //! merged), and `urdf/write.rs` writes the model, commented.
 
+pub(crate) mod named;
 mod tree;
 mod write;
 mod xml;
