@@ -236,6 +236,26 @@ impl Scope {
 /// them relative to the model file).
 pub type FileReader<'a> = dyn Fn(&str) -> Result<String, String> + 'a;
 
+/// "the coordinates are a, b, c", at most twenty of them named: the help of
+/// a table that names one the model does not have.
+fn coordinate_list(coordinates: &[Coordinate]) -> String {
+    const SHOWN: usize = 20;
+    let mut names: Vec<&str> = coordinates.iter().take(SHOWN).map(|c| c.name.as_str()).collect();
+    let more = coordinates.len().saturating_sub(SHOWN);
+    let more = if more > 0 { format!(" and {more} more") } else { String::new() };
+    match names.len() {
+        0 => "the model has no coordinates".into(),
+        1 => format!("the only coordinate is {}", names[0]),
+        _ => {
+            let last = if more.is_empty() { names.pop() } else { None };
+            match last {
+                Some(last) => format!("the coordinates are {} and {last}", names.join(", ")),
+                None => format!("the coordinates are {}{more}", names.join(", ")),
+            }
+        }
+    }
+}
+
 /// The reader of a model given as text alone: it names no files.
 fn no_files(name: &str) -> Result<String, String> {
     Err(format!("this model was given as text, so the file '{name}' cannot be read"))
@@ -651,7 +671,8 @@ impl Model {
                 return Err(ModelError::at(
                     k.span(),
                     format!("[forces] names '{}', which is not a coordinate", k.get_ref()),
-                ));
+                )
+                .with_help(coordinate_list(&r.coordinates)));
             };
             forces[i] = Some(r.expr(v, Scope::Driven, &format!("the force on '{}'", k.get_ref()))?);
         }
@@ -666,7 +687,8 @@ impl Model {
                 return Err(ModelError::at(
                     k.span(),
                     format!("[initial] names '{key}', which is not a coordinate or a velocity"),
-                ));
+                )
+                .with_help(coordinate_list(&r.coordinates)));
             };
             if order > 1 {
                 return Err(ModelError::at(
@@ -910,5 +932,26 @@ mod tests {
         // A charge in a magnetic field: terms linear in the velocities vanish at rest.
         let text = "coordinates = [\"r\", \"th\"]\nkinetic = \"m*(r'^2 + th'^2)/2\"\npotential = \"G*(r*th' - th*r') + 1/(1 + r'^2)\"\n[parameters]\nm = 1.0\nG = 1.0\n";
         assert!(Model::parse(text, &[]).is_ok());
+    }
+
+    /// A table naming a coordinate the model lacks lists those it has.
+    #[test]
+    fn an_unknown_coordinate_lists_the_coordinates() {
+        let help = |coords: &[String], table: &str| {
+            let quoted: Vec<String> = coords.iter().map(|c| format!("\"{c}\"")).collect();
+            let text = format!(
+                "coordinates = [{}]\nkinetic = \"{}'^2\"\n[{table}]\nz = \"1\"\n",
+                quoted.join(", "),
+                coords[0]
+            );
+            Model::parse(&text, &[]).expect_err(&text).help.expect("a help")
+        };
+        let two = ["x".to_string(), "y".to_string()];
+        assert_eq!(help(&two, "initial"), "the coordinates are x and y");
+        assert_eq!(help(&two, "forces"), "the coordinates are x and y");
+        assert_eq!(help(&two[..1], "initial"), "the only coordinate is x");
+        let many: Vec<String> = (0..25).map(|k| format!("q{k}")).collect();
+        let text = help(&many, "initial");
+        assert!(text.starts_with("the coordinates are q0, q1,") && text.ends_with("q19 and 5 more"), "{text}");
     }
 }
