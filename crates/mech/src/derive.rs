@@ -1275,29 +1275,28 @@ fn elimination_solve(pool: &mut Pool, mut a: Vec<Vec<ExprId>>, mut r: Vec<ExprId
     Some(v)
 }
 
-/// Explains whether h equals T + U₀, the way the notes do: a time-dependent
-/// transformation x(q, t) makes T inhomogeneous in q'; a velocity-dependent
-/// potential adds terms to h.
 /// Whether T is homogeneous of degree 2 in the velocities, read from L's
 /// form when U is free of them: b = 0 and T₀ = L₀ + U = 0, each coefficient
 /// decided on its own.
 fn homogeneity(pool: &mut Pool, form: &Quadratic, potential: ExprId) -> Decision {
     let t0 = pool.add2(form.l0, potential);
-    let mut decisions = Vec::with_capacity(form.b.len() + 1);
+    let mut all_zero = true;
     for &b in form.b.iter().chain([&t0]) {
-        let d = probe::decide_zero(pool, b);
-        if d.is_nonzero() {
-            return d;
+        match probe::decide_zero(pool, b) {
+            Decision::NonZero => return Decision::NonZero,
+            d => all_zero &= d.is_zero(),
         }
-        decisions.push(d);
     }
-    if decisions.iter().all(|d| d.is_zero()) {
+    if all_zero {
         Decision::Zero
     } else {
         Decision::Undecided
     }
 }
 
+/// Explains whether h equals T + U₀, the way the notes do: a time-dependent
+/// transformation x(q, t) makes T inhomogeneous in q'; a velocity-dependent
+/// potential adds terms to h.
 #[allow(clippy::too_many_arguments)]
 fn explain_energy(
     pool: &mut Pool,
