@@ -19,6 +19,7 @@ mod layout;
 mod load;
 mod no_inertia;
 mod quadratic;
+mod shared;
 mod verdict;
 
 pub use body::BodyMotion;
@@ -161,6 +162,9 @@ struct Energies {
     form: Option<Quadratic>,
     sparsity: Option<Sparsity>,
     bodies: Vec<BodyMotion>,
+    /// Built by the shared path ([`shared`]): nothing expanded, facts about
+    /// long expressions decided without rewriting.
+    shared: bool,
 }
 
 /// R and Q: what acts on the system besides L.
@@ -192,7 +196,20 @@ impl Derivation {
     /// Derives everything from a model, in the order of the notes: L, the
     /// equations of motion, what is conserved and why, H and Hamilton's
     /// equations, then the constraints. Fails on a singular mass matrix.
-    pub fn new(mut model: Model) -> Result<Derivation, ModelError> {
+    pub fn new(model: Model) -> Result<Derivation, ModelError> {
+        if shared::wanted(&model) {
+            return Derivation::derive(model, Path::Shared).map_err(Stop::into_error);
+        }
+        let fallback = model.clone();
+        match Derivation::derive(model, Path::Expanded) {
+            Err(Stop::TooLong(_)) => Derivation::derive(fallback, Path::Shared),
+            result => result,
+        }
+        .map_err(Stop::into_error)
+    }
+
+    /// [`Derivation::new`] along one path.
+    fn derive(mut model: Model, path: Path) -> Result<Derivation, Stop> {
         let started = crate::clock::Instant::now();
         // The pool is taken out of the model while the model's other parts are read.
         let mut pool_owned = std::mem::take(&mut model.pool);
@@ -200,19 +217,37 @@ impl Derivation {
         let s = Symbols::new(pool, &model);
         let is_var = |x: Symbol| s.is_var(x);
 
-        pool.set_work_limit(Some(pool.work() + WORK_LIMIT));
+        let shared = path == Path::Shared;
+        let start = pool.work();
+        let stage_limit = match (shared, model.constraints.is_empty()) {
+            (true, _) => WORK_LIMIT,
+            (false, true) => EXPANDED_WORK_LIMIT,
+            (false, false) => EXPANDED_CONSTRAINED_WORK_LIMIT,
+        };
+        pool.set_work_limit(Some(start + stage_limit));
+        let within = |pool: &Pool, model: &Model| within_work_limit(pool, model, path);
         let frames = crate::model::frames::frames(pool, &model.bodies, &s.q, &s.qd);
-        let energies = energies(pool, &model, &s, &frames, &is_var);
-        within_work_limit(pool, &model)?;
-        let ext = external(pool, &model, &s, &frames, &is_var);
-        let motion = equations_of_motion(pool, &s, &energies, &ext, &is_var);
-        within_work_limit(pool, &model)?;
+        let (energies, ext, motion) = if shared {
+            let mut energies = shared::energies(pool, &model, &s, &frames);
+            let ext = external(pool, &model, &s, &frames, true, &is_var);
+            let motion = shared::motion(pool, &s, &mut energies, &ext);
+            (energies, ext, motion)
+        } else {
+            let energies = energies(pool, &model, &s, &frames, &is_var);
+            within(pool, &model)?;
+            let ext = external(pool, &model, &s, &frames, false, &is_var);
+            let motion = equations_of_motion(pool, &s, &energies, &ext, &is_var);
+            within(pool, &model)?;
+            pool.set_work_limit(Some(start + WORK_LIMIT));
+            (energies, ext, motion)
+        };
+        within(pool, &model)?;
         let equations_seconds = started.elapsed().as_secs_f64();
         check_regular(pool, &model, &motion.mass_matrix)?;
-        let (cyclic, mut conserved, cyclic_reasons) = cyclic_coordinates(pool, &s, &motion, &ext);
-        within_work_limit(pool, &model)?;
+        let (cyclic, mut conserved, cyclic_reasons) = cyclic_coordinates(pool, &s, &motion, &ext, shared);
+        within(pool, &model)?;
         let mut judged = judge(pool, &model, &s, &energies, &motion, &ext, &is_var);
-        within_work_limit(pool, &model)?;
+        within(pool, &model)?;
         judged.verdicts.cyclic = cyclic_reasons;
         if judged.hamiltonian_conserved {
             conserved.push(Conserved {
@@ -236,7 +271,11 @@ impl Derivation {
                     .iter()
                     .map(|&u| {
                         let b = pool.diff(f, u);
-                        pool.simplify_in(b, &is_var)
+                        if shared {
+                            simplify_bounded(pool, b, &is_var)
+                        } else {
+                            pool.simplify_in(b, &is_var)
+                        }
                     })
                     .collect()
             })
@@ -244,10 +283,10 @@ impl Derivation {
         let inputs_affine = input_matrix.iter().flatten().all(|&b| {
             inputs.iter().all(|&u| {
                 let d = pool.diff(b, u);
-                probe::decide_zero(pool, d).is_zero()
+                decide(pool, d, shared).is_zero()
             })
         });
-        within_work_limit(pool, &model)?;
+        within(pool, &model)?;
         let layout = Layout::new(pool, &s.q, &s.qd, s.t, &model.parameters);
         model.pool = pool_owned;
         let Symbols { q, qd, qdd, p, t, .. } = s;
@@ -288,7 +327,7 @@ impl Derivation {
         };
         // The constraints amend the equations and the verdicts of the system without them.
         constraint::attach(&mut derivation)?;
-        within_work_limit(&derivation.model.pool, &derivation.model)?;
+        within_work_limit(&derivation.model.pool, &derivation.model, path)?;
         // The bound is the derivation's: analyses rewrite in copies of the pool.
         derivation.model.pool.set_work_limit(None);
         Ok(derivation)
@@ -581,7 +620,7 @@ fn energies(
         }
     };
     let sparsity = form.as_ref().map(|f| f.sparsity(pool, q));
-    Energies { kinetic, potential, lagrangian, form, sparsity, bodies }
+    Energies { kinetic, potential, lagrangian, form, sparsity, bodies, shared: false }
 }
 
 /// The most work ([`Pool::work`]: nodes built, weighted by their operands) a
@@ -593,10 +632,65 @@ fn energies(
 /// rather than running for minutes.
 pub const WORK_LIMIT: u64 = 64_000_000;
 
+/// The work the expanded path may spend on L, M and f before the derivation
+/// starts again on the shared path ([`shared`]), about a tenth of a second.
+/// Every model of the notes and the guide stays far below it (a few 10⁴);
+/// a chain of eleven rods, fifty particles on a string, or a robot arm with
+/// skew joint axes pass it, and the shared path derives them in milliseconds.
+const EXPANDED_WORK_LIMIT: u64 = 2_000_000;
+
+/// [`EXPANDED_WORK_LIMIT`] for a model with constraints, whose multipliers the
+/// expanded path eliminates on short collected expressions: the benchmark
+/// bicycle (four bodies, two rolling wheels) spends 1.4·10⁷ on its equations
+/// of motion and stays on the expanded path.
+const EXPANDED_CONSTRAINED_WORK_LIMIT: u64 = 16_000_000;
+
+/// The two ways to derive: expanding and simplifying each coefficient (short,
+/// collected results) or keeping one shared DAG (results that grow gently with
+/// the model).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Path {
+    Expanded,
+    Shared,
+}
+
+/// Why a derivation along one path stopped.
+enum Stop {
+    /// The expanded path passed its work bound: the shared one takes over
+    /// (the error is what the shared path reports at its own bound).
+    TooLong(ModelError),
+    /// An error to report.
+    Model(ModelError),
+}
+
+impl From<ModelError> for Stop {
+    fn from(e: ModelError) -> Stop {
+        Stop::Model(e)
+    }
+}
+
+impl Stop {
+    fn into_error(self) -> ModelError {
+        match self {
+            Stop::Model(e) | Stop::TooLong(e) => e,
+        }
+    }
+}
+
+/// Decides a zero: by rewriting on the expanded path; on the shared path
+/// without expanding long expressions ([`shared::decide_zero`]).
+fn decide(pool: &mut Pool, e: ExprId, shared: bool) -> Decision {
+    if shared {
+        shared::decide_zero(pool, e)
+    } else {
+        probe::decide_zero(pool, e)
+    }
+}
+
 /// An error, located at the first body (or at L, T or the first particle), when
 /// the derivation has done more than [`WORK_LIMIT`] work: its rewrites have
 /// stopped, so nothing it would go on to claim could be trusted.
-fn within_work_limit(pool: &Pool, model: &Model) -> Result<(), ModelError> {
+fn within_work_limit(pool: &Pool, model: &Model, path: Path) -> Result<(), Stop> {
     if !pool.work_exhausted() {
         return Ok(());
     }
@@ -606,7 +700,11 @@ fn within_work_limit(pool: &Pool, model: &Model) -> Result<(), ModelError> {
         WORK_LIMIT / 1_000_000
     );
     let help = "long chains of bodies, each turning relative to the one before, and long products of sums make the expressions grow quickly; a shorter chain, or a Lagrangian written out by hand, stays within the bound";
-    Err(ModelError { message, span, help: Some(help.into()), setting: None, within: None })
+    let error = ModelError { message, span, help: Some(help.into()), setting: None, within: None };
+    Err(match path {
+        Path::Expanded => Stop::TooLong(error),
+        Path::Shared => Stop::Model(error),
+    })
 }
 
 /// Rayleigh's R and the generalized forces Q (`[forces]` and the loads' virtual
@@ -616,9 +714,17 @@ fn external(
     model: &Model,
     s: &Symbols,
     frames: &[crate::model::frames::Frame],
+    shared: bool,
     is_var: &dyn Fn(Symbol) -> bool,
 ) -> External {
-    let dissipation = model.dissipation.as_ref().map(|r| pool.simplify_in(r.expr, is_var));
+    let simplify = |pool: &mut Pool, e: ExprId| {
+        if shared {
+            simplify_bounded(pool, e, is_var)
+        } else {
+            pool.simplify_in(e, is_var)
+        }
+    };
+    let dissipation = model.dissipation.as_ref().map(|r| simplify(pool, r.expr));
     let from_loads = load::generalized_forces(pool, &model.loads, frames, &s.q, &s.qd);
     let forces = model
         .forces
@@ -629,7 +735,7 @@ fn external(
                 Some(f) => pool.add2(f.expr, l),
                 None => l,
             };
-            pool.simplify_in(f, is_var)
+            simplify(pool, f)
         })
         .collect();
     External { dissipation, forces }
@@ -777,13 +883,14 @@ fn cyclic_coordinates(
     s: &Symbols,
     m: &Motion,
     ext: &External,
+    shared: bool,
 ) -> (Vec<usize>, Vec<Conserved>, Vec<CyclicReason>) {
     let mut cyclic = Vec::new();
     let mut conserved = Vec::new();
     let mut reasons = Vec::new();
     for i in 0..s.n() {
         let coordinate = s.names[i].clone();
-        match probe::decide_zero(pool, m.dl_dq[i]) {
+        match decide(pool, m.dl_dq[i], shared) {
             Decision::Zero => {}
             Decision::NonZero => continue,
             Decision::Undecided => {
@@ -795,11 +902,11 @@ fn cyclic_coordinates(
         let damping = match ext.dissipation {
             Some(r) => {
                 let d = pool.diff(r, s.qd[i]);
-                probe::decide_zero(pool, d)
+                decide(pool, d, shared)
             }
             None => Decision::Zero,
         };
-        let forcing = probe::decide_zero(pool, ext.forces[i]);
+        let forcing = decide(pool, ext.forces[i], shared);
         match (damping, forcing) {
             (Decision::Zero, Decision::Zero) => conserved.push(Conserved {
                 name: format!("p_{coordinate}"),
@@ -837,12 +944,12 @@ fn judge(
     };
     // Each term of dH/dt: H is conserved only when all three are proven 0.
     let dl_dt = pool.diff(e.lagrangian, s.t);
-    let time = probe::decide_zero(pool, dl_dt);
+    let time = decide(pool, dl_dt, e.shared);
     let dissipation = match ext.dissipation {
-        Some(r) => probe::decide_zero(pool, r),
+        Some(r) => decide(pool, r, e.shared),
         None => Decision::Zero,
     };
-    let forces: Vec<Decision> = (0..n).map(|i| probe::decide_zero(pool, ext.forces[i])).collect();
+    let forces: Vec<Decision> = (0..n).map(|i| decide(pool, ext.forces[i], e.shared)).collect();
     let forced: Vec<usize> = (0..n).filter(|&i| forces[i].is_nonzero()).collect();
     let force = if !forced.is_empty() {
         Decision::NonZero
@@ -883,20 +990,23 @@ fn judge(
             let u0 = pool.substitute(uu, &zero_vel);
             let en = pool.add2(tt, u0);
             // T and U are simplified each; their sum is, too, while it is small.
-            let en = if model.particles.is_empty() { simplify_bounded(pool, en, is_var) } else { en };
+            let en = if model.particles.is_empty() && !e.shared { simplify_bounded(pool, en, is_var) } else { en };
             // With U free of the velocities, L's form holds T's b and L₀ = T₀ − U:
             // T is homogeneous of degree 2 exactly when b = 0 and T₀ = L₀ + U = 0,
             // and h − E = −bᵀq' − 2T₀, so h = E exactly then. Deciding that on the
             // form's simplified coefficients spares proving two long sums equal.
             let homogeneous = match &e.form {
-                Some(form) if qd.iter().all(|&v| pool.free_of(uu, v)) => Some(homogeneity(pool, form, uu)),
+                Some(form) if qd.iter().all(|&v| pool.free_of(uu, v)) => Some(homogeneity(pool, form, uu, e.shared)),
                 _ => None,
             };
             let same = match homogeneous {
                 Some(decision) => decision.known(),
-                None => probe::decide_equal(pool, energy_function, en).known(),
+                None => {
+                    let d = pool.sub(energy_function, en);
+                    decide(pool, d, e.shared).known()
+                }
             };
-            explain_energy(pool, &mut verdicts, same, homogeneous, tt, uu, u0, qd);
+            explain_energy(pool, &mut verdicts, same, homogeneous, tt, uu, u0, qd, e.shared);
             (Some(en), same)
         }
         _ => {
@@ -920,6 +1030,13 @@ fn hamiltonian(
     verdicts: &mut Verdicts,
     is_var: &dyn Fn(Symbol) -> bool,
 ) -> Hamiltonian {
+    if e.shared && e.form.is_some() {
+        // M⁻¹ written out would grow with the cube of a full block, and with
+        // every level of the tree: the shared path does not invert M.
+        let coupled = largest_block(pool, &m.mass_matrix);
+        verdicts.hamiltonian.push(HamiltonianReason::TooLong { coupled });
+        return (None, None, None);
+    }
     let Some((form, sparsity)) = e.form.as_ref().zip(e.sparsity.as_ref()) else {
         verdicts.hamiltonian.push(HamiltonianReason::NotQuadratic);
         return (None, None, None);
@@ -1278,11 +1395,11 @@ fn elimination_solve(pool: &mut Pool, mut a: Vec<Vec<ExprId>>, mut r: Vec<ExprId
 /// Whether T is homogeneous of degree 2 in the velocities, read from L's
 /// form when U is free of them: b = 0 and T₀ = L₀ + U = 0, each coefficient
 /// decided on its own.
-fn homogeneity(pool: &mut Pool, form: &Quadratic, potential: ExprId) -> Decision {
+fn homogeneity(pool: &mut Pool, form: &Quadratic, potential: ExprId, shared: bool) -> Decision {
     let t0 = pool.add2(form.l0, potential);
     let mut all_zero = true;
     for &b in form.b.iter().chain([&t0]) {
-        match probe::decide_zero(pool, b) {
+        match decide(pool, b, shared) {
             Decision::NonZero => return Decision::NonZero,
             d => all_zero &= d.is_zero(),
         }
@@ -1307,6 +1424,7 @@ fn explain_energy(
     potential: ExprId,
     u0: ExprId,
     qd: &[ExprId],
+    shared: bool,
 ) {
     // T homogeneous of degree 2 in q' ⇔ Σ q' ∂T/∂q' = 2T.
     let homogeneous = homogeneous.unwrap_or_else(|| {
@@ -1321,14 +1439,15 @@ fn explain_energy(
         let two_t = pool.mul2(two, kinetic);
         terms.push(pool.neg(two_t));
         let euler = pool.add(&terms);
-        probe::decide_zero(pool, euler)
+        decide(pool, euler, shared)
     });
     verdicts.energy.push(match homogeneous {
         Decision::Zero => EnergyReason::KineticHomogeneous,
         Decision::NonZero => EnergyReason::KineticNotHomogeneous,
         Decision::Undecided => EnergyReason::HomogeneityUndecided,
     });
-    match probe::decide_equal(pool, potential, u0) {
+    let velocity_part = pool.sub(potential, u0);
+    match decide(pool, velocity_part, shared) {
         Decision::Zero => {}
         Decision::NonZero => verdicts.energy.push(EnergyReason::VelocityDependentPotential),
         Decision::Undecided => verdicts.energy.push(EnergyReason::VelocityDependenceUndecided),

@@ -152,6 +152,19 @@ pub fn decide_zero(pool: &mut Pool, e: ExprId) -> Decision {
     }
 }
 
+/// [`decide_zero`] without rewriting, for expressions too long to expand:
+/// [`Decision::Zero`] only when the canonical form is 0, [`Decision::NonZero`]
+/// when a point refutes it, [`Decision::Undecided`] otherwise.
+pub fn decide_zero_without_rewriting(pool: &Pool, e: ExprId) -> Decision {
+    if pool.is_zero(e) {
+        Decision::Zero
+    } else if pool.as_number(e).is_some() || refuted_at_points(pool, e) {
+        Decision::NonZero
+    } else {
+        Decision::Undecided
+    }
+}
+
 /// Decides whether `a − b` is identically zero ([`decide_zero`]).
 pub fn decide_equal(pool: &mut Pool, a: ExprId, b: ExprId) -> Decision {
     let d = pool.sub(a, b);

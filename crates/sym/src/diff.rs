@@ -97,7 +97,7 @@ impl Pool {
     }
 
     /// f'(u) for the language's functions.
-    fn func_derivative(&mut self, f: Func, u: ExprId) -> ExprId {
+    pub(crate) fn func_derivative(&mut self, f: Func, u: ExprId) -> ExprId {
         let one = self.one();
         match f {
             Func::Sin => self.func(Func::Cos, u),

@@ -15,6 +15,7 @@
 //! assert_eq!(pool.display(p_q).to_string(), "l^2*m*q'");
 //! ```
 
+mod ad;
 #[cfg(feature = "jit")]
 mod cc;
 mod diff;

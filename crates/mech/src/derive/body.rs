@@ -51,9 +51,20 @@ pub(crate) fn terms(
     t: ExprId,
     gravity: Option<&Gravity>,
 ) -> BodyTerms {
-    let (omega, d) = (frame.omega, frame.d);
     // v_ref = Σ ∂x/∂q_i q_i' + ∂x/∂t, space components.
     let v_ref = crate::model::frames::velocity(pool, &frame.origin, q, qd, t);
+    terms_with_velocity(pool, body, frame, v_ref, gravity)
+}
+
+/// [`terms`] with the reference point's velocity (space components) given.
+pub(crate) fn terms_with_velocity(
+    pool: &mut Pool,
+    body: &Body,
+    frame: &Frame,
+    v_ref: [ExprId; 3],
+    gravity: Option<&Gravity>,
+) -> BodyTerms {
+    let (omega, d) = (frame.omega, frame.d);
     let moving = v_ref.iter().any(|&v| !pool.is_zero(v));
     let half = pool.rational(1, 2);
     let mut t_terms = Vec::new();
@@ -219,6 +230,19 @@ fn cross(pool: &mut Pool, a: &[ExprId; 3], b: &[ExprId; 3]) -> [ExprId; 3] {
         c[k] = pool.sub(x, y);
     }
     c
+}
+
+/// A body's ω and L as the kinematics give them, not simplified (for models too
+/// large to simplify).
+pub(crate) fn motion_as_is(body: &Body, frame: &Frame, terms: &BodyTerms) -> BodyMotion {
+    BodyMotion {
+        name: body.name.clone(),
+        omega: terms.omega,
+        angular_momentum: terms.angular_momentum,
+        position: frame.origin,
+        center: terms.center,
+        axes: frame.d,
+    }
 }
 
 /// Simplifies a body's ω and L for printing and recording.
