@@ -48,14 +48,12 @@ impl Pool {
                 }
                 Node::Pow(b, p) => {
                     let (db, dp) = (tan[&b], tan[&p]);
-                    self.pow_partials(id, b, p).into_iter().zip([db, dp]).fold(zero, |acc, (part, d)| {
-                        match part {
-                            Some(part) if d != zero => {
-                                let t = self.mul2(part, d);
-                                self.add2(acc, t)
-                            }
-                            _ => acc,
+                    self.pow_partials(id, b, p).into_iter().zip([db, dp]).fold(zero, |acc, (part, d)| match part {
+                        Some(part) if d != zero => {
+                            let t = self.mul2(part, d);
+                            self.add2(acc, t)
                         }
+                        _ => acc,
                     })
                 }
                 Node::Func(f, u) => {

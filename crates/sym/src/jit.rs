@@ -103,6 +103,13 @@ impl std::fmt::Debug for Compiled {
 /// compiles in 25 ms without it and 650 ms with it.
 pub const OPTIMIZE_MAX_OPS: usize = 4096;
 
+/// Tapes longer than this are compiled with the single-pass register
+/// allocator ([`Codegen::Quick`]). The backtracking allocator's time grows
+/// faster than linearly with the values live across a long function: the
+/// right-hand side of a chain of forty rods (about 60 000 instructions)
+/// spent 8 of its run's 10 s allocating registers.
+pub const QUICK_MIN_OPS: usize = 20_000;
+
 /// How much work cranelift spends on a function.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Codegen {
@@ -613,7 +620,14 @@ impl Compiled {
     pub fn new(tape: &Tape) -> Result<Compiled, JitError> {
         let trig = tape.ops().iter().any(|op| matches!(op, Op::Func(Func::Sin | Func::Cos, _)));
         let optimize = tape.len() <= OPTIMIZE_MAX_OPS && !trig;
-        let mut module = new_module(if optimize { Codegen::Optimized } else { Codegen::Plain })?;
+        let mode = if optimize {
+            Codegen::Optimized
+        } else if tape.len() <= QUICK_MIN_OPS {
+            Codegen::Plain
+        } else {
+            Codegen::Quick
+        };
+        let mut module = new_module(mode)?;
 
         let ptr = module.target_config().pointer_type();
         let mut sig: Signature = module.make_signature();

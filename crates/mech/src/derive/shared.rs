@@ -70,12 +70,7 @@ fn time_seeds(pool: &Pool, s: &Symbols) -> FxHashMap<ExprId, ExprId> {
 /// T, U and L of a model, as the tree gives them (bodies' T from their ω and
 /// the tangent of their reference point, particles' ½ m |x'|²), nothing
 /// simplified; the form (M, b, L₀) is filled in by [`motion`].
-pub(super) fn energies(
-    pool: &mut Pool,
-    model: &Model,
-    s: &Symbols,
-    frames: &[Frame],
-) -> Energies {
+pub(super) fn energies(pool: &mut Pool, model: &Model, s: &Symbols, frames: &[Frame]) -> Energies {
     let mut bodies = Vec::new();
     if let Some(l) = &model.lagrangian {
         return Energies {
@@ -304,9 +299,9 @@ center_of_mass = ["0", "0", "-l/2"]
             let names = expanded.coordinate_names();
             for i in 0..names.len() {
                 let claimed = shared.cyclic().contains(&i);
-                let undecided = shared.verdicts().cyclic.iter().any(|r| {
-                    matches!(r, super::super::CyclicReason::Undecided { coordinate } if coordinate == names[i])
-                });
+                let undecided = shared.verdicts().cyclic.iter().any(
+                    |r| matches!(r, super::super::CyclicReason::Undecided { coordinate } if coordinate == names[i]),
+                );
                 match expanded.cyclic().contains(&i) {
                     true => assert!(claimed || undecided, "{name}: {} is cyclic", names[i]),
                     false => assert!(!claimed, "{name}: {} is not cyclic", names[i]),
