@@ -129,6 +129,8 @@ def check(binary: str, path: str, floating_base: bool, states: int, seed: int, t
 
     out = json.loads(proc.stdout)
     coords = out["coordinates"]
+    # A large model's results name their shared subexpressions: evaluated in order first.
+    definitions = [(d["name"], compile(_to_python(d["expr"]), d["name"], "eval")) for d in out.get("definitions") or []]
     mass = [[compile(_to_python(e), "M", "eval") for e in row] for row in out["mass_matrix"]]
     forcing = [compile(_to_python(e), "f", "eval") for e in out["forcing"]]
     namespace = {name: getattr(math, name) for name in ("sin", "cos", "tan", "sqrt", "exp", "log", "pi")}
@@ -177,6 +179,8 @@ def check(binary: str, path: str, floating_base: bool, states: int, seed: int, t
             else:
                 q[iq] = values[c]
             v[iv] = rates[c]
+        for name, code in definitions:
+            env[name] = eval(code, {"__builtins__": {}}, env)
         m = np.array([[eval(e, {"__builtins__": {}}, env) for e in row] for row in mass], float)
         f = np.array([eval(e, {"__builtins__": {}}, env) for e in forcing], float)
         m_pin = pin.crba(model, data, q).copy()

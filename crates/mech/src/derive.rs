@@ -888,8 +888,13 @@ fn cyclic_coordinates(
     let mut cyclic = Vec::new();
     let mut conserved = Vec::new();
     let mut reasons = Vec::new();
+    // On the shared path most ∂L/∂q are refuted by numbers: all at once.
+    let refuted = if shared { probe::refuted_each(pool, &m.dl_dq) } else { vec![false; s.n()] };
     for i in 0..s.n() {
         let coordinate = s.names[i].clone();
+        if refuted[i] {
+            continue;
+        }
         match decide(pool, m.dl_dq[i], shared) {
             Decision::Zero => {}
             Decision::NonZero => continue,

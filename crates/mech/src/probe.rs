@@ -212,6 +212,33 @@ fn refuted_at_points(pool: &Pool, e: ExprId) -> bool {
     false
 }
 
+/// [`refuted_at_points`] for many expressions at once, with one walk and one
+/// evaluation of their shared DAG per point (the symbols get their values in
+/// the order of the whole DAG, so a root may meet other points than alone):
+/// for each root, true when some point shows it nonzero.
+pub fn refuted_each(pool: &Pool, roots: &[ExprId]) -> Vec<bool> {
+    let order = pool.reachable(roots);
+    let (symbols, points) = random_points(pool, roots, REFUTING_POINTS, 0x5eed_0001);
+    let slot: FxHashMap<ExprId, usize> = order.iter().enumerate().map(|(k, &id)| (id, k)).collect();
+    let mut values = vec![Bounded::EXACT_ZERO; order.len()];
+    let mut refuted = vec![false; roots.len()];
+    for point in &points {
+        for (&s, &x) in symbols.iter().zip(point) {
+            values[slot[&s]] = Bounded { value: x, error: 0.0 };
+        }
+        for (k, &id) in order.iter().enumerate() {
+            if !matches!(pool.node(id), Node::Sym(_)) {
+                values[k] = bounded_node(pool, id, |c| values[slot[&c]]);
+            }
+        }
+        for (r, &e) in roots.iter().enumerate() {
+            let Bounded { value, error } = values[slot[&e]];
+            refuted[r] |= value.is_finite() && error.is_finite() && value.abs() > REFUTING_MARGIN * error;
+        }
+    }
+    refuted
+}
+
 /// Whether `e` is zero to rounding at one point (symbols valued by `env`, by
 /// their text): its value is within [`REFUTING_MARGIN`] times its
 /// rounding-error bound, as a value that is not a refutation of zero. None
@@ -398,6 +425,17 @@ pub type Subst = FxHashMap<ExprId, ExprId>;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Many roots at once: each refuted exactly when it is refuted alone.
+    #[test]
+    fn refuted_each_agrees_with_one_at_a_time() {
+        let mut pool = Pool::default();
+        let texts = ["sin(x)^2 + cos(x)^2 - 1", "x*y", "exp(-1000000*x^2)", "(x + y)^2 - x^2 - 2*x*y - y^2", "y - 1/3"];
+        let roots: Vec<ExprId> = texts.iter().map(|t| pool.parse(t).unwrap()).collect();
+        let alone: Vec<bool> = roots.iter().map(|&e| refuted_at_points(&pool, e)).collect();
+        assert_eq!(refuted_each(&pool, &roots), alone);
+        assert_eq!(alone, [false, true, false, false, true]);
+    }
 
     #[track_caller]
     fn check(text: &str, expect: Decision) {

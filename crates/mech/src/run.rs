@@ -443,7 +443,7 @@ pub fn choose_method(
         None if fixed_step && conserved && dynamics.is_separable() => (Method::KahanLi8, Form::Separable),
         None if fixed_step && dynamics.has_hamilton_form() => (Method::Gauss6, Form::Hamilton),
         None if fixed_step => (Method::Gauss6, Form::Lagrange),
-        None if dynamics.is_analytic() => (Method::Taylor, Form::Lagrange),
+        None if dynamics.is_analytic() && taylor_pays(d, dynamics) => (Method::Taylor, Form::Lagrange),
         None => (Method::Dop853, Form::Lagrange),
         Some(m) if m.needs_separable() => {
             if !dynamics.is_separable() {
@@ -460,6 +460,23 @@ pub fn choose_method(
         }
         Some(m) => (m, Form::Lagrange),
     })
+}
+
+/// Most coordinates for which the Taylor method is the default, unless M is
+/// constant. A Taylor step's work grows with the square of its order times
+/// the right-hand side's, with every sine and cosine carried as a series: whole
+/// `simulate --until 10` runs (release build, one machine, 2026-11-28) took
+/// 0.18 s with DOP853 against 0.49 s with Taylor for a chain of 10 rods,
+/// 0.35 against 1.48 s for the UR5 arm (6 joints), 0.92 against 9.6 s for the
+/// Panda; at 5 coordinates the two were even (0.08 s each for 5 rods at
+/// t = 100), and below it Taylor is the faster (the performance chapter).
+const TAYLOR_MAX_COORDINATES: usize = 4;
+
+/// Whether the Taylor method is the faster default for this model: few
+/// coordinates, or a constant mass matrix (a chain of springs, whose series are
+/// short polynomials however many coordinates it has).
+fn taylor_pays(d: &Derivation, dynamics: &Dynamics) -> bool {
+    d.q.len() <= TAYLOR_MAX_COORDINATES || dynamics.is_separable()
 }
 
 /// The solver of a run at its initial state, and how it was chosen.

@@ -83,7 +83,7 @@ impl Method {
         match self {
             Method::Dopri5 => "Dormand-Prince 5(4), adaptive explicit Runge-Kutta (general purpose)",
             Method::Dop853 => {
-                "Dormand-Prince 8(5,3), adaptive explicit Runge-Kutta (the default with constraints or abs)"
+                "Dormand-Prince 8(5,3), adaptive explicit Runge-Kutta (the default with constraints, abs or many coordinates)"
             }
             Method::Verlet => "Stormer-Verlet, symplectic, order 2, fixed step (separable H)",
             Method::Yoshida4 => "Yoshida triple-jump composition, symplectic, order 4, fixed step (separable H)",
