@@ -944,7 +944,11 @@ fn judge(
             let mut h_terms: Vec<ExprId> = (0..n).map(|i| pool.mul2(qd[i], m.momenta[i])).collect();
             h_terms.push(pool.neg(e.lagrangian));
             let h_sum = pool.add(&h_terms);
-            pool.simplify_in(h_sum, is_var)
+            if e.shared {
+                simplify_bounded(pool, h_sum, is_var)
+            } else {
+                pool.simplify_in(h_sum, is_var)
+            }
         }
     };
     // Each term of dH/dt: H is conserved only when all three are proven 0.

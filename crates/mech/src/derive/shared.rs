@@ -201,8 +201,9 @@ mod tests {
 
     /// Models of every kind the shared path meets: bodies (hinged, planar,
     /// Euler angles, Tait–Bryan), particles, time-dependent constraints, a
-    /// velocity-dependent potential, dissipation, forces and inputs.
-    const MODELS: [(&str, &str); 12] = [
+    /// velocity-dependent potential, dissipation, forces, inputs, and a
+    /// Lagrangian given as such.
+    const MODELS: [(&str, &str); 13] = [
         ("double pendulum", include_str!("../../../../examples/double_pendulum.toml")),
         ("heavy top", include_str!("../../../../examples/tops/heavy_top.toml")),
         ("torqued body", include_str!("../../../../examples/tops/torqued_body.toml")),
@@ -215,6 +216,7 @@ mod tests {
         ("cart pendulum", include_str!("../../../../examples/cart_pendulum.toml")),
         ("compound pendulum", include_str!("../../../../examples/compound_pendulum.toml")),
         ("spatial chain", SPATIAL_CHAIN),
+        ("kepler (a Lagrangian)", include_str!("../../../../examples/kepler.toml")),
     ];
 
     /// Two bodies, each turned by three angles relative to its parent, with
