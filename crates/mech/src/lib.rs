@@ -110,7 +110,9 @@ pub use modes::{
 };
 pub use num::{Method, Output};
 pub use orbit::{Kepler, Orbit, OrbitError, OrbitKind, OrbitReport};
-pub use report::{BodyReport, ConstraintReport, DeriveReport, HamiltonEquations, NamedExpr, Ordered};
+pub use report::{
+    prints_shared, BodyReport, ConstraintReport, Definition, DeriveReport, HamiltonEquations, NamedExpr, Ordered,
+};
 pub use run::body::BodyRecorder;
 pub use run::constrained::{constraint_columns, ConstraintAudit};
 pub use run::dynamics::{invariants_of, Dynamics, Form, Invariant, System};

@@ -2,11 +2,17 @@
 //! expression language), ready to serialize as the JSON contract of DESIGN.md.
 //!
 //! Field names are a contract: add fields freely, rename none.
+//!
+//! A large derivation (its expressions' trees together past
+//! [`sym::SHARING_PAYS_ABOVE`] nodes, [`prints_shared`]) writes each
+//! subexpression it would repeat once, in `definitions` (`w1 = …`, children
+//! first), and the other fields refer to those names; a small one has no
+//! `definitions` and prints as it always has.
 
 use crate::derive::Derivation;
 use serde::ser::{SerializeMap, Serializer};
 use serde::Serialize;
-use sym::ExprId;
+use sym::{ExprId, PrintOptions, Printout};
 
 /// A map that keeps its insertion order (coordinates and parameters in file order).
 #[derive(Debug, Clone, Default)]
@@ -142,6 +148,28 @@ pub struct DeriveReport {
     /// With inputs: whether f is proven affine in u.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub inputs_affine: Option<bool>,
+    /// The named intermediates of a large derivation, children first: the
+    /// other expressions (and later definitions) use their names (extra
+    /// field, absent when nothing is named).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub definitions: Vec<Definition>,
+}
+
+/// One named intermediate: `name = expr`.
+#[derive(Debug, Clone, Serialize)]
+pub struct Definition {
+    /// Its name, `w1`, `w2`, …: a symbol of no expression of the derivation.
+    pub name: String,
+    /// The expression it stands for, which may use the names defined before it.
+    pub expr: String,
+}
+
+/// Whether the outputs of `d` print with named intermediates: whether all the
+/// report's expressions written as trees would exceed
+/// [`sym::SHARING_PAYS_ABOVE`] nodes. Every output of one derivation (JSON,
+/// text, LaTeX, MathML) makes the same decision by it.
+pub fn prints_shared(d: &Derivation) -> bool {
+    d.pool().sharing_pays(&DeriveReport::roots(d))
 }
 
 /// A rigid body's angular velocity and angular momentum, body components.
@@ -207,10 +235,36 @@ pub struct Explanations {
 }
 
 impl DeriveReport {
-    /// Builds the report from a derivation.
+    /// Builds the report from a derivation; see the module documentation
+    /// for the named intermediates of a large one.
     pub fn new(d: &Derivation) -> DeriveReport {
+        let roots = DeriveReport::roots(d);
+        if !d.pool().sharing_pays(&roots) {
+            return DeriveReport::build(d, &Printout::Trees);
+        }
+        let shared = d.pool().share(&roots);
+        let definitions = shared
+            .definitions()
+            .map(|(name, id)| Definition {
+                name,
+                expr: shared.print_definition(d.pool(), id, PrintOptions::text()).to_string(),
+            })
+            .collect();
+        DeriveReport { definitions, ..DeriveReport::build(d, &Printout::Named(shared)) }
+    }
+
+    /// Every expression the report prints, in order (one listed twice is
+    /// printed twice).
+    fn roots(d: &Derivation) -> Vec<ExprId> {
+        let roots = Printout::roots();
+        DeriveReport::build(d, &roots);
+        roots.into_roots()
+    }
+
+    /// The report with its expressions written as `how` says.
+    fn build(d: &Derivation, how: &Printout) -> DeriveReport {
         let pool = d.pool();
-        let s = |e: ExprId| pool.display(e).to_string();
+        let s = |e: ExprId| how.write(pool, e, PrintOptions::text());
         let names = d.coordinate_names();
         let by_coord = |v: &[ExprId]| Ordered(names.iter().zip(v).map(|(n, &e)| (n.to_string(), s(e))).collect());
         DeriveReport {
@@ -306,6 +360,89 @@ impl DeriveReport {
             input_matrix: (!d.inputs.is_empty())
                 .then(|| d.input_matrix.iter().map(|row| row.iter().map(|&b| s(b)).collect()).collect()),
             inputs_affine: (!d.inputs.is_empty()).then_some(d.inputs_affine),
+            definitions: Vec::new(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Model;
+    use rustc_hash::FxHashMap;
+    use sym::Pool;
+
+    fn derive(text: &str) -> Derivation {
+        Derivation::new(Model::parse(text, &[]).expect("the model parses")).expect("it derives")
+    }
+
+    /// A value for each symbol in [0.3, 1.3), fixed by its name.
+    fn value_of(name: &str) -> Option<f64> {
+        let h = name.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3));
+        Some(0.3 + (h >> 11) as f64 / (1u64 << 53) as f64)
+    }
+
+    /// Parses each definition in order into `pool`, with the earlier ones
+    /// substituted: each name's expression in the symbols of the model.
+    fn definitions(pool: &mut Pool, report: &DeriveReport) -> FxHashMap<ExprId, ExprId> {
+        let mut map = FxHashMap::default();
+        for def in &report.definitions {
+            let e = pool.parse(&def.expr).unwrap_or_else(|err| panic!("{} = {}: {err}", def.name, def.expr));
+            let value = pool.substitute(e, &map);
+            let name = pool.symbol(&def.name);
+            map.insert(name, value);
+        }
+        map
+    }
+
+    /// The benchmark bicycle's report is under 1 MB as JSON (1.39 MB with its
+    /// expressions as trees) and names its shared subexpressions; its mass
+    /// matrix, forcing, momenta and Hamiltonian, read back through the
+    /// definitions, have the derivation's values.
+    #[test]
+    fn a_large_report_defines_each_shared_subexpression_once() {
+        let d = derive(include_str!("../../../examples/bicycle/benchmark_bicycle.toml"));
+        assert!(prints_shared(&d));
+        let report = DeriveReport::new(&d);
+        assert!(report.definitions.len() > 100, "{} definitions", report.definitions.len());
+        let json = serde_json::to_string(&report).expect("serializes");
+        assert!(json.len() < 1_000_000, "{} bytes", json.len());
+        // No definition names a symbol of the model (the bicycle has a parameter `w`).
+        for def in &report.definitions {
+            assert!(d.pool().find_name(&def.name).is_none(), "{} is a name of the model", def.name);
+        }
+        let mut pool = d.pool().clone();
+        let map = definitions(&mut pool, &report);
+        let mut pairs: Vec<(ExprId, &str)> = Vec::new();
+        for (row, texts) in d.mass_matrix.iter().zip(&report.mass_matrix) {
+            pairs.extend(row.iter().copied().zip(texts.iter().map(String::as_str)));
+        }
+        pairs.extend(d.forcing.iter().copied().zip(report.forcing.iter().map(String::as_str)));
+        pairs.extend(d.momenta.iter().copied().zip(report.momenta.0.iter().map(|(_, t)| t.as_str())));
+        pairs.extend(d.hamiltonian.zip(report.hamiltonian.as_deref()));
+        assert!(pairs.len() >= 80, "{} expressions", pairs.len());
+        let mut named = 0;
+        for (want, text) in pairs {
+            let e = pool.parse(text).unwrap_or_else(|err| panic!("{text}: {err}"));
+            named += usize::from(text.contains('w'));
+            let back = pool.substitute(e, &map);
+            let (a, b) =
+                (pool.eval(want, &value_of).expect("evaluates"), pool.eval(back, &value_of).expect("evaluates"));
+            assert!((a - b).abs() <= 1e-9 * (1.0 + a.abs()), "{text}: {b} where the derivation has {a}");
+        }
+        assert!(named > 10, "only {named} expressions use a name");
+    }
+
+    /// A small model's report has no definitions, and no `definitions` field.
+    #[test]
+    fn a_small_report_prints_trees() {
+        let d = derive(
+            "coordinates = [\"th\"]\ngravity = \"g\"\n[parameters]\ng = 9.81\n\
+             [[particles]]\nmass = \"1\"\nposition = [\"sin(th)\", \"-cos(th)\"]\n",
+        );
+        assert!(!prints_shared(&d));
+        let json = serde_json::to_value(DeriveReport::new(&d)).expect("serializes");
+        assert!(json.get("definitions").is_none(), "{json}");
+        assert_eq!(json["mass_matrix"][0][0], "1");
     }
 }

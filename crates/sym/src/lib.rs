@@ -30,6 +30,7 @@ mod number;
 mod parse;
 mod print;
 mod rational;
+mod shared;
 mod simplify;
 mod taylor;
 #[cfg(feature = "jit")]
@@ -52,4 +53,5 @@ pub use native::{CBuild, CcError, JitError};
 pub use number::{Number, Rational};
 pub use parse::{Limits, ParseError, ParseErrorKind, ParseOptions, Span};
 pub use print::{PrintMode, PrintOptions, Printed};
+pub use shared::{Printout, Shared, MAX_CUT_TREE, MIN_NAMED_TREE, SHARING_PAYS_ABOVE};
 pub use taylor::{ClosedFormInverse, Lanes, LinearSecondOrder, TaylorCode, TaylorTape};

@@ -23,6 +23,12 @@
 //! composite one an `<mrow>`), so a piece can always be the base or the
 //! exponent of an `<msup>` or a part of an `<mfrac>`.
 //!
+//! With a [`Shared`] (see `shared.rs`) the walk stops at the named nodes and
+//! writes their names (`w12`, `w_{12}`, `<msub><mi>w</mi><mn>12</mn></msub>`)
+//! instead; wherever it would look inside a child to choose a form (a term's
+//! sign, a factor below the bar, a function raised to a power) a named child
+//! counts as a name, an atom with nothing to look into.
+//!
 //! The text is checked by a property test: parsing it gives back the same
 //! [`ExprId`]. Symbols whose names are not names of the language (a symbol
 //! called `pi` or `sin`, or `"x y"`, built directly through [`Pool::symbol`])
@@ -30,6 +36,7 @@
 
 use crate::expr::{ExprId, Func, Node, Pool, Symbol};
 use crate::number::{Number, Rational};
+use crate::shared::Shared;
 use std::fmt;
 
 /// How [`Pool::print`] writes an expression; start from a preset.
@@ -88,12 +95,31 @@ pub struct Printed<'a> {
     pool: &'a Pool,
     id: ExprId,
     options: PrintOptions,
+    /// The named nodes, written as their names.
+    names: Option<&'a Shared>,
+    /// Whether `id` is written out even when it is named (the right side of
+    /// its definition).
+    defining: bool,
+}
+
+impl<'a> Printed<'a> {
+    /// `id` with the nodes `names` holds written as their names; when
+    /// `defining`, `id` itself is written out (the right side of its definition).
+    pub(crate) fn with_names(
+        pool: &'a Pool,
+        id: ExprId,
+        options: PrintOptions,
+        names: &'a Shared,
+        defining: bool,
+    ) -> Printed<'a> {
+        Printed { pool, id, options, names: Some(names), defining }
+    }
 }
 
 impl Pool {
     /// The expression `id` written as `options` say.
     pub fn print(&self, id: ExprId, options: PrintOptions) -> Printed<'_> {
-        Printed { pool: self, id, options }
+        Printed { pool: self, id, options, names: None, defining: false }
     }
 
     /// The expression in the expression language, with minimal parentheses
@@ -116,7 +142,13 @@ impl Pool {
 
 impl fmt::Display for Printed<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&Printer { pool: self.pool, mode: self.options.mode }.expr(self.id).text)
+        let printer = Printer {
+            pool: self.pool,
+            mode: self.options.mode,
+            names: self.names,
+            top: self.defining.then_some(self.id),
+        };
+        f.write_str(&printer.expr(self.id).text)
     }
 }
 
@@ -271,7 +303,8 @@ struct Fraction<'a> {
     below: Vec<(ExprId, Exp<'a>)>,
 }
 
-fn fraction<'a>(pool: &'a Pool, coeff: Number, factors: &'a [ExprId]) -> Fraction<'a> {
+/// `factors` split around the bar; `opaque` factors (named ones) stay above it.
+fn fraction<'a>(pool: &'a Pool, coeff: Number, factors: &'a [ExprId], opaque: impl Fn(ExprId) -> bool) -> Fraction<'a> {
     let (float, p, q) = match coeff {
         Number::Rational(r) => (None, r.numer(), r.denom()),
         Number::Float(x) => (Some(x), 1, 1),
@@ -279,7 +312,7 @@ fn fraction<'a>(pool: &'a Pool, coeff: Number, factors: &'a [ExprId]) -> Fractio
     let mut above = Vec::new();
     let mut below = Vec::new();
     for &f in factors {
-        match below_bar(pool, f) {
+        match below_bar(pool, f).filter(|_| !opaque(f)) {
             Some(b) => below.push(b),
             None => above.push(f),
         }
@@ -299,11 +332,39 @@ const SPACED_TIMES: &str = "<mo lspace=\"0.17em\" rspace=\"0.17em\">&#x2062;</mo
 struct Printer<'a> {
     pool: &'a Pool,
     mode: PrintMode,
+    /// The named nodes, if any: each is written as its name.
+    names: Option<&'a Shared>,
+    /// The expression defined, written out although it is named.
+    top: Option<ExprId>,
 }
 
 impl Printer<'_> {
+    /// The number of the name `id` is written as, if it is named (and not
+    /// the expression being defined).
+    fn name_of(&self, id: ExprId) -> Option<usize> {
+        self.names.filter(|_| Some(id) != self.top).and_then(|n| n.number_of(id))
+    }
+
+    /// Whether `id` is written as a name, so that nothing inside it shows.
+    fn opaque(&self, id: ExprId) -> bool {
+        self.name_of(id).is_some()
+    }
+
+    /// A named node's name: `w12`, `w_{12}`, `<msub><mi>w</mi><mn>12</mn></msub>`.
+    fn name(&self, k: usize) -> Piece {
+        let text = match self.mode {
+            PrintMode::Text => format!("w{k}"),
+            PrintMode::Latex => format!("w_{{{k}}}"),
+            PrintMode::MathMl => format!("<msub><mi>w</mi><mn>{k}</mn></msub>"),
+        };
+        Piece::new(text, Prec::Atom)
+    }
+
     fn expr(&self, id: ExprId) -> Piece {
         let pool = self.pool;
+        if let Some(k) = self.name_of(id) {
+            return self.name(k);
+        }
         match pool.node(id) {
             Node::Num(n) => self.num(*n),
             Node::Pi => Piece::new(self.pick("pi", "\\pi", "<mi>π</mi>"), Prec::Atom),
@@ -448,7 +509,7 @@ impl Printer<'_> {
     fn sum(&self, ts: &[ExprId]) -> Piece {
         let mut out = String::new();
         for (i, &t) in ts.iter().enumerate() {
-            let neg = negated(self.pool, t);
+            let neg = if self.opaque(t) { None } else { negated(self.pool, t) };
             out.push_str(match (i, neg.is_some()) {
                 (0, false) => "",
                 (0, true) => self.pick("-", "- ", MINUS),
@@ -473,10 +534,13 @@ impl Printer<'_> {
         if factors.is_empty() {
             return self.num_abs(coeff);
         }
-        if coeff.is_one() && factors.len() == 1 && below_bar(self.pool, factors[0]).is_none() {
+        if coeff.is_one()
+            && factors.len() == 1
+            && (self.opaque(factors[0]) || below_bar(self.pool, factors[0]).is_none())
+        {
             return self.expr(factors[0]);
         }
-        let fr = fraction(self.pool, coeff, factors);
+        let fr = fraction(self.pool, coeff, factors, |f| self.opaque(f));
         let mut above: Vec<String> = Vec::new();
         if let Some(x) = fr.float {
             above.push(self.num_abs(Number::float(x)).text);
@@ -507,7 +571,7 @@ impl Printer<'_> {
                 // distributes), so a lone sum below the bar keeps its number apart.
                 let lone_sum = fr.q != 1
                     && matches!(fr.below[..], [(b, e)] if is_rational(exp_number(self.pool, e), 1, 1)
-                    && matches!(self.pool.node(b), Node::Add(_)));
+                    && !self.opaque(b) && matches!(self.pool.node(b), Node::Add(_)));
                 match below.len() {
                     1 => format!("{above}/{}", below[0]),
                     _ if lone_sum => format!("{above}/{}/{}", below[1], below[0]),
@@ -599,7 +663,7 @@ impl Printer<'_> {
         };
         // Typeset, sin(q)^2 reads as \sin^{2}(q) when the exponent is a positive integer.
         if let (true, Node::Func(f, a), Some(Number::Rational(r))) = (typeset, self.pool.node(base), n) {
-            if r.is_integer() && !r.is_negative() && !matches!(f, Func::Exp | Func::Abs) {
+            if !self.opaque(base) && r.is_integer() && !r.is_negative() && !matches!(f, Func::Exp | Func::Abs) {
                 return self.func(*f, *a, Some(&e.text));
             }
         }

@@ -7,24 +7,50 @@
 //! [`Item`]s; the three renderings ([`Text`], [`Latex`], [`MathMl`]) write each
 //! item their way, or not at all: LaTeX gives the equations, the text and the
 //! MathML also the verdicts and their reasons.
+//!
+//! A large derivation ([`mech::prints_shared`], the same decision as its
+//! JSON's) is written with named intermediates: each rendering runs once to
+//! list the expressions it prints, [`sym::Pool::share`] names the
+//! subexpressions they would repeat, and the second run writes those as
+//! `w1`, `w2`, … and ends with their definitions (a `where` section, a last
+//! `align*` block, a last table).
 
 use mech::{BodyMotion, Constraint, Derivation};
 use std::fmt::Write;
-use sym::ExprId;
+use sym::{ExprId, PrintOptions, Printout};
+
+/// How the renderings of `d` write expressions: as trees when `d` is small;
+/// otherwise with the nodes named that the roots `list` prints (given a
+/// listing printout, it renders and hands the printout back) would repeat.
+fn printout(d: &Derivation, list: impl FnOnce(Printout) -> Printout) -> Printout {
+    if !mech::prints_shared(d) {
+        return Printout::Trees;
+    }
+    let roots = list(Printout::roots()).into_roots();
+    Printout::Named(d.pool().share(&roots))
+}
 
 /// The derivation as text, with the notes' names and the reasons behind each verdict.
 pub fn text(d: &Derivation) -> String {
-    let mut r = Text { d, names: d.coordinate_names(), o: String::new() };
-    layout(d, &mut |item| r.item(item));
-    r.o
+    let render = |out: Printout| {
+        let mut r = Text { d, names: d.coordinate_names(), o: String::new(), out };
+        layout(d, &mut |item| r.item(item));
+        r
+    };
+    let out = printout(d, |out| render(out).out);
+    render(out).finish()
 }
 
 /// The derivation as LaTeX (an `align*` environment per section).
 pub fn latex(d: &Derivation) -> String {
-    let q = d.q().iter().map(|&q| d.pool().latex(q).to_string()).collect();
-    let mut r = Latex { d, q, o: String::new(), blocks: Default::default() };
-    layout(d, &mut |item| r.item(item));
-    r.finish()
+    let render = |out: Printout| {
+        let q = d.q().iter().map(|&q| d.pool().latex(q).to_string()).collect();
+        let mut r = Latex { d, q, o: String::new(), blocks: Default::default(), out };
+        layout(d, &mut |item| r.item(item));
+        r
+    };
+    let out = printout(d, |out| render(out).out);
+    render(out).finish()
 }
 
 /// The derivation as an HTML fragment, `<section class="derivation">`: a
@@ -32,16 +58,21 @@ pub fn latex(d: &Derivation) -> String {
 /// `<math display="block">` table, and the verdicts and their reasons as
 /// paragraphs. It holds no entity but XML's, so it is also well-formed XML.
 pub fn mathml(d: &Derivation) -> String {
-    let q = d.q().iter().map(|&q| d.pool().mathml(q).to_string()).collect();
-    let mut r = MathMl {
-        d,
-        names: d.coordinate_names(),
-        q,
-        o: String::from("<section class=\"derivation\">\n"),
-        rows: Vec::new(),
+    let render = |out: Printout| {
+        let q = d.q().iter().map(|&q| d.pool().mathml(q).to_string()).collect();
+        let mut r = MathMl {
+            d,
+            names: d.coordinate_names(),
+            q,
+            o: String::from("<section class=\"derivation\">\n"),
+            rows: Vec::new(),
+            out,
+        };
+        layout(d, &mut |item| r.item(item));
+        r
     };
-    layout(d, &mut |item| r.item(item));
-    r.finish()
+    let out = printout(d, |out| render(out).out);
+    render(out).finish()
 }
 
 /// One thing the layout puts down.
@@ -174,11 +205,24 @@ struct Text<'a> {
     d: &'a Derivation,
     names: Vec<&'a str>,
     o: String,
+    out: Printout,
 }
 
 impl Text<'_> {
     fn s(&self, e: ExprId) -> String {
-        self.d.pool().display(e).to_string()
+        self.out.write(self.d.pool(), e, PrintOptions::text())
+    }
+
+    /// The text, with the named intermediates' definitions last.
+    fn finish(mut self) -> String {
+        if let Some(shared) = self.out.shared() {
+            let _ = writeln!(self.o, "\nwhere");
+            for (name, id) in shared.definitions() {
+                let _ =
+                    writeln!(self.o, "  {name} = {}", shared.print_definition(self.d.pool(), id, PrintOptions::text()));
+            }
+        }
+        self.o
     }
 
     /// The width of the `name:` labels before the equations.
@@ -477,7 +521,8 @@ struct Latex<'a> {
     /// The title; the blocks follow it.
     o: String,
     /// The rows of each block: the row and its comment.
-    blocks: [Vec<(String, Option<String>)>; 3],
+    blocks: [Vec<(String, Option<String>)>; 4],
+    out: Printout,
 }
 
 impl Latex<'_> {
@@ -486,9 +531,11 @@ impl Latex<'_> {
     const MAIN: usize = 0;
     const CONSTRAINTS: usize = 1;
     const HAMILTON: usize = 2;
+    /// The named intermediates' definitions.
+    const WHERE: usize = 3;
 
     fn l(&self, e: ExprId) -> String {
-        self.d.pool().latex(e).to_string()
+        self.out.write(self.d.pool(), e, PrintOptions::latex())
     }
 
     fn item(&mut self, item: Item<'_>) {
@@ -543,7 +590,19 @@ impl Latex<'_> {
 
     /// The title, then each block that has rows, every row but a block's last
     /// ending in `\\`.
-    fn finish(self) -> String {
+    fn finish(mut self) -> String {
+        if let Some(shared) = self.out.shared() {
+            let pool = self.d.pool();
+            for (k, (_, id)) in shared.definitions().enumerate() {
+                let row = format!(
+                    "{} &= {}",
+                    shared.print(pool, id, PrintOptions::latex()),
+                    shared.print_definition(pool, id, PrintOptions::latex())
+                );
+                let comment = (k == 0).then(|| "where".to_string());
+                self.blocks[Self::WHERE].push((row, comment));
+            }
+        }
         let mut o = self.o;
         for rows in self.blocks.iter().filter(|rows| !rows.is_empty()) {
             let _ = writeln!(o, "\\begin{{align*}}");
@@ -573,6 +632,7 @@ struct MathMl<'a> {
     o: String,
     /// The rows not yet set.
     rows: Vec<Row>,
+    out: Printout,
 }
 
 /// One row of an equation table: cells alternately right- and left-aligned
@@ -627,7 +687,7 @@ const MINUS: &str = "<mo>&#x2212;</mo>";
 
 impl MathMl<'_> {
     fn m(&self, e: ExprId) -> String {
-        self.d.pool().mathml(e).to_string()
+        self.out.write(self.d.pool(), e, PrintOptions::mathml())
     }
 
     /// `lhs = rhs` as a row, with a note in words (and math).
@@ -949,6 +1009,17 @@ impl MathMl<'_> {
     }
 
     fn finish(mut self) -> String {
+        if let Printout::Named(shared) = std::mem::replace(&mut self.out, Printout::Trees) {
+            self.heading("Where");
+            let pool = self.d.pool();
+            for (_, id) in shared.definitions() {
+                self.row(
+                    shared.print(pool, id, PrintOptions::mathml()).to_string(),
+                    shared.print_definition(pool, id, PrintOptions::mathml()).to_string(),
+                    None,
+                );
+            }
+        }
         self.flush();
         self.o.push_str("</section>\n");
         self.o
@@ -1129,6 +1200,51 @@ position = ["r*cos(th)", "r*sin(th)"]
         // The model's name is text, not markup.
         let out = check_mathml(&derive(&PENDULUM.replace("name = \"pendulum\"", "name = \"<b>&</b>\"")));
         check_contains(&out, &["<strong>&lt;b&gt;&amp;&lt;/b&gt;</strong>"]);
+    }
+
+    /// The benchmark bicycle, the one example large enough to print with named intermediates.
+    const BICYCLE: &str = include_str!("../../../examples/bicycle/benchmark_bicycle.toml");
+
+    /// The names `w1`, `w2`, … a text uses, each once, in order.
+    fn names_in(text: &str) -> Vec<usize> {
+        let mut names: Vec<usize> = text
+            .split(|c: char| !c.is_ascii_alphanumeric())
+            .filter_map(|word| word.strip_prefix('w')?.parse().ok())
+            .collect();
+        names.sort_unstable();
+        names.dedup();
+        names
+    }
+
+    /// The bicycle's text (1.5 MB as trees), LaTeX and MathML name each
+    /// shared subexpression once and define every name they use, in a last
+    /// section, each definition using only the names before it.
+    #[test]
+    fn a_large_derivation_prints_each_shared_subexpression_once() {
+        let d = derive(BICYCLE);
+        let out = text(&d);
+        assert!(out.len() < 1_000_000, "{} bytes", out.len());
+        let (body, defs) = out.split_once("\nwhere\n").expect("a where section");
+        let mut defined = Vec::new();
+        for line in defs.lines() {
+            let (name, expr) = line.trim_start().split_once(" = ").expect("name = expr");
+            for k in names_in(expr) {
+                assert!(defined.contains(&k), "{name} uses w{k} before its definition");
+            }
+            defined.extend(names_in(name));
+        }
+        let used = names_in(body);
+        assert!(used.len() > 100, "{} names used", used.len());
+        for k in used {
+            assert!(defined.contains(&k), "w{k} is used and not defined");
+        }
+        let out = latex(&d);
+        let (_, block) = out.rsplit_once("\\begin{align*}").expect("blocks");
+        assert!(block.starts_with("\nw_{1} &= ") && block.contains("  % where"), "{}", &block[..200]);
+        let out = mathml(&d);
+        roxmltree::Document::parse(&out).unwrap_or_else(|e| panic!("{e}: not well-formed"));
+        let (_, last) = out.rsplit_once("<h3>Where</h3>").expect("a last table");
+        assert!(last.contains("<msub><mi>w</mi><mn>1</mn></msub></mtd>"), "{}", &last[..400]);
     }
 
     #[test]
