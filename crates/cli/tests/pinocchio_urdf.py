@@ -42,10 +42,12 @@ ROBOTS = {
     "g1": "g1_description/urdf/g1_29dof_rev_1_0.urdf",
 }
 
+_ACCELERATION = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)''")
 _VELOCITY = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)'")
 
 
 def _to_python(expr: str) -> str:
+    expr = _ACCELERATION.sub(r"\1__ddot", expr)
     return _VELOCITY.sub(r"\1__dot", expr).replace("^", "**")
 
 
@@ -173,6 +175,7 @@ def check(binary: str, path: str, floating_base: bool, states: int, seed: int, t
         for c in coords:
             env[c] = values[c]
             env[c + "__dot"] = rates[c]
+            env[c + "__ddot"] = 0.0  # in definitions the equations share, not in M or f
             iv, iq, nq = where[c]
             if nq == 2:
                 q[iq], q[iq + 1] = math.cos(values[c]), math.sin(values[c])
