@@ -818,21 +818,25 @@ fn equations_of_motion(
             forcing.push(simplify_bounded(pool, f, is_var));
         }
     }
-    // E_i = Σ M_ij q_j'' − f_i is assembled from M and f, so the long
-    // equations are never expanded as a whole.
-    let equations = (0..n)
+    let equations = assemble_equations(pool, &mass_matrix, &forcing, &s.qdd);
+    Motion { momenta, mass_matrix, forcing, equations, dl_dq }
+}
+
+/// E_i = Σ M_ij q_j'' − f_i, assembled from M and f so that the long
+/// equations are never expanded as a whole.
+fn assemble_equations(pool: &mut Pool, mass_matrix: &[Vec<ExprId>], forcing: &[ExprId], qdd: &[ExprId]) -> Vec<ExprId> {
+    (0..forcing.len())
         .map(|i| {
-            let mut e_terms: Vec<ExprId> = Vec::with_capacity(n + 1);
-            for j in 0..n {
-                if !pool.is_zero(mass_matrix[i][j]) {
-                    e_terms.push(pool.mul2(mass_matrix[i][j], s.qdd[j]));
+            let mut terms: Vec<ExprId> = Vec::with_capacity(qdd.len() + 1);
+            for (&m, &a) in mass_matrix[i].iter().zip(qdd) {
+                if !pool.is_zero(m) {
+                    terms.push(pool.mul2(m, a));
                 }
             }
-            e_terms.push(pool.neg(forcing[i]));
-            pool.add(&e_terms)
+            terms.push(pool.neg(forcing[i]));
+            pool.add(&terms)
         })
-        .collect();
-    Motion { momenta, mass_matrix, forcing, equations, dl_dq }
+        .collect()
 }
 
 /// An error, located at L or T, when M is singular: then the equations of

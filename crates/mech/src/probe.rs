@@ -191,25 +191,7 @@ pub fn zero_if_proven(pool: &mut Pool, e: ExprId) -> ExprId {
 /// or the bound is not finite is skipped; a value that underflowed to 0 shows
 /// nothing.
 fn refuted_at_points(pool: &Pool, e: ExprId) -> bool {
-    let order = pool.reachable(&[e]);
-    let (symbols, points) = random_points(pool, &[e], REFUTING_POINTS, 0x5eed_0001);
-    let slot: FxHashMap<ExprId, usize> = order.iter().enumerate().map(|(k, &id)| (id, k)).collect();
-    let mut values = vec![Bounded::EXACT_ZERO; order.len()];
-    for point in &points {
-        for (&s, &x) in symbols.iter().zip(point) {
-            values[slot[&s]] = Bounded { value: x, error: 0.0 };
-        }
-        for (k, &id) in order.iter().enumerate() {
-            if !matches!(pool.node(id), Node::Sym(_)) {
-                values[k] = bounded_node(pool, id, |c| values[slot[&c]]);
-            }
-        }
-        let Bounded { value, error } = values[slot[&e]];
-        if value.is_finite() && error.is_finite() && value.abs() > REFUTING_MARGIN * error {
-            return true;
-        }
-    }
-    false
+    refuted_each(pool, &[e])[0]
 }
 
 /// [`refuted_at_points`] for many expressions at once, with one walk and one

@@ -34,17 +34,8 @@ impl Pool {
                     self.add(&ds)
                 }
                 Node::Mul(fs) => {
-                    let mut terms = Vec::new();
-                    for i in 0..fs.len() {
-                        let df = tan[&fs[i]];
-                        if df == zero {
-                            continue;
-                        }
-                        let mut prod: Vec<ExprId> = fs.to_vec();
-                        prod[i] = df;
-                        terms.push(self.mul(&prod));
-                    }
-                    self.add(&terms)
+                    let ds: Vec<ExprId> = fs.iter().map(|f| tan[f]).collect();
+                    self.product_rule(&fs, &ds)
                 }
                 Node::Pow(b, p) => {
                     let (db, dp) = (tan[&b], tan[&p]);

@@ -40,17 +40,8 @@ impl Pool {
             }
             Node::Mul(ref fs) => {
                 let fs = fs.clone();
-                let mut terms = Vec::new();
-                for i in 0..fs.len() {
-                    let df = self.diff(fs[i], x);
-                    if self.is_zero(df) {
-                        continue;
-                    }
-                    let mut prod: Vec<ExprId> = fs.to_vec();
-                    prod[i] = df;
-                    terms.push(self.mul(&prod));
-                }
-                self.add(&terms)
+                let ds: Vec<ExprId> = fs.iter().map(|&f| self.diff(f, x)).collect();
+                self.product_rule(&fs, &ds)
             }
             Node::Pow(b, p) => {
                 let db = self.diff(b, x);
@@ -94,6 +85,21 @@ impl Pool {
         };
         self.diff_cache.insert((e, x), d);
         d
+    }
+
+    /// The derivative of the product of `factors` whose own derivatives are
+    /// `derivatives`: Σ_i f_1 ⋯ f_i' ⋯ f_k, skipping the zero f_i'.
+    pub(crate) fn product_rule(&mut self, factors: &[ExprId], derivatives: &[ExprId]) -> ExprId {
+        let mut terms = Vec::new();
+        for (i, &d) in derivatives.iter().enumerate() {
+            if self.is_zero(d) {
+                continue;
+            }
+            let mut prod: Vec<ExprId> = factors.to_vec();
+            prod[i] = d;
+            terms.push(self.mul(&prod));
+        }
+        self.add(&terms)
     }
 
     /// f'(u) for the language's functions.

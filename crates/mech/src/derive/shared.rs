@@ -163,18 +163,7 @@ pub(super) fn motion(pool: &mut Pool, s: &Symbols, e: &mut Energies, ext: &Exter
             pool.add(&terms)
         })
         .collect();
-    let equations = (0..n)
-        .map(|i| {
-            let mut terms: Vec<ExprId> = Vec::with_capacity(n + 1);
-            for j in 0..n {
-                if !pool.is_zero(mass_matrix[i][j]) {
-                    terms.push(pool.mul2(mass_matrix[i][j], s.qdd[j]));
-                }
-            }
-            terms.push(pool.neg(forcing[i]));
-            pool.add(&terms)
-        })
-        .collect();
+    let equations = super::assemble_equations(pool, &mass_matrix, &forcing, &s.qdd);
     let entries: Vec<ExprId> = mass_matrix.iter().flatten().copied().collect();
     let quadratic = free_of_all(pool, &entries, qd);
     if quadratic {
