@@ -68,6 +68,9 @@ pub struct Derivation {
     pub(crate) forces: Vec<ExprId>,
     /// Generalized momenta p_q = ∂L/∂q'.
     pub(crate) momenta: Vec<ExprId>,
+    /// ∂L/∂q from the shared path's reverse pass ([`shared`]); None on the
+    /// expanded path, where differentiating the collected L is cheap.
+    pub(crate) coordinate_gradient: Option<Vec<ExprId>>,
     /// E_q = d/dt ∂L/∂q' − ∂L/∂q + ∂R/∂q' − Q_q.
     pub(crate) equations: Vec<ExprId>,
     /// M with E = M q'' − f.
@@ -303,6 +306,7 @@ impl Derivation {
             dissipation: ext.dissipation,
             forces: ext.forces,
             momenta: motion.momenta,
+            coordinate_gradient: shared.then_some(motion.dl_dq),
             equations: motion.equations,
             mass_matrix: motion.mass_matrix,
             forcing: motion.forcing,

@@ -22,6 +22,7 @@ pub(crate) mod dynamics;
 pub(crate) mod ensemble;
 mod plain;
 pub(crate) mod series;
+pub(crate) mod tree;
 
 use crate::clock::Instant;
 use crate::derive::Derivation;
@@ -229,6 +230,9 @@ pub struct RunReport {
     pub method: Method,
     /// The state variables integrated.
     pub form: Form,
+    /// How the accelerations were computed: `"articulated-body"` (the model's
+    /// tree, O(n), [`dynamics`]) or `"mass-matrix"` (M and f, solved).
+    pub right_hand_side: &'static str,
     /// The fixed step used, for fixed-step methods.
     pub dt: Option<f64>,
     /// Whether that step was given (`RunConfig::dt`) rather than chosen from the tolerance.
@@ -734,9 +738,11 @@ fn drive(
     }
     warnings.extend(solver.subdivisions().map(|s| s.to_string()));
     let (t_last, final_q, final_qd) = last;
+    let articulated = form == Form::Lagrange && method != Method::Taylor && dynamics.uses_articulated_body();
     let mut report = RunReport {
         method,
         form,
+        right_hand_side: if articulated { "articulated-body" } else { "mass-matrix" },
         dt,
         step_given: config.dt.is_some(),
         rtol: config.rtol,

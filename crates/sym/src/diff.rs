@@ -174,16 +174,29 @@ impl Pool {
 
     /// The ids reachable from `roots`, children before parents (ascending ids).
     pub fn reachable(&self, roots: &[ExprId]) -> Vec<ExprId> {
+        self.reachable_until(roots, |_| false)
+    }
+
+    /// [`Pool::reachable`] without the nodes `known` says are known already
+    /// (nor what lies below them, unless reached another way): a walk that
+    /// grows a tape over many roots visits each node once.
+    pub fn reachable_until(&self, roots: &[ExprId], known: impl Fn(ExprId) -> bool) -> Vec<ExprId> {
         // Children have smaller ids than their parents, so popping the largest
         // id first sees every copy of an id in a row, after all its parents:
         // a heap deduplicates without hashing.
-        let mut roots = roots.to_vec();
+        let mut roots: Vec<ExprId> = roots.iter().copied().filter(|&r| !known(r)).collect();
         roots.sort_unstable();
         roots.dedup();
         let mut heap = BinaryHeap::from(roots);
         let mut out: Vec<ExprId> = Vec::new();
+        let mut last = None;
         while let Some(id) = heap.pop() {
-            if out.last() == Some(&id) {
+            // Asked once per id, not once per edge into it.
+            if last == Some(id) {
+                continue;
+            }
+            last = Some(id);
+            if known(id) {
                 continue;
             }
             out.push(id);

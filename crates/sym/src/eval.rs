@@ -214,6 +214,21 @@ impl Builder<'_> {
         slot
     }
 
+    /// Emits every node reachable from `roots` that has no slot yet.
+    fn walk(&mut self, roots: &[ExprId]) -> Result<(), EvalError> {
+        let pool = self.pool;
+        for id in pool.reachable_until(roots, |id| self.slot_of.contains_key(&id)) {
+            if self.slot_of.contains_key(&id) {
+                continue;
+            }
+            if let Node::Sym(s) = pool.node(id) {
+                return Err(EvalError::Unbound { name: pool.symbol_text(*s) });
+            }
+            self.node(id);
+        }
+        Ok(())
+    }
+
     /// The slot of `-t` when `t` is a term with coefficient -1 (so `a - b` is a Sub).
     fn negated(&mut self, t: ExprId) -> Option<u32> {
         let Node::Mul(fs) = self.pool.node(t) else { return None };
@@ -239,20 +254,42 @@ impl Tape {
     /// values will be passed to [`Tape::eval`]). Fails when a root contains a
     /// symbol that is not an input.
     pub fn compile(pool: &Pool, roots: &[ExprId], inputs: &[ExprId]) -> Result<Tape, EvalError> {
+        Tape::compile_with_definitions(pool, &[], roots, inputs)
+    }
+
+    /// [`Tape::compile`] with definitions: each `(symbol, expr)` binds the
+    /// symbol to the value of `expr`, which may use the inputs and the symbols
+    /// defined before it. A recursive algorithm written as a sequence of
+    /// assignments (the articulated-body algorithm of `mech`) keeps its sums
+    /// and products apart this way, where the pool would flatten them into
+    /// one sum per output.
+    pub fn compile_with_definitions(
+        pool: &Pool,
+        definitions: &[(ExprId, ExprId)],
+        roots: &[ExprId],
+        inputs: &[ExprId],
+    ) -> Result<Tape, EvalError> {
         let mut b = Builder { pool, ops: Vec::new(), dedup: FxHashMap::default(), slot_of: FxHashMap::default() };
         for (k, &i) in inputs.iter().enumerate() {
             let s = b.emit(Op::Input(k as u32));
             b.slot_of.insert(i, s);
         }
-        for id in pool.reachable(roots) {
-            if b.slot_of.contains_key(&id) {
-                continue;
+        // Only the definitions the roots use, found from the last one back.
+        let mut needed: rustc_hash::FxHashSet<ExprId> =
+            if definitions.is_empty() { Default::default() } else { pool.reachable(roots).into_iter().collect() };
+        let mut used = vec![false; definitions.len()];
+        for (k, &(symbol, expr)) in definitions.iter().enumerate().rev() {
+            if needed.contains(&symbol) {
+                used[k] = true;
+                needed.extend(pool.reachable(&[expr]));
             }
-            if let Node::Sym(s) = pool.node(id) {
-                return Err(EvalError::Unbound { name: pool.symbol_text(*s) });
-            }
-            b.node(id);
         }
+        for (&(symbol, expr), _) in definitions.iter().zip(&used).filter(|(_, &u)| u) {
+            b.walk(&[expr])?;
+            let slot = b.slot_of[&expr];
+            b.slot_of.insert(symbol, slot);
+        }
+        b.walk(roots)?;
         let outputs = roots.iter().map(|r| b.slot_of[r]).collect();
         let slots = vec![0.0; b.ops.len()];
         Ok(Tape { ops: b.ops, outputs, n_inputs: inputs.len(), slots })
@@ -373,6 +410,31 @@ impl Pool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Definitions are computed in order, each from the inputs and the ones
+    /// before it; one the roots do not use costs no instruction; a symbol
+    /// that is neither an input nor defined is an error.
+    #[test]
+    fn definitions_stand_for_their_expressions() {
+        let mut p = Pool::default();
+        let (x, a, b, unused) = (p.symbol("x"), p.symbol("a"), p.symbol("b"), p.symbol("unused"));
+        let one = p.one();
+        let x_plus_1 = p.add2(x, one);
+        let sin_x = p.func(Func::Sin, x);
+        let a_squared = p.powi(a, 2);
+        let b_expr = p.mul2(a_squared, sin_x);
+        let unused_expr = p.func(Func::Exp, b);
+        let root = p.add2(b, a);
+        let defs = [(a, x_plus_1), (b, b_expr), (unused, unused_expr)];
+        let mut tape = Tape::compile_with_definitions(&p, &defs, &[root], &[x]).unwrap();
+        let mut out = [0.0];
+        tape.eval(&[0.5], &mut out);
+        assert_eq!(out[0], 1.5f64 * 1.5 * 0.5f64.sin() + 1.5);
+        assert!(!tape.ops.iter().any(|op| matches!(op, Op::Func(Func::Exp, _))), "the unused definition is left out");
+        let y = p.symbol("y");
+        let root = p.add2(b, y);
+        assert!(matches!(Tape::compile_with_definitions(&p, &defs, &[root], &[x]), Err(EvalError::Unbound { .. })));
+    }
 
     #[test]
     fn tape_shares_subexpressions_and_matches_direct_values() {

@@ -48,7 +48,7 @@ use interpreted::{cc, jit, taylor_jit};
 pub use cc::compiler as c_compiler;
 pub use eval::{EvalError, Tape};
 pub use expr::{ExprId, Func, NameId, Node, Pool, Symbol};
-pub use jit::Compiled;
+pub use jit::{Compiled, QUICK_MIN_OPS};
 pub use native::{CBuild, CcError, JitError};
 pub use number::{Number, Rational};
 pub use parse::{Limits, ParseError, ParseErrorKind, ParseOptions, Span};

@@ -62,6 +62,7 @@ pub fn summary_json(
         "format": "lagrange.simulate/1",
         "method": r.method.name(),
         "form": r.form.name(),
+        "right_hand_side": r.right_hand_side,
         "dt": r.dt,
         "rtol": r.rtol,
         "atol": r.atol,

@@ -37,21 +37,7 @@ pub(crate) fn frames(pool: &mut Pool, bodies: &[Body], q: &[ExprId], qd: &[ExprI
     let mut out: Vec<Frame> = Vec::with_capacity(bodies.len());
     for body in bodies {
         let (zero, one) = (pool.zero(), pool.one());
-        let (d_rel, w_rel) = match body.orientation {
-            Orientation::Euler { angles: [a, b, c], sequence } => (
-                Some(euler::rotation_of(pool, sequence, [q[a], q[b], q[c]])),
-                euler::angular_velocity_of(pool, sequence, [q[a], q[b], q[c]], [qd[a], qd[b], qd[c]]),
-            ),
-            Orientation::Planar { angle, axis } => {
-                let mut w = [zero; 3];
-                w[axis] = qd[angle];
-                (Some(euler::turn_expr(pool, axis, q[angle])), w)
-            }
-            Orientation::Hinge { angle, axis } => {
-                (Some(hinge(pool, axis, q[angle])), axis.map(|n| pool.mul2(n, qd[angle])))
-            }
-            Orientation::Fixed => (None, [zero; 3]),
-        };
+        let (d_rel, w_rel) = relative_turn(pool, body, q, qd);
         let own_turn = match body.orientation {
             Orientation::Planar { angle, axis } => Some((axis, q[angle])),
             _ => None,
@@ -93,6 +79,33 @@ pub(crate) fn frames(pool: &mut Pool, bodies: &[Body], q: &[ExprId], qd: &[ExprI
         out.push(frame);
     }
     out
+}
+
+/// A body's turn relative to its parent's axes (or space's): the rotation
+/// D_rel from the parent's components to the body's (None for no turn of its
+/// own) and the angular velocity ω_rel it adds, body components.
+pub(crate) fn relative_turn(
+    pool: &mut Pool,
+    body: &Body,
+    q: &[ExprId],
+    qd: &[ExprId],
+) -> (Option<euler::ExprMatrix>, [ExprId; 3]) {
+    let zero = pool.zero();
+    match body.orientation {
+        Orientation::Euler { angles: [a, b, c], sequence } => (
+            Some(euler::rotation_of(pool, sequence, [q[a], q[b], q[c]])),
+            euler::angular_velocity_of(pool, sequence, [q[a], q[b], q[c]], [qd[a], qd[b], qd[c]]),
+        ),
+        Orientation::Planar { angle, axis } => {
+            let mut w = [zero; 3];
+            w[axis] = qd[angle];
+            (Some(euler::turn_expr(pool, axis, q[angle])), w)
+        }
+        Orientation::Hinge { angle, axis } => {
+            (Some(hinge(pool, axis, q[angle])), axis.map(|n| pool.mul2(n, qd[angle])))
+        }
+        Orientation::Fixed => (None, [zero; 3]),
+    }
 }
 
 /// The turn by `angle` about the unit vector n, space → body components:

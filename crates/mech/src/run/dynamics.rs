@@ -101,6 +101,12 @@ pub(crate) struct LazyKernel {
 /// the cost of compiling them for a small model.
 const INVARIANTS_WARM_UP: usize = 4000;
 
+/// The same for a tape the JIT compiles in one quick pass
+/// ([`sym::QUICK_MIN_OPS`]): per instruction that costs about as much as
+/// interpreting it a hundred times (a 50-rod chain's H interpreted at every
+/// sample took a third of its run).
+const QUICK_INVARIANTS_WARM_UP: usize = 100;
+
 impl LazyKernel {
     fn new(tape: Tape) -> LazyKernel {
         LazyKernel::with_warm_up(tape, 0)
@@ -169,10 +175,17 @@ pub struct Dynamics {
     mass_forcing: LazyKernel,
     /// The tape of `mass_forcing`, for Taylor expansions ([`crate::run::series`]).
     mass_forcing_tape: Arc<Tape>,
+    /// q'' (n) from `[q, q', t, params]` by the articulated-body algorithm, where
+    /// the model is a tree and that costs fewer operations than M, f and their
+    /// solve ([`crate::run::tree`]); the Lagrange form then uses it.
+    accelerations: Option<LazyKernel>,
     /// Hamilton's form, two kernels: M's stored entries and `b` (n) from `[q, t, params]`
     /// (free of q'), and `∂L/∂q − ∂R/∂q' + Q` (n) from `[q, q', t, params]`. Split so that
     /// each right-hand side computes each group once.
     hamilton: Option<(LazyKernel, LazyKernel)>,
+    /// What the Hamilton kernels are built from, on first use (a Lagrange-form
+    /// run never pays for their expressions); None unless L is quadratic in q'.
+    hamilton_source: Option<Arc<HamiltonSource>>,
     /// Scratch for [`Dynamics::eval_mass_forcing`].
     scratch: Vec<f64>,
     /// Outputs the invariants from `[q, q', t, params]`.
@@ -215,46 +228,45 @@ impl Dynamics {
             Arc::new(Tape::compile(pool, &outs, input_syms).expect("derivation symbols are inputs"));
         // Compiled on first use: a Taylor run never evaluates it.
         let mass_forcing = LazyKernel::new((*mass_forcing_tape).clone());
+        let accelerations = tree_kernel(pool, d, &mass_forcing_tape, &pattern, input_syms);
 
         // Which symbols M and f contain, from one traversal each (a chain of a
         // thousand masses has a thousand entries and two thousand symbols).
         let in_mass: FxHashSet<ExprId> = pool.reachable(&stored).into_iter().collect();
         let in_forcing: FxHashSet<ExprId> = pool.reachable(&d.forcing).into_iter().collect();
         let quadratic = d.qd.iter().all(|v| !in_mass.contains(v));
-        let hamilton = quadratic.then(|| {
-            let zero_vel: probe::Subst = d.qd.iter().map(|&v| (v, pool.zero())).collect();
-            let mut outs: Vec<ExprId> = stored.clone();
-            for &p in &d.momenta {
-                outs.push(pool.substitute(p, &zero_vel));
-            }
-            let mut rates = Vec::with_capacity(n);
-            for i in 0..n {
-                let mut terms = vec![pool.diff(d.lagrangian, d.q[i]), d.forces[i]];
-                if let Some(r) = d.dissipation {
-                    let dr = pool.diff(r, d.qd[i]);
-                    terms.push(pool.neg(dr));
-                }
-                rates.push(pool.add(&terms));
-            }
-            let compile = |pool: &sym::Pool, outs: &[ExprId]| {
-                LazyKernel::new(Tape::compile(pool, outs, input_syms).expect("derivation symbols are inputs"))
-            };
-            (compile(pool, &outs), compile(pool, &rates))
-        });
         let constant_mass = d.q.iter().chain(&d.qd).chain([&d.t]).all(|v| !in_mass.contains(v));
         let velocity_free_forcing = d.qd.iter().all(|v| !in_forcing.contains(v));
         let zero_vel: probe::Subst = d.qd.iter().map(|&v| (v, pool.zero())).collect();
-        let no_linear_momentum = d.momenta.iter().all(|&p| {
-            let b = pool.substitute(p, &zero_vel);
-            probe::is_zero(pool, b)
-        });
-        let separable = quadratic && constant_mass && velocity_free_forcing && no_linear_momentum;
-
+        // Asked only when the rest holds: a substitution per momentum is long on a large model.
+        let separable = quadratic
+            && constant_mass
+            && velocity_free_forcing
+            && d.momenta.iter().all(|&p| {
+                let b = pool.substitute(p, &zero_vel);
+                probe::is_zero(pool, b)
+            });
         let exprs: Vec<ExprId> = invariants.iter().map(|i| i.expr).collect();
-        let invariants_tape = LazyKernel::with_warm_up(
-            Tape::compile(pool, &exprs, input_syms).expect("derivation symbols are inputs"),
-            INVARIANTS_WARM_UP,
-        );
+        let invariants_tape = Tape::compile(pool, &exprs, input_syms).expect("derivation symbols are inputs");
+        let warm_up =
+            if invariants_tape.len() > sym::QUICK_MIN_OPS { QUICK_INVARIANTS_WARM_UP } else { INVARIANTS_WARM_UP };
+        let invariants_tape = LazyKernel::with_warm_up(invariants_tape, warm_up);
+
+        let hamilton_source = quadratic.then(|| {
+            Arc::new(HamiltonSource {
+                pool: pool_owned,
+                inputs: input_syms.to_vec(),
+                stored,
+                momenta: d.momenta.clone(),
+                coordinate_gradient: d.coordinate_gradient.clone(),
+                lagrangian: d.lagrangian,
+                q: d.q.clone(),
+                qd: d.qd.clone(),
+                forces: d.forces.clone(),
+                dissipation: d.dissipation,
+                kernels: OnceLock::new(),
+            })
+        });
 
         Dynamics {
             n,
@@ -263,13 +275,24 @@ impl Dynamics {
             pattern,
             mass_forcing,
             mass_forcing_tape,
-            hamilton,
+            accelerations,
+            hamilton_source,
+            hamilton: None,
             invariants_tape,
             invariants,
             separable,
             quadratic,
             coordinate_names: d.model.coordinates.iter().map(|c| c.name.clone()).collect(),
         }
+    }
+
+    /// Hamilton's two kernels, built on first use.
+    fn hamilton_kernels(&mut self) -> &mut (LazyKernel, LazyKernel) {
+        if self.hamilton.is_none() {
+            let source = self.hamilton_source.as_ref().expect("Hamilton form needs L quadratic in q'");
+            self.hamilton = Some(source.kernels().clone());
+        }
+        self.hamilton.as_mut().expect("set above")
     }
 
     /// The number of coordinates.
@@ -293,9 +316,15 @@ impl Dynamics {
         self.mass_forcing_tape.is_analytic()
     }
 
+    /// True when the Lagrange form's accelerations come from the
+    /// articulated-body kernel ([`crate::run::tree`]) rather than `M q'' = f`.
+    pub fn uses_articulated_body(&self) -> bool {
+        self.accelerations.is_some()
+    }
+
     /// True when Hamilton's form is available (L quadratic in the velocities).
     pub fn has_hamilton_form(&self) -> bool {
-        self.quadratic && self.hamilton.is_some()
+        self.quadratic && self.hamilton_source.is_some()
     }
 
     /// The invariants audited along a run.
@@ -360,6 +389,88 @@ impl Dynamics {
     }
 }
 
+/// The expressions of Hamilton's form, built and compiled when a run first
+/// asks for them: M's stored entries and b = p at q' = 0 (from `[q, t,
+/// params]`), and ∂L/∂q − ∂R/∂q' + Q (from `[q, q', t, params]`).
+#[derive(Debug)]
+struct HamiltonSource {
+    /// The pool of [`Dynamics::new`], holding every expression below.
+    pool: sym::Pool,
+    inputs: Vec<ExprId>,
+    stored: Vec<ExprId>,
+    momenta: Vec<ExprId>,
+    coordinate_gradient: Option<Vec<ExprId>>,
+    lagrangian: ExprId,
+    q: Vec<ExprId>,
+    qd: Vec<ExprId>,
+    forces: Vec<ExprId>,
+    dissipation: Option<ExprId>,
+    /// The two kernels, once built (clones share their native code).
+    kernels: OnceLock<(LazyKernel, LazyKernel)>,
+}
+
+impl HamiltonSource {
+    fn kernels(&self) -> &(LazyKernel, LazyKernel) {
+        self.kernels.get_or_init(|| {
+            let mut pool = self.pool.clone();
+            let pool = &mut pool;
+            let zero_vel: probe::Subst = self.qd.iter().map(|&v| (v, pool.zero())).collect();
+            let mut outs: Vec<ExprId> = self.stored.clone();
+            for &p in &self.momenta {
+                outs.push(pool.substitute(p, &zero_vel));
+            }
+            let mut rates = Vec::with_capacity(self.q.len());
+            for i in 0..self.q.len() {
+                let dl_dq = match &self.coordinate_gradient {
+                    Some(gradient) => gradient[i],
+                    None => pool.diff(self.lagrangian, self.q[i]),
+                };
+                let mut terms = vec![dl_dq, self.forces[i]];
+                if let Some(r) = self.dissipation {
+                    let dr = pool.diff(r, self.qd[i]);
+                    terms.push(pool.neg(dr));
+                }
+                rates.push(pool.add(&terms));
+            }
+            let compile = |pool: &sym::Pool, outs: &[ExprId]| {
+                LazyKernel::new(Tape::compile(pool, outs, &self.inputs).expect("derivation symbols are inputs"))
+            };
+            (compile(pool, &outs), compile(pool, &rates))
+        })
+    }
+}
+
+/// Fewer coordinates than this and runs always solve `M q'' = f`: at that
+/// size M and its solve cost little, and the notes' examples keep their
+/// numbers to the last bit.
+const TREE_MIN_COORDINATES: usize = 5;
+
+/// The articulated-body kernel of `d` ([`crate::run::tree`]) where the model
+/// is a tree and its tape is shorter than M's and f's plus the operations of
+/// their solve (a division per row for a diagonal M, else an LU's 2n³/3 and
+/// the substitutions' 2n²).
+fn tree_kernel(
+    pool: &mut sym::Pool,
+    d: &Derivation,
+    dense: &Tape,
+    pattern: &MassPattern,
+    inputs: &[ExprId],
+) -> Option<LazyKernel> {
+    let n = d.q.len();
+    if n < TREE_MIN_COORDINATES {
+        return None;
+    }
+    let tape = articulated_body_tape(pool, d, inputs)?;
+    let solve = if pattern.diagonal { n } else { 2 * n * n * n / 3 + 2 * n * n };
+    (tape.len() < dense.len() + solve).then(|| LazyKernel::new(tape))
+}
+
+/// The tape of q'' by the articulated-body algorithm, where `d`'s model is a tree.
+fn articulated_body_tape(pool: &mut sym::Pool, d: &Derivation, inputs: &[ExprId]) -> Option<Tape> {
+    let program = crate::run::tree::program(pool, d)?;
+    Tape::compile_with_definitions(pool, &program.definitions, &program.accelerations, inputs).ok()
+}
+
 /// The quantities audited along a run: H, every conserved momentum, and the
 /// energy E where it differs from H.
 pub fn invariants_of(d: &Derivation) -> Vec<Invariant> {
@@ -414,8 +525,8 @@ impl System {
             Form::Hamilton | Form::Separable => {
                 // p = M q' + b.
                 self.set_inputs(t, q, qd);
-                let (tape, _) = self.dynamics.hamilton.as_mut().expect("Hamilton form needs L quadratic in q'");
                 let e = self.dynamics.pattern.len();
+                let (tape, _) = self.dynamics.hamilton_kernels();
                 tape.eval(&self.inputs, &mut self.out[..e + n]);
                 let mut p = self.out[e..e + n].to_vec();
                 for (&(i, j), m) in self.dynamics.pattern.entries.iter().zip(&self.out[..e]) {
@@ -505,8 +616,8 @@ impl System {
             *v = 0.0;
         }
         self.inputs[2 * n] = t;
-        let (tape, _) = self.dynamics.hamilton.as_mut().expect("Hamilton form needs L quadratic in q'");
         let e = self.dynamics.pattern.len();
+        let (tape, _) = self.dynamics.hamilton_kernels();
         tape.eval(&self.inputs, &mut self.out[..e + n]);
         self.factor_mass()?;
         for i in 0..n {
@@ -528,6 +639,14 @@ impl OdeSystem for System {
             Form::Lagrange => {
                 self.inputs[..2 * n].copy_from_slice(y);
                 self.inputs[2 * n] = t;
+                if let Some(tree) = &mut self.dynamics.accelerations {
+                    dy[..n].copy_from_slice(&y[n..]);
+                    tree.eval(&self.inputs, &mut dy[n..]);
+                    if let Some(index) = dy.iter().position(|v| !v.is_finite()) {
+                        return Err(RhsError::NonFinite { index });
+                    }
+                    return Ok(());
+                }
                 let e = self.dynamics.pattern.len();
                 self.dynamics.mass_forcing.eval(&self.inputs, &mut self.out[..e + n]);
                 self.factor_mass()?;
@@ -544,8 +663,8 @@ impl OdeSystem for System {
                 }
                 // p' = ∂L/∂q − ∂R/∂q' + Q at q' = M⁻¹(p − b).
                 self.inputs[n..2 * n].copy_from_slice(&qd);
-                let (_, tape) = self.dynamics.hamilton.as_mut().expect("Hamilton form needs L quadratic in q'");
                 let e = self.dynamics.pattern.len();
+                let (_, tape) = self.dynamics.hamilton_kernels();
                 tape.eval(&self.inputs, &mut self.out[e + n..e + 2 * n]);
                 dy[..n].copy_from_slice(&qd);
                 dy[n..].copy_from_slice(&self.out[e + n..e + 2 * n]);
@@ -674,6 +793,131 @@ mod tests {
             assert!((out[i] - v[i]).abs() < 1e-15 && (out[3 + i] - masses[i] * acc[i]).abs() < 1e-13, "{out:?}");
         }
         assert_eq!(ham.mass_matrix_at(0.0, &yh), vec![1.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 4.0]);
+    }
+
+    /// q'' of the articulated-body kernel and of `M q'' = f` at a state.
+    fn both_accelerations(dy: &Dynamics, y: &[f64], t: f64) -> (Vec<f64>, Vec<f64>) {
+        let n = dy.n;
+        let mut tree = vec![0.0; 2 * n];
+        dy.system(Form::Lagrange).rhs(t, y, &mut tree).unwrap();
+        let mut dense_dynamics = dy.clone();
+        dense_dynamics.accelerations = None;
+        let mut dense = vec![0.0; 2 * n];
+        dense_dynamics.system(Form::Lagrange).rhs(t, y, &mut dense).unwrap();
+        (tree[n..].to_vec(), dense[n..].to_vec())
+    }
+
+    /// Trees of every kind of node the kernel knows, each against `M q'' = f`
+    /// at random states.
+    #[test]
+    fn the_articulated_body_kernel_gives_the_accelerations_of_m_and_f() {
+        let chain = |n: usize| {
+            let coords: Vec<String> = (1..=n).map(|i| format!("\"th{i}\"")).collect();
+            let mut text = format!("gravity = \"g\"\ncoordinates = [{}]\n[parameters]\ng = 9.81\n", coords.join(", "));
+            let (mut xs, mut ys) = (Vec::new(), Vec::new());
+            for k in 1..=n {
+                text += &format!("m{k} = {}\nl{k} = {}\n", 1.0 + 0.1 * k as f64, 1.0 - 0.05 * k as f64);
+            }
+            for k in 1..=n {
+                xs.push(format!("l{k}*sin(th{k})"));
+                ys.push(format!("-l{k}*cos(th{k})"));
+                text += &format!(
+                    "[[particles]]\nmass = \"m{k}\"\nposition = [\"{}\", \"{}\"]\n",
+                    xs.join(" + "),
+                    ys.join(" + ")
+                );
+            }
+            text
+        };
+        let rods = |n: usize, extra: &str| {
+            let coords: Vec<String> = (0..n).map(|i| format!("\"a{i}\"")).collect();
+            let mut text = format!(
+                "gravity = \"g\"\ncoordinates = [{}]\n{extra}[parameters]\nm = 1.3\nl = 0.7\ng = 9.81\nk = 2.0\nc = 0.3\n",
+                coords.join(", ")
+            );
+            for i in 0..n {
+                text += &format!("[[bodies]]\nname = \"r{i}\"\nmass = \"m\"\ninertia = \"m*l^2/3\"\nangle = \"a{i}\"\ncenter_of_mass = [\"0.1\", \"-l/2\"]\n");
+                if i > 0 {
+                    text += &format!("parent = \"r{}\"\nposition = [\"0\", \"-l\"]\n", i - 1);
+                }
+            }
+            text
+        };
+        let spatial = |n: usize| {
+            let mut coords = Vec::new();
+            for i in 0..n {
+                coords.extend([format!("\"p{i}\""), format!("\"t{i}\""), format!("\"s{i}\"")]);
+            }
+            let mut text = format!(
+                "gravity = \"g\"\ncoordinates = [{}]\n[parameters]\nm = 1.0\nl = 1.0\ng = 9.81\n",
+                coords.join(", ")
+            );
+            for i in 0..n {
+                text += &format!(
+                    "[[bodies]]\nname = \"b{i}\"\nmass = \"m\"\ninertia = [[\"0.3*m*l^2\", \"0.05\", \"0\"], [\"0.05\", \"m*l^2/4\", \"0.02\"], [\"0\", \"0.02\", \"m*l^2/5\"]]\nangles = [\"p{i}\", \"t{i}\", \"s{i}\"]\ncenter_of_mass = [\"0.1\", \"0\", \"-l/2\"]\n"
+                );
+                if i > 0 {
+                    text += &format!("parent = \"b{}\"\nposition = [\"0.2\", \"0\", \"-l\"]\n", i - 1);
+                }
+            }
+            text
+        };
+        // A cart on a moving rail with a double rod on it, a spring, damping and a force.
+        let cart = "gravity = \"g\"\ncoordinates = [\"x\", \"a\", \"b\", \"c\", \"d\"]\n\
+            potential = \"k*x^2/2 + k*a^2\"\ndissipation = \"damp*(x'^2 + b'^2)/2\"\n\
+            [forces]\nd = \"sin(t)\"\n\
+            [parameters]\ng = 9.81\nk = 3.0\ndamp = 0.2\n\
+            [[bodies]]\nname = \"cart\"\nmass = \"2\"\nposition = [\"x\", \"0.1*sin(t)\"]\n\
+            [[bodies]]\nname = \"rod\"\nparent = \"cart\"\nmass = \"1\"\ninertia = \"0.3\"\nangle = \"a\"\ncenter_of_mass = [\"0\", \"-0.5\"]\n\
+            [[bodies]]\nname = \"slider\"\nparent = \"rod\"\nmass = \"0.5\"\ninertia = \"0.02\"\nposition = [\"0\", \"-1 - b\"]\n\
+            [[bodies]]\nname = \"arm\"\nparent = \"slider\"\nmass = \"0.4\"\ninertia = \"0.05\"\nangle = \"c\"\ncenter_of_mass = [\"0.3\", \"0\"]\n\
+            [[bodies]]\nname = \"tip\"\nparent = \"arm\"\nmass = \"0.2\"\ninertia = \"0.01\"\nangle = \"d\"\nposition = [\"0.6\", \"0\"]\ncenter_of_mass = [\"0.2\", \"0.1\"]\n";
+        let models = [
+            ("particle chain", chain(7)),
+            ("rod chain", rods(6, "")),
+            ("damped rods", rods(5, "dissipation = \"c*(a0'^2 + a3'^2)\"\npotential = \"k*(a1 - a2)^2\"\n")),
+            ("spatial chain", spatial(3)),
+            ("cart", cart.to_string()),
+        ];
+        let mut rng = 0x2545_f491_4f6c_dd1d_u64;
+        let mut uniform = || {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            (rng >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let urdf = |file: &str, floating: bool| format!("urdf = \"{file}\"\nfloating_base = {floating}\n");
+        let robots = [
+            ("spatial arm", urdf("spatial_arm.urdf", false)),
+            ("planar arm", urdf("planar_arm.urdf", false)),
+            ("floating body", urdf("floating_body.urdf", false)),
+            ("cart pendulum", urdf("cart_pendulum.urdf", false)),
+        ];
+        for (name, text) in models.into_iter().chain(robots) {
+            let files = |path: &str| {
+                let folder = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/urdf/");
+                std::fs::read_to_string(format!("{folder}{path}")).map_err(|e| e.to_string())
+            };
+            let model = crate::Model::parse_with(&text, &[], &files).expect("the model parses");
+            let d = Derivation::new(model).expect("the model derives");
+            let mut dy = Dynamics::new(&d);
+            if dy.accelerations.is_none() {
+                // Below the size where runs use it: made all the same.
+                assert!(dy.n < TREE_MIN_COORDINATES, "{name}: no tree kernel");
+                let mut pool = d.pool().clone();
+                let tape = articulated_body_tape(&mut pool, &d, d.layout.symbols()).expect("a tree");
+                dy.accelerations = Some(LazyKernel::new(tape));
+            }
+            for _ in 0..3 {
+                let y: Vec<f64> = (0..2 * dy.n).map(|_| uniform()).collect();
+                let t = uniform();
+                let (tree, dense) = both_accelerations(&dy, &y, t);
+                let scale = dense.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
+                for (i, (a, b)) in tree.iter().zip(&dense).enumerate() {
+                    assert!((a - b).abs() < 1e-10 * scale, "{name}: q''[{i}] {a} against {b}");
+                }
+            }
+        }
     }
 
     #[test]
