@@ -132,7 +132,8 @@ fn hinge(pool: &mut Pool, n: [ExprId; 3], angle: ExprId) -> euler::ExprMatrix {
     })
 }
 
-fn mat_vec(pool: &mut Pool, m: &euler::ExprMatrix, v: &[ExprId; 3]) -> [ExprId; 3] {
+/// M v for a 3×3 matrix of expressions.
+pub(crate) fn mat_vec(pool: &mut Pool, m: &euler::ExprMatrix, v: &[ExprId; 3]) -> [ExprId; 3] {
     std::array::from_fn(|i| {
         let terms: Vec<ExprId> = (0..3).map(|j| pool.mul2(m[i][j], v[j])).collect();
         pool.add(&terms)

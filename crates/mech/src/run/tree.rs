@@ -34,7 +34,7 @@
 
 use crate::derive::Derivation;
 use crate::euler::ExprMatrix;
-use crate::model::frames::relative_turn;
+use crate::model::frames::{mat_vec, relative_turn};
 use crate::model::{Gravity, Model};
 use rustc_hash::{FxHashMap, FxHashSet};
 use sym::{ExprId, Node, Pool};
@@ -602,11 +602,4 @@ fn split(v: &Spatial) -> (Vec3, Vec3) {
 
 fn join(a: &Vec3, b: &Vec3) -> Spatial {
     [a[0], a[1], a[2], b[0], b[1], b[2]]
-}
-
-fn mat_vec(pool: &mut Pool, e: &ExprMatrix, v: &Vec3) -> Vec3 {
-    std::array::from_fn(|i| {
-        let terms: Vec<ExprId> = (0..3).map(|j| pool.mul2(e[i][j], v[j])).collect();
-        pool.add(&terms)
-    })
 }
