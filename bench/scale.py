@@ -13,7 +13,8 @@ What it does, one process after another in this job (single-core measurements):
    process, and microseconds per right-hand side: the integration alone, i.e. the
    summary's wall_seconds less the compile (setup_seconds - derive_seconds), over
    rhs_evaluations), at the same rtol = atol as the anchor;
-3. for each robot Pinocchio loaded from a URDF file: `lagrange import` it, then
+3. for each robot Pinocchio loaded from a URDF file: `lagrange import` it, start every
+   joint (not a floating base) turning at 0.5 rad/s, then
    `lagrange simulate --until 10 --method dop853` (us per rhs as above);
 4. prints every record as JSON lines on stdout (the anchors' own, tagged with `source`;
    then `robot` and `ratio` records), then the Markdown table; ratios are

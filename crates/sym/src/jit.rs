@@ -45,6 +45,7 @@ pub(crate) mod trig;
 use crate::eval::{Op, Tape};
 use crate::expr::Func;
 pub(crate) use crate::native::JitError;
+use crate::native::QUICK_MIN_OPS;
 use cranelift_codegen::ir::condcodes::FloatCC;
 use cranelift_codegen::ir::{
     types, AbiParam, BlockArg, FuncRef, InstBuilder, MemFlagsData, Signature, StackSlot, StackSlotData, StackSlotKind,
@@ -102,17 +103,6 @@ impl std::fmt::Debug for Compiled {
 /// tapes: one of 14 000 instructions (a sum over a thousand coupled terms)
 /// compiles in 25 ms without it and 650 ms with it.
 pub const OPTIMIZE_MAX_OPS: usize = 4096;
-
-/// Tapes longer than this are compiled with the single-pass register
-/// allocator ([`Codegen::Quick`]). The backtracking allocator's time grows
-/// faster than linearly with the values live across a long function: the
-/// right-hand side of a chain of forty rods (about 60 000 instructions)
-/// spent 8 of its run's 10 s allocating registers. From 4096 instructions on
-/// (the articulated-body kernels of 50-link chains and humanoids, 3 000 to
-/// 17 000) the quick allocator's code runs as fast (0.99× and 1.03× over 200 s
-/// of a 50-link and a 20-rod chain) and whole runs to t = 10 take 0.81× to
-/// 0.97× the time, the compile being most of the difference.
-pub const QUICK_MIN_OPS: usize = 4_096;
 
 /// How much work cranelift spends on a function.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

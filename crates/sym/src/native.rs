@@ -8,6 +8,18 @@
 
 use std::path::PathBuf;
 
+/// Tapes longer than this are compiled with the single-pass register
+/// allocator (`jit.rs`'s `Codegen::Quick`; declared here, in every build, for
+/// the callers that size their work by it). The backtracking allocator's time grows
+/// faster than linearly with the values live across a long function: the
+/// right-hand side of a chain of forty rods (about 60 000 instructions)
+/// spent 8 of its run's 10 s allocating registers. From 4096 instructions on
+/// (the articulated-body kernels of 50-link chains and humanoids, 3 000 to
+/// 17 000) the quick allocator's code runs as fast (0.99× and 1.03× over 200 s
+/// of a 50-link and a 20-rod chain) and whole runs to t = 10 take 0.81× to
+/// 0.97× the time, the compile being most of the difference.
+pub const QUICK_MIN_OPS: usize = 4_096;
+
 /// Why a tape could not be compiled to native code. The caller falls back to
 /// [`Tape::eval`](crate::Tape::eval).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
