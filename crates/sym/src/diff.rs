@@ -184,7 +184,7 @@ impl Pool {
         // Children have smaller ids than their parents, so popping the largest
         // id first sees every copy of an id in a row, after all its parents:
         // a heap deduplicates without hashing.
-        let mut roots: Vec<ExprId> = roots.iter().copied().filter(|&r| !known(r)).collect();
+        let mut roots = roots.to_vec();
         roots.sort_unstable();
         roots.dedup();
         let mut heap = BinaryHeap::from(roots);

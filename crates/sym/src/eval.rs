@@ -218,9 +218,6 @@ impl Builder<'_> {
     fn walk(&mut self, roots: &[ExprId]) -> Result<(), EvalError> {
         let pool = self.pool;
         for id in pool.reachable_until(roots, |id| self.slot_of.contains_key(&id)) {
-            if self.slot_of.contains_key(&id) {
-                continue;
-            }
             if let Node::Sym(s) = pool.node(id) {
                 return Err(EvalError::Unbound { name: pool.symbol_text(*s) });
             }
