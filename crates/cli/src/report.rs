@@ -71,7 +71,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let names: Vec<String> = d.coordinate_names().iter().map(|s| s.to_string()).collect();
     let timing = view::simulate::Timing { derive_seconds: derived, setup_seconds: first_row };
     let summary = view::simulate::summary_json(&report, &names, &timing, None, &crate::TERMS);
-    let data = rows.data(&d, args.until, summary, view::derive::mathml(&d));
+    let data = rows.data(&d, args.until, summary);
     let page = view::report::page(&data);
     crate::files::write_whole(&args.out, page.as_bytes())
         .map_err(|e| Failure::run(format!("cannot write the report {}: {e}", args.out.display())))?;

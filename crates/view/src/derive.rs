@@ -59,20 +59,29 @@ pub fn latex(d: &Derivation) -> String {
 /// paragraphs. It holds no entity but XML's, so it is also well-formed XML.
 pub fn mathml(d: &Derivation) -> String {
     let render = |out: Printout| {
-        let q = d.q().iter().map(|&q| d.pool().mathml(q).to_string()).collect();
-        let mut r = MathMl {
-            d,
-            names: d.coordinate_names(),
-            q,
-            o: String::from("<section class=\"derivation\">\n"),
-            rows: Vec::new(),
-            out,
-        };
+        let mut r = MathMl::new(d, out, None);
         layout(d, &mut |item| r.item(item));
         r
     };
     let out = printout(d, |out| render(out).out);
     render(out).finish()
+}
+
+/// The derivation as [`mathml`] writes it when that takes at most `budget`
+/// bytes as `size` counts them (a page may escape it); otherwise its outline: the model, the cyclic coordinates and the
+/// verdicts with their reasons, without the expressions, and a paragraph
+/// saying what was left out and that `lagrange derive` prints it. A page that
+/// must open quickly (the report) cannot hold a large mechanism's equations:
+/// a chain of 50 rods takes 20 MB of MathML, most of it named intermediates.
+pub fn mathml_within(d: &Derivation, budget: usize, size: impl Fn(&str) -> usize) -> String {
+    let whole = mathml(d);
+    let bytes = size(&whole);
+    if bytes <= budget {
+        return whole;
+    }
+    let mut r = MathMl::new(d, Printout::Trees, Some(Outline { whole: bytes, budget }));
+    layout(d, &mut |item| r.item(item));
+    r.finish()
 }
 
 /// One thing the layout puts down.
@@ -633,6 +642,15 @@ struct MathMl<'a> {
     /// The rows not yet set.
     rows: Vec<Row>,
     out: Printout,
+    /// Set when only the outline is written (see [`mathml_within`]).
+    outline: Option<Outline>,
+}
+
+/// The sizes behind an outline: the whole derivation's and the room there was.
+#[derive(Clone, Copy)]
+struct Outline {
+    whole: usize,
+    budget: usize,
 }
 
 /// One row of an equation table: cells alternately right- and left-aligned
@@ -685,7 +703,19 @@ fn inline(math: &str) -> String {
 const EQUALS: &str = "<mo>=</mo>";
 const MINUS: &str = "<mo>&#x2212;</mo>";
 
-impl MathMl<'_> {
+impl<'a> MathMl<'a> {
+    fn new(d: &'a Derivation, out: Printout, outline: Option<Outline>) -> MathMl<'a> {
+        MathMl {
+            d,
+            names: d.coordinate_names(),
+            q: d.q().iter().map(|&q| d.pool().mathml(q).to_string()).collect(),
+            o: String::from("<section class=\"derivation\">\n"),
+            rows: Vec::new(),
+            out,
+            outline,
+        }
+    }
+
     fn m(&self, e: ExprId) -> String {
         self.out.write(self.d.pool(), e, PrintOptions::mathml())
     }
@@ -748,6 +778,10 @@ impl MathMl<'_> {
     }
 
     fn item(&mut self, item: Item<'_>) {
+        if let Some(outline) = self.outline {
+            self.outline_item(item, outline);
+            return;
+        }
         let d = self.d;
         let pool = d.pool();
         match item {
@@ -765,11 +799,7 @@ impl MathMl<'_> {
                         plural(k)
                     ));
                 }
-                if !d.model().parameters.is_empty() {
-                    let ps: Vec<String> =
-                        d.model().parameters.iter().map(|p| escape(&format!("{} = {}", p.name, p.value))).collect();
-                    self.para(&format!("Parameters: {}", ps.join(", ")));
-                }
+                self.parameters();
                 self.heading("Lagrangian");
             }
             Item::Define(what, e) => {
@@ -856,6 +886,54 @@ impl MathMl<'_> {
                     vec![qd, format!("{EQUALS}{}<mo>,</mo>", self.m(dq)), pd, format!("{EQUALS}{}", self.m(dp))];
                 self.rows.push(Row { cells, note: None });
             }
+        }
+    }
+
+    /// The parameters and their values, when there are any.
+    fn parameters(&mut self) {
+        let parameters = &self.d.model().parameters;
+        if !parameters.is_empty() {
+            let ps: Vec<String> = parameters.iter().map(|p| escape(&format!("{} = {}", p.name, p.value))).collect();
+            self.para(&format!("Parameters: {}", ps.join(", ")));
+        }
+    }
+
+    /// What the outline keeps of an item: the title, the words of the
+    /// constraints, the cyclic coordinates and the verdicts, no expression.
+    fn outline_item(&mut self, item: Item<'_>, outline: Outline) {
+        let d = self.d;
+        let mb = |bytes: usize| format!("{:.2} MB", bytes as f64 / 1e6);
+        match item {
+            Item::Title => {
+                let (n, qs) = (self.q.len(), self.q.iter().map(|q| inline(q)).collect::<Vec<_>>().join(", "));
+                self.para(&format!("<strong>{}</strong>: {n} coordinate{}: {qs}", escape(&d.model().name), plural(n)));
+                self.parameters();
+                self.para(&format!(
+                    "Its equations of motion, typeset, take {}, more than this page holds ({}): \
+                     <code>lagrange derive</code> prints them all, as text, LaTeX or JSON. Here are its verdicts.",
+                    mb(outline.whole),
+                    mb(outline.budget)
+                ));
+            }
+            Item::ConstraintNotes => {
+                self.heading("Constraints");
+                for line in &d.constraints().explanation {
+                    self.para(&escape(line));
+                }
+            }
+            Item::Cyclic => self.cyclic(),
+            Item::Heading(Section::Hamiltonian) => self.heading("Hamiltonian"),
+            Item::Hamiltonian(None) => {
+                self.para("H has no closed form:");
+                self.reasons(&d.verdicts().hamiltonian);
+            }
+            Item::Verdicts => {
+                self.para(&format!("{}:", energy_verdict(d)));
+                self.reasons(&d.verdicts().energy);
+                self.para(&format!("{}:", conservation_verdict(d)));
+                self.reasons(&d.verdicts().conservation);
+            }
+            _ => {}
         }
     }
 
@@ -998,7 +1076,10 @@ impl MathMl<'_> {
                 "{}: {}, so {} {}.",
                 inline(q),
                 inline(&format!("{}{EQUALS}<mn>0</mn>", partial("<mi>L</mi>", q))),
-                inline(&format!("{}{EQUALS}{}", self.m(d.p()[i]), self.m(d.momenta()[i]))),
+                match self.outline {
+                    None => inline(&format!("{}{EQUALS}{}", self.m(d.p()[i]), self.m(d.momenta()[i]))),
+                    Some(_) => inline(&self.m(d.p()[i])),
+                },
                 cyclic_momentum(d, &self.names, i)
             );
             self.para(&sentence);
@@ -1054,7 +1135,7 @@ fn comment_text(text: &str) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::{latex, mathml, text};
+    use super::{latex, mathml, mathml_within, text};
 
     /// A pendulum: one coordinate, no cyclic one, H the energy.
     const PENDULUM: &str = r#"
@@ -1146,6 +1227,22 @@ position = ["r*cos(th)", "r*sin(th)"]
             assert!(blocks.iter().any(|b| b.contains(&m)), "{} is in no block of\n{out}", pool.display(e));
         }
         out
+    }
+
+    #[test]
+    fn a_derivation_past_the_budget_is_outlined_with_its_verdicts() {
+        let d = derive(FREE);
+        let whole = mathml(&d);
+        assert_eq!(mathml_within(&d, whole.len(), str::len), whole);
+        let outline = mathml_within(&d, whole.len() - 1, str::len);
+        let doc = roxmltree::Document::parse(&outline).unwrap_or_else(|e| panic!("{e}: not well-formed:\n{outline}"));
+        assert_eq!(doc.root_element().attribute("class"), Some("derivation"));
+        // No equation, and a pointer to where they are.
+        assert!(!outline.contains("<math display=\"block\">"), "{outline}");
+        assert!(outline.contains("<code>lagrange derive</code> prints them all"), "{outline}");
+        // The cyclic coordinate, with its momentum named, not written out.
+        check_contains(&outline, &["Cyclic coordinates", "is conserved", "H is the energy", "Hamiltonian"]);
+        assert!(!outline.contains(&d.pool().mathml(d.momenta()[1]).to_string()), "{outline}");
     }
 
     #[test]

@@ -28,6 +28,13 @@ const MIN_MODE_FRAMES: usize = 16;
 const MODE_NUMBERS: usize = 24_000;
 /// The most modes animated (the lowest frequencies; the data lists them all).
 const MAX_ANIMATED_MODES: usize = 12;
+/// The bytes a page may take: its derivation is typeset whole when it fits in
+/// what the template and the run's data leave, in outline otherwise
+/// (`derive::mathml_within`). The data alone stays under about 1.5 MB.
+const PAGE_BUDGET: usize = 1_990_000;
+/// Significant digits of the positions drawn, relative to the mechanism's size
+/// (a millionth of it, far below a pixel); the rows' own numbers are exact.
+const DRAWN_DIGITS: i32 = 6;
 
 /// The template and what goes into it.
 const PAGE: &str = include_str!("report/page.html");
@@ -158,8 +165,9 @@ impl Recorder {
     }
 
     /// The `lagrange.report/1` data of the run: `summary` is the run's
-    /// `lagrange.simulate/1` summary, `derivation` the derivation's HTML.
-    pub fn data(&self, d: &Derivation, until: f64, summary: Value, derivation: String) -> Value {
+    /// `lagrange.simulate/1` summary. The derivation is typeset whole when
+    /// the page then stays within [`PAGE_BUDGET`], in outline otherwise.
+    pub fn data(&self, d: &Derivation, until: f64, summary: Value) -> Value {
         let mut mech = Mechanism::new(d);
         let names = d.coordinate_names();
         let inv = mech::invariants_of(d);
@@ -201,7 +209,14 @@ impl Recorder {
             mech.place(r.t, &r.q, &r.qd, &mut out);
             frames.push(out);
         }
-        let axis = |p: usize, k: usize| -> Vec<f64> { frames.iter().map(|f| f[p * dim + k]).collect() };
+        // The mechanism's size; a body turning about a fixed point alone has
+        // none, and its axes are drawn a unit long.
+        let extent = match extent(&frames, dim) {
+            e if e > 1e-9 => e,
+            _ => 1.0 / 0.3,
+        };
+        let (at_size, at_unit) = (Drawn::new(extent), Drawn::new(1.0));
+        let axis = |p: usize, k: usize| -> Vec<f64> { frames.iter().map(|f| at_size.round(f[p * dim + k])).collect() };
         let point_values: Vec<Value> = mech
             .points()
             .iter()
@@ -217,16 +232,11 @@ impl Recorder {
                 })
             })
             .collect();
-        // The mechanism's size; a body turning about a fixed point alone has
-        // none, and its axes are drawn a unit long.
-        let extent = match extent(&frames, dim) {
-            e if e > 1e-9 => e,
-            _ => 1.0 / 0.3,
-        };
         let bodies: Vec<Value> = (0..mech.bodies().len())
             .map(|b| {
                 let axes: Vec<[[f64; 3]; 3]> = rows.iter().map(|r| mech.axes(b, r.t, &r.q, &r.qd)).collect();
-                let per_axis: Vec<Vec<[f64; 3]>> = (0..3).map(|k| axes.iter().map(|a| a[k]).collect()).collect();
+                let per_axis: Vec<Vec<[f64; 3]>> =
+                    (0..3).map(|k| axes.iter().map(|a| a[k].map(|x| at_unit.round(x))).collect()).collect();
                 json!({
                     "name": mech.bodies()[b].name,
                     "point": mech.bodies()[b].point,
@@ -260,11 +270,11 @@ impl Recorder {
         if let Some(t) = top(d, &mut mech, &rows) {
             analyses.insert("top".into(), t);
         }
-        json!({
+        let mut data = json!({
             "format": "lagrange.report/1",
             "name": d.model().name,
             "dimension": dim,
-            "derivation": derivation,
+            "derivation": "",
             "until": until,
             "time": column(&|r| r.t),
             "coordinates": coordinates,
@@ -277,7 +287,13 @@ impl Recorder {
             "summary": summary,
             "events": events,
             "analyses": analyses,
-        })
+        });
+        // What the page takes without the derivation, and the derivation as
+        // the page would inline it.
+        let room = PAGE_BUDGET.saturating_sub(page(&data).len());
+        let inlined = |html: &str| script_safe_json(&Value::String(html.to_string())).len();
+        data["derivation"] = Value::String(crate::derive::mathml_within(d, room, inlined));
+        data
     }
 
     /// The rows shown, in order: evenly spaced rows up to the budget of
@@ -313,24 +329,30 @@ pub fn page(data: &Value) -> String {
     fill(&strip_comments(PAGE), &[("title", &title), ("style", STYLE), ("script", SCRIPT), ("data", &data)])
 }
 
-/// JSON text that is inert inside a `<script>` element. The element's content
-/// ends at the first `</script` and, after a `<!--`, a `<script` puts the HTML
-/// tokenizer in its double-escaped state, where even the element's own end tag
-/// no longer ends it (a model named `<!--<script>x` kept the page's script from
-/// running). Every one of these begins with `<`, so no `<` may appear at all:
-/// JSON has `<` only inside strings, where `\u003c` reads back as the same
-/// character. With no `<`, a `-->` or `&` is plain text in script data, so
-/// they stay (the derivation's MathML holds tens of thousands of `>`). U+2028
-/// and U+2029 are escaped too: older JavaScript parsers take them for line ends.
+/// JSON text that is inert inside a `<script>` element. In script data the
+/// HTML tokenizer leaves the element's content only at a `</` (an end tag, as
+/// `</script`) or a `<!` (a `<!--` leads to the double-escaped state, where
+/// even the element's own end tag no longer ends it: a model named
+/// `<!--<script>x` once kept the page's script from running). JSON has `<`
+/// only inside strings, so a `</` becomes `<\/` (JSON's escape of `/`, one
+/// byte more: the derivation's MathML has a closing tag for every element) and
+/// a `<!` becomes `\u003c!`; every other `<` is plain text there, and so are
+/// `-->` and `&`. U+2028 and U+2029 are escaped too: older JavaScript parsers
+/// take them for line ends.
 fn script_safe_json(data: &Value) -> String {
     let text = data.to_string();
-    let mut out = String::with_capacity(text.len() + text.len() / 8);
-    for c in text.chars() {
-        match c {
-            '<' => out.push_str("\\u003c"),
-            '\u{2028}' => out.push_str("\\u2028"),
-            '\u{2029}' => out.push_str("\\u2029"),
-            c => out.push(c),
+    let mut out = String::with_capacity(text.len() + text.len() / 16);
+    let mut chars = text.chars().peekable();
+    while let Some(c) = chars.next() {
+        match (c, chars.peek()) {
+            ('<', Some('/')) => {
+                chars.next();
+                out.push_str("<\\/");
+            }
+            ('<', Some('!')) => out.push_str("\\u003c"),
+            ('\u{2028}', _) => out.push_str("\\u2028"),
+            ('\u{2029}', _) => out.push_str("\\u2029"),
+            (c, _) => out.push(c),
         }
     }
     out
@@ -375,6 +397,36 @@ fn fill(template: &str, values: &[(&str, &str)]) -> String {
 /// Text for HTML.
 fn escape(s: &str) -> String {
     s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+}
+
+/// Positions for drawing, rounded to [`DRAWN_DIGITS`] digits of a size: a
+/// decimal that prints short (a chain of 50 rods: 0.45 MB of positions, not 1 MB).
+#[derive(Clone, Copy)]
+struct Drawn {
+    /// The power of ten of the last digit kept, negated: 6 keeps millionths.
+    decimals: i32,
+}
+
+impl Drawn {
+    fn new(size: f64) -> Drawn {
+        let magnitude = if size.is_finite() && size > 0.0 { size.log10().floor() as i32 } else { 0 };
+        Drawn { decimals: (DRAWN_DIGITS - magnitude).clamp(-22, 22) }
+    }
+
+    /// `x` to the nearest multiple of 10^−decimals, as the double nearest that
+    /// decimal (an integer and an exact power of ten divided once), which
+    /// prints as the decimal itself. What is not finite stays as it is.
+    fn round(self, x: f64) -> f64 {
+        if !x.is_finite() {
+            return x;
+        }
+        let scale = 10f64.powi(self.decimals.abs());
+        if self.decimals >= 0 {
+            (x * scale).round() / scale
+        } else {
+            (x / scale).round() * scale
+        }
+    }
 }
 
 /// The largest distance of a drawn point from the origin over the run.
@@ -425,7 +477,8 @@ fn modes(d: &Derivation, mech: &mut Mechanism, extent: f64) -> Option<Value> {
             let q: Vec<f64> = modes.equilibrium.iter().zip(&m.shape).map(|(q0, a)| q0 + amplitude * s * a).collect();
             frames.push(place(mech, &q));
         }
-        let coord = |p: usize, k: usize| -> Vec<f64> { frames.iter().map(|f| f[p * dim + k]).collect() };
+        let at_size = Drawn::new(extent);
+        let coord = |p: usize, k: usize| -> Vec<f64> { frames.iter().map(|f| at_size.round(f[p * dim + k])).collect() };
         let points: Vec<Value> = (0..n_points)
             .map(|p| json!({"x": coord(p, 0), "y": coord(p, 1), "z": if dim == 3 { json!(coord(p, 2)) } else { Value::Null }}))
             .collect();
@@ -466,7 +519,8 @@ fn top(d: &Derivation, mech: &mut Mechanism, rows: &[&Row]) -> Option<Value> {
     if mech.bodies().is_empty() {
         return None;
     }
-    let e3: Vec<[f64; 3]> = rows.iter().map(|r| mech.axes(0, r.t, &r.q, &r.qd)[2]).collect();
+    let at_unit = Drawn::new(1.0);
+    let e3: Vec<[f64; 3]> = rows.iter().map(|r| mech.axes(0, r.t, &r.q, &r.qd)[2].map(|x| at_unit.round(x))).collect();
     let mut value = report;
     value["axis"] = json!({
         "x": e3.iter().map(|e| e[0]).collect::<Vec<_>>(),
@@ -590,7 +644,7 @@ th = 0.5
     #[test]
     fn a_long_run_keeps_every_turning_point_and_both_ends() {
         let (d, rec) = run(100_000);
-        let data = rec.data(&d, 20.0, json!({}), String::new());
+        let data = rec.data(&d, 20.0, json!({}));
         let time: Vec<f64> = data["time"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
         assert!(time.len() < 5000, "{} rows shown", time.len());
         assert_eq!((time[0], time[time.len() - 1]), (0.0, 20.0));
@@ -606,12 +660,16 @@ th = 0.5
     #[test]
     fn the_pendulum_hangs_on_a_rod_from_the_origin_and_its_angle_wraps() {
         let (d, rec) = run(201);
-        let data = rec.data(&d, 20.0, json!({}), String::new());
+        let data = rec.data(&d, 20.0, json!({}));
         assert_eq!(data["rods"], json!([[-1, 0]]));
         assert_eq!(data["coordinates"][0]["angle"], json!(true));
         assert_eq!(data["dimension"], json!(2));
-        let x0 = data["points"][0]["x"][0].as_f64().unwrap();
-        assert_eq!(x0, 2.0 * 0.5f64.sin());
+        // Drawn to a millionth of the mechanism's size (2), printed short.
+        let x0 = &data["points"][0]["x"][0];
+        assert_eq!(x0.to_string(), "0.958851");
+        assert!((x0.as_f64().unwrap() - 2.0 * 0.5f64.sin()).abs() < 5e-7);
+        // The rows' own numbers are exact.
+        assert_eq!(data["coordinates"][0]["q"][0].as_f64(), Some(0.5));
         // ω = √(g/l) = 2.2147; the frames of mode 0, point 0, as the page reads them.
         let modes = &data["analyses"]["modes"];
         assert!((modes["frequencies"][0].as_f64().unwrap() - (9.81f64 / 2.0).sqrt()).abs() < 1e-9);
@@ -622,12 +680,17 @@ th = 0.5
 
     #[test]
     fn the_page_fills_each_placeholder_once_and_escapes_the_data() {
-        let data = json!({"name": "a <b> {{data}}", "x": "</script>"});
+        let data = json!({"name": "a <b> {{data}}", "x": "</script>", "y": "<!--<script>", "z": "<mi>"});
         let html = page(&data);
         assert!(html.contains("<title>a &lt;b&gt; {{data}}</title>"), "{html}");
-        assert!(html.contains(r#""x":"\u003c/script>""#));
-        // The data is inlined once, in its element.
-        assert_eq!(html.matches(r#""x":"\u003c/script>""#).count(), 1);
+        assert!(html.contains(r#""x":"<\/script>""#));
+        assert!(html.contains(r#""y":"\u003c!--<script>""#));
+        assert!(html.contains(r#""z":"<mi>""#));
+        // The data is inlined once, in its element, and reads back as it was.
+        assert_eq!(html.matches(r#""x":"<\/script>""#).count(), 1);
+        let start = html.find(r#"id="lagrange-data">"#).unwrap() + r#"id="lagrange-data">"#.len();
+        let inlined = &html[start..start + html[start..].find("</script>").unwrap()];
+        assert_eq!(serde_json::from_str::<Value>(inlined).unwrap(), data);
         assert!(html.contains(r#"<script type="application/json" id="lagrange-data">{"#));
         assert!(!html.contains("<!--"));
         assert_eq!(fill("{{a}}{{b}}{{c}}", &[("a", "{{b}}"), ("b", "2")]), "{{b}}2{{c}}");

@@ -166,7 +166,7 @@ pub fn report(source: &str, options_json: &str) -> String {
         let o = options(options_json)?;
         let mut rows = view::report::Recorder::new();
         let (d, config, summary) = run(source, &o, |row| rows.push(row))?;
-        let mut data = rows.data(&d, config.until, summary, view::derive::mathml(&d));
+        let mut data = rows.data(&d, config.until, summary);
         data["page"] = json!(view::report::page(&data));
         Ok(data)
     })())
