@@ -1,9 +1,10 @@
-//! Step-size control shared by the adaptive explicit Runge–Kutta methods
-//! ([`crate::Dopri5`], [`crate::Dop853`]): Hairer's initial step guess (`hinit`), the
-//! scaled error norm and the standard/PI controller of `DOPRI5`/`DOP853`.
+//! What the adaptive explicit Runge–Kutta methods ([`crate::Dopri5`],
+//! [`crate::Dop853`]) share: Hairer's initial step guess (`hinit`), the scaled
+//! error norm, the standard/PI controller of `DOPRI5`/`DOP853`, and the step
+//! loop itself ([`step`]), which a method drives through [`EmbeddedPair`].
 
 use crate::error::SolveError;
-use crate::solver::{Config, Controller, Statistics};
+use crate::solver::{Config, Controller, SolverState, Statistics, StepOutcome};
 use crate::system::{first_non_finite, OdeSystem};
 
 /// Controller state and constants (Hairer, Nørsett, Wanner, *Solving ODEs I*, §II.4).
@@ -168,5 +169,62 @@ pub(crate) fn step_failure(t: f64, h: f64, y_trial: &[f64], f_trial: &[f64]) -> 
         SolveError::NonFiniteState { t: t + h, index }
     } else {
         SolveError::StepSizeTooSmall { t, h }
+    }
+}
+
+/// An embedded explicit Runge–Kutta pair as [`step`] drives it: the methods
+/// differ in their stages and their dense output only.
+pub(crate) trait EmbeddedPair {
+    fn state(&mut self) -> &mut SolverState;
+    fn control(&mut self) -> &mut StepControl;
+    /// Tries a step of `h` from the current state: the trial's scaled error.
+    fn attempt(&mut self, h: f64) -> Result<f64, SolveError>;
+    /// Why a step of `h` cannot be taken ([`step_failure`] of the last trial).
+    fn failure(&self, h: f64) -> SolveError;
+    /// Keeps the trial of an accepted step of `h`: its dense output, the trial
+    /// state as the current one, and its last stage as the next step's first.
+    fn accept(&mut self, h: f64) -> Result<(), SolveError>;
+}
+
+/// One accepted step of an embedded pair: trials shortened by the controller
+/// until one is accepted, the last one cut to land on the stop time.
+pub(crate) fn step<P: EmbeddedPair>(pair: &mut P) -> Result<StepOutcome, SolveError> {
+    pair.state().check_max_steps()?;
+    loop {
+        let state = pair.state();
+        let mut h = state.h;
+        let mut reaches_stop = false;
+        if let Some(stop) = state.stop {
+            if state.t + h * (1.0 + 1e-10) >= stop {
+                h = stop - state.t;
+                reaches_stop = true;
+            }
+        }
+        if !reaches_stop && h < StepControl::h_min(state.t) {
+            return Err(pair.failure(h));
+        }
+        if reaches_stop && h == 0.0 {
+            state.stop = None;
+            return Ok(StepOutcome::ReachedStop);
+        }
+        let err = pair.attempt(h)?;
+        let (accepted, h_new) = pair.control().decide(h, err);
+        if !accepted {
+            let state = pair.state();
+            state.stats.rejected += 1;
+            state.h = h_new;
+            if h_new < StepControl::h_min(state.t) {
+                return Err(pair.failure(h));
+            }
+            continue;
+        }
+        pair.accept(h)?;
+        let state = pair.state();
+        state.t_old = state.t;
+        state.t = if reaches_stop { state.stop.take().unwrap_or(state.t + h) } else { state.t + h };
+        state.stats.steps += 1;
+        // A step shortened to hit the stop time says little about the next one.
+        state.h = if reaches_stop { h_new.max(state.h) } else { h_new };
+        return Ok(if reaches_stop { StepOutcome::ReachedStop } else { StepOutcome::Stepped });
     }
 }

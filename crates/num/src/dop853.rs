@@ -9,7 +9,7 @@
 //! the tests check the measured order (8) and a reference solution.
 #![allow(clippy::excessive_precision)] // Coefficients are quoted as published.
 
-use crate::adaptive::{first_step, step_failure, StepControl};
+use crate::adaptive::{self, first_step, step_failure, EmbeddedPair, StepControl};
 use crate::error::SolveError;
 use crate::method::Method;
 use crate::solver::{
@@ -361,6 +361,35 @@ impl<S: OdeSystem> Dop853<S> {
     }
 }
 
+impl<S: OdeSystem> EmbeddedPair for Dop853<S> {
+    fn state(&mut self) -> &mut SolverState {
+        &mut self.state
+    }
+
+    fn control(&mut self) -> &mut StepControl {
+        &mut self.control
+    }
+
+    fn attempt(&mut self, h: f64) -> Result<f64, SolveError> {
+        Dop853::attempt(self, h)
+    }
+
+    fn failure(&self, h: f64) -> SolveError {
+        step_failure(self.state.t, h, &self.y1, &self.k[12])
+    }
+
+    fn accept(&mut self, h: f64) -> Result<(), SolveError> {
+        if self.lazy_dense {
+            self.dense_pending = Some(h);
+        } else {
+            self.build_dense(h)?;
+        }
+        std::mem::swap(&mut self.state.y, &mut self.y1);
+        self.k.swap(0, 12);
+        Ok(())
+    }
+}
+
 impl<S: OdeSystem> Solver for Dop853<S> {
     fn method(&self) -> Method {
         Method::Dop853
@@ -373,50 +402,9 @@ impl<S: OdeSystem> Solver for Dop853<S> {
     }
 
     fn step(&mut self) -> Result<StepOutcome, SolveError> {
-        self.state.check_max_steps()?;
         // This step overwrites the stages a pending dense output would need.
         self.dense_pending = None;
-        loop {
-            let mut h = self.state.h;
-            let mut reaches_stop = false;
-            if let Some(stop) = self.state.stop {
-                if self.state.t + h * (1.0 + 1e-10) >= stop {
-                    h = stop - self.state.t;
-                    reaches_stop = true;
-                }
-            }
-            if !reaches_stop && h < StepControl::h_min(self.state.t) {
-                return Err(step_failure(self.state.t, h, &self.y1, &self.k[12]));
-            }
-            if reaches_stop && h == 0.0 {
-                self.state.stop = None;
-                return Ok(StepOutcome::ReachedStop);
-            }
-            let err = self.attempt(h)?;
-            let (accepted, h_new) = self.control.decide(h, err);
-            if !accepted {
-                self.state.stats.rejected += 1;
-                self.state.h = h_new;
-                if h_new < StepControl::h_min(self.state.t) {
-                    return Err(step_failure(self.state.t, h, &self.y1, &self.k[12]));
-                }
-                continue;
-            }
-            if self.lazy_dense {
-                self.dense_pending = Some(h);
-            } else {
-                self.build_dense(h)?;
-            }
-            self.state.t_old = self.state.t;
-            self.state.t =
-                if reaches_stop { self.state.stop.take().unwrap_or(self.state.t + h) } else { self.state.t + h };
-            std::mem::swap(&mut self.state.y, &mut self.y1);
-            self.k.swap(0, 12);
-            self.state.stats.steps += 1;
-            // A step shortened to hit the stop time says little about the next one.
-            self.state.h = if reaches_stop { h_new.max(self.state.h) } else { h_new };
-            return Ok(if reaches_stop { StepOutcome::ReachedStop } else { StepOutcome::Stepped });
-        }
+        adaptive::step(self)
     }
 
     fn set_lazy_dense(&mut self, lazy: bool) {

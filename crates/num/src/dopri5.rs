@@ -3,7 +3,7 @@
 //! embedded error estimate, a 4th-order continuous extension for dense output, and
 //! Hairer's PI step-size control. Enter with [`Dopri5::new`].
 
-use crate::adaptive::{first_step, step_failure, StepControl};
+use crate::adaptive::{self, first_step, step_failure, EmbeddedPair, StepControl};
 use crate::error::SolveError;
 use crate::method::Method;
 use crate::solver::{
@@ -139,6 +139,46 @@ impl<S: OdeSystem> Dopri5<S> {
     }
 }
 
+impl<S: OdeSystem> EmbeddedPair for Dopri5<S> {
+    fn state(&mut self) -> &mut SolverState {
+        &mut self.state
+    }
+
+    fn control(&mut self) -> &mut StepControl {
+        &mut self.control
+    }
+
+    fn attempt(&mut self, h: f64) -> Result<f64, SolveError> {
+        Dopri5::attempt(self, h)
+    }
+
+    fn failure(&self, h: f64) -> SolveError {
+        step_failure(self.state.t, h, &self.y1, &self.k[6])
+    }
+
+    /// Dense output of the accepted step (Hairer's continuous extension).
+    fn accept(&mut self, h: f64) -> Result<(), SolveError> {
+        for i in 0..self.state.y.len() {
+            let ydiff = self.y1[i] - self.state.y[i];
+            let bspl = h * self.k[0][i] - ydiff;
+            self.cont[0][i] = self.state.y[i];
+            self.cont[1][i] = ydiff;
+            self.cont[2][i] = bspl;
+            self.cont[3][i] = ydiff - h * self.k[6][i] - bspl;
+            self.cont[4][i] = h
+                * (D1 * self.k[0][i]
+                    + D3 * self.k[2][i]
+                    + D4 * self.k[3][i]
+                    + D5 * self.k[4][i]
+                    + D6 * self.k[5][i]
+                    + D7 * self.k[6][i]);
+        }
+        std::mem::swap(&mut self.state.y, &mut self.y1);
+        self.k.swap(0, 6);
+        Ok(())
+    }
+}
+
 impl<S: OdeSystem> Solver for Dopri5<S> {
     fn method(&self) -> Method {
         Method::Dopri5
@@ -151,60 +191,7 @@ impl<S: OdeSystem> Solver for Dopri5<S> {
     }
 
     fn step(&mut self) -> Result<StepOutcome, SolveError> {
-        self.state.check_max_steps()?;
-        let n = self.state.y.len();
-        loop {
-            let mut h = self.state.h;
-            let mut reaches_stop = false;
-            if let Some(stop) = self.state.stop {
-                if self.state.t + h * (1.0 + 1e-10) >= stop {
-                    h = stop - self.state.t;
-                    reaches_stop = true;
-                }
-            }
-            if !reaches_stop && h < StepControl::h_min(self.state.t) {
-                return Err(step_failure(self.state.t, h, &self.y1, &self.k[6]));
-            }
-            if reaches_stop && h == 0.0 {
-                self.state.stop = None;
-                return Ok(StepOutcome::ReachedStop);
-            }
-            let err = self.attempt(h)?;
-            let (accepted, h_new) = self.control.decide(h, err);
-            if !accepted {
-                self.state.stats.rejected += 1;
-                self.state.h = h_new;
-                if h_new < StepControl::h_min(self.state.t) {
-                    return Err(step_failure(self.state.t, h, &self.y1, &self.k[6]));
-                }
-                continue;
-            }
-            // Dense output of the accepted step.
-            for i in 0..n {
-                let ydiff = self.y1[i] - self.state.y[i];
-                let bspl = h * self.k[0][i] - ydiff;
-                self.cont[0][i] = self.state.y[i];
-                self.cont[1][i] = ydiff;
-                self.cont[2][i] = bspl;
-                self.cont[3][i] = ydiff - h * self.k[6][i] - bspl;
-                self.cont[4][i] = h
-                    * (D1 * self.k[0][i]
-                        + D3 * self.k[2][i]
-                        + D4 * self.k[3][i]
-                        + D5 * self.k[4][i]
-                        + D6 * self.k[5][i]
-                        + D7 * self.k[6][i]);
-            }
-            self.state.t_old = self.state.t;
-            self.state.t =
-                if reaches_stop { self.state.stop.take().unwrap_or(self.state.t + h) } else { self.state.t + h };
-            std::mem::swap(&mut self.state.y, &mut self.y1);
-            self.k.swap(0, 6);
-            self.state.stats.steps += 1;
-            // A step shortened to hit the stop time says little about the next one.
-            self.state.h = if reaches_stop { h_new.max(self.state.h) } else { h_new };
-            return Ok(if reaches_stop { StepOutcome::ReachedStop } else { StepOutcome::Stepped });
-        }
+        adaptive::step(self)
     }
 
     fn set_state(&mut self, y: &[f64]) -> Result<(), SolveError> {

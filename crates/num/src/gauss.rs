@@ -33,7 +33,7 @@ use crate::linalg::DenseLu;
 use crate::method::Method;
 use crate::solver::{
     check_initial, check_interpolation, check_len, compensated_add, Config, FixedClock, Solver, SolverState,
-    Statistics, StepOutcome,
+    Statistics, StepOutcome, Subdivisions,
 };
 use crate::system::{first_non_finite, OdeSystem};
 
@@ -101,31 +101,6 @@ enum Iteration {
 /// Most halvings of a step: a step of the fixed grid is taken as at most
 /// `2^MAX_LEVEL` (65,536) sub-steps before the run fails.
 const MAX_LEVEL: u32 = 16;
-
-/// The steps of a run that were taken as shorter sub-steps, for its warnings.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Subdivisions {
-    /// Steps of the fixed grid taken as sub-steps.
-    pub steps: usize,
-    /// The start of the first of them.
-    pub first_t: f64,
-    /// The shortest sub-step taken.
-    pub shortest: f64,
-}
-
-impl std::fmt::Display for Subdivisions {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "the stage equations of {} step{} of the fixed step did not converge, and {} taken as shorter sub-steps (down to {:.3e}), the first at t = {}: the motion there is faster than the step was chosen for, and H no longer keeps the bound the step promised; an adaptive method (the default, without --method) follows such motion",
-            self.steps,
-            if self.steps == 1 { "" } else { "s" },
-            if self.steps == 1 { "was" } else { "were" },
-            self.shortest,
-            self.first_t
-        )
-    }
-}
 
 /// A step of the fixed grid being taken as sub-steps: `[start, end]` cut into
 /// `2^level` sub-steps, `done` of them taken.

@@ -50,6 +50,7 @@
 #![allow(clippy::needless_range_loop)]
 
 mod adaptive;
+mod build;
 mod composition;
 mod dop853;
 mod dopri5;
@@ -82,7 +83,7 @@ pub use dop853::Dop853;
 pub use dopri5::Dopri5;
 pub use eigen::{balanced, eigenvalue_rounding, eigenvalues, symmetric_definite, symmetric_rounding, EigenError};
 pub use error::{LinalgError, NewtonError, QuadratureError, RhsError, SolveError};
-pub use gauss::{Gauss, Subdivisions};
+pub use gauss::Gauss;
 pub use integrate::{
     integrate, integrate_projected, integrate_to, probe_spacing, Direction, Event, Observation, ObservationKind,
     Output, Projection, StopReason, Summary, FORESIGHT_MARGIN,
@@ -99,7 +100,7 @@ pub use quadrature::{
 pub use radau5::Radau5;
 pub use root::brent;
 pub use shortest::Shortest;
-pub use solver::{Config, Controller, Solver, SolverState, Statistics, StepOutcome};
+pub use solver::{Config, Controller, Solver, SolverState, Statistics, StepOutcome, Subdivisions};
 pub use stepsize::{run_fixed, select_step};
 pub use system::{finite_difference_jacobian, OdeSystem, Separable, SeparableSystem};
 pub use taylor::{taylor_advance, taylor_order, taylor_ratio, taylor_step, Taylor};

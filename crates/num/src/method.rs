@@ -1,30 +1,22 @@
 //! The catalogue of methods ([`Method`]): names for `--method NAME`, one-line
-//! descriptions for `--list-methods`, properties (order, adaptive, symplectic) and
-//! [`Method::build`] / [`Method::build_separable`], which construct any of them as a
-//! `Box<dyn Solver>`.
+//! descriptions for `--list-methods`, and properties (order, adaptive,
+//! symplectic). Every solver names itself by it; the factory that builds any of
+//! them ([`Method::build`]) is in `build.rs`, so that this catalogue imports no
+//! solver.
 
 use std::fmt;
 use std::str::FromStr;
 
-use crate::composition::{Composition, Scheme};
-use crate::dop853::Dop853;
-use crate::dopri5::Dopri5;
 use crate::error::SolveError;
-use crate::gauss::Gauss;
-use crate::radau5::Radau5;
-use crate::solver::{check_initial, Config, Solver};
-use crate::stepsize::{guess_step, run_fixed, select_step};
-use crate::system::{OdeSystem, Separable, SeparableSystem};
-use crate::taylor::Taylor;
 
 /// An integration method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Method {
-    /// Dormand–Prince 5(4), adaptive explicit Runge–Kutta ([`Dopri5`]).
+    /// Dormand–Prince 5(4), adaptive explicit Runge–Kutta ([`crate::Dopri5`]).
     Dopri5,
-    /// DOP853, adaptive explicit Runge–Kutta of order 8 ([`Dop853`]).
+    /// DOP853, adaptive explicit Runge–Kutta of order 8 ([`crate::Dop853`]).
     Dop853,
-    /// Störmer–Verlet, symplectic, order 2, fixed step ([`Composition`]).
+    /// Störmer–Verlet, symplectic, order 2, fixed step ([`crate::Composition`]).
     Verlet,
     /// Yoshida's triple jump of Verlet, symplectic, order 4.
     Yoshida4,
@@ -32,16 +24,16 @@ pub enum Method {
     KahanLi6,
     /// Kahan–Li 15-stage composition of Verlet, symplectic, order 8.
     KahanLi8,
-    /// Gauss–Legendre collocation, 1 stage (implicit midpoint), symplectic, order 2 ([`Gauss`]).
+    /// Gauss–Legendre collocation, 1 stage (implicit midpoint), symplectic, order 2 ([`crate::Gauss`]).
     Gauss2,
     /// Gauss–Legendre collocation, 2 stages, symplectic, order 4.
     Gauss4,
     /// Gauss–Legendre collocation, 3 stages, symplectic, order 6.
     Gauss6,
-    /// Radau IIA, 3 stages, order 5, adaptive, for stiff problems ([`Radau5`]).
+    /// Radau IIA, 3 stages, order 5, adaptive, for stiff problems ([`crate::Radau5`]).
     Radau5,
-    /// Adaptive Taylor series, order from the tolerance ([`Taylor`]); needs a system
-    /// with [`OdeSystem::taylor_series`].
+    /// Adaptive Taylor series, order from the tolerance ([`crate::Taylor`]); needs a system
+    /// with [`crate::OdeSystem::taylor_series`].
     Taylor,
 }
 
@@ -145,79 +137,6 @@ impl Method {
     /// Whether the method needs a [`SeparableSystem`] (the explicit compositions).
     pub fn needs_separable(self) -> bool {
         matches!(self, Method::Verlet | Method::Yoshida4 | Method::KahanLi6 | Method::KahanLi8)
-    }
-
-    /// Builds a solver for a general system from `(t0, y0)`.
-    ///
-    /// Fails with [`SolveError::RequiresSeparable`] for the explicit symplectic
-    /// compositions. A fixed-step method without `config.dt` first picks its step with
-    /// [`select_step`] (capped by `config.h_max`; set it to the length of the run).
-    pub fn build<'a, S: OdeSystem + 'a>(
-        self,
-        mut system: S,
-        t0: f64,
-        y0: &[f64],
-        config: &Config,
-    ) -> Result<Box<dyn Solver + 'a>, SolveError> {
-        config.validate()?;
-        check_initial(system.dim(), t0, y0)?;
-        if self.needs_separable() {
-            return Err(SolveError::RequiresSeparable { method: self.name() });
-        }
-        let mut config = *config;
-        if !self.is_adaptive() && config.dt.is_none() {
-            let guess = guess_step(&mut system, self.order(), t0, y0, &config)?;
-            let dt = select_step(
-                |h, steps, out| {
-                    let cfg = Config { dt: Some(h), ..config };
-                    run_fixed(Gauss::new(&mut system, self, t0, y0, &cfg).map(Gauss::without_sub_steps), steps, out)
-                },
-                self.order(),
-                y0,
-                &config,
-                guess,
-            )?;
-            config.dt = Some(dt);
-        }
-        Ok(match self {
-            Method::Dopri5 => Box::new(Dopri5::new(system, t0, y0, &config)?),
-            Method::Dop853 => Box::new(Dop853::new(system, t0, y0, &config)?),
-            Method::Radau5 => Box::new(Radau5::new(system, t0, y0, &config)?),
-            Method::Taylor => Box::new(Taylor::new(system, t0, y0, &config)?),
-            _ => Box::new(Gauss::new(system, self, t0, y0, &config)?),
-        })
-    }
-
-    /// Builds a solver for a separable system from `(t0, y0)`, `y0 = [q0, p0]`. Every
-    /// method applies; the non-composition ones see the system through [`Separable`].
-    pub fn build_separable<'a, S: SeparableSystem + 'a>(
-        self,
-        mut system: S,
-        t0: f64,
-        y0: &[f64],
-        config: &Config,
-    ) -> Result<Box<dyn Solver + 'a>, SolveError> {
-        let Some(scheme) = Scheme::of(self) else {
-            return self.build(Separable(system), t0, y0, config);
-        };
-        config.validate()?;
-        check_initial(2 * system.n(), t0, y0)?;
-        let mut config = *config;
-        if config.dt.is_none() {
-            let guess = guess_step(&mut Separable(&mut system), self.order(), t0, y0, &config)?;
-            let dt = select_step(
-                |h, steps, out| {
-                    let cfg = Config { dt: Some(h), ..config };
-                    run_fixed(Composition::new(&mut system, scheme, t0, y0, &cfg), steps, out)
-                },
-                self.order(),
-                y0,
-                &config,
-                guess,
-            )?;
-            config.dt = Some(dt);
-        }
-        Ok(Box::new(Composition::new(system, scheme, t0, y0, &config)?))
     }
 
     /// The names of all methods, comma separated.
