@@ -115,8 +115,8 @@ impl Func {
         match self {
             // The native code's sine and cosine, so that every evaluation
             // agrees with it bit for bit (within an ulp of libm's).
-            Func::Sin => crate::jit::trig::sin_cos_f64(x).0,
-            Func::Cos => crate::jit::trig::sin_cos_f64(x).1,
+            Func::Sin => crate::trig::sin_cos_f64(x).0,
+            Func::Cos => crate::trig::sin_cos_f64(x).1,
             Func::Tan => x.tan(),
             Func::Asin => x.asin(),
             Func::Acos => x.acos(),

@@ -5,12 +5,10 @@
 //! it falls back to anyway. The interpreter is the reference the native code
 //! agrees with bit for bit, so results do not change; only speed does.
 
-/// What stands for `jit.rs`: [`Compiled`] that never compiles, and the
-/// `sin`/`cos` arithmetic every evaluation shares.
+/// What stands for `jit.rs`: [`Compiled`] that never compiles.
 pub(crate) mod jit {
     use crate::eval::Tape;
     pub(crate) use crate::native::JitError;
-    pub(crate) use crate::trig;
 
     /// A tape compiled to native code: never, in this build
     /// ([`Compiled::new`] says why), so there is no value of this type.

@@ -211,7 +211,7 @@ pub(crate) struct Imports {
 /// in three blocks, and a long trigonometric tape (a chain of fifty links has
 /// 1275 angle differences, each with its sine and cosine) spends seconds in
 /// cranelift for them; the call is the same arithmetic (the interpreter's
-/// [`trig::sin_cos_f64`]), so the numbers are the tape's bit for bit, at a
+/// [`crate::trig::sin_cos_f64`]), so the numbers are the tape's bit for bit, at a
 /// few nanoseconds more per pair.
 pub const OUTLINE_TRIG: usize = 256;
 
@@ -223,7 +223,7 @@ pub const OUTLINE_TRIG: usize = 256;
 /// `out` points to two writable, aligned `f64`s (the compiled code passes a
 /// 16-byte stack slot of its own).
 pub(crate) unsafe extern "C" fn lagrange_sin_cos(x: f64, out: *mut f64) {
-    let (s, c) = trig::sin_cos_f64(x);
+    let (s, c) = crate::trig::sin_cos_f64(x);
     // SAFETY: the caller passes two writable, aligned f64s (see above).
     unsafe {
         out.write(s);
@@ -259,7 +259,7 @@ impl Imports {
     }
 
     /// `sin x` and `cos x`, those of the two that `want` asks for: inline
-    /// ([`trig::sin_cos`]) for `|x| <` [`trig::INLINE_MAX`], calls to the
+    /// ([`trig::sin_cos`]) for `|x| <` [`crate::trig::INLINE_MAX`], calls to the
     /// wrappers in a cold block otherwise (large, infinite or NaN `x`).
     pub(crate) fn sin_cos(
         &mut self,
@@ -293,7 +293,7 @@ impl Imports {
         let (inline, library, done) = (b.create_block(), b.create_block(), b.create_block());
         let results: Vec<Value> = want.iter().filter(|&&w| w).map(|_| b.append_block_param(done, types::F64)).collect();
         let ax = b.ins().fabs(x);
-        let bound = b.ins().f64const(trig::INLINE_MAX);
+        let bound = b.ins().f64const(crate::trig::INLINE_MAX);
         let in_range = b.ins().fcmp(FloatCC::LessThan, ax, bound);
         b.ins().brif(in_range, inline, &[], library, &[]);
         b.set_cold_block(library);

@@ -37,9 +37,6 @@ mod taylor;
 mod taylor_c;
 #[cfg(feature = "jit")]
 mod taylor_jit;
-/// `sin` and `cos` without native code: declared here, since `jit` is not.
-#[cfg(not(feature = "jit"))]
-#[path = "jit/trig.rs"]
 mod trig;
 
 #[cfg(not(feature = "jit"))]

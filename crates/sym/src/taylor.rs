@@ -1219,7 +1219,7 @@ fn order_zero<const L: usize>(c: &mut [Lanes<L>], op: T, stride: usize) -> Lanes
         T::Sin { u, cos, .. } => {
             let (mut sin, mut cos_v) = ([0.0; L], [0.0; L]);
             for l in 0..L {
-                (sin[l], cos_v[l]) = crate::jit::trig::sin_cos_f64(c[s(u)][l]);
+                (sin[l], cos_v[l]) = crate::trig::sin_cos_f64(c[s(u)][l]);
             }
             c[s(cos)] = cos_v;
             sin

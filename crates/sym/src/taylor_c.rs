@@ -23,8 +23,8 @@
 //! whichever of the interpreter, cranelift or the C compiler computed its
 //! steps.
 
-use crate::jit::trig;
 use crate::taylor::{SecondOrderLayout, TaylorTape, T};
+use crate::trig;
 use std::fmt::Write as _;
 
 /// The C source of a Taylor expansion: functions `part0` … `part{n−1}`, each
