@@ -23,7 +23,7 @@
 //! composite one an `<mrow>`), so a piece can always be the base or the
 //! exponent of an `<msup>` or a part of an `<mfrac>`.
 //!
-//! With a [`Shared`] (see `shared.rs`) the walk stops at the named nodes and
+//! With a [`crate::Shared`] (see `shared.rs`) the walk stops at the named nodes and
 //! writes their names (`w12`, `w_{12}`, `<msub><mi>w</mi><mn>12</mn></msub>`)
 //! instead; wherever it would look inside a child to choose a form (a term's
 //! sign, a factor below the bar, a function raised to a power) a named child
@@ -36,7 +36,6 @@
 
 use crate::expr::{ExprId, Func, Node, Pool, Symbol};
 use crate::number::{Number, Rational};
-use crate::shared::Shared;
 use std::fmt;
 
 /// How [`Pool::print`] writes an expression; start from a preset.
@@ -89,6 +88,14 @@ impl Default for PrintOptions {
     }
 }
 
+/// Nodes written as numbered names (`w12`) instead of their trees: those a
+/// printout of shared subexpressions names (`crate::Shared`, which depends on
+/// the printer, not the printer on it).
+pub(crate) trait Names {
+    /// The number of the name that stands for `id` (`w12`: 12), if one does.
+    fn number_of(&self, id: ExprId) -> Option<usize>;
+}
+
 /// An expression to print with its options; see [`Pool::print`].
 #[derive(Clone, Copy)]
 pub struct Printed<'a> {
@@ -96,7 +103,7 @@ pub struct Printed<'a> {
     id: ExprId,
     options: PrintOptions,
     /// The named nodes, written as their names.
-    names: Option<&'a Shared>,
+    names: Option<&'a dyn Names>,
     /// Whether `id` is written out even when it is named (the right side of
     /// its definition).
     defining: bool,
@@ -109,7 +116,7 @@ impl<'a> Printed<'a> {
         pool: &'a Pool,
         id: ExprId,
         options: PrintOptions,
-        names: &'a Shared,
+        names: &'a dyn Names,
         defining: bool,
     ) -> Printed<'a> {
         Printed { pool, id, options, names: Some(names), defining }
@@ -333,7 +340,7 @@ struct Printer<'a> {
     pool: &'a Pool,
     mode: PrintMode,
     /// The named nodes, if any: each is written as its name.
-    names: Option<&'a Shared>,
+    names: Option<&'a dyn Names>,
     /// The expression defined, written out although it is named.
     top: Option<ExprId>,
 }

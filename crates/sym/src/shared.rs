@@ -27,7 +27,7 @@
 //! (checked by a property test at random points).
 
 use crate::expr::{ExprId, Pool};
-use crate::print::{PrintOptions, Printed};
+use crate::print::{Names, PrintOptions, Printed};
 use rustc_hash::FxHashMap;
 use std::cell::RefCell;
 
@@ -200,6 +200,12 @@ impl Printout {
             Printout::Named(shared) => Some(shared),
             _ => None,
         }
+    }
+}
+
+impl Names for Shared {
+    fn number_of(&self, id: ExprId) -> Option<usize> {
+        Shared::number_of(self, id)
     }
 }
 
