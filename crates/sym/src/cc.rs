@@ -1,5 +1,5 @@
 //! The system C compiler as a code generator: compiles generated C
-//! (`taylor_c.rs`) into a shared library for this machine, caches it per
+//! (`taylor/c.rs`) into a shared library for this machine, caches it per
 //! source and machine, and loads it.
 //!
 //! Every machine that builds lagrange has a C compiler, since Rust links with
@@ -39,7 +39,7 @@ use std::time::Instant;
 pub(crate) use crate::native::{CBuild, CcError};
 
 /// The flags every source is compiled with (before the output and input).
-/// The source is written in vectors already (`taylor_c.rs`), so `-O1`
+/// The source is written in vectors already (`taylor/c.rs`), so `-O1`
 /// serves: register allocation and common subexpressions are what the code
 /// needs, and `-O3` would take six times as long for the same speed.
 const FLAGS: &[&str] =

@@ -33,14 +33,10 @@ mod rational;
 mod shared;
 mod simplify;
 mod taylor;
-#[cfg(feature = "jit")]
-mod taylor_c;
-#[cfg(feature = "jit")]
-mod taylor_jit;
 mod trig;
 
 #[cfg(not(feature = "jit"))]
-use interpreted::{cc, jit, taylor_jit};
+use interpreted::{cc, jit};
 
 pub use cc::compiler as c_compiler;
 pub use eval::{EvalError, Tape};

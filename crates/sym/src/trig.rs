@@ -2,7 +2,7 @@
 //! reduction and kernels, branch-free, on plain `f64` ([`sin_cos_f64`], which the
 //! tape interpreter, the Taylor recurrences and every evaluation call). The native
 //! code emits the same operations in the same order (`jit/trig.rs`, cranelift IR;
-//! `taylor_c.rs`, C), so all of them give the same numbers bit for bit. A leaf:
+//! `taylor/c.rs`, C), so all of them give the same numbers bit for bit. A leaf:
 //! it imports nothing of the crate.
 //!
 //!

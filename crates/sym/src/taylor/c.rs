@@ -1,5 +1,5 @@
-//! C source for a [`TaylorTape`]'s orders: the same functions as
-//! `taylor_jit.rs`, written for the system C compiler (`cc.rs`) in the
+//! C source for a Taylor program's orders: the same functions as
+//! `cranelift.rs`, written for the system C compiler (`cc.rs`) in the
 //! machine's full vector width.
 //!
 //! Cranelift's vectors are 128 bits wide, two lanes per instruction; the
@@ -23,7 +23,7 @@
 //! whichever of the interpreter, cranelift or the C compiler computed its
 //! steps.
 
-use crate::taylor::{SecondOrderLayout, TaylorTape, T};
+use super::program::{Instruction, SecondOrderLayout};
 use crate::trig;
 use std::fmt::Write as _;
 
@@ -60,13 +60,12 @@ pub(crate) fn part_name(i: usize) -> String {
     format!("part{i}")
 }
 
-/// The source of every order of `tape` (function `k` computes order `k`), for
-/// [`TaylorTape::compute`].
-pub(crate) fn orders<const L: usize>(tape: &TaylorTape<L>, fused: bool) -> CSource {
-    let order = tape.order();
+/// The source of every order of `program` (function `k` computes order `k`),
+/// for [`super::TaylorTape::compute`].
+pub(crate) fn orders<const L: usize>(program: &[(u32, Instruction)], order: usize, fused: bool) -> CSource {
     let mut w = Writer::new(L, order + 1, fused);
     for k in 0..=order {
-        w.function(k, |w| w.orders(tape.program(), k));
+        w.function(k, |w| w.orders(program, k));
     }
     w.finish()
 }
@@ -76,7 +75,7 @@ pub(crate) fn orders<const L: usize>(tape: &TaylorTape<L>, fused: bool) -> CSour
 /// of y and y' (see `TaylorTape::set_second_order`), so that the functions
 /// run in turn make the whole expansion.
 pub(crate) fn second_order<const L: usize>(
-    program: &[(u32, T)],
+    program: &[(u32, Instruction)],
     order: usize,
     layout: &SecondOrderLayout,
     fused: bool,
@@ -328,23 +327,23 @@ impl Writer {
     }
 
     /// Whether order 0 of `op` calls the C library (and so runs lane by lane).
-    fn calls_library(op: T) -> bool {
+    fn calls_library(op: Instruction) -> bool {
         matches!(
             op,
-            T::PowC(..)
-                | T::Exp { .. }
-                | T::Log(_)
-                | T::Sinh { .. }
-                | T::Tan { .. }
-                | T::Asin { .. }
-                | T::Atan { .. }
-                | T::Atan2 { .. }
+            Instruction::PowC(..)
+                | Instruction::Exp { .. }
+                | Instruction::Log(_)
+                | Instruction::Sinh { .. }
+                | Instruction::Tan { .. }
+                | Instruction::Asin { .. }
+                | Instruction::Atan { .. }
+                | Instruction::Atan2 { .. }
         )
     }
 
     /// Order 0 of one instruction.
-    fn order_zero(&mut self, w: u32, op: T) {
-        if matches!(op, T::CosOf | T::Aux) {
+    fn order_zero(&mut self, w: u32, op: Instruction) {
+        if matches!(op, Instruction::CosOf | Instruction::Aux) {
             return;
         }
         if Self::calls_library(op) {
@@ -353,27 +352,31 @@ impl Writer {
             self.vector();
         }
         let v = match op {
-            T::CosOf | T::Aux => return,
-            T::Add(a, b) | T::AddC(a, b) => self.let_(format!("{} + {}", self.ld(a, 0), self.ld(b, 0))),
-            T::Sub(a, b) | T::SubVC(a, b) | T::SubCV(a, b) => {
+            Instruction::CosOf | Instruction::Aux => return,
+            Instruction::Add(a, b) | Instruction::AddC(a, b) => {
+                self.let_(format!("{} + {}", self.ld(a, 0), self.ld(b, 0)))
+            }
+            Instruction::Sub(a, b) | Instruction::SubVC(a, b) | Instruction::SubCV(a, b) => {
                 self.let_(format!("{} - {}", self.ld(a, 0), self.ld(b, 0)))
             }
-            T::Mul(a, b) | T::MulC(a, b) => self.let_(format!("{} * {}", self.ld(a, 0), self.ld(b, 0))),
-            T::Div(a, b) | T::DivVC(a, b) | T::DivCV(a, b) => {
+            Instruction::Mul(a, b) | Instruction::MulC(a, b) => {
+                self.let_(format!("{} * {}", self.ld(a, 0), self.ld(b, 0)))
+            }
+            Instruction::Div(a, b) | Instruction::DivVC(a, b) | Instruction::DivCV(a, b) => {
                 self.let_(format!("{} / {}", self.ld(a, 0), self.ld(b, 0)))
             }
-            T::Neg(a) => self.let_(self.neg(&self.ld(a, 0))),
-            T::Square(a) => {
+            Instruction::Neg(a) => self.let_(self.neg(&self.ld(a, 0))),
+            Instruction::Square(a) => {
                 let x = self.let_(self.ld(a, 0));
                 self.let_(format!("{x} * {x}"))
             }
-            T::Sqrt(a) => self.let_(format!("lg_vsqrt({})", self.ld(a, 0))),
-            T::PowC(a, e) => self.let_(format!("pow({}, {})", self.ld(a, 0), self.ld(e, 0))),
-            T::Exp { u, .. } => self.let_(format!("exp({})", self.ld(u, 0))),
-            T::Deriv(_) => self.let_(self.splat("0.0")),
-            T::Log(a) => self.let_(format!("log({})", self.ld(a, 0))),
-            T::Abs(a) => self.let_(format!("lg_vabs({})", self.ld(a, 0))),
-            T::Sin { u, cos, .. } => {
+            Instruction::Sqrt(a) => self.let_(format!("lg_vsqrt({})", self.ld(a, 0))),
+            Instruction::PowC(a, e) => self.let_(format!("pow({}, {})", self.ld(a, 0), self.ld(e, 0))),
+            Instruction::Exp { u, .. } => self.let_(format!("exp({})", self.ld(u, 0))),
+            Instruction::Deriv(_) => self.let_(self.splat("0.0")),
+            Instruction::Log(a) => self.let_(format!("log({})", self.ld(a, 0))),
+            Instruction::Abs(a) => self.let_(format!("lg_vabs({})", self.ld(a, 0))),
+            Instruction::Sin { u, cos, .. } => {
                 let x = self.let_(self.ld(u, 0));
                 let (sn, cs) = (format!("t{}", self.temps), format!("t{}", self.temps + 1));
                 self.temps += 2;
@@ -393,13 +396,13 @@ impl Writer {
                 );
                 return;
             }
-            T::Sinh { u, cosh, .. } => {
+            Instruction::Sinh { u, cosh, .. } => {
                 let x = self.let_(self.ld(u, 0));
                 let ch = self.let_(format!("cosh({x})"));
                 self.st(cosh, 0, &ch);
                 self.let_(format!("sinh({x})"))
             }
-            T::Tan { u, aux, sign, .. } => {
+            Instruction::Tan { u, aux, sign, .. } => {
                 let x = self.let_(self.ld(u, 0));
                 let v = self.let_(format!("{}({x})", if sign > 0.0 { "tan" } else { "tanh" }));
                 let sq = self.let_(format!("{v} * {v}"));
@@ -408,7 +411,7 @@ impl Writer {
                 self.st(aux, 0, &a);
                 v
             }
-            T::Asin { u, inner, root, sign } => {
+            Instruction::Asin { u, inner, root, sign } => {
                 let x = self.let_(self.ld(u, 0));
                 let sq = self.let_(format!("{x} * {x}"));
                 let i = self.let_(format!("1.0 - {sq}"));
@@ -417,14 +420,14 @@ impl Writer {
                 self.st(root, 0, &r);
                 self.let_(format!("{}({x})", if sign > 0.0 { "asin" } else { "acos" }))
             }
-            T::Atan { u, aux } => {
+            Instruction::Atan { u, aux } => {
                 let x = self.let_(self.ld(u, 0));
                 let sq = self.let_(format!("{x} * {x}"));
                 let a = self.let_(format!("1.0 + {sq}"));
                 self.st(aux, 0, &a);
                 self.let_(format!("atan({x})"))
             }
-            T::Atan2 { y, x, aux } => {
+            Instruction::Atan2 { y, x, aux } => {
                 let (yv, xv) = (self.let_(self.ld(y, 0)), self.let_(self.ld(x, 0)));
                 let xx = self.let_(format!("{xv} * {xv}"));
                 let yy = self.let_(format!("{yv} * {yv}"));
@@ -437,17 +440,17 @@ impl Writer {
     }
 
     /// Order `k ≥ 1` of one instruction.
-    fn order_k(&mut self, w: u32, op: T, k: usize) {
+    fn order_k(&mut self, w: u32, op: Instruction, k: usize) {
         let v = match op {
-            T::CosOf | T::Aux => return,
-            T::Add(a, b) => self.let_(format!("{} + {}", self.ld(a, k), self.ld(b, k))),
-            T::Sub(a, b) => self.let_(format!("{} - {}", self.ld(a, k), self.ld(b, k))),
-            T::Neg(a) | T::SubCV(_, a) => self.let_(self.neg(&self.ld(a, k))),
-            T::AddC(a, _) | T::SubVC(a, _) => self.let_(self.ld(a, k)),
-            T::MulC(a, c) => self.let_(format!("{} * {}", self.ld(a, k), self.ld(c, 0))),
-            T::DivVC(a, c) => self.let_(format!("{} / {}", self.ld(a, k), self.ld(c, 0))),
-            T::Mul(a, b) => self.sum(a, b, k, 0..=k, false),
-            T::Square(a) => {
+            Instruction::CosOf | Instruction::Aux => return,
+            Instruction::Add(a, b) => self.let_(format!("{} + {}", self.ld(a, k), self.ld(b, k))),
+            Instruction::Sub(a, b) => self.let_(format!("{} - {}", self.ld(a, k), self.ld(b, k))),
+            Instruction::Neg(a) | Instruction::SubCV(_, a) => self.let_(self.neg(&self.ld(a, k))),
+            Instruction::AddC(a, _) | Instruction::SubVC(a, _) => self.let_(self.ld(a, k)),
+            Instruction::MulC(a, c) => self.let_(format!("{} * {}", self.ld(a, k), self.ld(c, 0))),
+            Instruction::DivVC(a, c) => self.let_(format!("{} / {}", self.ld(a, k), self.ld(c, 0))),
+            Instruction::Mul(a, b) => self.sum(a, b, k, 0..=k, false),
+            Instruction::Square(a) => {
                 let half = self.sum(a, a, k, 0..=k.div_ceil(2) - 1, false);
                 let mut out = self.let_(format!("2.0 * {half}"));
                 if k.is_multiple_of(2) {
@@ -457,23 +460,23 @@ impl Writer {
                 }
                 out
             }
-            T::Div(a, b) => {
+            Instruction::Div(a, b) => {
                 let ak = self.let_(self.ld(a, k));
                 let acc = self.sub_sum(ak, b, w, k, 1..=k);
                 self.let_(format!("{acc} / {}", self.ld(b, 0)))
             }
-            T::DivCV(_, b) => {
+            Instruction::DivCV(_, b) => {
                 let zero = self.let_(self.splat("0.0"));
                 let acc = self.sub_sum(zero, b, w, k, 1..=k);
                 self.let_(format!("{acc} / {}", self.ld(b, 0)))
             }
-            T::Sqrt(a) => {
+            Instruction::Sqrt(a) => {
                 let ak = self.let_(self.ld(a, k));
                 let acc = self.sub_sum(ak, w, w, k, 1..=k - 1);
                 let den = self.let_(format!("2.0 * {}", self.ld(w, 0)));
                 self.let_(format!("{acc} / {den}"))
             }
-            T::PowC(a, e) => {
+            Instruction::PowC(a, e) => {
                 let alpha = self.let_(self.ld(e, 0));
                 let mut acc = self.let_(self.splat("0.0"));
                 for j in 0..k {
@@ -486,25 +489,25 @@ impl Writer {
                 let den = self.let_(format!("{} * {}", lit(k as f64), self.ld(a, 0)));
                 self.let_(format!("{acc} / {den}"))
             }
-            T::Deriv(a) => self.let_(format!("{} * {}", lit(k as f64), self.ld(a, k))),
-            T::Exp { du, .. } => self.derived(du, w, k),
-            T::Log(a) => {
+            Instruction::Deriv(a) => self.let_(format!("{} * {}", lit(k as f64), self.ld(a, k))),
+            Instruction::Exp { du, .. } => self.derived(du, w, k),
+            Instruction::Log(a) => {
                 let s = self.weighted(w, a, k, k - 1);
                 let num = self.let_(format!("{} - {s}", self.ld(a, k)));
                 self.let_(format!("{num} / {}", self.ld(a, 0)))
             }
-            T::Sin { du, cos, .. } => {
+            Instruction::Sin { du, cos, .. } => {
                 let (sin, c) = self.derived_pair(du, cos, w, k);
                 let c = self.let_(self.neg(&c));
                 self.st(cos, k, &c);
                 sin
             }
-            T::Sinh { du, cosh, .. } => {
+            Instruction::Sinh { du, cosh, .. } => {
                 let (sinh, c) = self.derived_pair(du, cosh, w, k);
                 self.st(cosh, k, &c);
                 sinh
             }
-            T::Tan { du, aux, sign, .. } => {
+            Instruction::Tan { du, aux, sign, .. } => {
                 let v = self.derived(du, aux, k);
                 self.st(w, k, &v);
                 let sq = self.self_product(w, k);
@@ -512,7 +515,7 @@ impl Writer {
                 self.st(aux, k, &a);
                 v
             }
-            T::Asin { u, inner, root, sign } => {
+            Instruction::Asin { u, inner, root, sign } => {
                 let sq = self.self_product(u, k);
                 let i = self.let_(self.neg(&sq));
                 self.st(inner, k, &i);
@@ -522,12 +525,12 @@ impl Writer {
                 self.st(root, k, &r);
                 self.derivative_quotient(u, root, w, k, sign)
             }
-            T::Atan { u, aux } => {
+            Instruction::Atan { u, aux } => {
                 let sq = self.self_product(u, k);
                 self.st(aux, k, &sq);
                 self.derivative_quotient(u, aux, w, k, 1.0)
             }
-            T::Atan2 { y, x, aux } => {
+            Instruction::Atan2 { y, x, aux } => {
                 let mut sq = self.let_(self.splat("0.0"));
                 for j in 0..=k {
                     let t = self.let_(format!("{} * {}", self.ld(x, j), self.ld(x, k - j)));
@@ -551,7 +554,7 @@ impl Writer {
                 let den = self.let_(format!("{} * {}", lit(k as f64), self.ld(aux, 0)));
                 self.let_(format!("{acc} / {den}"))
             }
-            T::Abs(a) => {
+            Instruction::Abs(a) => {
                 let (a0, ak) = (self.ld(a, 0), self.let_(self.ld(a, k)));
                 self.let_(format!("lg_vsel((lg_m)({a0} < LG_ZERO), lg_vneg({ak}), {ak})"))
             }
@@ -561,7 +564,7 @@ impl Writer {
 
     /// Order `k` of every instruction: in vectors, but for the library's
     /// functions at order 0, lane by lane.
-    fn orders(&mut self, program: &[(u32, T)], k: usize) {
+    fn orders(&mut self, program: &[(u32, Instruction)], k: usize) {
         for &(w, op) in program {
             if k == 0 {
                 self.order_zero(w, op);

@@ -1,8 +1,8 @@
-//! Native code for a [`TaylorTape`]: one straight-line machine function per
-//! Taylor order, compiled with cranelift.
+//! Native code for a Taylor program: one straight-line machine function per
+//! Taylor order, compiled with cranelift (`native.rs` holds it).
 //!
 //! The function of order `k` computes order `k` of every variable slot on
-//! every lane, exactly the recurrences of `taylor.rs` with every loop
+//! every lane, exactly the recurrences of the interpreter (`interpret.rs`, `tape.rs`) with every loop
 //! unrolled (the order, the convolution bounds and the lanes are known when
 //! compiling), reading and writing the tape's coefficient buffer in place,
 //! two lanes per instruction where the lanes pair up. Cranelift's optimizer
@@ -10,66 +10,64 @@
 //! ([`Codegen::Quick`]): the code is straight-line arithmetic on loaded
 //! values, which neither can improve, and they would triple the compile time,
 //! which a short run pays in full. For a linearly implicit second-order
-//! system `A y'' = b` ([`NativeTaylor::second_order`]) each order's function
+//! system `A y'' = b` ([`second_order`]) each order's function
 //! includes the coupling, so the functions run in turn make the whole
 //! expansion. The functions are compiled on two threads ([`compile_shared`]);
 //! for one trajectory the caller steps with the interpreter as soon as it
 //! has no function left to take, while the helper finishes its last
 //! ([`compile_shared_then`],
 //! [`crate::TaylorTape::compile_second_order_in_background`]).
-//! The interpreter in `taylor.rs` stays the reference and the fallback; both
+//! The interpreter stays the reference and the fallback; both
 //! do the same operations in the same order, fusing the same multiply-adds
 //! where the host has FMA, so that they agree to the last bit and a run
 //! gives the same numbers whichever of the two computed each step.
 
-// Calling JIT-compiled code can only be done through a raw function pointer;
-// see `jit.rs` for the same pattern. Two unsafe blocks: the pointer casts in
-// `NativeTaylor::new` and the call in `NativeTaylor::run`.
-#![allow(unsafe_code)]
-
-use crate::cc::{self, CBuild, CLibrary, CcError};
+use super::program::{Instruction, SecondOrderLayout};
 use crate::expr::Func;
 use crate::jit::shared::{compile_shared, compile_shared_then, Part};
 use crate::jit::{codegen, define_function, offset, unary, Codegen, Imports, JitError, ATAN2, POWF};
 use crate::native::host_has_fma;
-use crate::taylor::{SecondOrderLayout, TaylorTape, T};
-use crate::taylor_c;
 use cranelift_codegen::ir::{condcodes::FloatCC, types, AbiParam, InstBuilder, MemFlagsData, Signature, Value};
 use cranelift_frontend::FunctionBuilder;
 use cranelift_jit::JITModule;
 use cranelift_module::{FuncId, Linkage, Module};
-use std::sync::{Mutex, PoisonError};
 
-/// `(coefficients, series)`: the tape's buffer, and the caller's order-major
-/// series of a second-order expansion (null for the tape's orders alone).
-type OrderFn = unsafe extern "C" fn(coef: *mut f64, series: *mut f64);
-
-/// Orders `0..=p` of a Taylor tape as native functions. Shared by the clones
-/// of a tape (one compilation serves an ensemble's workers).
-pub(crate) struct NativeTaylor {
-    /// Own the code the functions point into; taken only in `Drop`.
-    modules: Mutex<Vec<JITModule>>,
-    /// Or the C library that holds it (`taylor_c.rs`); dropped after the
-    /// functions, as fields drop in order.
-    library: Option<CLibrary>,
-    funcs: Vec<OrderFn>,
-    /// The length of the coefficient buffer the functions address.
-    len: usize,
-    /// The length of the series a second-order expansion writes (orders
-    /// `1..=p` of `[y, y']`, order-major); 0 for the tape's orders alone.
-    series_len: usize,
+/// Every order of `program`, one function each, compiled on two threads:
+/// function `i` computes order `order − i` (the longest first).
+pub(super) fn orders<const L: usize>(program: Vec<(u32, Instruction)>, order: usize) -> Result<Vec<Part>, JitError> {
+    compile_shared(order + 1, Codegen::Quick, move |module, i| {
+        let k = order - i;
+        let sig = signature(module);
+        define::<L>(module, &format!("order{k}"), &sig, order, |e| e.orders(&program, k))
+    })
 }
 
-impl std::fmt::Debug for NativeTaylor {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("NativeTaylor").field("orders", &self.funcs.len()).finish_non_exhaustive()
-    }
+/// The whole expansion of a linearly implicit second-order system `A y'' = b`:
+/// orders `0..p` of the program, each followed by the coupling that yields the
+/// state's next order, one function per order (function `i` computes order
+/// `p − 1 − i`), compiled on two threads ([`compile_shared`]: compiling costs
+/// more than a thousand steps of a small system).
+pub(super) fn second_order<const L: usize>(
+    program: Vec<(u32, Instruction)>,
+    order: usize,
+    layout: SecondOrderLayout,
+) -> Result<Vec<Part>, JitError> {
+    compile_shared(order, Codegen::Quick, second_order_functions::<L>(program, order, layout, || true))
 }
 
-/// Tapes whose unrolled code would exceed this many multiply-adds (over all
-/// orders and lanes) stay interpreted: compiling takes about a microsecond per
-/// multiply-add, which a run must win back.
-pub(crate) const NATIVE_MAX_WORK: usize = 60_000;
+/// [`second_order`] for a caller that steps on meanwhile
+/// ([`compile_shared_then`]): returns when no function is left for this thread
+/// to compile; `publish` gets the functions (or the error) from whichever
+/// thread finishes last. The helper gives up as soon as `wanted()` turns false.
+pub(super) fn second_order_then<const L: usize>(
+    program: Vec<(u32, Instruction)>,
+    order: usize,
+    layout: SecondOrderLayout,
+    wanted: impl Fn() -> bool + Send + Sync + 'static,
+    publish: impl FnOnce(Result<Vec<Part>, JitError>) + Send + 'static,
+) {
+    compile_shared_then(order, Codegen::Quick, second_order_functions::<L>(program, order, layout, wanted), publish)
+}
 
 /// Emits the code of one function. Values are `f64` (width 1) or `f64x2`
 /// (width 2, two lanes per instruction); `lane` arguments name the first lane
@@ -279,67 +277,67 @@ impl<const L: usize> Emitter<'_, '_, L> {
     }
 
     /// Order 0 of one instruction on one lane.
-    fn order_zero(&mut self, w: u32, op: T, lane: usize) -> Result<(), JitError> {
+    fn order_zero(&mut self, w: u32, op: Instruction, lane: usize) -> Result<(), JitError> {
         let v = match op {
-            T::CosOf | T::Aux => return Ok(()),
-            T::Add(a, b) | T::AddC(a, b) => {
+            Instruction::CosOf | Instruction::Aux => return Ok(()),
+            Instruction::Add(a, b) | Instruction::AddC(a, b) => {
                 let (x, y) = (self.ld(a, 0, lane)?, self.ld(b, 0, lane)?);
                 self.b.ins().fadd(x, y)
             }
-            T::Sub(a, b) | T::SubVC(a, b) | T::SubCV(a, b) => {
+            Instruction::Sub(a, b) | Instruction::SubVC(a, b) | Instruction::SubCV(a, b) => {
                 let (x, y) = (self.ld(a, 0, lane)?, self.ld(b, 0, lane)?);
                 self.b.ins().fsub(x, y)
             }
-            T::Mul(a, b) | T::MulC(a, b) => {
+            Instruction::Mul(a, b) | Instruction::MulC(a, b) => {
                 let (x, y) = (self.ld(a, 0, lane)?, self.ld(b, 0, lane)?);
                 self.b.ins().fmul(x, y)
             }
-            T::Div(a, b) | T::DivVC(a, b) | T::DivCV(a, b) => {
+            Instruction::Div(a, b) | Instruction::DivVC(a, b) | Instruction::DivCV(a, b) => {
                 let (x, y) = (self.ld(a, 0, lane)?, self.ld(b, 0, lane)?);
                 self.b.ins().fdiv(x, y)
             }
-            T::Neg(a) => {
+            Instruction::Neg(a) => {
                 let x = self.ld(a, 0, lane)?;
                 self.b.ins().fneg(x)
             }
-            T::Square(a) => {
+            Instruction::Square(a) => {
                 let x = self.ld(a, 0, lane)?;
                 self.b.ins().fmul(x, x)
             }
-            T::Sqrt(a) => {
+            Instruction::Sqrt(a) => {
                 let x = self.ld(a, 0, lane)?;
                 self.b.ins().sqrt(x)
             }
-            T::PowC(a, e) => {
+            Instruction::PowC(a, e) => {
                 let (x, y) = (self.ld(a, 0, lane)?, self.ld(e, 0, lane)?);
                 self.call(POWF, &[x, y])?
             }
-            T::Exp { u, .. } => {
+            Instruction::Exp { u, .. } => {
                 let x = self.ld(u, 0, lane)?;
                 self.func(Func::Exp, x)?
             }
-            T::Deriv(_) => self.c(0.0),
-            T::Log(a) => {
+            Instruction::Deriv(_) => self.c(0.0),
+            Instruction::Log(a) => {
                 let x = self.ld(a, 0, lane)?;
                 self.func(Func::Log, x)?
             }
-            T::Abs(a) => {
+            Instruction::Abs(a) => {
                 let x = self.ld(a, 0, lane)?;
                 self.b.ins().fabs(x)
             }
-            T::Sin { u, cos, .. } => {
+            Instruction::Sin { u, cos, .. } => {
                 let x = self.ld(u, 0, lane)?;
                 let (sin, c) = self.sin_cos(x)?;
                 self.st(cos, 0, lane, c)?;
                 sin
             }
-            T::Sinh { u, cosh, .. } => {
+            Instruction::Sinh { u, cosh, .. } => {
                 let x = self.ld(u, 0, lane)?;
                 let c = self.func(Func::Cosh, x)?;
                 self.st(cosh, 0, lane, c)?;
                 self.func(Func::Sinh, x)?
             }
-            T::Tan { u, aux, sign, .. } => {
+            Instruction::Tan { u, aux, sign, .. } => {
                 let x = self.ld(u, 0, lane)?;
                 let v = self.func(if sign > 0.0 { Func::Tan } else { Func::Tanh }, x)?;
                 let (one, s) = (self.c(1.0), self.c(sign));
@@ -349,7 +347,7 @@ impl<const L: usize> Emitter<'_, '_, L> {
                 self.st(aux, 0, lane, a)?;
                 v
             }
-            T::Asin { u, inner, root, sign } => {
+            Instruction::Asin { u, inner, root, sign } => {
                 let x = self.ld(u, 0, lane)?;
                 let one = self.c(1.0);
                 let sq = self.b.ins().fmul(x, x);
@@ -359,7 +357,7 @@ impl<const L: usize> Emitter<'_, '_, L> {
                 self.st(root, 0, lane, r)?;
                 self.func(if sign > 0.0 { Func::Asin } else { Func::Acos }, x)?
             }
-            T::Atan { u, aux } => {
+            Instruction::Atan { u, aux } => {
                 let x = self.ld(u, 0, lane)?;
                 let one = self.c(1.0);
                 let sq = self.b.ins().fmul(x, x);
@@ -367,7 +365,7 @@ impl<const L: usize> Emitter<'_, '_, L> {
                 self.st(aux, 0, lane, a)?;
                 self.func(Func::Atan, x)?
             }
-            T::Atan2 { y, x, aux } => {
+            Instruction::Atan2 { y, x, aux } => {
                 let (yv, xv) = (self.ld(y, 0, lane)?, self.ld(x, 0, lane)?);
                 let xx = self.b.ins().fmul(xv, xv);
                 let yy = self.b.ins().fmul(yv, yv);
@@ -380,32 +378,32 @@ impl<const L: usize> Emitter<'_, '_, L> {
     }
 
     /// Order `k ≥ 1` of one instruction on one lane.
-    fn order_k(&mut self, w: u32, op: T, k: usize, lane: usize) -> Result<(), JitError> {
+    fn order_k(&mut self, w: u32, op: Instruction, k: usize, lane: usize) -> Result<(), JitError> {
         let v = match op {
-            T::CosOf | T::Aux => return Ok(()),
-            T::Add(a, b) => {
+            Instruction::CosOf | Instruction::Aux => return Ok(()),
+            Instruction::Add(a, b) => {
                 let (x, y) = (self.ld(a, k, lane)?, self.ld(b, k, lane)?);
                 self.b.ins().fadd(x, y)
             }
-            T::Sub(a, b) => {
+            Instruction::Sub(a, b) => {
                 let (x, y) = (self.ld(a, k, lane)?, self.ld(b, k, lane)?);
                 self.b.ins().fsub(x, y)
             }
-            T::Neg(a) | T::SubCV(_, a) => {
+            Instruction::Neg(a) | Instruction::SubCV(_, a) => {
                 let x = self.ld(a, k, lane)?;
                 self.b.ins().fneg(x)
             }
-            T::AddC(a, _) | T::SubVC(a, _) => self.ld(a, k, lane)?,
-            T::MulC(a, c) => {
+            Instruction::AddC(a, _) | Instruction::SubVC(a, _) => self.ld(a, k, lane)?,
+            Instruction::MulC(a, c) => {
                 let (x, y) = (self.ld(a, k, lane)?, self.ld(c, 0, lane)?);
                 self.b.ins().fmul(x, y)
             }
-            T::DivVC(a, c) => {
+            Instruction::DivVC(a, c) => {
                 let (x, y) = (self.ld(a, k, lane)?, self.ld(c, 0, lane)?);
                 self.b.ins().fdiv(x, y)
             }
-            T::Mul(a, b) => self.sum(a, b, k, 0..=k, |_| None, lane)?,
-            T::Square(a) => {
+            Instruction::Mul(a, b) => self.sum(a, b, k, 0..=k, |_| None, lane)?,
+            Instruction::Square(a) => {
                 let half = self.sum(a, a, k, 0..k.div_ceil(2), |_| None, lane)?;
                 let two = self.c(2.0);
                 let mut out = self.b.ins().fmul(two, half);
@@ -416,26 +414,26 @@ impl<const L: usize> Emitter<'_, '_, L> {
                 }
                 out
             }
-            T::Div(a, b) => {
+            Instruction::Div(a, b) => {
                 let ak = self.ld(a, k, lane)?;
                 let acc = self.sub_sum(ak, b, w, k, 1..k + 1, lane)?;
                 let b0 = self.ld(b, 0, lane)?;
                 self.b.ins().fdiv(acc, b0)
             }
-            T::DivCV(_, b) => {
+            Instruction::DivCV(_, b) => {
                 let zero = self.c(0.0);
                 let acc = self.sub_sum(zero, b, w, k, 1..k + 1, lane)?;
                 let b0 = self.ld(b, 0, lane)?;
                 self.b.ins().fdiv(acc, b0)
             }
-            T::Sqrt(a) => {
+            Instruction::Sqrt(a) => {
                 let ak = self.ld(a, k, lane)?;
                 let acc = self.sub_sum(ak, w, w, k, 1..k, lane)?;
                 let (two, w0) = (self.c(2.0), self.ld(w, 0, lane)?);
                 let den = self.b.ins().fmul(two, w0);
                 self.b.ins().fdiv(acc, den)
             }
-            T::PowC(a, e) => {
+            Instruction::PowC(a, e) => {
                 let alpha = self.ld(e, 0, lane)?;
                 let mut acc = self.c(0.0);
                 for j in 0..k {
@@ -451,30 +449,30 @@ impl<const L: usize> Emitter<'_, '_, L> {
                 let den = self.b.ins().fmul(kf, a0);
                 self.b.ins().fdiv(acc, den)
             }
-            T::Deriv(a) => {
+            Instruction::Deriv(a) => {
                 let (kf, x) = (self.c(k as f64), self.ld(a, k, lane)?);
                 self.b.ins().fmul(kf, x)
             }
-            T::Exp { du, .. } => self.derived(du, w, k, lane)?,
-            T::Log(a) => {
+            Instruction::Exp { du, .. } => self.derived(du, w, k, lane)?,
+            Instruction::Log(a) => {
                 let s = self.weighted(w, a, k, k - 1, lane)?;
                 let ak = self.ld(a, k, lane)?;
                 let num = self.b.ins().fsub(ak, s);
                 let a0 = self.ld(a, 0, lane)?;
                 self.b.ins().fdiv(num, a0)
             }
-            T::Sin { du, cos, .. } => {
+            Instruction::Sin { du, cos, .. } => {
                 let (sin, c) = self.derived_pair(du, cos, w, k, lane)?;
                 let c = self.b.ins().fneg(c);
                 self.st(cos, k, lane, c)?;
                 sin
             }
-            T::Sinh { du, cosh, .. } => {
+            Instruction::Sinh { du, cosh, .. } => {
                 let (sinh, c) = self.derived_pair(du, cosh, w, k, lane)?;
                 self.st(cosh, k, lane, c)?;
                 sinh
             }
-            T::Tan { du, aux, sign, .. } => {
+            Instruction::Tan { du, aux, sign, .. } => {
                 let v = self.derived(du, aux, k, lane)?;
                 self.st(w, k, lane, v)?;
                 let sq = self.self_product(w, k, lane)?;
@@ -483,7 +481,7 @@ impl<const L: usize> Emitter<'_, '_, L> {
                 self.st(aux, k, lane, a)?;
                 v
             }
-            T::Asin { u, inner, root, sign } => {
+            Instruction::Asin { u, inner, root, sign } => {
                 let sq = self.self_product(u, k, lane)?;
                 let i = self.b.ins().fneg(sq);
                 self.st(inner, k, lane, i)?;
@@ -494,12 +492,12 @@ impl<const L: usize> Emitter<'_, '_, L> {
                 self.st(root, k, lane, r)?;
                 self.derivative_quotient(u, root, w, k, sign, lane)?
             }
-            T::Atan { u, aux } => {
+            Instruction::Atan { u, aux } => {
                 let sq = self.self_product(u, k, lane)?;
                 self.st(aux, k, lane, sq)?;
                 self.derivative_quotient(u, aux, w, k, 1.0, lane)?
             }
-            T::Atan2 { y, x, aux } => {
+            Instruction::Atan2 { y, x, aux } => {
                 let mut sq = self.c(0.0);
                 for j in 0..=k {
                     let (x1, x2) = (self.ld(x, j, lane)?, self.ld(x, k - j, lane)?);
@@ -532,7 +530,7 @@ impl<const L: usize> Emitter<'_, '_, L> {
                 let den = self.b.ins().fmul(kf, d0);
                 self.b.ins().fdiv(acc, den)
             }
-            T::Abs(a) => {
+            Instruction::Abs(a) => {
                 let (a0, ak) = (self.ld(a, 0, lane)?, self.ld(a, k, lane)?);
                 let zero = self.c(0.0);
                 let negative = self.b.ins().fcmp(FloatCC::LessThan, a0, zero);
@@ -553,7 +551,7 @@ impl<const L: usize> Emitter<'_, '_, L> {
     /// Order `k` of every instruction on every lane: order 0 lane by lane (it
     /// calls the elementary functions), higher orders two lanes at a time
     /// where the lanes pair up.
-    fn orders(&mut self, program: &[(u32, T)], k: usize) -> Result<(), JitError> {
+    fn orders(&mut self, program: &[(u32, Instruction)], k: usize) -> Result<(), JitError> {
         self.width = if k == 0 { 1 } else { vector_width(L) };
         for &(w, op) in program {
             for lane in self.groups().collect::<Vec<_>>() {
@@ -682,166 +680,10 @@ impl<const L: usize> Emitter<'_, '_, L> {
     }
 }
 
-impl NativeTaylor {
-    /// Compiles the whole expansion of a linearly implicit second-order
-    /// system `A y'' = b` (run it with
-    /// [`run_all`](Self::run_all)): orders `0..p` of the tape, each followed by
-    /// the coupling that yields the state's next order, one function per
-    /// order, compiled on two threads ([`compile_shared`]: compiling costs
-    /// more than a thousand steps of a small system).
-    pub(crate) fn second_order<const L: usize>(
-        program: Vec<(u32, T)>,
-        order: usize,
-        layout: SecondOrderLayout,
-        buffer_len: usize,
-    ) -> Result<NativeTaylor, JitError> {
-        let series_len = (order + 1) * 2 * layout.n * L;
-        let parts =
-            compile_shared(order, Codegen::Quick, second_order_functions::<L>(program, order, layout, || true))?;
-        Ok(NativeTaylor::assemble(parts, order, |i| order - 1 - i, buffer_len, series_len))
-    }
-
-    /// [`second_order`](Self::second_order) for a caller that steps on
-    /// meanwhile ([`compile_shared_then`]): returns when no function is left
-    /// for this thread to compile; `publish` gets the code (or the error)
-    /// from whichever thread finishes last. The helper gives up as soon as
-    /// `wanted()` turns false.
-    pub(crate) fn second_order_then<const L: usize>(
-        program: Vec<(u32, T)>,
-        order: usize,
-        layout: SecondOrderLayout,
-        buffer_len: usize,
-        wanted: impl Fn() -> bool + Send + Sync + 'static,
-        publish: impl FnOnce(Result<NativeTaylor, JitError>) + Send + 'static,
-    ) {
-        let series_len = (order + 1) * 2 * layout.n * L;
-        let define = second_order_functions::<L>(program, order, layout, wanted);
-        compile_shared_then(order, Codegen::Quick, define, move |parts| {
-            publish(parts.map(|parts| NativeTaylor::assemble(parts, order, |i| order - 1 - i, buffer_len, series_len)))
-        });
-    }
-
-    /// Compiles every order of `tape`, one function each, on two threads.
-    pub(crate) fn new<const L: usize>(tape: &TaylorTape<L>) -> Result<NativeTaylor, JitError> {
-        let order = tape.order();
-        let program = tape.program().to_vec();
-        // Function i computes order p − i: the longest first.
-        let parts = compile_shared(order + 1, Codegen::Quick, move |module, i| {
-            let k = order - i;
-            let sig = signature(module);
-            define::<L>(module, &format!("order{k}"), &sig, order, |e| e.orders(&program, k))
-        })?;
-        Ok(NativeTaylor::assemble(parts, order + 1, |i| order - i, tape.buffer_len(), 0))
-    }
-
-    /// The functions of `parts` by order (`order_of` maps a function's number
-    /// to its order), and the modules that own them.
-    fn assemble(
-        parts: Vec<Part>,
-        count: usize,
-        order_of: impl Fn(usize) -> usize,
-        len: usize,
-        series_len: usize,
-    ) -> NativeTaylor {
-        let mut funcs: Vec<Option<OrderFn>> = vec![None; count];
-        let mut modules = Vec::with_capacity(parts.len());
-        for (module, ids) in parts {
-            for (i, id) in ids {
-                let code = module.get_finalized_function(id);
-                // SAFETY: `code` is the entry of a function just defined with
-                // signature `(ptr, ptr) -> ()` in the host's default calling
-                // convention (`extern "C"` on every host cranelift-native
-                // supports); the module owning it lives as long as `self`.
-                funcs[order_of(i)] = Some(unsafe { std::mem::transmute::<*const u8, OrderFn>(code) });
-            }
-            modules.push(module);
-        }
-        let funcs = funcs.into_iter().map(|f| f.expect("compile_shared compiles every function")).collect();
-        NativeTaylor { modules: Mutex::new(modules), library: None, funcs, len, series_len }
-    }
-
-    /// The whole expansion of a second-order system, like
-    /// [`second_order`](Self::second_order), compiled by the system C
-    /// compiler at the machine's vector width (`cc.rs`, `taylor_c.rs`).
-    pub(crate) fn second_order_c<const L: usize>(
-        program: &[(u32, T)],
-        order: usize,
-        layout: &SecondOrderLayout,
-        buffer_len: usize,
-    ) -> Result<NativeTaylor, CcError> {
-        let source = taylor_c::second_order::<L>(program, order, layout, host_has_fma());
-        let series_len = (order + 1) * 2 * layout.n * L;
-        NativeTaylor::from_c(&source, buffer_len, series_len)
-    }
-
-    /// Every order of `tape`, like [`new`](Self::new), compiled by the system
-    /// C compiler.
-    pub(crate) fn orders_c<const L: usize>(tape: &TaylorTape<L>) -> Result<NativeTaylor, CcError> {
-        let source = taylor_c::orders(tape, host_has_fma());
-        NativeTaylor::from_c(&source, tape.buffer_len(), 0)
-    }
-
-    fn from_c(source: &taylor_c::CSource, len: usize, series_len: usize) -> Result<NativeTaylor, CcError> {
-        let files = std::thread::available_parallelism().map_or(1, |n| n.get()).min(4);
-        let library = cc::build(&source.files(files))?;
-        let funcs = (0..source.parts.len()).map(|i| library.get(&taylor_c::part_name(i))).collect::<Result<_, _>>()?;
-        Ok(NativeTaylor { modules: Mutex::new(Vec::new()), library: Some(library), funcs, len, series_len })
-    }
-
-    /// How the code was built: by the C compiler (and how), or by cranelift (None).
-    pub(crate) fn c_build(&self) -> Option<&CBuild> {
-        self.library.as_ref().map(|l| &l.build)
-    }
-
-    /// Runs the function of order `k` on the coefficient buffer (the tape's
-    /// orders, [`new`](Self::new)).
-    ///
-    /// # Panics
-    ///
-    /// When `coef` is not the length the code was compiled for, `k` is above
-    /// the order, or the functions are a second-order expansion's.
-    pub(crate) fn run(&self, k: usize, coef: &mut [f64]) {
-        assert_eq!(coef.len(), self.len, "NativeTaylor::run: wrong buffer length");
-        assert_eq!(self.series_len, 0, "NativeTaylor::run: a second-order expansion writes a series");
-        let f = self.funcs[k];
-        // SAFETY: the function reads and writes `coef[i]` only for indices
-        // `(slot * (order + 1) + j) * L + lane` of slots, orders and lanes of
-        // the tape it was compiled from, all below `self.len`, which was just
-        // checked; the slice is valid and exclusively borrowed. Functions of
-        // the tape's orders never touch the second pointer (only `couple`,
-        // of second-order expansions, writes it). The code is alive while
-        // `self` is, calls only the safe wrappers of `jit.rs`, and never
-        // unwinds.
-        unsafe { f(coef.as_mut_ptr(), std::ptr::null_mut()) }
-    }
-
-    /// Runs every function of a second-order expansion in turn
-    /// ([`second_order`](Self::second_order)), writing orders `1..=p` of
-    /// `[y, y']` into `series` (order-major, `L` lanes each; order 0 is the
-    /// caller's).
-    ///
-    /// # Panics
-    ///
-    /// When `coef` or `series` is not the length the code was compiled for.
-    pub(crate) fn run_all(&self, coef: &mut [f64], series: &mut [f64]) {
-        assert_eq!(coef.len(), self.len, "NativeTaylor::run_all: wrong buffer length");
-        assert!(self.series_len > 0, "NativeTaylor::run_all: not a second-order expansion");
-        assert_eq!(series.len(), self.series_len, "NativeTaylor::run_all: wrong series length");
-        for &f in &self.funcs {
-            // SAFETY: as in `run` for `coef`; the function writes `series[i]`
-            // only for `i = (order·2n + component)·L + lane` with order ≤ p,
-            // component < 2n and lane < L, all below `self.series_len`, which
-            // was just checked, and the slice is valid and exclusively
-            // borrowed.
-            unsafe { f(coef.as_mut_ptr(), series.as_mut_ptr()) }
-        }
-    }
-}
-
 /// Defines function `i` of a second-order expansion (order `p − 1 − i`: the
 /// longest first) with the coupling, while `wanted()` holds.
 fn second_order_functions<const L: usize>(
-    program: Vec<(u32, T)>,
+    program: Vec<(u32, Instruction)>,
     order: usize,
     layout: SecondOrderLayout,
     wanted: impl Fn() -> bool + Send + Sync + 'static,
@@ -896,16 +738,4 @@ fn define<const L: usize>(
         Ok(e.b)
     })?;
     Ok(id)
-}
-
-impl Drop for NativeTaylor {
-    fn drop(&mut self) {
-        let modules = std::mem::take(self.modules.get_mut().unwrap_or_else(PoisonError::into_inner));
-        for module in modules {
-            // SAFETY: the functions are only called through `run` and
-            // `run_all`, which need `&self`; `drop` has `&mut self`, so none is
-            // running, and none can be called afterwards.
-            unsafe { module.free_memory() }
-        }
-    }
 }

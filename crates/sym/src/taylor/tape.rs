@@ -1,37 +1,12 @@
-//! Taylor-mode evaluation of a tape: the Taylor coefficients of every output,
-//! order by order, from the Taylor coefficients of the inputs.
-//!
-//! This is the engine of the Taylor integrator (Jorba & Zou 2005; heyoka):
-//! along a solution `y(t)` of an ODE each tape slot is a function of `t`, and
-//! its normalized coefficients `x[k] = x⁽ᵏ⁾(t₀)/k!` follow from the operands'
-//! by the classical recurrences (products are Cauchy convolutions, quotients
-//! and functions are solved from `w' = g(u) u'`). Order `k` of every slot needs
-//! only orders `0..=k` of its operands, so an ODE integrator sets the state's
-//! order `k`, calls [`TaylorTape::compute`] for order `k`, and reads the right-
-//! hand side's order `k`, which is the state's order `k + 1` times `k + 1`.
-//!
-//! Slots that depend only on constants and constant inputs (the parameters)
-//! are evaluated once by [`TaylorTape::refresh_constants`] and enter the
-//! recurrences as scalars: `c·u` costs `O(1)` per order instead of the `O(k)`
-//! of a convolution. Integer powers become chains of products (no division by
-//! a base that may vanish), and `u^v` becomes `exp(v·ln u)`.
-//!
-//! A linearly implicit second-order system `A(y, y', t) y'' = b(y, y', t)`
-//! whose `A` and `b` are the tape's outputs ([`LinearSecondOrder`]) expands
-//! whole: [`TaylorTape::set_second_order`], then
-//! [`TaylorTape::expand_second_order`] per expansion point, interpreted until
-//! native code is compiled ([`TaylorTape::compile_second_order`], or
-//! [`TaylorTape::compile_second_order_in_background`] for one lane, which
-//! steps on meanwhile: for one lane both give the same numbers to the last
-//! bit, so it does not matter which computed a step).
-//!
-//! Every coefficient is an array of `L` lanes: `L` independent trajectories
-//! run in lock step, and the loops over lanes vectorize.
+//! The public Taylor tape ([`TaylorTape`]): the program's coefficients on `L`
+//! lanes, computed order by order by the interpreter or by native code, and
+//! the whole expansion of a linearly implicit second-order system.
 
+use super::interpret::{derivative_quotient, derived, derived_pair, fma, fms, lanes, madd, order_zero, weighted};
+use super::native::{NativeTaylor, NATIVE_MAX_WORK};
+use super::program::{self, ClosedFormInverse, Instruction, Lanes, LinearSecondOrder, Program, SecondOrderLayout};
 use crate::eval::{Op, Tape};
-use crate::expr::Func;
 use crate::native::{host_has_fma, CBuild, CcError, JitError};
-use crate::taylor_jit::{NativeTaylor, NATIVE_MAX_WORK};
 use std::sync::{Arc, OnceLock};
 
 /// Which code computes a tape's Taylor expansions ([`TaylorTape::code`]).
@@ -45,111 +20,6 @@ pub enum TaylorCode {
     C(CBuild),
 }
 
-/// Where the parts of a linearly implicit second-order system `A y'' = b`
-/// sit among the slots (see [`TaylorTape::compile_second_order`]).
-#[derive(Clone, Debug)]
-pub(crate) struct SecondOrderLayout {
-    pub(crate) n: usize,
-    /// `(row, column)` of the entries of A the tape outputs first.
-    pub(crate) entries: Vec<(usize, usize)>,
-    /// Slots of y and y' (inputs 0..2n; t, input 2n, is the caller's).
-    pub(crate) y: Vec<u32>,
-    pub(crate) dy: Vec<u32>,
-    /// Slots of A's entries and of b (outputs).
-    pub(crate) matrix: Vec<u32>,
-    pub(crate) rhs: Vec<u32>,
-    /// Which entries of A vary along a trajectory.
-    pub(crate) varying: Vec<bool>,
-    /// Extra slots: y'' (n) and A[0]⁻¹ (n for a diagonal A, n² otherwise).
-    pub(crate) second: Vec<u32>,
-    pub(crate) inverse: Vec<u32>,
-    /// A[0]⁻¹ by reciprocals ([`crate::ClosedFormInverse::Diagonal`]), not
-    /// by the adjugate.
-    pub(crate) diagonal: bool,
-}
-
-/// One coefficient of one slot on every lane.
-pub type Lanes<const L: usize> = [f64; L];
-
-/// A variable instruction of the Taylor tape; operands are slots, `c` names a
-/// constant slot (read at order 0 only).
-#[derive(Clone, Copy, Debug)]
-pub(crate) enum T {
-    Add(u32, u32),
-    Sub(u32, u32),
-    Mul(u32, u32),
-    Div(u32, u32),
-    Neg(u32),
-    Square(u32),
-    /// `v + c`
-    AddC(u32, u32),
-    /// `v - c`
-    SubVC(u32, u32),
-    /// `c - v`
-    SubCV(u32, u32),
-    /// `v * c`
-    MulC(u32, u32),
-    /// `v / c`
-    DivVC(u32, u32),
-    /// `c / v`
-    DivCV(u32, u32),
-    Sqrt(u32),
-    /// `v ^ c` for a non-integer constant exponent.
-    PowC(u32, u32),
-    /// `exp u`; `du` is `Deriv(u)`.
-    Exp {
-        u: u32,
-        du: u32,
-    },
-    Log(u32),
-    /// `k·u[k]` at order k: the coefficients of `t·u'(t)`, shared by the
-    /// recurrences `w' = u'·g` of exp, sin, cos, sinh, cosh, tan and tanh.
-    Deriv(u32),
-    /// sin and cos of `u`: this slot is sin, `cos` the other.
-    Sin {
-        u: u32,
-        du: u32,
-        cos: u32,
-    },
-    /// The cosine half of a [`T::Sin`], computed with it.
-    CosOf,
-    /// sinh and cosh of `u`, like [`T::Sin`].
-    Sinh {
-        u: u32,
-        du: u32,
-        cosh: u32,
-    },
-    /// `tan u`, `aux = 1 + tan²u`; `sign = -1` gives `tanh u`, `aux = 1 - tanh²u`.
-    Tan {
-        u: u32,
-        du: u32,
-        aux: u32,
-        sign: f64,
-    },
-    /// Written by its `Tan`.
-    Aux,
-    /// `asin u` (`sign = 1`) or `acos u` (`sign = -1`); `root = √(1 - u²)`,
-    /// `inner = 1 - u²`.
-    Asin {
-        u: u32,
-        inner: u32,
-        root: u32,
-        sign: f64,
-    },
-    /// `atan u`, `aux = 1 + u²`.
-    Atan {
-        u: u32,
-        aux: u32,
-    },
-    /// `atan2(y, x)`, `aux = x² + y²`.
-    Atan2 {
-        y: u32,
-        x: u32,
-        aux: u32,
-    },
-    Abs(u32),
-}
-
 /// A tape evaluated in Taylor mode on `L` lanes. See the module documentation.
 #[derive(Clone, Debug)]
 pub struct TaylorTape<const L: usize> {
@@ -159,7 +29,7 @@ pub struct TaylorTape<const L: usize> {
     /// Constant instructions, evaluated by `refresh_constants`: (slot, op over slots).
     constants: Vec<(u32, Op)>,
     /// Variable instructions in order: (slot, instruction).
-    program: Vec<(u32, T)>,
+    program: Vec<(u32, Instruction)>,
     /// The slot of each input.
     input_slots: Vec<u32>,
     /// Whether each input varies along a trajectory.
@@ -194,274 +64,22 @@ struct SecondOrder {
     compiling: bool,
 }
 
-/// A linearly implicit second-order system of ODEs,
-/// `A(y, y', t) y'' = b(y, y', t)` with `y ∈ ℝⁿ`, as a tape computes it: the
-/// tape's inputs start with `y` (n), `y'` (n) and `t` (any further inputs are
-/// constant), and its outputs are the entries of `A` at `entries`, then `b`
-/// (n). [`TaylorTape::compile_second_order`] compiles its Taylor expansion.
-#[derive(Clone, Copy, Debug)]
-pub struct LinearSecondOrder<'a> {
-    /// `n`, the dimension of `y`.
-    pub dim: usize,
-    /// `(row, column)` of the entries of `A` the tape outputs, in their order;
-    /// the entries not named are zero.
-    pub entries: &'a [(usize, usize)],
-    /// How `A` at the expansion point is inverted.
-    pub inverse: ClosedFormInverse,
-}
-
-/// How a Taylor expansion of `A y'' = b` inverts `A[0]`, the matrix at the
-/// expansion point, once per expansion ([`LinearSecondOrder::inverse`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ClosedFormInverse {
-    /// Reciprocals of the diagonal: every entry of `A` is on the diagonal.
-    Diagonal,
-    /// The adjugate over the determinant, for `n` up to
-    /// [`ClosedFormInverse::ADJUGATE_MAX_DIM`].
-    Adjugate,
-}
-
-impl ClosedFormInverse {
-    /// The largest `n` whose adjugate is written out.
-    pub const ADJUGATE_MAX_DIM: usize = 3;
-}
-
-struct Builder {
-    constants: Vec<(u32, Op)>,
-    program: Vec<(u32, T)>,
-    constant: Vec<bool>,
-    /// The (sin, cos) or (sinh, cosh) slots of an argument, made once for both.
-    pairs: rustc_hash::FxHashMap<(u32, bool), (u32, u32)>,
-    /// The `Deriv` slot of an argument.
-    derivs: rustc_hash::FxHashMap<u32, u32>,
-}
-
-impl Builder {
-    fn slot(&mut self, constant: bool) -> u32 {
-        self.constant.push(constant);
-        (self.constant.len() - 1) as u32
-    }
-
-    fn constant_op(&mut self, op: Op) -> u32 {
-        let s = self.slot(true);
-        self.constants.push((s, op));
-        s
-    }
-
-    fn var(&mut self, t: T) -> u32 {
-        let s = self.slot(false);
-        self.program.push((s, t));
-        s
-    }
-
-    fn is_const(&self, s: u32) -> bool {
-        self.constant[s as usize]
-    }
-
-    fn mul(&mut self, a: u32, b: u32) -> u32 {
-        match (self.is_const(a), self.is_const(b)) {
-            (true, true) => self.constant_op(Op::Mul(a, b)),
-            (false, true) => self.var(T::MulC(a, b)),
-            (true, false) => self.var(T::MulC(b, a)),
-            (false, false) if a == b => self.var(T::Square(a)),
-            (false, false) => self.var(T::Mul(a, b)),
-        }
-    }
-
-    fn recip(&mut self, a: u32) -> u32 {
-        if self.is_const(a) {
-            return self.constant_op(Op::Recip(a));
-        }
-        let one = self.constant_op(Op::Const(1f64.to_bits()));
-        self.var(T::DivCV(one, a))
-    }
-
-    /// `base^n` by binary exponentiation.
-    fn powi(&mut self, base: u32, n: i32) -> u32 {
-        if self.is_const(base) {
-            return self.constant_op(Op::Powi(base, n));
-        }
-        if n == 0 {
-            return self.constant_op(Op::Const(1f64.to_bits()));
-        }
-        let mut m = n.unsigned_abs();
-        let mut power = base;
-        let mut acc: Option<u32> = None;
-        loop {
-            if m & 1 == 1 {
-                acc = Some(match acc {
-                    Some(a) => self.mul(a, power),
-                    None => power,
-                });
-            }
-            m >>= 1;
-            if m == 0 {
-                break;
-            }
-            power = self.mul(power, power);
-        }
-        let acc = acc.expect("n != 0 has a set bit");
-        if n < 0 {
-            self.recip(acc)
-        } else {
-            acc
-        }
-    }
-
-    /// The slot of `Deriv(u)`, made once per argument.
-    fn deriv(&mut self, u: u32) -> u32 {
-        if let Some(&d) = self.derivs.get(&u) {
-            return d;
-        }
-        let d = self.var(T::Deriv(u));
-        self.derivs.insert(u, d);
-        d
-    }
-
-    fn exp(&mut self, u: u32) -> u32 {
-        let du = self.deriv(u);
-        self.var(T::Exp { u, du })
-    }
-
-    fn func(&mut self, f: Func, u: u32) -> u32 {
-        match f {
-            Func::Sin | Func::Cos | Func::Sinh | Func::Cosh => {
-                let circular = matches!(f, Func::Sin | Func::Cos);
-                let (sin, cos) = match self.pairs.get(&(u, circular)) {
-                    Some(&pair) => pair,
-                    None => {
-                        let du = self.deriv(u);
-                        let sin = self.slot(false);
-                        let cos = self.slot(false);
-                        let op = if circular { T::Sin { u, du, cos } } else { T::Sinh { u, du, cosh: cos } };
-                        self.program.push((sin, op));
-                        self.program.push((cos, T::CosOf));
-                        self.pairs.insert((u, circular), (sin, cos));
-                        (sin, cos)
-                    }
-                };
-                if matches!(f, Func::Sin | Func::Sinh) {
-                    sin
-                } else {
-                    cos
-                }
-            }
-            Func::Tan | Func::Tanh => {
-                let du = self.deriv(u);
-                let w = self.slot(false);
-                let aux = self.slot(false);
-                let sign = if f == Func::Tan { 1.0 } else { -1.0 };
-                self.program.push((w, T::Tan { u, du, aux, sign }));
-                self.program.push((aux, T::Aux));
-                w
-            }
-            Func::Asin | Func::Acos => {
-                let inner = self.slot(false);
-                let root = self.slot(false);
-                let w = self.slot(false);
-                self.program.push((inner, T::Aux));
-                self.program.push((root, T::Aux));
-                let sign = if f == Func::Asin { 1.0 } else { -1.0 };
-                self.program.push((w, T::Asin { u, inner, root, sign }));
-                w
-            }
-            Func::Atan => {
-                let aux = self.slot(false);
-                self.program.push((aux, T::Aux));
-                self.var(T::Atan { u, aux })
-            }
-            Func::Exp => self.exp(u),
-            Func::Log => self.var(T::Log(u)),
-            Func::Abs => self.var(T::Abs(u)),
-        }
-    }
-}
-
 impl<const L: usize> TaylorTape<L> {
     /// Prepares `tape` for Taylor coefficients up to `order`. `variable[k]` tells
     /// whether input `k` varies along a trajectory (state, time) or is constant
     /// (a parameter); every input starts at 0 on every lane.
     pub fn new(tape: &Tape, order: usize, variable: &[bool]) -> TaylorTape<L> {
         assert_eq!(variable.len(), tape.n_inputs(), "one flag per input");
-        let mut b = Builder {
-            constants: Vec::new(),
-            program: Vec::new(),
-            constant: Vec::new(),
-            pairs: Default::default(),
-            derivs: Default::default(),
-        };
-        let mut input_slots = vec![0; tape.n_inputs()];
-        // The Taylor slot of each tape slot.
-        let mut map: Vec<u32> = Vec::with_capacity(tape.len());
-        for op in tape.ops() {
-            let m = |s: u32| map[s as usize];
-            let all_const = |b: &Builder, slots: &[u32]| slots.iter().all(|&s| b.is_const(m(s)));
-            let slot = match *op {
-                Op::Input(k) => {
-                    let s = b.slot(!variable[k as usize]);
-                    input_slots[k as usize] = s;
-                    s
-                }
-                Op::Const(bits) => b.constant_op(Op::Const(bits)),
-                // Every operand constant: evaluated once, as the tape would.
-                Op::Add(x, y) | Op::Sub(x, y) | Op::Mul(x, y) | Op::Div(x, y) | Op::Powf(x, y) | Op::Atan2(x, y)
-                    if all_const(&b, &[x, y]) =>
-                {
-                    b.constant_op(remap(*op, &map))
-                }
-                Op::Neg(x) | Op::Recip(x) | Op::Square(x) | Op::Powi(x, _) | Op::Sqrt(x) | Op::Func(_, x)
-                    if all_const(&b, &[x]) =>
-                {
-                    b.constant_op(remap(*op, &map))
-                }
-                Op::Add(x, y) => match (b.is_const(m(x)), b.is_const(m(y))) {
-                    (true, _) => b.var(T::AddC(m(y), m(x))),
-                    (_, true) => b.var(T::AddC(m(x), m(y))),
-                    _ => b.var(T::Add(m(x), m(y))),
-                },
-                Op::Sub(x, y) => match (b.is_const(m(x)), b.is_const(m(y))) {
-                    (true, _) => b.var(T::SubCV(m(x), m(y))),
-                    (_, true) => b.var(T::SubVC(m(x), m(y))),
-                    _ => b.var(T::Sub(m(x), m(y))),
-                },
-                Op::Mul(x, y) => b.mul(m(x), m(y)),
-                Op::Div(x, y) => match (b.is_const(m(x)), b.is_const(m(y))) {
-                    (true, _) => b.var(T::DivCV(m(x), m(y))),
-                    (_, true) => b.var(T::DivVC(m(x), m(y))),
-                    _ => b.var(T::Div(m(x), m(y))),
-                },
-                Op::Neg(x) => b.var(T::Neg(m(x))),
-                Op::Recip(x) => b.recip(m(x)),
-                Op::Square(x) => b.var(T::Square(m(x))),
-                Op::Powi(x, n) => b.powi(m(x), n),
-                Op::Powf(x, y) if b.is_const(m(y)) => b.var(T::PowC(m(x), m(y))),
-                Op::Powf(x, y) => {
-                    // x^y = exp(y ln x)
-                    let ln =
-                        if b.is_const(m(x)) { b.constant_op(Op::Func(Func::Log, m(x))) } else { b.var(T::Log(m(x))) };
-                    let prod = b.mul(m(y), ln);
-                    b.exp(prod)
-                }
-                Op::Sqrt(x) => b.var(T::Sqrt(m(x))),
-                Op::Func(f, x) => b.func(f, m(x)),
-                Op::Atan2(y, x) => {
-                    let aux = b.slot(false);
-                    b.program.push((aux, T::Aux));
-                    b.var(T::Atan2 { y: m(y), x: m(x), aux })
-                }
-            };
-            map.push(slot);
-        }
-        let n_slots = b.constant.len();
+        let Program { constants, program, constant, input_slots, outputs } = program::build(tape, variable);
         TaylorTape {
             order,
-            coef: vec![[0.0; L]; n_slots * (order + 1)],
-            constants: b.constants,
-            program: b.program,
+            coef: vec![[0.0; L]; constant.len() * (order + 1)],
+            constants,
+            program,
             input_slots,
             variable_inputs: variable.to_vec(),
-            outputs: tape.output_slots().iter().map(|&s| map[s as usize]).collect(),
-            constant: b.constant,
+            outputs,
+            constant,
             native: None,
             second_order: None,
             rhs: Vec::new(),
@@ -610,7 +228,7 @@ impl<const L: usize> TaylorTape<L> {
         if self.native_work() > NATIVE_MAX_WORK {
             return Ok(false);
         }
-        self.native = Some(Arc::new(NativeTaylor::orders_c(self)?));
+        self.native = Some(Arc::new(NativeTaylor::orders_c::<L>(&self.program, self.order, self.buffer_len())?));
         Ok(true)
     }
 
@@ -834,7 +452,7 @@ impl<const L: usize> TaylorTape<L> {
         if self.native_work() > NATIVE_MAX_WORK {
             return Ok(false);
         }
-        self.native = Some(Arc::new(NativeTaylor::new(self)?));
+        self.native = Some(Arc::new(NativeTaylor::new::<L>(&self.program, self.order, self.buffer_len())?));
         Ok(true)
     }
 
@@ -850,19 +468,23 @@ impl<const L: usize> TaylorTape<L> {
         self.program
             .iter()
             .map(|(_, op)| match op {
-                T::Add(..)
-                | T::Sub(..)
-                | T::Neg(_)
-                | T::AddC(..)
-                | T::SubVC(..)
-                | T::SubCV(..)
-                | T::MulC(..)
-                | T::DivVC(..)
-                | T::Abs(_)
-                | T::Deriv(_)
-                | T::CosOf
-                | T::Aux => 1,
-                T::Sin { .. } | T::Sinh { .. } | T::Tan { .. } | T::Asin { .. } | T::Atan2 { .. } => 2 * (k + 1),
+                Instruction::Add(..)
+                | Instruction::Sub(..)
+                | Instruction::Neg(_)
+                | Instruction::AddC(..)
+                | Instruction::SubVC(..)
+                | Instruction::SubCV(..)
+                | Instruction::MulC(..)
+                | Instruction::DivVC(..)
+                | Instruction::Abs(_)
+                | Instruction::Deriv(_)
+                | Instruction::CosOf
+                | Instruction::Aux => 1,
+                Instruction::Sin { .. }
+                | Instruction::Sinh { .. }
+                | Instruction::Tan { .. }
+                | Instruction::Asin { .. }
+                | Instruction::Atan2 { .. } => 2 * (k + 1),
                 _ => k + 1,
             })
             .sum()
@@ -871,12 +493,6 @@ impl<const L: usize> TaylorTape<L> {
     /// Whether [`compute`](Self::compute) runs native code.
     pub fn is_native(&self) -> bool {
         self.native.is_some()
-    }
-
-    /// The variable instructions, for the code generator.
-    #[cfg(feature = "jit")]
-    pub(crate) fn program(&self) -> &[(u32, T)] {
-        &self.program
     }
 
     /// The number of `f64` in the coefficient buffer.
@@ -1028,19 +644,19 @@ impl<const L: usize> TaylorTape<L> {
             let s = |slot: u32| slot as usize * stride;
             let value: Lanes<L> = if k == 0 {
                 match op {
-                    T::CosOf | T::Aux => continue,
+                    Instruction::CosOf | Instruction::Aux => continue,
                     _ => order_zero(c, op, stride),
                 }
             } else {
                 match op {
-                    T::Add(a, b) => lanes(|l| c[s(a) + k][l] + c[s(b) + k][l]),
-                    T::Sub(a, b) => lanes(|l| c[s(a) + k][l] - c[s(b) + k][l]),
-                    T::Neg(a) => lanes(|l| -c[s(a) + k][l]),
-                    T::AddC(a, _) | T::SubVC(a, _) => c[s(a) + k],
-                    T::SubCV(_, a) => lanes(|l| -c[s(a) + k][l]),
-                    T::MulC(a, b) => lanes(|l| c[s(a) + k][l] * c[s(b)][l]),
-                    T::DivVC(a, b) => lanes(|l| c[s(a) + k][l] / c[s(b)][l]),
-                    T::Mul(a, b) => {
+                    Instruction::Add(a, b) => lanes(|l| c[s(a) + k][l] + c[s(b) + k][l]),
+                    Instruction::Sub(a, b) => lanes(|l| c[s(a) + k][l] - c[s(b) + k][l]),
+                    Instruction::Neg(a) => lanes(|l| -c[s(a) + k][l]),
+                    Instruction::AddC(a, _) | Instruction::SubVC(a, _) => c[s(a) + k],
+                    Instruction::SubCV(_, a) => lanes(|l| -c[s(a) + k][l]),
+                    Instruction::MulC(a, b) => lanes(|l| c[s(a) + k][l] * c[s(b)][l]),
+                    Instruction::DivVC(a, b) => lanes(|l| c[s(a) + k][l] / c[s(b)][l]),
+                    Instruction::Mul(a, b) => {
                         let (a, b) = (s(a), s(b));
                         let mut acc = [0.0; L];
                         for (x, y) in c[a..=a + k].iter().zip(c[b..=b + k].iter().rev()) {
@@ -1048,7 +664,7 @@ impl<const L: usize> TaylorTape<L> {
                         }
                         acc
                     }
-                    T::Square(a) => {
+                    Instruction::Square(a) => {
                         let a = s(a);
                         let mut acc = [0.0; L];
                         for j in 0..k.div_ceil(2) {
@@ -1060,7 +676,7 @@ impl<const L: usize> TaylorTape<L> {
                         }
                         out
                     }
-                    T::Div(a, b) => {
+                    Instruction::Div(a, b) => {
                         // w = a/b: w[k] = (a[k] - Σ_{j=1..k} b[j] w[k-j]) / b[0]
                         let (a, b) = (s(a), s(b));
                         let mut acc = c[a + k];
@@ -1069,7 +685,7 @@ impl<const L: usize> TaylorTape<L> {
                         }
                         lanes(|l| acc[l] / c[b][l])
                     }
-                    T::DivCV(_, b) => {
+                    Instruction::DivCV(_, b) => {
                         let b = s(b);
                         let mut acc = [0.0; L];
                         for j in 1..=k {
@@ -1077,7 +693,7 @@ impl<const L: usize> TaylorTape<L> {
                         }
                         lanes(|l| acc[l] / c[b][l])
                     }
-                    T::Sqrt(a) => {
+                    Instruction::Sqrt(a) => {
                         // w² = a: w[k] = (a[k] - Σ_{j=1..k-1} w[j] w[k-j]) / (2 w[0])
                         let a = s(a);
                         let mut acc = c[a + k];
@@ -1086,7 +702,7 @@ impl<const L: usize> TaylorTape<L> {
                         }
                         lanes(|l| acc[l] / (2.0 * c[w][l]))
                     }
-                    T::PowC(a, e) => {
+                    Instruction::PowC(a, e) => {
                         // a w' = α a' w: w[k] = Σ_{j=0..k-1} (α(k-j) - j) a[k-j] w[j] / (k a[0])
                         let (a, e) = (s(a), s(e));
                         let kf = k as f64;
@@ -1099,33 +715,33 @@ impl<const L: usize> TaylorTape<L> {
                         }
                         lanes(|l| acc[l] / (kf * c[a][l]))
                     }
-                    T::Deriv(a) => {
+                    Instruction::Deriv(a) => {
                         let kf = k as f64;
                         lanes(|l| kf * c[s(a) + k][l])
                     }
-                    T::Exp { du, .. } => {
+                    Instruction::Exp { du, .. } => {
                         // w' = u' w: w[k] = Σ_{j=1..k} j u[j] w[k-j] / k
                         derived::<F, L>(c, s(du), w, k)
                     }
-                    T::Log(a) => {
+                    Instruction::Log(a) => {
                         // a w' = a': w[k] = (a[k] - Σ_{j=1..k-1} j w[j] a[k-j] / k) / a[0]
                         let a = s(a);
                         let sum = weighted::<F, L>(c, w, a, k, 1, k - 1);
                         lanes(|l| (c[a + k][l] - sum[l]) / c[a][l])
                     }
-                    T::Sin { du, cos, .. } => {
+                    Instruction::Sin { du, cos, .. } => {
                         let (du, cs) = (s(du), s(cos));
                         let (sin, cos) = derived_pair::<F, L>(c, du, cs, w, k);
                         c[cs + k] = lanes(|l| -cos[l]);
                         sin
                     }
-                    T::Sinh { du, cosh, .. } => {
+                    Instruction::Sinh { du, cosh, .. } => {
                         let (du, ch) = (s(du), s(cosh));
                         let (sinh, cosh) = derived_pair::<F, L>(c, du, ch, w, k);
                         c[ch + k] = cosh;
                         sinh
                     }
-                    T::Tan { du, aux, sign, .. } => {
+                    Instruction::Tan { du, aux, sign, .. } => {
                         // w' = u' (1 ± w²)
                         let (du, x) = (s(du), s(aux));
                         let v = derived::<F, L>(c, du, x, k);
@@ -1137,7 +753,7 @@ impl<const L: usize> TaylorTape<L> {
                         c[x + k] = lanes(|l| sign * sq[l]);
                         v
                     }
-                    T::Asin { u, inner, root, sign } => {
+                    Instruction::Asin { u, inner, root, sign } => {
                         // inner = 1 - u², root = √inner, root·w' = ±u'
                         let (u, i, r) = (s(u), s(inner), s(root));
                         let mut sq = [0.0; L];
@@ -1152,7 +768,7 @@ impl<const L: usize> TaylorTape<L> {
                         c[r + k] = lanes(|l| acc[l] / (2.0 * c[r][l]));
                         derivative_quotient(c, u, r, w, k, sign)
                     }
-                    T::Atan { u, aux } => {
+                    Instruction::Atan { u, aux } => {
                         // aux = 1 + u², aux·w' = u'
                         let (u, x) = (s(u), s(aux));
                         let mut sq = [0.0; L];
@@ -1162,7 +778,7 @@ impl<const L: usize> TaylorTape<L> {
                         c[x + k] = sq;
                         derivative_quotient(c, u, x, w, k, 1.0)
                     }
-                    T::Atan2 { y, x, aux } => {
+                    Instruction::Atan2 { y, x, aux } => {
                         // aux = x² + y², aux·w' = x y' - y x'
                         let (y, x, d) = (s(y), s(x), s(aux));
                         let mut sq = [0.0; L];
@@ -1187,184 +803,15 @@ impl<const L: usize> TaylorTape<L> {
                         }
                         lanes(|l| acc[l] / (k as f64 * c[d][l]))
                     }
-                    T::Abs(a) => {
+                    Instruction::Abs(a) => {
                         let a = s(a);
                         lanes(|l| if c[a][l] < 0.0 { -c[a + k][l] } else { c[a + k][l] })
                     }
-                    T::CosOf | T::Aux => continue,
+                    Instruction::CosOf | Instruction::Aux => continue,
                 }
             };
             c[w + k] = value;
         }
-    }
-}
-
-/// Order 0 of a variable instruction: its ordinary value (and that of its
-/// companion slots).
-fn order_zero<const L: usize>(c: &mut [Lanes<L>], op: T, stride: usize) -> Lanes<L> {
-    let s = |slot: u32| slot as usize * stride;
-    match op {
-        T::Add(a, b) | T::AddC(a, b) => lanes(|l| c[s(a)][l] + c[s(b)][l]),
-        T::Sub(a, b) | T::SubVC(a, b) | T::SubCV(a, b) => lanes(|l| c[s(a)][l] - c[s(b)][l]),
-        T::Mul(a, b) | T::MulC(a, b) => lanes(|l| c[s(a)][l] * c[s(b)][l]),
-        T::Div(a, b) | T::DivVC(a, b) | T::DivCV(a, b) => lanes(|l| c[s(a)][l] / c[s(b)][l]),
-        T::Neg(a) => lanes(|l| -c[s(a)][l]),
-        T::Square(a) => lanes(|l| c[s(a)][l] * c[s(a)][l]),
-        T::Sqrt(a) => lanes(|l| c[s(a)][l].sqrt()),
-        T::PowC(a, e) => lanes(|l| c[s(a)][l].powf(c[s(e)][l])),
-        T::Exp { u, .. } => lanes(|l| c[s(u)][l].exp()),
-        T::Deriv(_) => [0.0; L],
-        T::Log(a) => lanes(|l| c[s(a)][l].ln()),
-        T::Abs(a) => lanes(|l| c[s(a)][l].abs()),
-        T::Sin { u, cos, .. } => {
-            let (mut sin, mut cos_v) = ([0.0; L], [0.0; L]);
-            for l in 0..L {
-                (sin[l], cos_v[l]) = crate::trig::sin_cos_f64(c[s(u)][l]);
-            }
-            c[s(cos)] = cos_v;
-            sin
-        }
-        T::Sinh { u, cosh, .. } => {
-            c[s(cosh)] = lanes(|l| c[s(u)][l].cosh());
-            lanes(|l| c[s(u)][l].sinh())
-        }
-        T::Tan { u, aux, sign, .. } => {
-            let v = lanes(|l| if sign > 0.0 { c[s(u)][l].tan() } else { c[s(u)][l].tanh() });
-            c[s(aux)] = lanes(|l| 1.0 + sign * v[l] * v[l]);
-            v
-        }
-        T::Asin { u, inner, root, sign } => {
-            let inner_v = lanes(|l| 1.0 - c[s(u)][l] * c[s(u)][l]);
-            c[s(inner)] = inner_v;
-            c[s(root)] = lanes(|l| inner_v[l].sqrt());
-            lanes(|l| if sign > 0.0 { c[s(u)][l].asin() } else { c[s(u)][l].acos() })
-        }
-        T::Atan { u, aux } => {
-            c[s(aux)] = lanes(|l| 1.0 + c[s(u)][l] * c[s(u)][l]);
-            lanes(|l| c[s(u)][l].atan())
-        }
-        T::Atan2 { y, x, aux } => {
-            c[s(aux)] = lanes(|l| c[s(x)][l] * c[s(x)][l] + c[s(y)][l] * c[s(y)][l]);
-            lanes(|l| c[s(y)][l].atan2(c[s(x)][l]))
-        }
-        T::CosOf | T::Aux => unreachable!("written by their instruction"),
-    }
-}
-
-/// `Σ_{j=1..=k} du[j] b[k-j] / k` with `du[j] = j u[j]` (the recurrence of `w' = u' b`).
-#[inline(always)]
-fn derived<const F: bool, const L: usize>(c: &[Lanes<L>], du: usize, b: usize, k: usize) -> Lanes<L> {
-    let mut acc = [0.0; L];
-    for (d, x) in c[du + 1..=du + k].iter().zip(c[b..b + k].iter().rev()) {
-        madd::<F, L>(&mut acc, d, x);
-    }
-    let kf = k as f64;
-    lanes(|l| acc[l] / kf)
-}
-
-/// [`derived`] for two slots `a` and `b` at once (sin and cos, sinh and
-/// cosh): the same sums, two independent chains in one loop.
-#[inline(always)]
-fn derived_pair<const F: bool, const L: usize>(
-    c: &[Lanes<L>],
-    du: usize,
-    a: usize,
-    b: usize,
-    k: usize,
-) -> (Lanes<L>, Lanes<L>) {
-    let (mut sa, mut sb) = ([0.0; L], [0.0; L]);
-    let terms = c[du + 1..=du + k].iter().zip(c[a..a + k].iter().rev()).zip(c[b..b + k].iter().rev());
-    for ((d, x), y) in terms {
-        madd::<F, L>(&mut sa, d, x);
-        madd::<F, L>(&mut sb, d, y);
-    }
-    let kf = k as f64;
-    (lanes(|l| sa[l] / kf), lanes(|l| sb[l] / kf))
-}
-
-/// `Σ_{j=lo..=hi} j a[j] b[k-j] / k` (the recurrence of `w' = a' b`).
-#[inline(always)]
-fn weighted<const F: bool, const L: usize>(
-    c: &[Lanes<L>],
-    a: usize,
-    b: usize,
-    k: usize,
-    lo: usize,
-    hi: usize,
-) -> Lanes<L> {
-    let mut acc = [0.0; L];
-    for j in lo..=hi {
-        let jf = j as f64;
-        let weighted: Lanes<L> = lanes(|l| jf * c[a + j][l]);
-        madd::<F, L>(&mut acc, &weighted, &c[b + k - j]);
-    }
-    let kf = k as f64;
-    lanes(|l| acc[l] / kf)
-}
-
-/// `w[k]` from `d·w' = sign·u'`:
-/// `w[k] = (sign·k·u[k] - Σ_{j=1..k-1} (k-j) d[j] w[k-j]) / (k d[0])`.
-#[inline(always)]
-fn derivative_quotient<const L: usize>(c: &[Lanes<L>], u: usize, d: usize, w: usize, k: usize, sign: f64) -> Lanes<L> {
-    let kf = k as f64;
-    let mut acc: Lanes<L> = lanes(|l| sign * kf * c[u + k][l]);
-    for j in 1..k {
-        let kj = (k - j) as f64;
-        for l in 0..L {
-            acc[l] -= kj * c[d + j][l] * c[w + k - j][l];
-        }
-    }
-    lanes(|l| acc[l] / (kf * c[d][l]))
-}
-
-#[inline(always)]
-fn lanes<const L: usize>(f: impl Fn(usize) -> f64) -> Lanes<L> {
-    std::array::from_fn(f)
-}
-
-/// `acc += a·b` lane by lane, fused (one rounding) when `F`: what native
-/// code computes for a sum of products where the host has FMA.
-#[inline(always)]
-fn madd<const F: bool, const L: usize>(acc: &mut Lanes<L>, a: &Lanes<L>, b: &Lanes<L>) {
-    for l in 0..L {
-        acc[l] = if F { a[l].mul_add(b[l], acc[l]) } else { acc[l] + a[l] * b[l] };
-    }
-}
-
-/// `acc += a·b` lane by lane, two roundings (native code's explicit
-/// product and sum).
-#[inline(always)]
-fn fma<const L: usize>(acc: &mut Lanes<L>, a: &Lanes<L>, b: &Lanes<L>) {
-    for l in 0..L {
-        acc[l] += a[l] * b[l];
-    }
-}
-
-#[inline(always)]
-fn fms<const L: usize>(acc: &mut Lanes<L>, a: &Lanes<L>, b: &Lanes<L>) {
-    for l in 0..L {
-        acc[l] -= a[l] * b[l];
-    }
-}
-
-/// An instruction of the tape with its operand slots renamed.
-fn remap(op: Op, map: &[u32]) -> Op {
-    let m = |s: u32| map[s as usize];
-    match op {
-        Op::Input(k) => Op::Input(k),
-        Op::Const(b) => Op::Const(b),
-        Op::Add(a, b) => Op::Add(m(a), m(b)),
-        Op::Sub(a, b) => Op::Sub(m(a), m(b)),
-        Op::Mul(a, b) => Op::Mul(m(a), m(b)),
-        Op::Div(a, b) => Op::Div(m(a), m(b)),
-        Op::Neg(a) => Op::Neg(m(a)),
-        Op::Recip(a) => Op::Recip(m(a)),
-        Op::Square(a) => Op::Square(m(a)),
-        Op::Powi(a, n) => Op::Powi(m(a), n),
-        Op::Powf(a, b) => Op::Powf(m(a), m(b)),
-        Op::Sqrt(a) => Op::Sqrt(m(a)),
-        Op::Func(f, a) => Op::Func(f, m(a)),
-        Op::Atan2(a, b) => Op::Atan2(m(a), m(b)),
     }
 }
 
@@ -1475,7 +922,7 @@ mod tests {
         let (x, a, b) = (p.symbol("x"), p.symbol("a"), p.symbol("b"));
         let tape = Tape::compile(&p, &[e], &[x, a, b]).unwrap();
         let t = TaylorTape::<1>::new(&tape, 4, &[true, false, false]);
-        assert!(t.program.iter().all(|(_, op)| !matches!(op, T::Mul(..) | T::Square(..))));
+        assert!(t.program.iter().all(|(_, op)| !matches!(op, Instruction::Mul(..) | Instruction::Square(..))));
         let e = p.parse("a*b").unwrap();
         let tape = Tape::compile(&p, &[e], &[x, a, b]).unwrap();
         let mut t = TaylorTape::<1>::new(&tape, 4, &[true, false, false]);
