@@ -87,7 +87,7 @@ mod window;
 
 use grid::format_axes;
 pub use grid::{Axis, Grid, Shard, Target};
-use runs::{complete, initial_values, row, start_of, Initial, Plan, Start};
+use runs::{complete, initial_values, row, start_of, Begin, Initial, Plan, Start};
 pub use table::{merge, SweepHeader, SweepTable, TableRow};
 
 /// Initial separation of the Lyapunov twin, in state units.
@@ -408,8 +408,8 @@ impl<'a> Sweep<'a> {
                         .map(|k| {
                             let run = run_at(k);
                             let inputs = grid.point(run);
-                            let start = start_of(&inputs, grid, base, d, model.as_mut());
-                            (run, inputs, start)
+                            let begin = start_of(&inputs, grid, base, d, model.as_mut());
+                            Start { run, inputs, begin }
                         })
                         .collect();
                     let rows = plan.run_batch(series, sys, scratch, n, starts, halted)?;
@@ -432,14 +432,16 @@ impl<'a> Sweep<'a> {
                         }
                         let run = run_at(k);
                         let inputs = grid.point(run);
-                        let outcome = start_of(&inputs, grid, base, d, model.as_mut()).map(|(q, qd, values)| {
-                            if has_parameters {
-                                // The tapes take the parameters as inputs: no recompilation.
-                                sys.set_parameters(&values);
-                                twin.set_parameters(&values);
-                            }
-                            plan.run(sys, twin, &q, &qd)
-                        });
+                        let outcome = start_of(&inputs, grid, base, d, model.as_mut()).map(
+                            |Begin { q, qd, parameters: values }| {
+                                if has_parameters {
+                                    // The tapes take the parameters as inputs: no recompilation.
+                                    sys.set_parameters(&values);
+                                    twin.set_parameters(&values);
+                                }
+                                plan.run(sys, twin, &q, &qd)
+                            },
+                        );
                         progress();
                         rows.push(row(run, inputs, n, outcome));
                     }

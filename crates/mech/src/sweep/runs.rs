@@ -80,14 +80,14 @@ pub(super) fn start_of(
                 // what a run checks of its start: refused here, the row's failure.
                 model.check_values(Some((&q, &qd)))?;
                 no_inertia(d, model, &q)?;
-                let values = model.parameters.iter().map(|p| p.value).collect();
-                Ok((q, qd, values))
+                let parameters = model.parameters.iter().map(|p| p.value).collect();
+                Ok(Begin { q, qd, parameters })
             })
         }
         None => complete(base, grid, inputs, &d.model).and_then(|(q, qd)| {
             d.model.check_values(Some((&q, &qd)))?;
             no_inertia(d, &d.model, &q)?;
-            Ok((q, qd, d.model.parameters.iter().map(|p| p.value).collect()))
+            Ok(Begin { q, qd, parameters: d.model.parameters.iter().map(|p| p.value).collect() })
         }),
     };
     start.map_err(|e| e.message)
@@ -123,7 +123,11 @@ pub(super) fn no_inertia(d: &Derivation, model: &Model, q: &[f64]) -> Result<(),
 }
 
 /// The `[initial]` values of a model at its current parameter values (None where not given).
-pub(super) type Initial = (Vec<Option<f64>>, Vec<Option<f64>>);
+#[derive(Clone, Debug)]
+pub(super) struct Initial {
+    pub(super) q: Vec<Option<f64>>,
+    pub(super) qd: Vec<Option<f64>>,
+}
 
 pub(super) fn initial_values(model: &Model) -> Result<Initial, ModelError> {
     let n = model.n_coords();
@@ -135,7 +139,7 @@ pub(super) fn initial_values(model: &Model) -> Result<Initial, ModelError> {
         let slot = if iv.order == 0 { &mut q } else { &mut qd };
         slot[iv.coord] = Some(v);
     }
-    Ok((q, qd))
+    Ok(Initial { q, qd })
 }
 
 /// The initial (q, q') of a run: the model's values overridden by the grid's.
@@ -145,7 +149,7 @@ pub(super) fn complete(
     inputs: &[f64],
     model: &Model,
 ) -> Result<(Vec<f64>, Vec<f64>), ModelError> {
-    let (mut q, mut qd) = base.clone();
+    let Initial { mut q, mut qd } = base.clone();
     for (value, target) in inputs.iter().zip(&grid.targets) {
         match *target {
             Target::Coordinate(k) => q[k] = Some(*value),
@@ -351,11 +355,21 @@ impl Plan<'_> {
     }
 }
 
-/// A run's initial q, q' and parameter values.
-pub(super) type Begin = (Vec<f64>, Vec<f64>, Vec<f64>);
+/// How a run begins: its initial q, q' and parameter values.
+#[derive(Clone, Debug)]
+pub(super) struct Begin {
+    pub(super) q: Vec<f64>,
+    pub(super) qd: Vec<f64>,
+    pub(super) parameters: Vec<f64>,
+}
 
 /// A run of a batch: its index, its grid inputs, and how it begins, or why it cannot.
-pub(super) type Start = (usize, Vec<f64>, Result<Begin, String>);
+#[derive(Debug)]
+pub(super) struct Start {
+    pub(super) run: usize,
+    pub(super) inputs: Vec<f64>,
+    pub(super) begin: Result<Begin, String>,
+}
 
 /// A run on the lanes of a batch: its main trajectory on lane `slot`, its
 /// Lyapunov twin on lane `slot + LANES / 2`.
@@ -388,14 +402,14 @@ impl Plan<'_> {
         let cfg = self.config;
         let slots = if cfg.lyapunov { LANES / 2 } else { LANES };
         let twin_of = |slot: usize| slot + LANES / 2;
-        let mut pending = (0..starts.len()).filter(|&i| starts[i].2.is_ok());
+        let mut pending = (0..starts.len()).filter(|&i| starts[i].begin.is_ok());
         let mut outcomes: Vec<Option<RunOutcome>> = (0..starts.len()).map(|_| None).collect();
-        let Some(first) = starts.iter().find_map(|s| s.2.as_ref().ok()) else {
+        let Some(first) = starts.iter().find_map(|s| s.begin.as_ref().ok()) else {
             return Some(finish(starts, outcomes, n));
         };
         // Lanes left without a run keep the first run's state (finite, never read back).
-        let mut batch = Batch::new(&[[first.0.as_slice(), &first.1].concat()]);
-        let mut params: Vec<Lanes<LANES>> = first.2.iter().map(|&v| [v; LANES]).collect();
+        let mut batch = Batch::new(&[[first.q.as_slice(), &first.qd].concat()]);
+        let mut params: Vec<Lanes<LANES>> = first.parameters.iter().map(|&v| [v; LANES]).collect();
         let mut target = [cfg.until; LANES];
         let mut on: Vec<Option<OnLanes>> = (0..slots).map(|_| None).collect();
         // Puts the next pending run (if any) on the lanes of `slot`.
@@ -407,7 +421,7 @@ impl Plan<'_> {
                 }
                 return None;
             };
-            let (q, qd, values) = starts[at].2.as_ref().expect("pending runs started");
+            let Begin { q, qd, parameters: values } = starts[at].begin.as_ref().expect("pending runs started");
             let y0 = [q.as_slice(), qd].concat();
             for (k, &v) in values.iter().enumerate() {
                 for &l in &lanes {
@@ -471,7 +485,7 @@ impl Plan<'_> {
                 }
                 let run = on[slot].take().expect("checked above");
                 let at = run.at;
-                let values = &starts[at].2.as_ref().expect("started").2;
+                let values = &starts[at].begin.as_ref().expect("started").parameters;
                 outcomes[at] = Some(self.outcome(sys, values, &batch, slot, run, n));
                 on[slot] = take(slot, &mut batch, &mut params, &mut target);
                 refilled |= on[slot].is_some();
@@ -511,7 +525,7 @@ pub(super) fn finish(starts: Vec<Start>, outcomes: Vec<Option<RunOutcome>>, n: u
     starts
         .into_iter()
         .zip(outcomes)
-        .map(|((run, inputs, start), outcome)| {
+        .map(|(Start { run, inputs, begin: start }, outcome)| {
             let outcome = match (start, outcome) {
                 (Err(message), _) => Err(message),
                 (Ok(_), Some(o)) => Ok(o),
