@@ -6,8 +6,8 @@
 //!
 //! Uses are the `crate::` and `super::` paths of the code (comments and the
 //! unit tests at the end of a file left out), resolved to the longest module
-//! they name; a name the crate root re-exports (`crate::Tape`) counts as a use
-//! of the module it comes from.
+//! they name; a name a module re-exports (`crate::Tape`, `super::RunError`)
+//! counts as a use of the module it comes from.
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::fs;
@@ -46,24 +46,34 @@ fn code(text: &str) -> String {
     text.lines().filter(|l| !l.trim_start().starts_with("//")).collect::<Vec<_>>().join("\n")
 }
 
-/// The names the crate root re-exports (`pub use eval::{EvalError, Tape};`),
-/// each with the module it comes from.
-fn reexports(root: &str) -> HashMap<String, Module> {
-    let mut map = HashMap::new();
-    for stmt in code(root).split(';') {
-        let Some(path) = stmt.trim().strip_prefix("pub use ") else { continue };
-        let (module, names) = match path.find("::{") {
-            Some(at) => (&path[..at], path[at + 3..].trim_end_matches('}')),
-            None => path.rsplit_once("::").unwrap_or(("", path)),
+/// The names `own`'s code re-exports (`pub use eval::{EvalError, Tape};`,
+/// `pub(crate) use report::conclude;`), each as its path through `own` with
+/// the path it stands for, from the crate root.
+fn reexports(own: &Module, code: &str) -> Vec<(Vec<String>, Vec<String>)> {
+    let mut found = Vec::new();
+    for stmt in code.split(';') {
+        let stmt = stmt.trim();
+        let Some(path) = ["pub use ", "pub(crate) use ", "pub(super) use "].iter().find_map(|p| stmt.strip_prefix(p))
+        else {
+            continue;
         };
-        let module: Module = module.split("::").map(str::trim).map(String::from).collect();
-        for name in names.split(',').map(|n| n.rsplit(" as ").next().unwrap().trim()) {
-            if !name.is_empty() {
-                map.insert(name.to_string(), module.clone());
+        // A path without `crate::` or `super::` starts at `own` (a child's name).
+        let absolute = if path.starts_with("crate::") || path.starts_with("super::") {
+            path.to_string()
+        } else {
+            format!("crate::{}{path}", own.iter().map(|m| format!("{m}::")).collect::<String>())
+        };
+        for target in paths(own, &absolute) {
+            let name = target.last().cloned().unwrap_or_default();
+            let name = name.rsplit(" as ").next().unwrap_or_default().trim().to_string();
+            if !name.is_empty() && name != "*" && name != "self" {
+                let mut via = own.clone();
+                via.push(name);
+                found.push((via, target));
             }
         }
     }
-    map
+    found
 }
 
 /// Every path a use or an expression names from `crate::` or `super::`, as
@@ -118,15 +128,25 @@ fn cycles(src: &Path) -> Vec<String> {
     let mut files = Vec::new();
     rust_files(src, &mut files);
     let modules: BTreeMap<Module, PathBuf> = files.iter().map(|f| (module_of(src, f), f.clone())).collect();
-    let root = modules.get(&Vec::new()).map(|f| fs::read_to_string(f).unwrap()).unwrap_or_default();
-    let reexports = reexports(&root);
-    // Each use, as (module, module used), resolved to the longest module named.
+    let codes: BTreeMap<&Module, String> =
+        modules.iter().map(|(m, f)| (m, code(&fs::read_to_string(f).unwrap()))).collect();
+    let reexported: HashMap<Vec<String>, Vec<String>> =
+        codes.iter().flat_map(|(own, code)| reexports(own, code)).collect();
+    // Each use, as (module, module used): a re-exported name stands for what it
+    // re-exports (followed a few times: a name may be re-exported twice), and
+    // a path for the longest module it names.
     let mut edges = BTreeSet::new();
-    for (own, file) in &modules {
-        for mut path in paths(own, &code(&fs::read_to_string(file).unwrap())) {
-            if path.len() == 1 {
-                if let Some(module) = reexports.get(&path[0]) {
-                    path = module.clone();
+    for (own, code) in &codes {
+        let own = *own;
+        for mut path in paths(own, code) {
+            for _ in 0..4 {
+                match (1..=path.len()).rev().find_map(|k| reexported.get(&path[..k]).map(|to| (k, to))) {
+                    Some((k, to)) if to[..] != path[..k] => {
+                        let mut next = to.clone();
+                        next.extend_from_slice(&path[k..]);
+                        path = next;
+                    }
+                    _ => break,
                 }
             }
             let target = (1..=path.len()).rev().map(|k| path[..k].to_vec()).find(|m| modules.contains_key(m));
@@ -213,6 +233,11 @@ fn the_checker_finds_a_cycle_through_a_group_a_reexport_and_super() {
     // y uses x back, through a group: a loop under b.
     fs::write(dir.join("b/y.rs"), "use crate::b::{x::X, y};\npub struct Y;\n").unwrap();
     assert_eq!(cycles(&dir), ["under b: x → y → x"]);
+    // y uses x back through b's re-export of X.
+    fs::write(dir.join("b/mod.rs"), "mod x;\nmod y;\npub(crate) use x::X;\n").unwrap();
+    fs::write(dir.join("b/y.rs"), "pub struct Y(super::X);\n").unwrap();
+    assert_eq!(cycles(&dir), ["under b: x → y → x"]);
+    fs::write(dir.join("b/mod.rs"), "mod x;\nmod y;\n").unwrap();
     fs::write(dir.join("b/y.rs"), "pub struct Y;\n").unwrap();
     // a uses b, and b uses a through the root's re-export of Thing.
     fs::write(dir.join("a.rs"), "pub struct Thing(crate::b::Z);\npub struct Other;\n").unwrap();

@@ -114,12 +114,12 @@ pub use report::{
     prints_shared, BodyReport, ConstraintReport, Definition, DeriveReport, HamiltonEquations, NamedExpr, Ordered,
 };
 pub use run::body::BodyRecorder;
-pub use run::constrained::{constraint_columns, ConstraintAudit};
+pub use run::constrained::constraint_columns;
 pub use run::dynamics::{invariants_of, Dynamics, Form, Invariant, System};
 pub use run::series::SeriesCode;
 pub use run::{
-    approx, row_columns, simulate, Audit, BudgetAdvice, BudgetStage, Row, RunConfig, RunError, RunFailure, RunReport,
-    StepBudget, StopCondition, TimeScale, MAX_SAMPLES, STEPS_PER_TIME_SCALE,
+    approx, row_columns, simulate, Audit, BudgetAdvice, BudgetStage, ConstraintAudit, Row, RunConfig, RunError,
+    RunFailure, RunReport, StepBudget, StopCondition, TimeScale, MAX_SAMPLES, STEPS_PER_TIME_SCALE,
 };
 pub use source::MAX_FILE_BYTES;
 pub use sweep::{

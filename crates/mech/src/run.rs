@@ -10,6 +10,10 @@
 //! and their columns). The caller (the CLI) does the IO — CSV, plots,
 //! progress — in the `on_row` callback; this module only computes.
 //!
+//! The parts of a run beside the driver: `config.rs` (the settings and stop
+//! conditions, checked before the run), `report.rs` (rows, audits, the report
+//! and the errors a run hands back).
+//!
 //! The default method follows the derivation (issue #4): H conserved and
 //! separable → an 8th-order symplectic composition; H conserved, not separable →
 //! Gauss–Legendre (order 6) on Hamilton's equations; otherwise DOP853.
@@ -17,10 +21,12 @@
 mod audit;
 pub(crate) mod body;
 mod budget;
+mod config;
 pub(crate) mod constrained;
 pub(crate) mod dynamics;
 pub(crate) mod ensemble;
 mod plain;
+mod report;
 pub(crate) mod series;
 pub(crate) mod tree;
 
@@ -29,400 +35,12 @@ use crate::derive::Derivation;
 use crate::error::ModelError;
 use audit::InvariantAudit;
 pub use budget::{approx, BudgetAdvice, BudgetStage, StepBudget, TimeScale, STEPS_PER_TIME_SCALE};
+pub(crate) use config::is_positive_time;
+pub use config::{RunConfig, StopCondition, MAX_SAMPLES};
 use dynamics::{Dynamics, Form};
-use num::{
-    integrate, integrate_projected, Direction, Event, Method, ObservationKind, Output, RhsError, SolveError, Solver,
-    StopReason,
-};
+use num::{integrate, integrate_projected, Event, Method, ObservationKind, RhsError, SolveError, Solver, StopReason};
+pub use report::{Audit, ConstraintAudit, Row, RunError, RunFailure, RunReport};
 use std::ops::ControlFlow;
-use sym::Tape;
-
-/// A condition that ends the run (or records a row) where an expression g(q,
-/// q', t) crosses zero: `lhs < rhs` (falling through), `lhs > rhs` (rising),
-/// `lhs = rhs` or `lhs` alone (either way).
-#[derive(Debug, Clone)]
-pub struct StopCondition {
-    /// g = lhs − rhs, compiled over the derivation's [`Layout`](crate::Layout).
-    tape: Tape,
-    /// Which crossings count.
-    pub direction: Direction,
-    /// The condition as the user wrote it.
-    pub text: String,
-}
-
-impl StopCondition {
-    /// Reads a condition in the expression language. `what` names it in
-    /// messages (`the stop condition`); the spans of errors are byte offsets
-    /// into `text`.
-    pub fn parse(d: &Derivation, text: &str, what: &str) -> Result<StopCondition, ModelError> {
-        let (lhs, rhs, direction) = match text.find(['<', '>', '=']) {
-            Some(i) => {
-                let direction = match text.as_bytes()[i] {
-                    b'<' => Direction::Falling,
-                    b'>' => Direction::Rising,
-                    _ => Direction::Both,
-                };
-                let rest = text[i + 1..].strip_prefix('=').unwrap_or(&text[i + 1..]).trim_start();
-                (&text[..i], Some((text.len() - rest.len(), rest)), direction)
-            }
-            None => (text, None, Direction::Both),
-        };
-        let shift = |mut e: ModelError, offset: usize| {
-            if let Some(span) = &mut e.span {
-                *span = span.start + offset..span.end + offset;
-            }
-            e
-        };
-        // The derivation is frozen: the condition is read into a copy of the model.
-        let mut model = d.model.clone();
-        let g_lhs = model.parse_state_expr(lhs, what)?;
-        let g = match rhs {
-            Some((offset, rhs)) => {
-                let g_rhs = model.parse_state_expr(rhs, what).map_err(|e| shift(e, offset))?;
-                model.pool.sub(g_lhs, g_rhs)
-            }
-            None => g_lhs,
-        };
-        let tape = Tape::compile(&model.pool, &[g], d.layout.symbols())
-            .map_err(|e| ModelError::at(0..text.len(), format!("{what} cannot be evaluated: {e}")))?;
-        Ok(StopCondition { tape, direction, text: text.to_string() })
-    }
-
-    /// g at the inputs `values` (laid out as the derivation's [`Layout`](crate::Layout)).
-    pub(crate) fn eval(&mut self, values: &[f64]) -> f64 {
-        let mut out = [0.0];
-        self.tape.eval(values, &mut out);
-        out[0]
-    }
-}
-
-/// Options of a run.
-#[derive(Debug, Clone)]
-pub struct RunConfig {
-    /// End time (the run starts at t = 0).
-    pub until: f64,
-    /// The method, or None for the derivation's choice.
-    pub method: Option<Method>,
-    /// Relative tolerance (also sets the step of fixed-step methods without `dt`).
-    pub rtol: f64,
-    /// Absolute tolerance.
-    pub atol: f64,
-    /// Fixed step for fixed-step methods.
-    pub dt: Option<f64>,
-    /// Output rows: evenly spaced samples or every step.
-    pub output: Output,
-    /// Stop conditions.
-    pub stop_when: Vec<StopCondition>,
-    /// Crossings to record without stopping (the rows of a Poincaré section).
-    pub crossings: Vec<StopCondition>,
-    /// The most steps the run may take: its step budget.
-    pub max_steps: usize,
-    /// Values that replace `[initial]`'s, by name: a coordinate (`a`) or a
-    /// velocity (`a'`). Empty: the model's initial state as it is.
-    pub initial: Vec<(String, f64)>,
-}
-
-impl Default for RunConfig {
-    fn default() -> Self {
-        RunConfig {
-            until: 10.0,
-            method: None,
-            // 1e-9: nine digits per unit time; far below plotting resolution and
-            // cheap for the 8th-order methods that are the defaults.
-            rtol: 1e-9,
-            atol: 1e-12,
-            dt: None,
-            output: Output::Samples(1001),
-            stop_when: Vec::new(),
-            crossings: Vec::new(),
-            // The solvers' default, 10^7: a long symplectic run fits, a stalled
-            // adaptive one stops within seconds.
-            max_steps: num::Config::default().max_steps,
-            initial: Vec::new(),
-        }
-    }
-}
-
-/// Most output rows a run writes: as many as the steps a solver may take by
-/// default (`num::Config::max_steps`); beyond that the file, not the motion, is the work.
-pub const MAX_SAMPLES: usize = 10_000_000;
-
-impl RunConfig {
-    /// Checks what a run cannot start without, before anything is computed: a
-    /// positive, finite end time; a fixed step, if given, that reaches it within
-    /// the run's step budget and is no longer than the spacing of the
-    /// samples; and no more samples than [`MAX_SAMPLES`].
-    pub fn check(&self) -> Result<(), RunError> {
-        if !is_positive_time(self.until) {
-            return Err(RunError::Until { until: self.until });
-        }
-        if let Output::Samples(samples) = self.output {
-            if samples > MAX_SAMPLES {
-                return Err(RunError::TooManySamples { samples, max: MAX_SAMPLES });
-            }
-        }
-        if self.max_steps == 0 {
-            return Err(RunError::Input(ModelError::whole("a run needs a step budget of at least one step")));
-        }
-        if let Some(dt) = self.dt {
-            let max = self.max_steps;
-            let steps = self.until / dt;
-            if !(dt.is_finite() && dt > 0.0) || steps > max as f64 {
-                return Err(RunError::TooManySteps { dt, steps, max });
-            }
-            if let Output::Samples(k) = self.output {
-                let spacing = self.until / (k.max(2) - 1) as f64;
-                if dt > spacing * (1.0 + 1e-12) {
-                    return Err(RunError::StepOverSamples { dt, spacing });
-                }
-            }
-        }
-        Ok(())
-    }
-}
-
-/// Whether an end time is positive and finite (runs and sweeps start at t = 0).
-pub(crate) fn is_positive_time(t: f64) -> bool {
-    t.is_finite() && t > 0.0
-}
-
-/// One output row.
-#[derive(Debug)]
-pub struct Row<'a> {
-    /// Time.
-    pub t: f64,
-    /// Coordinates.
-    pub q: &'a [f64],
-    /// Velocities.
-    pub qd: &'a [f64],
-    /// Invariants, in the order of [`RunReport::invariants`].
-    pub invariants: &'a [f64],
-    /// Whether this row is a stop event or a crossing.
-    pub is_event: bool,
-    /// The condition of a stop or crossing row, as the user wrote it.
-    pub event: Option<&'a str>,
-    /// With constraints: λ, |Aᵀλ| and the residuals, in the order of
-    /// [`crate::constraint_columns`] (empty otherwise).
-    pub constraints: &'a [f64],
-}
-
-/// The audit of one invariant.
-#[derive(Debug, Clone)]
-pub struct Audit {
-    /// Its name (`H`, `E`, `p_th`).
-    pub name: String,
-    /// Whether the derivation says it is conserved.
-    pub conserved: bool,
-    /// Value at the start.
-    pub initial: f64,
-    /// Value at the last row.
-    pub final_value: f64,
-    /// Largest |I(t) − I(0)| over the rows.
-    pub max_abs_drift: f64,
-    /// Largest |I(t) − I(0)| / |I(0)| (or the absolute drift where I(0) = 0).
-    pub max_rel_drift: f64,
-}
-
-/// What a run did.
-#[derive(Debug, Clone)]
-pub struct RunReport {
-    /// The method used.
-    pub method: Method,
-    /// The state variables integrated.
-    pub form: Form,
-    /// How the accelerations were computed: `"articulated-body"` (the model's
-    /// tree, O(n), [`dynamics`]) or `"mass-matrix"` (M and f, solved).
-    pub right_hand_side: &'static str,
-    /// The fixed step used, for fixed-step methods.
-    pub dt: Option<f64>,
-    /// Whether that step was given (`RunConfig::dt`) rather than chosen from the tolerance.
-    pub step_given: bool,
-    /// Tolerances.
-    pub rtol: f64,
-    /// Absolute tolerance.
-    pub atol: f64,
-    /// Accepted steps.
-    pub steps: usize,
-    /// Rejected steps.
-    pub rejected: usize,
-    /// Right-hand-side evaluations.
-    pub rhs_evaluations: usize,
-    /// Right-hand-side evaluations of the Taylor method's look-ahead.
-    pub look_ahead_evaluations: usize,
-    /// Time reached.
-    pub t_final: f64,
-    /// Coordinates at the end.
-    pub final_q: Vec<f64>,
-    /// Velocities at the end.
-    pub final_qd: Vec<f64>,
-    /// Invariant audits.
-    pub invariants: Vec<Audit>,
-    /// Why the run ended (`finished`, or the stop condition's text).
-    pub stopped_by: Option<String>,
-    /// Warnings (an invariant drifting beyond what the tolerance explains).
-    pub warnings: Vec<String>,
-    /// Why the run failed midway, if it did.
-    pub failure: Option<String>,
-    /// The same as data: what failed, when and where.
-    pub failure_reason: Option<RunFailure>,
-    /// Right-hand-side evaluations of the pilot runs that chose a fixed step.
-    pub pilot_rhs_evaluations: usize,
-    /// Wall-clock seconds of the integration (compilation included).
-    pub wall_seconds: f64,
-    /// With constraints: the audit of each constraint (empty otherwise).
-    pub constraints: Vec<constrained::ConstraintAudit>,
-}
-
-/// Why a run failed midway, as data beside the message: what happened, at
-/// which time, to which component (`x`, `x'` or `p_x`).
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-#[serde(tag = "code", rename_all = "snake_case")]
-pub enum RunFailure {
-    /// A rigid body reached the gimbal singularity of its Euler angles.
-    Gimbal {
-        /// The body.
-        body: String,
-        /// When.
-        t: f64,
-    },
-    /// A component of the state grew without bound or stopped being finite.
-    BlowUp {
-        /// When.
-        t: f64,
-        /// Which component.
-        component: String,
-    },
-    /// The equations gave a non-finite rate of change.
-    NonFiniteRate {
-        /// When.
-        t: f64,
-        /// Of which component.
-        component: String,
-    },
-    /// The mass matrix (with constraints: the system with the multipliers)
-    /// became singular: the accelerations are undetermined.
-    Singular {
-        /// When.
-        t: f64,
-    },
-    /// The integrator could not take a step (too small, or implicit stages that
-    /// do not converge) for no reason that could be told.
-    Step {
-        /// The last time reached.
-        t: f64,
-    },
-    /// A row could not be evaluated (an invariant, a constraint column).
-    Row {
-        /// When.
-        t: f64,
-    },
-    /// The run could not reach its end time within its step budget: it spent
-    /// the budget, or its pace was foreseen far beyond it.
-    StepBudget(StepBudget),
-}
-
-impl RunFailure {
-    /// The failure's stable name.
-    pub fn code(&self) -> &'static str {
-        match self {
-            RunFailure::Gimbal { .. } => "gimbal",
-            RunFailure::BlowUp { .. } => "blow_up",
-            RunFailure::NonFiniteRate { .. } => "non_finite_rate",
-            RunFailure::Singular { .. } => "singular",
-            RunFailure::Step { .. } => "step",
-            RunFailure::Row { .. } => "row",
-            RunFailure::StepBudget(_) => "step_budget",
-        }
-    }
-}
-
-/// Why a run did not complete.
-#[derive(Debug, thiserror::Error)]
-pub enum RunError {
-    /// The end time is not a positive, finite number.
-    #[error("the end time must be positive and finite, not {}", num::Shortest(*.until))]
-    Until {
-        /// The end time asked for.
-        until: f64,
-    },
-    /// More output samples than [`MAX_SAMPLES`].
-    #[error("{samples} samples are more than a run writes ({max} at most)")]
-    TooManySamples {
-        /// The samples asked for.
-        samples: usize,
-        /// [`MAX_SAMPLES`].
-        max: usize,
-    },
-    /// A fixed step that would take more steps than a solver may to reach the end.
-    #[error("the step {dt} would take {steps:.3e} steps; a run takes at most {max}")]
-    TooManySteps {
-        /// The step.
-        dt: f64,
-        /// The steps it would take.
-        steps: f64,
-        /// The solvers' budget.
-        max: usize,
-    },
-    /// A fixed step longer than the spacing of the samples, which would be
-    /// shortened to that spacing rather than taken as given.
-    #[error("the step {dt} is longer than the spacing of the samples ({spacing})")]
-    StepOverSamples {
-        /// The step.
-        dt: f64,
-        /// The spacing of the samples.
-        spacing: f64,
-    },
-    /// A fixed step, chosen from the tolerance, that would take more steps than
-    /// the run's budget to reach the end time (refused before the run).
-    #[error("{0}")]
-    StepBudget(Box<StepBudget>),
-    /// A fixed step given for an adaptive method, which chooses its own.
-    #[error("a fixed step applies only to fixed-step methods, and {} chooses its own", .method.name())]
-    StepNotApplicable {
-        /// The method.
-        method: Method,
-    },
-    /// Bad input: an impossible method, a missing initial value (exit 2).
-    #[error("{0}")]
-    Input(ModelError),
-    /// The run failed midway (exit 1); the report covers what was done.
-    #[error("{message}")]
-    Failed {
-        /// What happened, naming the time and the coordinate.
-        message: String,
-        /// The run up to the failure.
-        report: Box<RunReport>,
-    },
-}
-
-/// The end of a run that integrated to its end or stopped: why it stopped (a
-/// stop condition, the caller, or the end), and a failure when a row could
-/// not be produced.
-pub(crate) fn conclude(
-    mut report: RunReport,
-    stop: StopReason,
-    conditions: &[(&StopCondition, bool)],
-    row_error: Option<(RunFailure, String)>,
-) -> Result<RunReport, RunError> {
-    report.stopped_by = match stop {
-        StopReason::Event { index } => Some(conditions[index].0.text.clone()),
-        StopReason::Observer => {
-            Some(row_error.as_ref().map_or_else(|| "stopped by the caller".into(), |(_, m)| m.clone()))
-        }
-        StopReason::Finished => None,
-    };
-    match row_error {
-        Some((reason, message)) => Err(failed(report, reason, message)),
-        None => Ok(report),
-    }
-}
-
-/// The error of a run that failed midway, its report saying why in words and as data.
-fn failed(mut report: RunReport, reason: RunFailure, message: String) -> RunError {
-    report.failure = Some(message.clone());
-    report.failure_reason = Some(reason);
-    RunError::Failed { message, report: Box::new(report) }
-}
 
 /// The default method and the form it integrates, or the form a requested method needs.
 ///
@@ -526,7 +144,7 @@ pub(crate) trait Stepping {
     /// Fills `row` (all but `is_event`) from the solver state (t, y).
     fn row(&mut self, t: f64, y: &[f64], row: &mut RowBuffer) -> Result<(), RhsError>;
     /// Adds the stepping's own audits at the end of the run.
-    fn audits(&mut self, _invariants: &mut Vec<Audit>, _constraints: &mut Vec<constrained::ConstraintAudit>) {}
+    fn audits(&mut self, _invariants: &mut Vec<Audit>, _constraints: &mut Vec<ConstraintAudit>) {}
     /// Adds the stepping's own warnings at the end of the run.
     fn warnings(&self, _warnings: &mut Vec<String>) {}
     /// A solver failure in the user's terms, from the initial state and the last good one.
@@ -790,4 +408,33 @@ fn drive(
             Err(failed(report, reason, message))
         }
     }
+}
+
+/// The end of a run that integrated to its end or stopped: why it stopped (a
+/// stop condition, the caller, or the end), and a failure when a row could
+/// not be produced.
+pub(crate) fn conclude(
+    mut report: RunReport,
+    stop: StopReason,
+    conditions: &[(&StopCondition, bool)],
+    row_error: Option<(RunFailure, String)>,
+) -> Result<RunReport, RunError> {
+    report.stopped_by = match stop {
+        StopReason::Event { index } => Some(conditions[index].0.text.clone()),
+        StopReason::Observer => {
+            Some(row_error.as_ref().map_or_else(|| "stopped by the caller".into(), |(_, m)| m.clone()))
+        }
+        StopReason::Finished => None,
+    };
+    match row_error {
+        Some((reason, message)) => Err(failed(report, reason, message)),
+        None => Ok(report),
+    }
+}
+
+/// The error of a run that failed midway, its report saying why in words and as data.
+fn failed(mut report: RunReport, reason: RunFailure, message: String) -> RunError {
+    report.failure = Some(message.clone());
+    report.failure_reason = Some(reason);
+    RunError::Failed { message, report: Box::new(report) }
 }

@@ -28,7 +28,8 @@ use crate::error::ModelError;
 use crate::model::ConstraintKind;
 use crate::run::dynamics::{Dynamics, Form, Kernel};
 use crate::run::{
-    Audit, ProjectionMap, RowBuffer, RunConfig, RunError, RunFailure, Start, Stepping, TimeScale, VelocityMap,
+    Audit, ConstraintAudit, ProjectionMap, RowBuffer, RunConfig, RunError, RunFailure, Start, Stepping, TimeScale,
+    VelocityMap,
 };
 use num::{Config, LinearSolver, Method, OdeSystem, RhsError, SolveError};
 use sym::{ExprId, Tape};
@@ -38,23 +39,6 @@ use sym::{ExprId, Tape};
 /// initial values are rejected (the start's own check,
 /// [`crate::Derivation::check_constraints_at`], uses the same).
 pub use crate::derive::constraint::INITIAL_TOLERANCE;
-
-/// The audit of one constraint along a run.
-#[derive(Debug, Clone)]
-pub struct ConstraintAudit {
-    /// Its name.
-    pub name: String,
-    /// Holonomic or velocity.
-    pub kind: ConstraintKind,
-    /// Largest |f(q, t)| (holonomic) or |A q' + a_t| (velocity) over the rows.
-    pub max_abs_residual: f64,
-    /// Largest |A q' + a_t| over the rows (for a holonomic constraint, df/dt).
-    pub max_abs_velocity_residual: f64,
-    /// The multiplier λ at the last row.
-    pub final_lambda: f64,
-    /// Largest |Aᵀλ| over the rows.
-    pub max_force: f64,
-}
 
 /// The CSV columns a constrained run adds, in the order of [`Row::constraints`](crate::Row::constraints):
 /// per constraint `lambda_NAME`, `force_NAME` (|Aᵀλ|), `residual_NAME` (f for a
