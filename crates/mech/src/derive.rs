@@ -9,23 +9,29 @@
 
 use crate::error::ModelError;
 use crate::model::Model;
-use crate::probe::{self, Decision, Subst};
+use crate::probe::{self, Decision};
 use quadratic::{Quadratic, Sparsity, Vars as QVars};
 use sym::{ExprId, NameId, Pool, Symbol};
 
 mod body;
 pub(crate) mod constraint;
+mod hamilton;
+mod judge;
 mod layout;
 mod load;
 mod no_inertia;
 mod quadratic;
 mod shared;
+mod solve;
 mod verdict;
 
 pub use body::BodyMotion;
 pub use constraint::{Constraint, Constraints};
+use hamilton::hamiltonian;
+use judge::{cyclic_coordinates, judge};
 pub use layout::Layout;
 pub use no_inertia::NoInertia;
+use solve::blocks;
 pub use verdict::{
     ConservationReason, ConservedReason, CyclicReason, EnergyReason, HamiltonianReason, RateTerm, Verdicts,
 };
@@ -263,8 +269,11 @@ impl Derivation {
                 },
             });
         }
-        let (hamiltonian, velocities, hamilton) =
-            hamiltonian(pool, &s, &energies, &motion, &ext, &mut judged.verdicts, &is_var);
+        let legendre = hamiltonian(pool, &s, &energies, &motion, &ext, &mut judged.verdicts, &is_var);
+        let (hamiltonian, velocities, hamilton) = match legendre {
+            Some(l) => (Some(l.hamiltonian), Some(l.velocities), Some(l.equations)),
+            None => (None, None, None),
+        };
         let inputs: Vec<ExprId> = model.inputs.iter().map(|u| pool.symbol(&u.name)).collect();
         let input_matrix: Vec<Vec<ExprId>> = motion
             .forcing
@@ -884,345 +893,6 @@ fn check_regular(pool: &mut Pool, model: &Model, mass_matrix: &[Vec<ExprId>]) ->
     Err(ModelError { message, span, help: Some(help.into()), setting: None, within: None })
 }
 
-/// Cyclic coordinates (∂L/∂q proven to be 0) and the momenta that are
-/// conserved: those on which neither dissipation nor a generalized force is
-/// proven absent. A coordinate whose ∂L/∂q (or whose R and Q) could not be
-/// decided gets a reason instead of a claim.
-fn cyclic_coordinates(
-    pool: &mut Pool,
-    s: &Symbols,
-    m: &Motion,
-    ext: &External,
-    shared: bool,
-) -> (Vec<usize>, Vec<Conserved>, Vec<CyclicReason>) {
-    let mut cyclic = Vec::new();
-    let mut conserved = Vec::new();
-    let mut reasons = Vec::new();
-    // On the shared path most ∂L/∂q are refuted by numbers: all at once.
-    let refuted = if shared { probe::refuted_each(pool, &m.dl_dq) } else { vec![false; s.n()] };
-    for i in 0..s.n() {
-        let coordinate = s.names[i].clone();
-        if refuted[i] {
-            continue;
-        }
-        match decide(pool, m.dl_dq[i], shared) {
-            Decision::Zero => {}
-            Decision::NonZero => continue,
-            Decision::Undecided => {
-                reasons.push(CyclicReason::Undecided { coordinate });
-                continue;
-            }
-        }
-        cyclic.push(i);
-        let damping = match ext.dissipation {
-            Some(r) => {
-                let d = pool.diff(r, s.qd[i]);
-                decide(pool, d, shared)
-            }
-            None => Decision::Zero,
-        };
-        let forcing = decide(pool, ext.forces[i], shared);
-        match (damping, forcing) {
-            (Decision::Zero, Decision::Zero) => conserved.push(Conserved {
-                name: format!("p_{coordinate}"),
-                expr: m.momenta[i],
-                reason: ConservedReason::Cyclic { coordinate },
-            }),
-            (Decision::NonZero, _) | (_, Decision::NonZero) => {}
-            _ => reasons.push(CyclicReason::MomentumUndecided { coordinate }),
-        }
-    }
-    (cyclic, conserved, reasons)
-}
-
-/// The energy function h = Σ q' ∂L/∂q' − L and the verdicts on it: whether H is
-/// conserved (dH/dt = −∂L/∂t − Σ q'·∂R/∂q' + Σ Q·q', each term named that is
-/// there) and whether it is the energy T + U₀.
-fn judge(
-    pool: &mut Pool,
-    model: &Model,
-    s: &Symbols,
-    e: &Energies,
-    m: &Motion,
-    ext: &External,
-    is_var: &dyn Fn(Symbol) -> bool,
-) -> Judged {
-    let (n, qd) = (s.n(), &s.qd);
-    let energy_function = match &e.form {
-        Some(form) => form.energy_function(pool, qd),
-        None => {
-            let mut h_terms: Vec<ExprId> = (0..n).map(|i| pool.mul2(qd[i], m.momenta[i])).collect();
-            h_terms.push(pool.neg(e.lagrangian));
-            let h_sum = pool.add(&h_terms);
-            if e.shared {
-                simplify_bounded(pool, h_sum, is_var)
-            } else {
-                pool.simplify_in(h_sum, is_var)
-            }
-        }
-    };
-    // Each term of dH/dt: H is conserved only when all three are proven 0.
-    let dl_dt = pool.diff(e.lagrangian, s.t);
-    let time = decide(pool, dl_dt, e.shared);
-    let dissipation = match ext.dissipation {
-        Some(r) => decide(pool, r, e.shared),
-        None => Decision::Zero,
-    };
-    let forces: Vec<Decision> = (0..n).map(|i| decide(pool, ext.forces[i], e.shared)).collect();
-    let forced: Vec<usize> = (0..n).filter(|&i| forces[i].is_nonzero()).collect();
-    let force = if !forced.is_empty() {
-        Decision::NonZero
-    } else if forces.iter().all(|f| f.is_zero()) {
-        Decision::Zero
-    } else {
-        Decision::Undecided
-    };
-    let explicit_time = time.known().map(|zero| !zero);
-    let terms =
-        [(RateTerm::ExplicitTime, time), (RateTerm::Dissipation, dissipation), (RateTerm::GeneralizedForces, force)];
-    let hamiltonian_conserved = terms.iter().all(|(_, d)| d.is_zero());
-    let mut verdicts = Verdicts::default();
-    if time.is_nonzero() {
-        verdicts.conservation.push(ConservationReason::ExplicitTime);
-    }
-    if dissipation.is_nonzero() {
-        verdicts.conservation.push(ConservationReason::Dissipation);
-    }
-    if !forced.is_empty() {
-        let coordinates = forced.iter().map(|&i| s.names[i].clone()).collect();
-        verdicts.conservation.push(ConservationReason::GeneralizedForces { coordinates });
-    }
-    let shown: Vec<RateTerm> = terms.iter().filter(|(_, d)| d.is_nonzero()).map(|&(t, _)| t).collect();
-    if !shown.is_empty() {
-        verdicts.conservation.push(ConservationReason::Rate { terms: shown });
-    }
-    let undecided: Vec<RateTerm> = terms.iter().filter(|(_, d)| *d == Decision::Undecided).map(|&(t, _)| t).collect();
-    if !undecided.is_empty() {
-        verdicts.conservation.push(ConservationReason::Undecided { terms: undecided });
-    }
-    if hamiltonian_conserved {
-        verdicts.conservation.push(ConservationReason::Conserved);
-    }
-    let (energy, hamiltonian_is_energy) = match (e.kinetic, e.potential) {
-        (Some(tt), Some(uu)) => {
-            let zero_vel: Subst = qd.iter().map(|&v| (v, pool.zero())).collect();
-            let u0 = pool.substitute(uu, &zero_vel);
-            let en = pool.add2(tt, u0);
-            // T and U are simplified each; their sum is, too, while it is small.
-            let en = if model.particles.is_empty() && !e.shared { simplify_bounded(pool, en, is_var) } else { en };
-            // With U free of the velocities, L's form holds T's b and L₀ = T₀ − U:
-            // T is homogeneous of degree 2 exactly when b = 0 and T₀ = L₀ + U = 0,
-            // and h − E = −bᵀq' − 2T₀, so h = E exactly then. Deciding that on the
-            // form's simplified coefficients spares proving two long sums equal.
-            let homogeneous = match &e.form {
-                Some(form) if qd.iter().all(|&v| pool.free_of(uu, v)) => Some(homogeneity(pool, form, uu, e.shared)),
-                _ => None,
-            };
-            let same = match homogeneous {
-                Some(decision) => decision.known(),
-                None => {
-                    let d = pool.sub(energy_function, en);
-                    decide(pool, d, e.shared).known()
-                }
-            };
-            explain_energy(pool, &mut verdicts, same, homogeneous, tt, uu, u0, qd, e.shared);
-            (Some(en), same)
-        }
-        _ => {
-            verdicts.energy.push(EnergyReason::OnlyLagrangian);
-            (None, None)
-        }
-    };
-    Judged { energy_function, energy, hamiltonian_is_energy, hamiltonian_conserved, explicit_time, verdicts }
-}
-
-/// H(q, p, t), q'(q, p, t) and Hamilton's equations by the Legendre transform,
-/// for L quadratic in q'; otherwise none, with the reason in the verdicts.
-type Hamiltonian = (Option<ExprId>, Option<Vec<ExprId>>, Option<Vec<(ExprId, ExprId)>>);
-
-fn hamiltonian(
-    pool: &mut Pool,
-    s: &Symbols,
-    e: &Energies,
-    m: &Motion,
-    ext: &External,
-    verdicts: &mut Verdicts,
-    is_var: &dyn Fn(Symbol) -> bool,
-) -> Hamiltonian {
-    if e.shared && e.form.is_some() {
-        // M⁻¹ written out would grow with the cube of a full block, and with
-        // every level of the tree: the shared path does not invert M.
-        let coupled = largest_block(pool, &m.mass_matrix);
-        verdicts.hamiltonian.push(HamiltonianReason::TooLong { coupled });
-        return (None, None, None);
-    }
-    let Some((form, sparsity)) = e.form.as_ref().zip(e.sparsity.as_ref()) else {
-        verdicts.hamiltonian.push(HamiltonianReason::NotQuadratic);
-        return (None, None, None);
-    };
-    let sys = System { q: &s.q, qd: &s.qd, p: &s.p, form, sparsity, dissipation: ext.dissipation, forces: &ext.forces };
-    match legendre(pool, &sys, is_var) {
-        Some((h, v, eqs)) => (Some(h), Some(v), Some(eqs)),
-        None => {
-            let coupled = largest_block(pool, &m.mass_matrix);
-            verdicts.hamiltonian.push(HamiltonianReason::TooLong { coupled });
-            (None, None, None)
-        }
-    }
-}
-
-/// The parts of a derivation the Legendre transform reads.
-struct System<'a> {
-    q: &'a [ExprId],
-    qd: &'a [ExprId],
-    p: &'a [ExprId],
-    form: &'a Quadratic,
-    sparsity: &'a Sparsity,
-    dissipation: Option<ExprId>,
-    forces: &'a [ExprId],
-}
-
-/// H(q, p, t), q'(q, p, t) and Hamilton's equations, for L quadratic in the
-/// velocities: L = ½q'ᵀMq' + bᵀq' + L₀ gives H = ½(p − b)ᵀM⁻¹(p − b) − L₀.
-/// None when the result would be too long to print.
-type Legendre = (ExprId, Vec<ExprId>, Vec<(ExprId, ExprId)>);
-
-fn legendre(pool: &mut Pool, s: &System, is_var: &dyn Fn(Symbol) -> bool) -> Option<Legendre> {
-    let n = s.q.len();
-    let (b, l0) = (&s.form.b, s.form.l0);
-    let shifted: Vec<ExprId> = (0..n).map(|i| pool.sub(s.p[i], b[i])).collect();
-    let no_b = b.iter().all(|&x| pool.is_zero(x));
-    // With M⁻¹ in closed form (blocks of at most 3 coordinates) and b = 0, H is
-    // Σ c_ij p_i p_j − L₀ with each coefficient simplified on its own, and so are
-    // q' and ṗ: nothing long is ever expanded.
-    if let (true, Some(inv)) = (no_b, small_block_inverse(pool, &s.form.m, is_var)) {
-        return Some(legendre_structured(pool, s, &inv, is_var));
-    }
-    let v = solve_symbolic(pool, &s.form.m, &shifted, is_var)?;
-    if v.iter().any(|&x| pool.tree_size(x) > MAX_PRINTED_TREE) {
-        return None;
-    }
-    let terms: Vec<ExprId> = (0..n).map(|i| pool.mul2(shifted[i], v[i])).collect();
-    let half = pool.rational(1, 2);
-    let kin = pool.add(&terms);
-    let kin = pool.mul2(half, kin);
-    let h = pool.sub(kin, l0);
-    let h = simplify_bounded(pool, h, is_var);
-    let vel_subst: Subst = (0..n).map(|i| (s.qd[i], v[i])).collect();
-    let mut eqs = Vec::with_capacity(n);
-    for i in 0..n {
-        let dh = pool.diff(h, s.q[i]);
-        let mut dp_terms = vec![pool.neg(dh)];
-        dp_terms.push(nonconservative(pool, s, i, &vel_subst));
-        let dp = pool.add(&dp_terms);
-        let dp = simplify_bounded(pool, dp, is_var);
-        if pool.tree_size(dp) > MAX_PRINTED_TREE {
-            return None;
-        }
-        eqs.push((v[i], dp));
-    }
-    Some((h, v, eqs))
-}
-
-/// −∂R/∂q_i' + Q_i written in (q, p, t) by the velocity substitution.
-fn nonconservative(pool: &mut Pool, s: &System, i: usize, vel_subst: &Subst) -> ExprId {
-    let mut terms = Vec::new();
-    if let Some(r) = s.dissipation {
-        let dr = pool.diff(r, s.qd[i]);
-        let dr = pool.substitute(dr, vel_subst);
-        terms.push(pool.neg(dr));
-    }
-    terms.push(pool.substitute(s.forces[i], vel_subst));
-    pool.add(&terms)
-}
-
-/// H = Σ_{i≤j} c_ij p_i p_j − L₀ with c_ii = ½(M⁻¹)_ii, c_ij = (M⁻¹)_ij, for b = 0.
-fn legendre_structured(pool: &mut Pool, s: &System, inv: &[Vec<ExprId>], is_var: &dyn Fn(Symbol) -> bool) -> Legendre {
-    let n = s.q.len();
-    let half = pool.rational(1, 2);
-    // The coefficients of H, one per pair of momenta M couples.
-    let mut pairs: Vec<(usize, usize, ExprId)> = Vec::new();
-    for i in 0..n {
-        for j in i..n {
-            if pool.is_zero(inv[i][j]) {
-                continue;
-            }
-            let c = if i == j { pool.mul2(half, inv[i][i]) } else { inv[i][j] };
-            pairs.push((i, j, c));
-        }
-    }
-    let mut h_terms: Vec<ExprId> = Vec::with_capacity(pairs.len() + 1);
-    for &(i, j, c) in &pairs {
-        let mono = if i == j { pool.powi(s.p[i], 2) } else { pool.mul2(s.p[i], s.p[j]) };
-        h_terms.push(pool.mul2(c, mono));
-    }
-    h_terms.push(pool.neg(s.form.l0));
-    let h = pool.add(&h_terms);
-    let v: Vec<ExprId> = (0..n)
-        .map(|i| {
-            let coupled: Vec<usize> = (0..n).filter(|&j| !pool.is_zero(inv[i][j])).collect();
-            let terms: Vec<ExprId> = coupled.into_iter().map(|j| pool.mul2(inv[i][j], s.p[j])).collect();
-            pool.add(&terms)
-        })
-        .collect();
-    // ṗ_k = −∂H/∂q_k = ½ q'ᵀ (∂M/∂q_k) q' + ∂L₀/∂q_k with q' = M⁻¹p, since
-    // ∂M⁻¹/∂q = −M⁻¹ (∂M/∂q) M⁻¹: only the few nonzero ∂M_ij/∂q_k are formed.
-    let vel_subst: Subst = (0..n).map(|i| (s.qd[i], v[i])).collect();
-    let mut eqs = Vec::with_capacity(n);
-    let (depends, grad_l0) = (&s.sparsity.depends, &s.sparsity.grad_l0);
-    for k in 0..n {
-        let mut terms = Vec::new();
-        for &(i, j) in &depends[k] {
-            let d = pool.diff(s.form.m[i][j], s.q[k]);
-            let d = if i == j { pool.mul2(half, d) } else { d };
-            let d = pool.simplify_in(d, is_var);
-            if !pool.is_zero(d) {
-                terms.push(pool.mul(&[d, v[i], v[j]]));
-            }
-        }
-        let dl0 = grad_l0[k];
-        let extra = nonconservative(pool, s, k, &vel_subst);
-        let rest = pool.add2(dl0, extra);
-        terms.push(pool.simplify_in(rest, is_var));
-        eqs.push((v[k], pool.add(&terms)));
-    }
-    (h, v, eqs)
-}
-
-/// M⁻¹ entry by entry when every block M couples has at most 3 coordinates
-/// (1×1 blocks divide; 2×2 and 3×3 use the adjugate over the simplified
-/// determinant), each entry simplified; None for larger blocks.
-fn small_block_inverse(
-    pool: &mut Pool,
-    m: &[Vec<ExprId>],
-    is_var: &dyn Fn(Symbol) -> bool,
-) -> Option<Vec<Vec<ExprId>>> {
-    let n = m.len();
-    let blocks = blocks(pool, m);
-    if blocks.iter().any(|idx| idx.len() > 3) {
-        return None;
-    }
-    let mut inv = vec![vec![pool.zero(); n]; n];
-    for idx in blocks {
-        let a: Vec<Vec<ExprId>> = idx.iter().map(|&i| idx.iter().map(|&j| m[i][j]).collect()).collect();
-        if idx.len() == 1 {
-            let one = pool.one();
-            inv[idx[0]][idx[0]] = pool.div(one, a[0][0]);
-            continue;
-        }
-        let (adj, det) = adjugate(pool, &a, is_var);
-        for (r, &i) in idx.iter().enumerate() {
-            for (c, &j) in idx.iter().enumerate().skip(r) {
-                // Common monomial factors of the (factored) cofactor and
-                // determinant cancel in the canonical product.
-                inv[i][j] = pool.div(adj[r][c], det);
-                inv[j][i] = inv[i][j];
-            }
-        }
-    }
-    Some(inv)
-}
-
 /// Largest tree size of an expression that is simplified (beyond it, expansion
 /// would cost more than it saves).
 const MAX_SIMPLIFIED_TREE: u64 = 1500;
@@ -1252,232 +922,6 @@ fn simplify_bounded(pool: &mut Pool, e: ExprId, is_var: &dyn Fn(Symbol) -> bool)
     }
 }
 
-/// The size of the largest block of coordinates coupled by M.
-fn largest_block(pool: &Pool, m: &[Vec<ExprId>]) -> usize {
-    blocks(pool, m).iter().map(Vec::len).max().unwrap_or(0)
-}
-
-/// Solves M v = r symbolically for the Legendre transform, block by block:
-/// coordinates that M couples form a block; 1×1 blocks divide, 2×2 and 3×3
-/// blocks use the adjugate over the (simplified) determinant, and larger
-/// blocks use Gaussian elimination without pivoting (M is positive definite)
-/// whose intermediate results stay shared in the DAG.
-fn solve_symbolic(
-    pool: &mut Pool,
-    m: &[Vec<ExprId>],
-    r: &[ExprId],
-    is_var: &dyn Fn(Symbol) -> bool,
-) -> Option<Vec<ExprId>> {
-    let n = r.len();
-    let mut v = vec![pool.zero(); n];
-    for idx in blocks(pool, m) {
-        let k = idx.len();
-        let a: Vec<Vec<ExprId>> = idx.iter().map(|&i| idx.iter().map(|&j| m[i][j]).collect()).collect();
-        let rhs: Vec<ExprId> = idx.iter().map(|&i| r[i]).collect();
-        let sol = match k {
-            1 => vec![pool.div(rhs[0], a[0][0])],
-            2 | 3 => adjugate_solve(pool, &a, &rhs, is_var),
-            _ => elimination_solve(pool, a, rhs)?,
-        };
-        for (pos, &i) in idx.iter().enumerate() {
-            v[i] = sol[pos];
-        }
-    }
-    Some(v)
-}
-
-/// The groups of coordinates that M couples (connected components of its
-/// nonzero pattern), each in ascending order.
-fn blocks(pool: &Pool, m: &[Vec<ExprId>]) -> Vec<Vec<usize>> {
-    let n = m.len();
-    let mut block_of: Vec<usize> = (0..n).collect();
-    fn find(b: &mut [usize], i: usize) -> usize {
-        let mut i = i;
-        while b[i] != i {
-            b[i] = b[b[i]];
-            i = b[i];
-        }
-        i
-    }
-    for i in 0..n {
-        for j in 0..n {
-            if i != j && !pool.is_zero(m[i][j]) {
-                let (a, b) = (find(&mut block_of, i), find(&mut block_of, j));
-                block_of[a] = b;
-            }
-        }
-    }
-    let mut blocks: Vec<Vec<usize>> = Vec::new();
-    let mut root_index: Vec<Option<usize>> = vec![None; n];
-    for i in 0..n {
-        let root = find(&mut block_of, i);
-        match root_index[root] {
-            Some(k) => blocks[k].push(i),
-            None => {
-                root_index[root] = Some(blocks.len());
-                blocks.push(vec![i]);
-            }
-        }
-    }
-    blocks
-}
-
-fn adjugate_solve(pool: &mut Pool, a: &[Vec<ExprId>], r: &[ExprId], is_var: &dyn Fn(Symbol) -> bool) -> Vec<ExprId> {
-    let k = a.len();
-    let (adj, det) = adjugate(pool, a, is_var);
-    (0..k)
-        .map(|i| {
-            let terms: Vec<ExprId> = (0..k).map(|j| pool.mul2(adj[i][j], r[j])).collect();
-            let num = pool.add(&terms);
-            let num = pool.simplify_in(num, is_var);
-            pool.div(num, det)
-        })
-        .collect()
-}
-
-/// The adjugate (entries simplified) and the simplified determinant of a 2×2 or 3×3 matrix.
-fn adjugate(pool: &mut Pool, a: &[Vec<ExprId>], is_var: &dyn Fn(Symbol) -> bool) -> (Vec<Vec<ExprId>>, ExprId) {
-    let k = a.len();
-    let minor = |pool: &mut Pool, rows: [usize; 2], cols: [usize; 2]| {
-        let x = pool.mul2(a[rows[0]][cols[0]], a[rows[1]][cols[1]]);
-        let y = pool.mul2(a[rows[0]][cols[1]], a[rows[1]][cols[0]]);
-        pool.sub(x, y)
-    };
-    // adj[i][j] = cofactor C_ji.
-    let mut adj = vec![vec![pool.zero(); k]; k];
-    let det;
-    if k == 2 {
-        adj[0][0] = a[1][1];
-        adj[1][1] = a[0][0];
-        adj[0][1] = pool.neg(a[0][1]);
-        adj[1][0] = pool.neg(a[1][0]);
-        det = minor(pool, [0, 1], [0, 1]);
-    } else {
-        let others = |i: usize| -> [usize; 2] {
-            match i {
-                0 => [1, 2],
-                1 => [0, 2],
-                _ => [0, 1],
-            }
-        };
-        // M is symmetric, and so is its adjugate.
-        for i in 0..3 {
-            for j in i..3 {
-                let c = minor(pool, others(j), others(i));
-                let c = if (i + j) % 2 == 0 { c } else { pool.neg(c) };
-                adj[i][j] = pool.simplify_in(c, is_var);
-                adj[j][i] = adj[i][j];
-            }
-        }
-        let terms: Vec<ExprId> = (0..3).map(|j| pool.mul2(a[0][j], adj[j][0])).collect();
-        det = pool.add(&terms);
-    }
-    let det = pool.simplify_in(det, is_var);
-    (adj, det)
-}
-
-/// Gaussian elimination; None as soon as a pivot is too long to print, since
-/// the solution divides by every pivot (a dense block of a pendulum with four
-/// links gets there within a few columns, long before the O(k³) work is done).
-fn elimination_solve(pool: &mut Pool, mut a: Vec<Vec<ExprId>>, mut r: Vec<ExprId>) -> Option<Vec<ExprId>> {
-    let k = r.len();
-    for col in 0..k {
-        let piv = a[col][col];
-        if pool.tree_size(piv) > MAX_PRINTED_TREE {
-            return None;
-        }
-        for row in col + 1..k {
-            if pool.is_zero(a[row][col]) {
-                continue;
-            }
-            let factor = pool.div(a[row][col], piv);
-            for c in col..k {
-                let x = pool.mul2(factor, a[col][c]);
-                a[row][c] = pool.sub(a[row][c], x);
-            }
-            let x = pool.mul2(factor, r[col]);
-            r[row] = pool.sub(r[row], x);
-        }
-    }
-    let mut v = vec![pool.zero(); k];
-    for row in (0..k).rev() {
-        let mut acc = r[row];
-        for c in row + 1..k {
-            let x = pool.mul2(a[row][c], v[c]);
-            acc = pool.sub(acc, x);
-        }
-        v[row] = pool.div(acc, a[row][row]);
-    }
-    Some(v)
-}
-
-/// Whether T is homogeneous of degree 2 in the velocities, read from L's
-/// form when U is free of them: b = 0 and T₀ = L₀ + U = 0, each coefficient
-/// decided on its own.
-fn homogeneity(pool: &mut Pool, form: &Quadratic, potential: ExprId, shared: bool) -> Decision {
-    let t0 = pool.add2(form.l0, potential);
-    let mut all_zero = true;
-    for &b in form.b.iter().chain([&t0]) {
-        match decide(pool, b, shared) {
-            Decision::NonZero => return Decision::NonZero,
-            d => all_zero &= d.is_zero(),
-        }
-    }
-    if all_zero {
-        Decision::Zero
-    } else {
-        Decision::Undecided
-    }
-}
-
-/// Explains whether h equals T + U₀, the way the notes do: a time-dependent
-/// transformation x(q, t) makes T inhomogeneous in q'; a velocity-dependent
-/// potential adds terms to h.
-#[allow(clippy::too_many_arguments)]
-fn explain_energy(
-    pool: &mut Pool,
-    verdicts: &mut Verdicts,
-    same: Option<bool>,
-    homogeneous: Option<Decision>,
-    kinetic: ExprId,
-    potential: ExprId,
-    u0: ExprId,
-    qd: &[ExprId],
-    shared: bool,
-) {
-    // T homogeneous of degree 2 in q' ⇔ Σ q' ∂T/∂q' = 2T.
-    let homogeneous = homogeneous.unwrap_or_else(|| {
-        let mut terms: Vec<ExprId> = qd
-            .iter()
-            .map(|&v| {
-                let d = pool.diff(kinetic, v);
-                pool.mul2(v, d)
-            })
-            .collect();
-        let two = pool.int(2);
-        let two_t = pool.mul2(two, kinetic);
-        terms.push(pool.neg(two_t));
-        let euler = pool.add(&terms);
-        decide(pool, euler, shared)
-    });
-    verdicts.energy.push(match homogeneous {
-        Decision::Zero => EnergyReason::KineticHomogeneous,
-        Decision::NonZero => EnergyReason::KineticNotHomogeneous,
-        Decision::Undecided => EnergyReason::HomogeneityUndecided,
-    });
-    let velocity_part = pool.sub(potential, u0);
-    match decide(pool, velocity_part, shared) {
-        Decision::Zero => {}
-        Decision::NonZero => verdicts.energy.push(EnergyReason::VelocityDependentPotential),
-        Decision::Undecided => verdicts.energy.push(EnergyReason::VelocityDependenceUndecided),
-    }
-    verdicts.energy.push(match same {
-        Some(true) => EnergyReason::IsEnergy,
-        Some(false) => EnergyReason::NotEnergy,
-        None => EnergyReason::EnergyUndecided,
-    });
-}
-
 /// Where the model states its energy: the Lagrangian, else the kinetic
 /// energy, else its first particle.
 fn energy_span(model: &Model) -> Option<std::ops::Range<usize>> {
@@ -1492,6 +936,7 @@ fn energy_span(model: &Model) -> Option<std::ops::Range<usize>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::probe::Subst;
 
     /// Hamilton's equations as built (structured for small blocks) agree with
     /// q' = ∂H/∂p and ṗ = −∂H/∂q − ∂R/∂q' + Q differentiated from H itself.
