@@ -425,10 +425,7 @@ position = ["r*cos(th)", "r*sin(th)"]
             .map(ToString::to_string)
             .chain(d.verdicts().conservation.iter().map(ToString::to_string))
         {
-            check_contains(
-                &out,
-                &[&format!("<li>{}</li>", reason.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;"))],
-            );
+            check_contains(&out, &[&format!("<li>{}</li>", crate::markup::text(&reason.to_string()))]);
         }
 
         let out = check_mathml(&derive(FREE));

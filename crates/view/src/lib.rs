@@ -37,6 +37,7 @@ pub mod extremal;
 pub mod heatmap;
 pub mod inertia;
 pub mod linearize;
+mod markup;
 pub mod modes;
 mod number;
 pub mod orbit;

@@ -3,7 +3,7 @@
 //! shapes; [`animation`] an SVG of every mode, animated. The computation is
 //! `mech::normal_modes`.
 
-use crate::{human, Terms};
+use crate::{human, markup, Terms};
 use mech::{Derivation, ModeKind, Modes, ModesConfig};
 use std::fmt::Write as _;
 
@@ -232,7 +232,7 @@ pub fn animation(d: &Derivation, m: &Modes) -> String {
     let _ = writeln!(
         s,
         r#"<text x="20" y="30" font-size="20" font-weight="bold">{} — normal modes</text>"#,
-        escape(&d.model().name)
+        markup::text(&d.model().name)
     );
     let _ = writeln!(
         s,
@@ -248,7 +248,7 @@ pub fn animation(d: &Derivation, m: &Modes) -> String {
             ModeKind::Free => format!("Ω{} = 0 (free)", j + 1),
             ModeKind::Unstable => format!("Ω{}² = {} (unstable)", j + 1, human(mode.omega_squared)),
         };
-        let _ = writeln!(s, r##"<text x="20" y="{:.1}" font-size="15">{}</text>"##, y0 + 5.0, escape(&label));
+        let _ = writeln!(s, r##"<text x="20" y="{:.1}" font-size="15">{}</text>"##, y0 + 5.0, markup::text(&label));
         let _ = writeln!(s, r##"<line x1="{left}" y1="{y0:.1}" x2="{:.1}" y2="{y0:.1}" stroke="#ccc"/>"##, left + span);
         let points = |phase: f64| -> String {
             (0..n)
@@ -301,17 +301,13 @@ pub fn animation(d: &Derivation, m: &Modes) -> String {
                     r##"<text x="{:.1}" y="{:.1}" font-size="13" text-anchor="middle" fill="#666">{}</text>"##,
                     x_of(i),
                     y0 + row_h / 2.0 + 5.0,
-                    escape(&m.coordinates[i])
+                    markup::text(&m.coordinates[i])
                 );
             }
         }
     }
     s.push_str("</svg>\n");
     s
-}
-
-fn escape(text: &str) -> String {
-    text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
 }
 
 #[cfg(test)]

@@ -324,7 +324,7 @@ fn budget(per_row: usize) -> usize {
 
 /// The page: the template with the style, the script and the data inlined.
 pub fn page(data: &Value) -> String {
-    let title = escape(data["name"].as_str().unwrap_or("lagrange report"));
+    let title = crate::markup::quoted(data["name"].as_str().unwrap_or("lagrange report"));
     let data = script_safe_json(data);
     fill(&strip_comments(PAGE), &[("title", &title), ("style", STYLE), ("script", SCRIPT), ("data", &data)])
 }
@@ -392,11 +392,6 @@ fn fill(template: &str, values: &[(&str, &str)]) -> String {
     }
     out.push_str(rest);
     out
-}
-
-/// Text for HTML.
-fn escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
 }
 
 /// Positions for drawing, rounded to [`DRAWN_DIGITS`] digits of a size: a

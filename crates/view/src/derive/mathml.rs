@@ -6,6 +6,7 @@ use std::fmt::Write;
 use sym::{ExprId, PrintOptions, Printout};
 
 use super::{conservation_verdict, constraint_tags, cyclic_momentum, energy_verdict, plural, Defined, Item, Section};
+use crate::markup::text as escape;
 
 /// The MathML rendering: an HTML fragment with a heading per section, the
 /// equations as `<mtable>` rows in block `<math>` elements (as LaTeX's
@@ -67,11 +68,6 @@ pub(super) fn sub(base: &str, subscript: &str) -> String {
 /// `(items)`, comma separated: a tuple or a row vector.
 pub(super) fn tuple(items: &[String]) -> String {
     format!("<mrow><mo>(</mo>{}<mo>)</mo></mrow>", items.join("<mo>,</mo>"))
-}
-
-/// Plain text, escaped for HTML and MathML.
-pub(super) fn escape(text: &str) -> String {
-    text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
 }
 
 /// Inline math.
