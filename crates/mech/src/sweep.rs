@@ -243,6 +243,14 @@ pub struct SweepConfig {
     pub threads: Option<usize>,
 }
 
+impl SweepConfig {
+    /// The integrator's settings for each run: the tolerances, and the end as
+    /// the longest step (the one copy from a sweep's settings to `num::Config`).
+    pub(crate) fn solver_config(&self) -> num::Config {
+        num::Config { rtol: self.rtol, atol: self.atol, h_max: Some(self.until), ..num::Config::default() }
+    }
+}
+
 impl Default for SweepConfig {
     fn default() -> Self {
         SweepConfig {

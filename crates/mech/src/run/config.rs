@@ -119,6 +119,21 @@ impl Default for RunConfig {
 pub const MAX_SAMPLES: usize = 10_000_000;
 
 impl RunConfig {
+    /// The integrator's settings for this run: its tolerances, its step (`dt`),
+    /// its end as the longest step, and its step budget. The one copy from a
+    /// run's settings to `num::Config`; a caller adds what only it knows (the
+    /// Taylor look-ahead).
+    pub(crate) fn solver_config(&self) -> num::Config {
+        num::Config {
+            rtol: self.rtol,
+            atol: self.atol,
+            dt: self.dt,
+            h_max: Some(self.until),
+            max_steps: self.max_steps,
+            ..num::Config::default()
+        }
+    }
+
     /// Checks what a run cannot start without, before anything is computed: a
     /// positive, finite end time; a fixed step, if given, that reaches it within
     /// the run's step budget and is no longer than the spacing of the

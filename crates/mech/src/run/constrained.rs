@@ -31,7 +31,7 @@ use crate::run::{
     Audit, ConstraintAudit, ProjectionMap, RowBuffer, RunConfig, RunError, RunFailure, Start, Stepping, TimeScale,
     VelocityMap,
 };
-use num::{Config, LinearSolver, Method, OdeSystem, RhsError, SolveError};
+use num::{LinearSolver, Method, OdeSystem, RhsError, SolveError};
 use sym::{ExprId, Tape};
 
 /// The largest initial residual (relative to the size of the constraint's
@@ -444,13 +444,7 @@ impl Constrained {
         system.fix_integral_levels(0.0, &y0);
         system.project(0.0, &mut y0).map_err(|e| RunError::Input(ModelError::whole(format!("at t = 0: {e}"))))?;
 
-        let solver_config = Config {
-            rtol: config.rtol,
-            atol: config.atol,
-            h_max: Some(config.until),
-            max_steps: config.max_steps,
-            ..Config::default()
-        };
+        let solver_config = config.solver_config();
         let solver = method
             .build(system.clone(), 0.0, &y0, &solver_config)
             .map_err(|e| RunError::Input(ModelError::whole(e.to_string())))?;

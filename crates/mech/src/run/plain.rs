@@ -64,15 +64,7 @@ impl Plain {
             return Err(RunError::Input(e));
         }
         let mut probe_system = system.clone();
-        let solver_config = Config {
-            rtol: config.rtol,
-            atol: config.atol,
-            dt: config.dt,
-            h_max: Some(config.until),
-            look_ahead: look_ahead(method, config),
-            max_steps: config.max_steps,
-            ..Config::default()
-        };
+        let solver_config = Config { look_ahead: look_ahead(method, config), ..config.solver_config() };
         let build = |system: System, config: &Config| -> Result<Box<dyn Solver>, SolveError> {
             if form == Form::Separable {
                 method.build_separable(system, 0.0, &y0, config)

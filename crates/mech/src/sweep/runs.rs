@@ -225,7 +225,7 @@ impl Plan<'_> {
         let mut qd = vec![0.0; n];
         let mut inv = vec![0.0; sys.n_invariants()];
         let h0 = sys.invariants_at(0.0, &y0, &mut qd, &mut inv).ok().map(|()| inv[0]);
-        let mut solver_config = Config { rtol: cfg.rtol, atol: cfg.atol, h_max: Some(cfg.until), ..Config::default() };
+        let mut solver_config = cfg.solver_config();
         let mut y = y0.clone();
         let mut t = 0.0;
         let mut twin_failure: Option<String> = None;
@@ -441,7 +441,7 @@ impl Plan<'_> {
             *run = take(slot, &mut batch, &mut params, &mut target);
         }
         series.set_parameters(&params);
-        let solver_config = Config { rtol: cfg.rtol, atol: cfg.atol, h_max: Some(cfg.until), ..Config::default() };
+        let solver_config = cfg.solver_config();
         while on.iter().any(Option::is_some) {
             if halted() {
                 return None;
