@@ -41,8 +41,8 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let path = &args.model;
     let (source, d) = crate::derive_file(path, &args.set, &[Some(args.out.as_path())])?;
     let derived = started.elapsed().as_secs_f64();
-    let settings = crate::simulate::RunSettings {
-        until: args.until,
+    let settings = mech::RunSettings {
+        until: Some(args.until),
         method: args.method.as_deref(),
         rtol: args.rtol,
         atol: None,

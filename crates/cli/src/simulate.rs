@@ -12,8 +12,8 @@
 use crate::diagnostics::Failure;
 use crate::interrupt::{self, Signal};
 use crate::stream::RowWriter;
-use mech::{Derivation, RunConfig, RunError, StopCondition};
-use num::{Method, Output};
+use mech::{Derivation, RunConfig, RunError, RunSettings, SettingError, StopCondition};
+use num::Method;
 use std::io::{IsTerminal, Write};
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
@@ -62,7 +62,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
 
     let Some(until) = opts.until else { return Err(Failure::usage("simulate needs --until T")) };
     let settings = RunSettings {
-        until,
+        until: Some(until),
         method: opts.method.as_deref(),
         rtol: opts.rtol,
         atol: opts.atol,
@@ -276,47 +276,15 @@ impl PendingCsv {
     }
 }
 
-/// The run settings `simulate` and `report` take from the command line.
-pub(crate) struct RunSettings<'a> {
-    pub until: f64,
-    pub method: Option<&'a str>,
-    pub rtol: Option<f64>,
-    pub atol: Option<f64>,
-    pub dt: Option<f64>,
-    pub samples: Option<usize>,
-    pub every_step: bool,
-}
-
-/// The settings checked and made a run's configuration (no stop conditions):
-/// atol defaults to rtol/1000 when only --rtol is given.
+/// The settings checked and made a run's configuration (no stop conditions),
+/// by `mech`'s one rule, its refusals in the command line's words.
 pub(crate) fn run_config(path: &Path, s: &RunSettings<'_>) -> Result<RunConfig, Failure> {
-    let method = match s.method {
-        None => None,
-        Some(name) => Some(name.parse::<Method>().map_err(|e| Failure::input(path, e.to_string()))?),
-    };
-    for (name, v) in [("--rtol", s.rtol), ("--atol", s.atol), ("--dt", s.dt)] {
-        if let Some(v) = v {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(Failure::usage(format!("{name} must be a positive number, not {}", num::Shortest(v))));
-            }
+    RunConfig::from_settings(s).map_err(|e| match e {
+        SettingError::UnknownMethod(message) => Failure::input(path, message),
+        SettingError::NotPositive { setting, value } => {
+            Failure::usage(format!("--{setting} must be a positive number, not {}", num::Shortest(value)))
         }
-    }
-    let defaults = RunConfig::default();
-    let output = match (s.every_step, s.samples) {
-        (true, _) => Output::EveryStep,
-        (false, Some(n)) if n < 2 => return Err(Failure::usage("--samples needs at least 2 rows (both ends)")),
-        (false, Some(n)) => Output::Samples(n),
-        (false, None) => defaults.output,
-    };
-    let rtol = s.rtol.unwrap_or(defaults.rtol);
-    Ok(RunConfig {
-        until: s.until,
-        method,
-        rtol,
-        atol: s.atol.unwrap_or(if s.rtol.is_some() { rtol * 1e-3 } else { defaults.atol }),
-        dt: s.dt,
-        output,
-        ..defaults
+        SettingError::TooFewSamples { .. } => Failure::usage("--samples needs at least 2 rows (both ends)"),
     })
 }
 

@@ -36,7 +36,7 @@ use crate::error::ModelError;
 use audit::InvariantAudit;
 pub use budget::{approx, BudgetAdvice, BudgetStage, StepBudget, TimeScale, STEPS_PER_TIME_SCALE};
 pub(crate) use config::is_positive_time;
-pub use config::{RunConfig, StopCondition, MAX_SAMPLES};
+pub use config::{RunConfig, RunSettings, SettingError, StopCondition, MAX_SAMPLES};
 use dynamics::{Dynamics, Form};
 use num::{integrate, integrate_projected, Event, Method, ObservationKind, RhsError, SolveError, Solver, StopReason};
 pub use report::{Audit, ConstraintAudit, Row, RunError, RunFailure, RunReport};

@@ -9,8 +9,7 @@
 use crate::errors::{self, guarded};
 use crate::model::Derived;
 use crate::signals::Signals;
-use mech::{BudgetAdvice, RunConfig, RunError, StepBudget, StopCondition};
-use num::{Method, Output};
+use mech::{BudgetAdvice, RunConfig, RunError, RunSettings, SettingError, StepBudget, StopCondition};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::ops::ControlFlow;
@@ -35,17 +34,22 @@ pub struct Options {
 impl Derived {
     fn config(&self, py: Python<'_>, o: &Options) -> PyResult<RunConfig> {
         let usage = |message: String| errors::plain_error(py, "simulate", &message, None);
-        let method = match &o.method {
-            None => None,
-            Some(name) => Some(name.parse::<Method>().map_err(|e| usage(format!("method: {e}")))?),
+        let settings = RunSettings {
+            until: Some(o.until),
+            method: o.method.as_deref(),
+            rtol: o.rtol,
+            atol: o.atol,
+            dt: o.dt,
+            samples: o.samples,
+            every_step: o.every_step,
         };
-        for (name, v) in [("rtol", o.rtol), ("atol", o.atol), ("dt", o.dt)] {
-            if let Some(v) = v {
-                if !(v.is_finite() && v > 0.0) {
-                    return Err(usage(format!("{name} must be a positive number, not {v}")));
-                }
+        let base = RunConfig::from_settings(&settings).map_err(|e| match e {
+            SettingError::UnknownMethod(message) => usage(format!("method: {message}")),
+            SettingError::NotPositive { setting, value } => {
+                usage(format!("{setting} must be a positive number, not {value}"))
             }
-        }
+            SettingError::TooFewSamples { .. } => usage("samples needs at least 2 rows (both ends)".into()),
+        })?;
         let conditions = |texts: &[String], what: &str| -> PyResult<Vec<StopCondition>> {
             texts
                 .iter()
@@ -54,25 +58,11 @@ impl Derived {
                 })
                 .collect()
         };
-        let defaults = RunConfig::default();
-        let rtol = o.rtol.unwrap_or(defaults.rtol);
-        let output = match (o.every_step, o.samples) {
-            (true, _) => Output::EveryStep,
-            (false, Some(n)) if n < 2 => return Err(usage("samples needs at least 2 rows (both ends)".into())),
-            (false, Some(n)) => Output::Samples(n),
-            (false, None) => defaults.output,
-        };
         let config = RunConfig {
-            until: o.until,
-            method,
-            rtol,
-            atol: o.atol.unwrap_or(if o.rtol.is_some() { rtol * 1e-3 } else { defaults.atol }),
-            dt: o.dt,
-            output,
             stop_when: conditions(&o.stop_when, "stop_when")?,
             crossings: conditions(&o.crossing, "crossing")?,
-            max_steps: defaults.max_steps,
             initial: o.initial.clone(),
+            ..base
         };
         config.check().map_err(|e| self.refused(py, e))?;
         Ok(config)

@@ -5,7 +5,7 @@
 
 use crate::located::{error, model_error};
 use crate::options::Options;
-use mech::{Derivation, Method, Model, Output, RunConfig, RunError};
+use mech::{Derivation, Model, RunConfig, RunError, RunSettings, SettingError};
 use serde_json::{json, Value};
 use std::ops::ControlFlow;
 use wasm_bindgen::prelude::wasm_bindgen;
@@ -89,31 +89,20 @@ pub fn derive(source: &str, options_json: &str) -> String {
 
 /// The run configuration of the options, with the CLI's defaults and checks.
 fn run_config(o: &Options) -> Result<RunConfig, Failure> {
-    let method = match &o.method {
-        None => None,
-        Some(name) => Some(name.parse::<Method>().map_err(plain)?),
+    let settings = RunSettings {
+        until: o.until,
+        method: o.method.as_deref(),
+        rtol: o.rtol,
+        atol: o.atol,
+        samples: o.samples,
+        ..RunSettings::default()
     };
-    for (name, v) in [("rtol", o.rtol), ("atol", o.atol)] {
-        if let Some(v) = v {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(plain(format!("{name} must be a positive number, not {v}")));
-            }
+    RunConfig::from_settings(&settings).map_err(|e| match e {
+        SettingError::UnknownMethod(message) => plain(message),
+        SettingError::NotPositive { setting, value } => {
+            plain(format!("{setting} must be a positive number, not {value}"))
         }
-    }
-    let defaults = RunConfig::default();
-    let output = match o.samples {
-        Some(n) if n < 2 => return Err(plain("samples: a run needs at least 2 rows (both ends)")),
-        Some(n) => Output::Samples(n),
-        None => defaults.output,
-    };
-    let rtol = o.rtol.unwrap_or(defaults.rtol);
-    Ok(RunConfig {
-        until: o.until.unwrap_or(defaults.until),
-        method,
-        rtol,
-        atol: o.atol.unwrap_or(if o.rtol.is_some() { rtol * 1e-3 } else { defaults.atol }),
-        output,
-        ..defaults
+        SettingError::TooFewSamples { .. } => plain("samples: a run needs at least 2 rows (both ends)"),
     })
 }
 

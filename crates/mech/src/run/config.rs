@@ -114,6 +114,85 @@ impl Default for RunConfig {
     }
 }
 
+/// A run's settings as a front end receives them (the CLI's flags, Python's
+/// keyword arguments, the browser's options), before defaults and checks:
+/// [`RunConfig::from_settings`] makes them a configuration.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct RunSettings<'a> {
+    /// End time; None for the default.
+    pub until: Option<f64>,
+    /// A method's name (`--list-methods`); None for the derivation's choice.
+    pub method: Option<&'a str>,
+    /// Relative tolerance; None for the default.
+    pub rtol: Option<f64>,
+    /// Absolute tolerance; None for the default (see [`RunConfig::from_settings`]).
+    pub atol: Option<f64>,
+    /// A fixed step, for fixed-step methods.
+    pub dt: Option<f64>,
+    /// Output rows, both ends included; None for the default.
+    pub samples: Option<usize>,
+    /// A row at every step instead of samples.
+    pub every_step: bool,
+}
+
+/// A setting [`RunConfig::from_settings`] refuses, for the front end to name
+/// in its own terms (`--rtol` in the CLI, `rtol=` in Python).
+#[derive(Debug, Clone, PartialEq)]
+pub enum SettingError {
+    /// No method has that name: the message lists the known ones.
+    UnknownMethod(String),
+    /// `rtol`, `atol` or `dt` (the setting's bare name) is not a positive,
+    /// finite number.
+    NotPositive {
+        /// `rtol`, `atol` or `dt`.
+        setting: &'static str,
+        /// What was given.
+        value: f64,
+    },
+    /// Fewer than two output rows: a run writes both ends.
+    TooFewSamples {
+        /// What was given.
+        samples: usize,
+    },
+}
+
+impl RunConfig {
+    /// The configuration of `settings`, the defaults where they are silent: the
+    /// one place that checks a front end's settings and fills them in. `atol`
+    /// defaults to `rtol`/1000 when only `rtol` is given (the pair then asks for
+    /// three more digits near zero than elsewhere), and to the default
+    /// otherwise. What needs the model (stop conditions, initial values) and
+    /// what needs the output (`check`) come after.
+    pub fn from_settings(settings: &RunSettings<'_>) -> Result<RunConfig, SettingError> {
+        let method = match settings.method {
+            None => None,
+            Some(name) => Some(name.parse::<Method>().map_err(|e| SettingError::UnknownMethod(e.to_string()))?),
+        };
+        for (setting, value) in [("rtol", settings.rtol), ("atol", settings.atol), ("dt", settings.dt)] {
+            if let Some(value) = value.filter(|v| !(v.is_finite() && *v > 0.0)) {
+                return Err(SettingError::NotPositive { setting, value });
+            }
+        }
+        let defaults = RunConfig::default();
+        let output = match (settings.every_step, settings.samples) {
+            (true, _) => Output::EveryStep,
+            (false, Some(samples)) if samples < 2 => return Err(SettingError::TooFewSamples { samples }),
+            (false, Some(n)) => Output::Samples(n),
+            (false, None) => defaults.output,
+        };
+        let rtol = settings.rtol.unwrap_or(defaults.rtol);
+        Ok(RunConfig {
+            until: settings.until.unwrap_or(defaults.until),
+            method,
+            rtol,
+            atol: settings.atol.unwrap_or(if settings.rtol.is_some() { rtol * 1e-3 } else { defaults.atol }),
+            dt: settings.dt,
+            output,
+            ..defaults
+        })
+    }
+}
+
 /// Most output rows a run writes: as many as the steps a solver may take by
 /// default (`num::Config::max_steps`); beyond that the file, not the motion, is the work.
 pub const MAX_SAMPLES: usize = 10_000_000;
@@ -170,4 +249,54 @@ impl RunConfig {
 /// Whether an end time is positive and finite (runs and sweeps start at t = 0).
 pub(crate) fn is_positive_time(t: f64) -> bool {
     t.is_finite() && t > 0.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn settings_get_the_defaults_and_atol_follows_a_given_rtol() {
+        let defaults = RunConfig::default();
+        let c = RunConfig::from_settings(&RunSettings::default()).unwrap();
+        assert_eq!(
+            (c.until, c.rtol, c.atol, c.method, c.dt),
+            (defaults.until, defaults.rtol, defaults.atol, None, None)
+        );
+        let c = RunConfig::from_settings(&RunSettings { rtol: Some(1e-6), ..RunSettings::default() }).unwrap();
+        assert_eq!((c.rtol, c.atol), (1e-6, 1e-6 * 1e-3));
+        let c = RunConfig::from_settings(&RunSettings { rtol: Some(1e-6), atol: Some(1e-7), ..RunSettings::default() })
+            .unwrap();
+        assert_eq!(c.atol, 1e-7);
+        let c = RunConfig::from_settings(&RunSettings {
+            until: Some(3.0),
+            method: Some("DOP853"),
+            every_step: true,
+            samples: Some(1),
+            ..RunSettings::default()
+        })
+        .unwrap();
+        assert_eq!((c.until, c.method, c.output), (3.0, Some(Method::Dop853), Output::EveryStep));
+    }
+
+    #[test]
+    fn bad_settings_are_refused_by_name() {
+        let refused = |s: RunSettings<'_>| RunConfig::from_settings(&s).unwrap_err();
+        assert_eq!(
+            refused(RunSettings { atol: Some(0.0), ..RunSettings::default() }),
+            SettingError::NotPositive { setting: "atol", value: 0.0 }
+        );
+        assert!(matches!(
+            refused(RunSettings { dt: Some(f64::NAN), ..RunSettings::default() }),
+            SettingError::NotPositive { setting: "dt", .. }
+        ));
+        assert_eq!(
+            refused(RunSettings { samples: Some(1), ..RunSettings::default() }),
+            SettingError::TooFewSamples { samples: 1 }
+        );
+        match refused(RunSettings { method: Some("rk4"), ..RunSettings::default() }) {
+            SettingError::UnknownMethod(message) => assert!(message.contains("dop853"), "{message}"),
+            other => panic!("{other:?}"),
+        }
+    }
 }
