@@ -20,8 +20,7 @@ mod resume;
 use crate::diagnostics::Failure;
 use crate::interrupt;
 use crate::stream::RowWriter;
-use mech::{Grid, Shard, SweepConfig, SweepError, SweepTable, TableRow};
-use num::Method;
+use mech::{Grid, SettingError, Shard, SweepConfig, SweepError, SweepTable, TableRow};
 use std::io::IsTerminal;
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
@@ -98,13 +97,6 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     };
     // clap requires --until without --merge; None is reported, not assumed.
     let Some(until) = args.until else { return Err(Failure::usage("sweep needs --until T")) };
-    for (name, v) in [("--rtol", args.rtol), ("--atol", args.atol)] {
-        if let Some(v) = v {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(Failure::usage(format!("{name} must be a positive number, not {}", num::Shortest(v))));
-            }
-        }
-    }
     if args.threads == Some(0) {
         return Err(Failure::usage("--threads must be at least 1"));
     }
@@ -115,23 +107,25 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         Some(text) => Shard::parse(text).map_err(usage)?,
         None => Shard::default(),
     };
-    let method = match &args.method {
-        Some(name) => Some(name.parse::<Method>().map_err(|e| Failure::usage(e.to_string()))?),
-        None => None,
-    };
-    let (source, derivation) = crate::derive_file(path, &args.set, &[args.out.as_deref(), args.heatmap.as_deref()])?;
-    derivation.reject_constraints("`lagrange sweep`").map_err(|e| Failure::model(path, &source, e))?;
-    let grid = Grid::parse(args.grid.as_deref().unwrap_or_default(), derivation.model()).map_err(usage)?;
-    let rtol = args.rtol.unwrap_or(mech::DEFAULT_RTOL);
-    let config = SweepConfig {
+    let settings = mech::SweepSettings {
         until,
-        method,
-        rtol,
-        atol: args.atol.unwrap_or(rtol * 1e-2),
+        method: args.method.as_deref(),
+        rtol: args.rtol,
+        atol: args.atol,
         lyapunov: !args.no_lyapunov,
         shard,
         threads: args.threads,
     };
+    let config = SweepConfig::from_settings(&settings).map_err(|e| match e {
+        SettingError::NotPositive { setting, value } => {
+            Failure::usage(format!("--{setting} must be a positive number, not {}", num::Shortest(value)))
+        }
+        SettingError::UnknownMethod(message) => Failure::usage(message),
+        SettingError::TooFewSamples { .. } => Failure::usage("--samples needs at least 2 rows (both ends)"),
+    })?;
+    let (source, derivation) = crate::derive_file(path, &args.set, &[args.out.as_deref(), args.heatmap.as_deref()])?;
+    derivation.reject_constraints("`lagrange sweep`").map_err(|e| Failure::model(path, &source, e))?;
+    let grid = Grid::parse(args.grid.as_deref().unwrap_or_default(), derivation.model()).map_err(usage)?;
     let sweep = mech::Sweep::new(&derivation, &grid, &config).map_err(|e| match e {
         SweepError::Model(e) => Failure::model(path, &source, e),
         other => usage(other),

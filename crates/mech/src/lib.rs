@@ -124,7 +124,7 @@ pub use run::{
 };
 pub use source::MAX_FILE_BYTES;
 pub use sweep::{
-    merge, sweep, Axis, Grid, Shard, Sweep, SweepConfig, SweepError, SweepHeader, SweepTable, TableRow, Target,
-    DEFAULT_RTOL, MAX_RUNS,
+    merge, sweep, Axis, Grid, Shard, Sweep, SweepConfig, SweepError, SweepHeader, SweepSettings, SweepTable, TableRow,
+    Target, DEFAULT_RTOL, MAX_RUNS,
 };
 pub use top::{FreeTop, HeavyTop, Nutation, NutationKind, Top, TopError, TopKind, TopReport};

@@ -70,10 +70,10 @@ use crate::error::ModelError;
 use crate::model::columns::{refuse_duplicates, Column};
 use crate::model::Model;
 use crate::run::body::GimbalGuard;
-use crate::run::choose_method;
 use crate::run::dynamics::{Dynamics, Form};
 use crate::run::ensemble::LANES;
 use crate::run::series::{LagrangeSeries, SeriesCode};
+use crate::run::{choose_method, SettingError};
 use num::Method;
 use std::ops::ControlFlow;
 use std::sync::OnceLock;
@@ -243,7 +243,53 @@ pub struct SweepConfig {
     pub threads: Option<usize>,
 }
 
+/// A sweep's settings as a front end receives them, before defaults and
+/// checks: [`SweepConfig::from_settings`] makes them a configuration.
+#[derive(Debug, Clone, Copy)]
+pub struct SweepSettings<'a> {
+    /// End time of every run.
+    pub until: f64,
+    /// A method's name; None for the sweep's default.
+    pub method: Option<&'a str>,
+    /// Relative tolerance; None for [`DEFAULT_RTOL`].
+    pub rtol: Option<f64>,
+    /// Absolute tolerance; None for `rtol`/100.
+    pub atol: Option<f64>,
+    /// Whether to estimate the largest Lyapunov exponent.
+    pub lyapunov: bool,
+    /// The runs of this shard.
+    pub shard: Shard,
+    /// Worker threads; None for every core.
+    pub threads: Option<usize>,
+}
+
 impl SweepConfig {
+    /// The configuration of `settings`: the one place that checks a front
+    /// end's method and tolerances for a sweep and fills in the defaults
+    /// (`rtol` [`DEFAULT_RTOL`], `atol` `rtol`/100), refusing with the same
+    /// [`SettingError`] as a run's settings.
+    pub fn from_settings(settings: &SweepSettings<'_>) -> Result<SweepConfig, SettingError> {
+        let method = match settings.method {
+            None => None,
+            Some(name) => Some(name.parse::<Method>().map_err(|e| SettingError::UnknownMethod(e.to_string()))?),
+        };
+        for (setting, value) in [("rtol", settings.rtol), ("atol", settings.atol)] {
+            if let Some(value) = value.filter(|v| !(v.is_finite() && *v > 0.0)) {
+                return Err(SettingError::NotPositive { setting, value });
+            }
+        }
+        let rtol = settings.rtol.unwrap_or(DEFAULT_RTOL);
+        Ok(SweepConfig {
+            until: settings.until,
+            method,
+            rtol,
+            atol: settings.atol.unwrap_or(rtol * 1e-2),
+            lyapunov: settings.lyapunov,
+            shard: settings.shard,
+            threads: settings.threads,
+        })
+    }
+
     /// The integrator's settings for each run: the tolerances, and the end as
     /// the longest step (the one copy from a sweep's settings to `num::Config`).
     pub(crate) fn solver_config(&self) -> num::Config {

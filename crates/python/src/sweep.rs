@@ -9,8 +9,7 @@
 use crate::errors::{self, guarded};
 use crate::model::Derived;
 use crate::signals::Signals;
-use mech::{Grid, Shard, Sweep, SweepConfig, SweepError, SweepTable};
-use num::Method;
+use mech::{Grid, SettingError, Shard, Sweep, SweepConfig, SweepError, SweepTable};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::ops::ControlFlow;
@@ -41,25 +40,6 @@ impl Derived {
     fn sweep<'py>(&self, py: Python<'py>, options: Options) -> PyResult<Bound<'py, PyDict>> {
         guarded("sweep", || {
             let grid = Grid::parse(&options.grid, self.d.model()).map_err(|e| sweep_error(py, "grid", e))?;
-            let defaults = SweepConfig::default();
-            let method = match &options.method {
-                None => None,
-                Some(name) => {
-                    Some(name.parse::<Method>().map_err(|e| errors::plain_error(py, "method", &e.to_string(), None))?)
-                }
-            };
-            for (name, v) in [("rtol", options.rtol), ("atol", options.atol)] {
-                if let Some(v) = v {
-                    if !(v.is_finite() && v > 0.0) {
-                        return Err(errors::plain_error(
-                            py,
-                            name,
-                            &format!("{name} must be a positive number, not {v}"),
-                            None,
-                        ));
-                    }
-                }
-            }
             if !(options.until.is_finite() && options.until > 0.0) {
                 let message = format!("until must be a positive time, not {}", options.until);
                 return Err(errors::plain_error(py, "until", &message, None));
@@ -72,16 +52,24 @@ impl Derived {
                     return Err(errors::plain_error(py, "shard", &message, None));
                 }
             };
-            let rtol = options.rtol.unwrap_or(defaults.rtol);
-            let config = SweepConfig {
+            let settings = mech::SweepSettings {
                 until: options.until,
-                method,
-                rtol,
-                atol: options.atol.unwrap_or(rtol * 1e-2),
+                method: options.method.as_deref(),
+                rtol: options.rtol,
+                atol: options.atol,
                 lyapunov: options.lyapunov,
                 shard,
                 threads: options.threads,
             };
+            let config = SweepConfig::from_settings(&settings).map_err(|e| match e {
+                SettingError::UnknownMethod(message) => errors::plain_error(py, "method", &message, None),
+                SettingError::NotPositive { setting, value } => {
+                    errors::plain_error(py, setting, &format!("{setting} must be a positive number, not {value}"), None)
+                }
+                SettingError::TooFewSamples { .. } => {
+                    errors::plain_error(py, "samples", "samples needs at least 2 rows (both ends)", None)
+                }
+            })?;
             let sweep = Sweep::new(&self.d, &grid, &config).map_err(|e| match e {
                 SweepError::Model(m) => self.error(py, &m),
                 other => sweep_error(py, "sweep", other),
