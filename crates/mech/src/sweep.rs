@@ -269,15 +269,8 @@ impl SweepConfig {
     /// (`rtol` [`DEFAULT_RTOL`], `atol` `rtol`/100), refusing with the same
     /// [`SettingError`] as a run's settings.
     pub fn from_settings(settings: &SweepSettings<'_>) -> Result<SweepConfig, SettingError> {
-        let method = match settings.method {
-            None => None,
-            Some(name) => Some(name.parse::<Method>().map_err(|e| SettingError::UnknownMethod(e.to_string()))?),
-        };
-        for (setting, value) in [("rtol", settings.rtol), ("atol", settings.atol)] {
-            if let Some(value) = value.filter(|v| !(v.is_finite() && *v > 0.0)) {
-                return Err(SettingError::NotPositive { setting, value });
-            }
-        }
+        let method = SettingError::method(settings.method)?;
+        SettingError::positive(&[("rtol", settings.rtol), ("atol", settings.atol)])?;
         let rtol = settings.rtol.unwrap_or(DEFAULT_RTOL);
         Ok(SweepConfig {
             until: settings.until,

@@ -156,6 +156,24 @@ pub enum SettingError {
     },
 }
 
+impl SettingError {
+    /// The method a setting names, if any ([`SettingError::UnknownMethod`] when none has that name).
+    pub(crate) fn method(name: Option<&str>) -> Result<Option<Method>, SettingError> {
+        name.map(|n| n.parse::<Method>().map_err(|e| SettingError::UnknownMethod(e.to_string()))).transpose()
+    }
+
+    /// Each setting given is a positive, finite number ([`SettingError::NotPositive`] at the first that is not).
+    pub(crate) fn positive(settings: &[(&'static str, Option<f64>)]) -> Result<(), SettingError> {
+        match settings
+            .iter()
+            .find_map(|&(setting, value)| value.filter(|v| !(v.is_finite() && *v > 0.0)).map(|v| (setting, v)))
+        {
+            Some((setting, value)) => Err(SettingError::NotPositive { setting, value }),
+            None => Ok(()),
+        }
+    }
+}
+
 impl RunConfig {
     /// The configuration of `settings`, the defaults where they are silent: the
     /// one place that checks a front end's settings and fills them in. `atol`
@@ -164,15 +182,8 @@ impl RunConfig {
     /// otherwise. What needs the model (stop conditions, initial values) and
     /// what needs the output (`check`) come after.
     pub fn from_settings(settings: &RunSettings<'_>) -> Result<RunConfig, SettingError> {
-        let method = match settings.method {
-            None => None,
-            Some(name) => Some(name.parse::<Method>().map_err(|e| SettingError::UnknownMethod(e.to_string()))?),
-        };
-        for (setting, value) in [("rtol", settings.rtol), ("atol", settings.atol), ("dt", settings.dt)] {
-            if let Some(value) = value.filter(|v| !(v.is_finite() && *v > 0.0)) {
-                return Err(SettingError::NotPositive { setting, value });
-            }
-        }
+        let method = SettingError::method(settings.method)?;
+        SettingError::positive(&[("rtol", settings.rtol), ("atol", settings.atol), ("dt", settings.dt)])?;
         let defaults = RunConfig::default();
         let output = match (settings.every_step, settings.samples) {
             (true, _) => Output::EveryStep,
