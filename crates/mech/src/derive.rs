@@ -197,14 +197,18 @@ struct Judged {
     energy: Option<ExprId>,
     hamiltonian_is_energy: Option<bool>,
     hamiltonian_conserved: bool,
+    /// H would be conserved but for the constraints' work W: H − W is.
+    work_balances_h: bool,
     explicit_time: Option<bool>,
     verdicts: Verdicts,
 }
 
 impl Derivation {
     /// Derives everything from a model, in the order of the notes: L, the
-    /// equations of motion, what is conserved and why, H and Hamilton's
-    /// equations, then the constraints. Fails on a singular mass matrix.
+    /// equations of motion and the constraints' multiplier equations, what is
+    /// conserved and why (the constraint forces included), H and Hamilton's
+    /// equations. Each stage makes a value the later ones read; none edits an
+    /// earlier one's verdicts. Fails on a singular mass matrix.
     pub fn new(model: Model) -> Result<Derivation, ModelError> {
         if shared::wanted(&model) {
             return Derivation::derive(model, Path::Shared).map_err(Stop::into_error);
@@ -253,11 +257,14 @@ impl Derivation {
         within(pool, &model)?;
         let equations_seconds = started.elapsed().as_secs_f64();
         check_regular(pool, &model, &motion.mass_matrix)?;
-        let (cyclic, mut conserved, cyclic_reasons) = cyclic_coordinates(pool, &s, &motion, &ext, shared);
+        let constraints = constraint::derive(pool, &model, &s, &motion.equations)?;
         within(pool, &model)?;
-        let mut judged = judge(pool, &model, &s, &energies, &motion, &ext, &is_var);
+        let cyclic = cyclic_coordinates(pool, &s, &motion, &ext, &constraints, shared);
+        let mut conserved = cyclic.conserved;
         within(pool, &model)?;
-        judged.verdicts.cyclic = cyclic_reasons;
+        let mut judged = judge(pool, &model, &s, &energies, &motion, &ext, &constraints, &is_var);
+        within(pool, &model)?;
+        judged.verdicts.cyclic = cyclic.reasons;
         if judged.hamiltonian_conserved {
             conserved.push(Conserved {
                 name: "H".into(),
@@ -270,6 +277,7 @@ impl Derivation {
             });
         }
         let legendre = hamiltonian(pool, &s, &energies, &motion, &ext, &mut judged.verdicts, &is_var);
+        let constraints = constraints.explained(cyclic.lost, judged.work_balances_h, legendre.is_some());
         let (hamiltonian, velocities, hamilton) = match legendre {
             Some(l) => (Some(l.hamiltonian), Some(l.velocities), Some(l.equations)),
             None => (None, None, None),
@@ -319,7 +327,7 @@ impl Derivation {
             equations: motion.equations,
             mass_matrix: motion.mass_matrix,
             forcing: motion.forcing,
-            cyclic,
+            cyclic: cyclic.indices,
             conserved,
             energy_function: judged.energy_function,
             hamiltonian,
@@ -332,14 +340,12 @@ impl Derivation {
             verdicts: judged.verdicts,
             bodies: energies.bodies,
             equations_seconds,
-            constraints: Default::default(),
+            constraints,
             layout,
             inputs,
             input_matrix,
             inputs_affine,
         };
-        // The constraints amend the equations and the verdicts of the system without them.
-        constraint::attach(&mut derivation)?;
         within_work_limit(&derivation.model.pool, &derivation.model, path)?;
         // The bound is the derivation's: analyses rewrite in copies of the pool.
         derivation.model.pool.set_work_limit(None);

@@ -12,13 +12,13 @@
 //! ([`crate::probe`]): proven by rewriting, refuted at a point, or left
 //! undecided (`integrable` is then None and the explanation says so).
 //!
-//! Entry point: [`attach`], the last step of [`crate::Derivation::new`]; the
-//! tables are read by `model/constraint.rs`, and the numbers of a run are in
-//! `run/constrained.rs`.
+//! Entry point: [`derive`], the stage of [`crate::Derivation::new`] between
+//! the equations of motion and the verdicts; the tables are read by
+//! `model/constraint.rs`, and the numbers of a run are in `run/constrained.rs`.
 
-use crate::derive::{ConservationReason, Derivation};
+use super::{Derivation, Symbols};
 use crate::error::ModelError;
-use crate::model::ConstraintKind;
+use crate::model::{ConstraintKind, Model};
 use crate::probe::Decision;
 use crate::probe::{self, Subst};
 use std::ops::Range;
@@ -221,107 +221,103 @@ fn power_base(pool: &Pool, e: ExprId) -> Option<ExprId> {
     }
 }
 
-/// Derives the constraints of `d.model` and amends the verdicts: a constraint
-/// whose force does work makes H not conserved; a momentum on which a
-/// constraint force acts is not conserved.
-pub(crate) fn attach(d: &mut Derivation) -> Result<(), ModelError> {
-    if d.model.constraints.is_empty() {
-        return Ok(());
+/// Derives the constraints of a model on its equations of motion `E`: each
+/// constraint's row of A, time term, velocity and acceleration forms,
+/// integrability and teaching text; the set's rank; the equations with
+/// multipliers `E − Aᵀλ` and, where they are determined, the Cartesian
+/// constraint forces. A stage of [`crate::Derivation::new`], run before any
+/// verdict: the verdicts then read what the constraint forces do
+/// ([`Constraints::work`], [`momentum_kept`]), and [`Constraints::explained`]
+/// adds their sentences.
+pub(super) fn derive(
+    pool: &mut Pool,
+    model: &Model,
+    s: &Symbols,
+    equations: &[ExprId],
+) -> Result<Constraints, ModelError> {
+    if model.constraints.is_empty() {
+        return Ok(Constraints::default());
     }
-    let specs = d.model.constraints.clone();
-    let n = d.q.len();
-    let names: Vec<String> = d.model.coordinates.iter().map(|c| c.name.clone()).collect();
-    let mut pool = std::mem::take(&mut d.model.pool);
-    let result = derive_all(&mut pool, d, &specs, &names);
-    d.model.pool = pool;
-    let mut set = result?;
-    let pool = &mut d.model.pool;
-
+    let mut set = derive_all(pool, s, &model.constraints)?;
     // Equations with multipliers: E_i − Σ_k λ_k A_ki = 0.
-    for i in 0..n {
+    for (i, &equation) in equations.iter().enumerate() {
         let terms: Vec<ExprId> = set.list.iter().map(|c| pool.mul2(c.multiplier, c.jacobian[i])).collect();
         let force = pool.add(&terms);
         set.generalized_forces.push(force);
-        let eq = pool.sub(d.equations[i], force);
+        let eq = pool.sub(equation, force);
         set.multiplier_equations.push(eq);
     }
-    set.cartesian_forces = cartesian_forces(d, &set.generalized_forces).or_else(|| {
-        let mut pool = std::mem::take(&mut d.model.pool);
-        let f = cartesian_forces_square(&mut pool, d, &set.generalized_forces);
-        d.model.pool = pool;
-        f
-    });
-    let pool = &mut d.model.pool;
-
-    // What the constraint forces change in the verdicts.
-    let working: Vec<&str> = set.list.iter().filter(|c| c.does_work == Some(true)).map(|c| c.name.as_str()).collect();
-    let undecided: Vec<String> = set.list.iter().filter(|c| c.does_work.is_none()).map(|c| c.name.clone()).collect();
-    if !working.is_empty() && d.hamiltonian_conserved {
-        d.hamiltonian_conserved = false;
-        set.work_balances_h = true;
-        d.conserved.retain(|c| c.name != "H");
-        d.verdicts.conservation.retain(|r| *r != ConservationReason::Conserved);
-        let constraints = working.iter().map(|w| w.to_string()).collect();
-        d.verdicts.conservation.push(ConservationReason::ConstraintWork { constraints });
-        d.verdicts.conservation.push(ConservationReason::WorkBalance);
-    } else if !undecided.is_empty() && d.hamiltonian_conserved {
-        d.hamiltonian_conserved = false;
-        d.conserved.retain(|c| c.name != "H");
-        d.verdicts.conservation.retain(|r| *r != ConservationReason::Conserved);
-        d.verdicts.conservation.push(ConservationReason::ConstraintWorkUndecided { constraints: undecided });
-    } else if working.is_empty() && d.hamiltonian_conserved {
-        d.verdicts.conservation.push(ConservationReason::ConstraintsDoNoWork);
-    }
-    let mut lost = Vec::new();
-    let conserved = std::mem::take(&mut d.conserved);
-    for c in conserved {
-        let coordinate = c.name.strip_prefix("p_").and_then(|q| names.iter().position(|nm| nm == q));
-        let Some(i) = coordinate else {
-            d.conserved.push(c);
-            continue;
-        };
-        let q = &names[i];
-        // The column of A: proven zero keeps the momentum; a point showing an
-        // entry nonzero, or an entry that could not be decided, does not.
-        let mut acted = Vec::new();
-        let mut unknown = Vec::new();
-        for k in &set.list {
-            match probe::decide_zero(pool, k.jacobian[i]) {
-                Decision::Zero => {}
-                Decision::NonZero => acted.push(k.name.as_str()),
-                Decision::Undecided => unknown.push(k.name.as_str()),
-            }
-        }
-        if !acted.is_empty() {
-            lost.push(format!(
-                "{q} is cyclic, but the constraint force of {} acts on it (its column of A is not zero), so p_{q} is not conserved.",
-                acted.join(", ")
-            ));
-        } else if !unknown.is_empty() {
-            lost.push(format!(
-                "{q} is cyclic, but whether the constraint force of {} acts on it could not be decided (its column of A is neither proven zero nor shown nonzero at a probe point), so p_{q} is not claimed conserved.",
-                unknown.join(", ")
-            ));
-        } else {
-            d.conserved.push(c);
-        }
-    }
-    set.explanation.extend(lost);
-    if d.hamilton.is_some() {
-        set.explanation
-            .push("Hamilton's equations are given for L alone: with the constraints, p' = −∂H/∂q + Aᵀλ.".into());
-    }
-    d.constraints = set;
-    Ok(())
+    set.cartesian_forces = cartesian_forces(model, &s.q, &set.generalized_forces)
+        .or_else(|| cartesian_forces_square(pool, model, &s.q, &set.generalized_forces));
+    Ok(set)
 }
 
-fn derive_all(
-    pool: &mut Pool,
-    d: &Derivation,
-    specs: &[crate::model::ConstraintSpec],
-    names: &[String],
-) -> Result<Constraints, ModelError> {
+/// The constraints whose forces do work (a_t proven nonzero) and those for
+/// which that could not be decided: what the verdict on H reads.
+pub(super) struct Work {
+    pub(super) working: Vec<String>,
+    pub(super) undecided: Vec<String>,
+}
+
+impl Constraints {
+    /// Which constraint forces do work ([`Work`]).
+    pub(super) fn work(&self) -> Work {
+        let names = |does_work: Option<bool>| {
+            self.list.iter().filter(|c| c.does_work == does_work).map(|c| c.name.clone()).collect()
+        };
+        Work { working: names(Some(true)), undecided: names(None) }
+    }
+
+    /// The set with the sentences of the verdicts that its forces changed:
+    /// the momenta of cyclic coordinates they take away (`lost`, from
+    /// [`momentum_kept`]), whether `H − W` is what a run audits, and that
+    /// Hamilton's equations (when there are any) are for L alone.
+    pub(super) fn explained(mut self, lost: Vec<String>, work_balances_h: bool, hamilton: bool) -> Constraints {
+        if self.is_empty() {
+            return self;
+        }
+        self.explanation.extend(lost);
+        if hamilton {
+            self.explanation
+                .push("Hamilton's equations are given for L alone: with the constraints, p' = −∂H/∂q + Aᵀλ.".into());
+        }
+        self.work_balances_h = work_balances_h;
+        self
+    }
+}
+
+/// Whether the momentum of the cyclic coordinate `i` (named `q`) stays
+/// conserved under the constraint forces: only when its column of A is proven
+/// zero. A point showing an entry nonzero, or an entry that could not be
+/// decided, gives the sentence saying why it is not claimed.
+pub(super) fn momentum_kept(pool: &mut Pool, set: &Constraints, i: usize, q: &str) -> Result<(), String> {
+    let mut acted = Vec::new();
+    let mut unknown = Vec::new();
+    for k in &set.list {
+        match probe::decide_zero(pool, k.jacobian[i]) {
+            Decision::Zero => {}
+            Decision::NonZero => acted.push(k.name.as_str()),
+            Decision::Undecided => unknown.push(k.name.as_str()),
+        }
+    }
+    if !acted.is_empty() {
+        Err(format!(
+            "{q} is cyclic, but the constraint force of {} acts on it (its column of A is not zero), so p_{q} is not conserved.",
+            acted.join(", ")
+        ))
+    } else if !unknown.is_empty() {
+        Err(format!(
+            "{q} is cyclic, but whether the constraint force of {} acts on it could not be decided (its column of A is neither proven zero nor shown nonzero at a probe point), so p_{q} is not claimed conserved.",
+            unknown.join(", ")
+        ))
+    } else {
+        Ok(())
+    }
+}
+
+fn derive_all(pool: &mut Pool, d: &Symbols, specs: &[crate::model::ConstraintSpec]) -> Result<Constraints, ModelError> {
     let n = d.q.len();
+    let names = &d.names;
     let var_names: Vec<NameId> = names.iter().map(|c| pool.name(c)).collect();
     let t_name = pool.name("t");
     let is_var = |s: Symbol| s.name == t_name || var_names.contains(&s.name);
@@ -768,17 +764,17 @@ fn integral(pool: &mut Pool, form: &[ExprId], z: &[ExprId], is_var: &dyn Fn(Symb
 /// The Cartesian constraint forces, when the coordinates are the particles'
 /// Cartesian components themselves (position = ["x", "y"]): then the force on
 /// a particle is the generalized force on its coordinates.
-fn cartesian_forces(d: &Derivation, generalized: &[ExprId]) -> Option<Vec<Vec<ExprId>>> {
-    let particles = &d.model.particles;
+fn cartesian_forces(model: &Model, q: &[ExprId], generalized: &[ExprId]) -> Option<Vec<Vec<ExprId>>> {
+    let particles = &model.particles;
     if particles.is_empty() {
         return None;
     }
-    let mut used = vec![false; d.q.len()];
+    let mut used = vec![false; q.len()];
     let mut forces = Vec::new();
     for part in particles {
         let mut f = Vec::new();
         for &x in &part.position {
-            let i = d.q.iter().position(|&q| q == x)?;
+            let i = q.iter().position(|&q| q == x)?;
             if used[i] {
                 return None;
             }
@@ -793,17 +789,22 @@ fn cartesian_forces(d: &Derivation, generalized: &[ExprId]) -> Option<Vec<Vec<Ex
 /// The Cartesian constraint forces when the particles' components x(q, t) are as
 /// many as the coordinates (n ≤ 3) and ∂x/∂q is invertible: Q = (∂x/∂q)ᵀ F then
 /// determines F = (∂x/∂q)⁻ᵀ Q, by the adjugate over the simplified determinant.
-fn cartesian_forces_square(pool: &mut Pool, d: &Derivation, generalized: &[ExprId]) -> Option<Vec<Vec<ExprId>>> {
-    let n = d.q.len();
-    let xs: Vec<ExprId> = d.model.particles.iter().flat_map(|p| p.position.iter().copied()).collect();
-    if d.model.particles.is_empty() || xs.len() != n || n > 3 {
+fn cartesian_forces_square(
+    pool: &mut Pool,
+    model: &Model,
+    q: &[ExprId],
+    generalized: &[ExprId],
+) -> Option<Vec<Vec<ExprId>>> {
+    let n = q.len();
+    let xs: Vec<ExprId> = model.particles.iter().flat_map(|p| p.position.iter().copied()).collect();
+    if model.particles.is_empty() || xs.len() != n || n > 3 {
         return None;
     }
-    let names: Vec<NameId> = d.model.coordinates.iter().map(|c| pool.name(&c.name)).collect();
+    let names: Vec<NameId> = model.coordinates.iter().map(|c| pool.name(&c.name)).collect();
     let t_name = pool.name("t");
     let is_var = |s: Symbol| s.name == t_name || names.contains(&s.name);
     // jt[i][a] = ∂x_a/∂q_i: the matrix of Q = Jᵀ F.
-    let jt: Vec<Vec<ExprId>> = (0..n).map(|i| xs.iter().map(|&x| pool.diff(x, d.q[i])).collect()).collect();
+    let jt: Vec<Vec<ExprId>> = (0..n).map(|i| xs.iter().map(|&x| pool.diff(x, q[i])).collect()).collect();
     if probe::is_singular(pool, &jt) {
         return None;
     }
@@ -855,7 +856,7 @@ fn cartesian_forces_square(pool: &mut Pool, d: &Derivation, generalized: &[ExprI
     }
     let mut forces = Vec::new();
     let mut k = 0;
-    for p in &d.model.particles {
+    for p in &model.particles {
         forces.push(flat[k..k + p.position.len()].to_vec());
         k += p.position.len();
     }

@@ -1,7 +1,9 @@
 //! The verdicts of a derivation, each made once: the cyclic coordinates and
 //! the momenta they conserve, the energy function h, whether H is conserved
-//! and whether it is the energy T + U₀, with the reasons the notes give.
+//! and whether it is the energy T + U₀, with the reasons the notes give. The
+//! constraints are derived before: their forces are part of each verdict.
 
+use super::constraint::{self, Constraints};
 use super::quadratic::Quadratic;
 use super::{
     decide, simplify_bounded, ConservationReason, Conserved, ConservedReason, CyclicReason, Energies, EnergyReason,
@@ -11,20 +13,35 @@ use crate::model::Model;
 use crate::probe::{self, Decision, Subst};
 use sym::{ExprId, Pool, Symbol};
 
+/// The cyclic coordinates and what they conserve.
+pub(super) struct Cyclic {
+    /// The indices of the coordinates whose ∂L/∂q is proven 0.
+    pub(super) indices: Vec<usize>,
+    /// Their momenta that are conserved.
+    pub(super) conserved: Vec<Conserved>,
+    /// Coordinates and momenta that could not be decided.
+    pub(super) reasons: Vec<CyclicReason>,
+    /// Why a constraint force takes a cyclic coordinate's momentum away, one
+    /// sentence per momentum (the constraints' explanation).
+    pub(super) lost: Vec<String>,
+}
+
 /// Cyclic coordinates (∂L/∂q proven to be 0) and the momenta that are
-/// conserved: those on which neither dissipation nor a generalized force is
-/// proven absent. A coordinate whose ∂L/∂q (or whose R and Q) could not be
-/// decided gets a reason instead of a claim.
+/// conserved: those on which dissipation, a generalized force and every
+/// constraint force are proven absent. A coordinate whose ∂L/∂q (or whose R
+/// and Q) could not be decided gets a reason instead of a claim.
 pub(super) fn cyclic_coordinates(
     pool: &mut Pool,
     s: &Symbols,
     m: &Motion,
     ext: &External,
+    constraints: &Constraints,
     shared: bool,
-) -> (Vec<usize>, Vec<Conserved>, Vec<CyclicReason>) {
+) -> Cyclic {
     let mut cyclic = Vec::new();
     let mut conserved = Vec::new();
     let mut reasons = Vec::new();
+    let mut lost = Vec::new();
     // On the shared path most ∂L/∂q are refuted by numbers: all at once.
     let refuted = if shared { probe::refuted_each(pool, &m.dl_dq) } else { vec![false; s.n()] };
     for i in 0..s.n() {
@@ -50,21 +67,26 @@ pub(super) fn cyclic_coordinates(
         };
         let forcing = decide(pool, ext.forces[i], shared);
         match (damping, forcing) {
-            (Decision::Zero, Decision::Zero) => conserved.push(Conserved {
-                name: format!("p_{coordinate}"),
-                expr: m.momenta[i],
-                reason: ConservedReason::Cyclic { coordinate },
-            }),
+            (Decision::Zero, Decision::Zero) => match constraint::momentum_kept(pool, constraints, i, &coordinate) {
+                Ok(()) => conserved.push(Conserved {
+                    name: format!("p_{coordinate}"),
+                    expr: m.momenta[i],
+                    reason: ConservedReason::Cyclic { coordinate },
+                }),
+                Err(why) => lost.push(why),
+            },
             (Decision::NonZero, _) | (_, Decision::NonZero) => {}
             _ => reasons.push(CyclicReason::MomentumUndecided { coordinate }),
         }
     }
-    (cyclic, conserved, reasons)
+    Cyclic { indices: cyclic, conserved, reasons, lost }
 }
 
 /// The energy function h = Σ q' ∂L/∂q' − L and the verdicts on it: whether H is
-/// conserved (dH/dt = −∂L/∂t − Σ q'·∂R/∂q' + Σ Q·q', each term named that is
-/// there) and whether it is the energy T + U₀.
+/// conserved (dH/dt = −∂L/∂t − Σ q'·∂R/∂q' + Σ Q·q' − λ·a_t, each term named
+/// that is there; with only the constraints' work in the way, H − W is) and
+/// whether it is the energy T + U₀.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn judge(
     pool: &mut Pool,
     model: &Model,
@@ -72,6 +94,7 @@ pub(super) fn judge(
     e: &Energies,
     m: &Motion,
     ext: &External,
+    constraints: &Constraints,
     is_var: &dyn Fn(Symbol) -> bool,
 ) -> Judged {
     let (n, qd) = (s.n(), &s.qd);
@@ -107,7 +130,7 @@ pub(super) fn judge(
     let explicit_time = time.known().map(|zero| !zero);
     let terms =
         [(RateTerm::ExplicitTime, time), (RateTerm::Dissipation, dissipation), (RateTerm::GeneralizedForces, force)];
-    let hamiltonian_conserved = terms.iter().all(|(_, d)| d.is_zero());
+    let unconstrained_conserved = terms.iter().all(|(_, d)| d.is_zero());
     let mut verdicts = Verdicts::default();
     if time.is_nonzero() {
         verdicts.conservation.push(ConservationReason::ExplicitTime);
@@ -127,9 +150,27 @@ pub(super) fn judge(
     if !undecided.is_empty() {
         verdicts.conservation.push(ConservationReason::Undecided { terms: undecided });
     }
-    if hamiltonian_conserved {
-        verdicts.conservation.push(ConservationReason::Conserved);
-    }
+    // Without the other terms, the constraints' work decides.
+    let work = constraints.work();
+    let (hamiltonian_conserved, work_balances_h) = match unconstrained_conserved {
+        false => (false, false),
+        true if !work.working.is_empty() => {
+            verdicts.conservation.push(ConservationReason::ConstraintWork { constraints: work.working });
+            verdicts.conservation.push(ConservationReason::WorkBalance);
+            (false, true)
+        }
+        true if !work.undecided.is_empty() => {
+            verdicts.conservation.push(ConservationReason::ConstraintWorkUndecided { constraints: work.undecided });
+            (false, false)
+        }
+        true => {
+            verdicts.conservation.push(ConservationReason::Conserved);
+            if !constraints.is_empty() {
+                verdicts.conservation.push(ConservationReason::ConstraintsDoNoWork);
+            }
+            (true, false)
+        }
+    };
     let (energy, hamiltonian_is_energy) = match (e.kinetic, e.potential) {
         (Some(tt), Some(uu)) => {
             let zero_vel: Subst = qd.iter().map(|&v| (v, pool.zero())).collect();
@@ -160,7 +201,15 @@ pub(super) fn judge(
             (None, None)
         }
     };
-    Judged { energy_function, energy, hamiltonian_is_energy, hamiltonian_conserved, explicit_time, verdicts }
+    Judged {
+        energy_function,
+        energy,
+        hamiltonian_is_energy,
+        hamiltonian_conserved,
+        work_balances_h,
+        explicit_time,
+        verdicts,
+    }
 }
 
 /// Whether T is homogeneous of degree 2 in the velocities, read from L's
