@@ -145,8 +145,14 @@ enum Format {
 }
 
 /// How the text outputs name this program's flags.
-pub(crate) const TERMS: view::Terms =
-    view::Terms { step: "--dt", start_at: "--at", full_output: "--format json", animation: "--animate" };
+pub(crate) const TERMS: view::Terms = view::Terms {
+    step: "--dt",
+    start_at: "--at",
+    full_output: "--format json",
+    animation: "--animate",
+    until: "--until",
+    method: "--method",
+};
 
 fn parse_set(s: &str) -> Result<(String, f64), String> {
     let (name, value) = s.split_once('=').ok_or_else(|| format!("expected NAME=VALUE, found '{s}'"))?;

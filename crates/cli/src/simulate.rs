@@ -245,7 +245,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     }
     crate::write_stdout(&text)?;
     for w in &report.warnings {
-        eprintln!("warning: {w}");
+        eprintln!("warning: {}", view::simulate::warning(w, &crate::TERMS));
     }
     let keeps = |what: &str| opts.out.as_ref().map_or(String::new(), |p| format!(" ({} keeps {what})", p.display()));
     if let Some(signal) = stopped_by {

@@ -119,7 +119,7 @@ pub use run::dynamics::{invariants_of, Dynamics, Form, Invariant, System};
 pub use run::series::SeriesCode;
 pub use run::{
     approx, row_columns, simulate, Audit, BudgetAdvice, BudgetStage, ConstraintAudit, Row, RunConfig, RunError,
-    RunFailure, RunReport, RunSettings, SettingError, StepBudget, StopCondition, TimeScale, MAX_SAMPLES,
+    RunFailure, RunReport, RunSettings, RunWarning, SettingError, StepBudget, StopCondition, TimeScale, MAX_SAMPLES,
     STEPS_PER_TIME_SCALE,
 };
 pub use source::MAX_FILE_BYTES;

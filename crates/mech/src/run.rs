@@ -39,7 +39,7 @@ pub(crate) use config::is_positive_time;
 pub use config::{RunConfig, RunSettings, SettingError, StopCondition, MAX_SAMPLES};
 use dynamics::{Dynamics, Form};
 use num::{integrate, integrate_projected, Event, Method, ObservationKind, RhsError, SolveError, Solver, StopReason};
-pub use report::{Audit, ConstraintAudit, Row, RunError, RunFailure, RunReport};
+pub use report::{Audit, ConstraintAudit, Row, RunError, RunFailure, RunReport, RunWarning};
 use std::ops::ControlFlow;
 
 /// The default method and the form it integrates, or the form a requested method needs.
@@ -146,7 +146,7 @@ pub(crate) trait Stepping {
     /// Adds the stepping's own audits at the end of the run.
     fn audits(&mut self, _invariants: &mut Vec<Audit>, _constraints: &mut Vec<ConstraintAudit>) {}
     /// Adds the stepping's own warnings at the end of the run.
-    fn warnings(&self, _warnings: &mut Vec<String>) {}
+    fn warnings(&self, _warnings: &mut Vec<RunWarning>) {}
     /// A solver failure in the user's terms, from the initial state and the last good one.
     fn describe(&mut self, e: &SolveError, y0: &[f64], at: (f64, Vec<f64>)) -> (RunFailure, String);
     /// The motion's fastest time scale at the solver state (t, y), if it can be told.
@@ -349,12 +349,9 @@ fn drive(
     let mut warnings = audit::drift_warnings(&audits, explained);
     stepping.warnings(&mut warnings);
     if method == Method::Taylor && !dynamics.is_analytic() {
-        warnings.push(
-            "the equations contain abs(), whose kink a Taylor series does not see: a step across it is not error-controlled (dop853 is the default for such models)"
-                .into(),
-        );
+        warnings.push(RunWarning::TaylorAcrossKink);
     }
-    warnings.extend(solver.subdivisions().map(|s| s.to_string()));
+    warnings.extend(solver.subdivisions().map(RunWarning::Subdivided));
     let (t_last, final_q, final_qd) = last;
     let articulated = form == Form::Lagrange && method != Method::Taylor && dynamics.uses_articulated_body();
     let mut report = RunReport {

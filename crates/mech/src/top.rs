@@ -210,7 +210,7 @@ impl Top {
         if model.bodies.len() != 1 {
             return Err(TopError::whole(
                 format!(
-                    "`lagrange top` needs a model with exactly one rigid body; this one has {}",
+                    "the top analysis needs a model with exactly one rigid body; this one has {}",
                     model.bodies.len()
                 ),
                 "describe the top in one [[bodies]] table with inertia = [\"I\", \"I\", \"I3\"]",
@@ -220,25 +220,25 @@ impl Top {
         let Some((body_angles, sequence)) = body.orientation.euler() else {
             return Err(TopError::at(
                 body.span.clone(),
-                "`lagrange top` reads a top turning in three Euler angles; this body has fewer",
+                "the top analysis reads a top turning in three Euler angles; this body has fewer",
                 "give the top angles = [\"al\", \"be\", \"ga\"]; `simulate` takes bodies with one angle or none",
             ));
         };
         if body.parent.is_some() {
             return Err(TopError::at(
                 body.span.clone(),
-                "`lagrange top` reads a top turning in space; this body turns relative to a parent",
-                "leave out `parent` for `lagrange top`; `simulate` follows bodies through their tree",
+                "the top analysis reads a top turning in space; this body turns relative to a parent",
+                "leave out `parent` for the top analysis; `simulate` follows bodies through their tree",
             ));
         }
         if sequence != crate::euler::Sequence::NOTES {
             return Err(TopError::at(
                 body.span.clone(),
                 format!(
-                    "`lagrange top` reads a top in the notes' z-x-z Euler angles; this body turns in the sequence {}",
+                    "the top analysis reads a top in the notes' z-x-z Euler angles; this body turns in the sequence {}",
                     sequence.name()
                 ),
-                "leave out `sequence` (or give sequence = \"zxz\") for `lagrange top`; `simulate` takes any sequence",
+                "leave out `sequence` (or give sequence = \"zxz\") for the top analysis; `simulate` takes any sequence",
             ));
         }
         if !model.particles.is_empty()
@@ -248,7 +248,7 @@ impl Top {
             || model.forces.iter().any(Option::is_some)
         {
             return Err(TopError::whole(
-                "`lagrange top` treats a top alone: the model has other particles, energies, dissipation or forces",
+                "the top analysis treats a top alone: the model has other particles, energies, dissipation or forces",
                 "keep only the [[bodies]] table (and gravity) in the model; use `simulate` for the rest",
             ));
         }
@@ -271,7 +271,7 @@ impl Top {
                     "a symmetric top has I1 = I2 and principal axes along the body frame; this inertia is {:?}",
                     inertia
                 ),
-                "`lagrange top` treats symmetric tops (notes 3.2.7); use `simulate` for an asymmetric body",
+                "the top analysis treats symmetric tops (notes 3.2.7); use `simulate` for an asymmetric body",
             ));
         }
         let (i, i3) = (inertia[0][0], inertia[2][2]);

@@ -3,6 +3,10 @@
 //! derive → run → analyses, with the shared leaves first). This test reads the sources and
 //! fails on any `crate::` path that points at the same level or upward, so
 //! that a module cycle cannot come back unnoticed.
+//!
+//! Below every front end, `mech` also speaks none of their words: no flag
+//! (`--dt`) and no command (`lagrange derive`) in its messages. What a user
+//! should change comes back as data (`RunWarning`) that the front end words.
 
 use std::collections::HashMap;
 use std::fs;
@@ -133,4 +137,41 @@ fn the_checker_sees_uses_in_groups_and_through_reexports() {
     let text =
         "use crate::{Derivation, model::Model};\n// crate::run in a comment\nlet x = crate::probe::is_zero(p, e);";
     assert_eq!(uses(text, &reexports), ["derive", "model", "probe"]);
+}
+
+/// Where a line of library code names a front end's flag or command.
+fn front_end_words(line: &str) -> Option<&'static str> {
+    let code = line.trim_start();
+    if code.starts_with("//") || !code.contains('"') {
+        return None;
+    }
+    let flag = line.match_indices("--").any(|(i, _)| line[i + 2..].starts_with(|c: char| c.is_ascii_lowercase()));
+    if flag {
+        Some("a flag")
+    } else if line.contains("`lagrange ") {
+        Some("a command")
+    } else {
+        None
+    }
+}
+
+#[test]
+fn the_library_names_no_flag_or_command_of_a_front_end() {
+    let mut files = Vec::new();
+    rust_files(&src(), &mut files);
+    let mut found = Vec::new();
+    for path in files {
+        let text = fs::read_to_string(&path).unwrap();
+        let library = text.split("#[cfg(test)]").next().unwrap_or("");
+        for (k, line) in library.lines().enumerate() {
+            if let Some(what) = front_end_words(line) {
+                found.push(format!("{}:{}: {what}: {}", path.display(), k + 1, line.trim()));
+            }
+        }
+    }
+    assert!(found.is_empty(), "library messages in front-end words:\n{}", found.join("\n"));
+    assert_eq!(front_end_words(r#"    "give a smaller --dt","#), Some("a flag"));
+    assert_eq!(front_end_words(r#"    .with_help("use `lagrange derive`")"#), Some("a command"));
+    assert_eq!(front_end_words("    // see --dt"), None);
+    assert_eq!(front_end_words(r#"    format!("{a} -- {b}")"#), None);
 }

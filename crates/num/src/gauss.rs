@@ -699,7 +699,7 @@ mod tests {
         assert!((solver.state()[0] - exact).abs() < 1e-2 * exact, "{} vs {exact}", solver.state()[0]);
         let sub = solver.subdivisions().expect("sub-steps were taken");
         assert!(sub.first_t >= 0.8 && sub.first_t < end && sub.shortest < 0.05, "{sub:?}");
-        assert!(sub.to_string().contains("did not converge"));
+        assert!(sub.steps >= 1, "{sub:?}");
         // A step that fails even as 2^16 sub-steps fails the run, naming its time.
         let mut solver = Gauss::new(Blowup, Method::Gauss6, 0.0, &[1.0], &config).unwrap();
         solver.set_stop_time(1.5).unwrap();

@@ -464,7 +464,8 @@ impl std::fmt::Debug for dyn Solver + '_ {
     }
 }
 
-/// The steps of a run that were taken as shorter sub-steps, for its warnings.
+/// The steps of a run that were taken as shorter sub-steps, for its warnings
+/// (worded by the front end, which knows how a user picks another method).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Subdivisions {
     /// Steps of the fixed grid taken as sub-steps.
@@ -473,18 +474,4 @@ pub struct Subdivisions {
     pub first_t: f64,
     /// The shortest sub-step taken.
     pub shortest: f64,
-}
-
-impl std::fmt::Display for Subdivisions {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "the stage equations of {} step{} of the fixed step did not converge, and {} taken as shorter sub-steps (down to {:.3e}), the first at t = {}: the motion there is faster than the step was chosen for, and H no longer keeps the bound the step promised; an adaptive method (the default, without --method) follows such motion",
-            self.steps,
-            if self.steps == 1 { "" } else { "s" },
-            if self.steps == 1 { "was" } else { "were" },
-            self.shortest,
-            self.first_t
-        )
-    }
 }

@@ -22,8 +22,14 @@ mod signals;
 mod sweep;
 
 /// How the text outputs name the settings a Python user gives.
-pub const TERMS: view::Terms =
-    view::Terms { step: "dt", start_at: "at", full_output: "the report's fields", animation: "animate()" };
+pub const TERMS: view::Terms = view::Terms {
+    step: "dt",
+    start_at: "at",
+    full_output: "the report's fields",
+    animation: "animate()",
+    until: "until",
+    method: "method",
+};
 
 /// Numbers as little-endian f64 bytes, which the Python side views with
 /// `numpy.frombuffer` without a copy.

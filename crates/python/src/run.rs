@@ -216,7 +216,8 @@ impl Derived {
         out.set_item("summary", summary.to_string())?;
         out.set_item("summary_text", text)?;
         out.set_item("failure", failure)?;
-        out.set_item("warnings", report.warnings.clone())?;
+        let warnings: Vec<String> = report.warnings.iter().map(|w| view::simulate::warning(w, &crate::TERMS)).collect();
+        out.set_item("warnings", warnings)?;
         out.set_item("interrupt", interrupt.map(|e| e.into_value(py)))?;
         out.set_item("plot", Bound::new(py, plot)?)?;
         Ok(out)

@@ -7,7 +7,7 @@
 //! fixed step ([`Terms::step`]).
 
 use crate::Terms;
-use mech::{Derivation, RunReport};
+use mech::{Derivation, RunReport, RunWarning};
 use serde_json::{json, Value};
 
 /// A run that a signal stopped: the signal's name (`SIGINT`), and the time of
@@ -78,7 +78,7 @@ pub fn summary_json(
         "tolerance_controls": tolerance_controls(r, terms),
         "final": fin,
         "invariants": inv,
-        "warnings": r.warnings,
+        "warnings": r.warnings.iter().map(|w| warning(w, terms)).collect::<Vec<_>>(),
         "wall_seconds": r.wall_seconds,
         "derive_seconds": timing.derive_seconds,
         "setup_seconds": timing.setup_seconds,
@@ -103,6 +103,33 @@ pub fn summary_json(
         v["stabilization"] = json!("projection after every step (positions by Gauss-Newton, then velocities)");
     }
     v
+}
+
+/// A run's warning in words, with the settings a user can change spelled as
+/// the front end spells them (`terms`).
+pub fn warning(w: &RunWarning, terms: &Terms) -> String {
+    match w {
+        RunWarning::Drift { invariant, drift, explained } => format!(
+            "{invariant} is conserved, but drifted by {drift:.3e} (relative), more than the tolerance explains ({explained:.1e})"
+        ),
+        RunWarning::PilotOutgrown { drift, bound } => format!(
+            "H drifted by {drift:.3e} (relative), more than the {bound:.1e} the pilot runs chose the step for: the motion after them needed a shorter step (give a smaller {}, or a longer pilot with a shorter {})",
+            terms.step, terms.until
+        ),
+        RunWarning::ConstraintViolated { constraint, residual } => {
+            format!("the constraint {constraint} is violated by up to {residual:.3e} despite the projection")
+        }
+        RunWarning::TaylorAcrossKink => "the equations contain abs(), whose kink a Taylor series does not see: a step across it is not error-controlled (dop853 is the default for such models)".into(),
+        RunWarning::Subdivided(s) => format!(
+            "the stage equations of {} step{} of the fixed step did not converge, and {} taken as shorter sub-steps (down to {:.3e}), the first at t = {}: the motion there is faster than the step was chosen for, and H no longer keeps the bound the step promised; an adaptive method (the default, without {}) follows such motion",
+            s.steps,
+            if s.steps == 1 { "" } else { "s" },
+            if s.steps == 1 { "was" } else { "were" },
+            s.shortest,
+            s.first_t,
+            terms.method
+        ),
+    }
 }
 
 /// What the run's tolerance controlled: the method's sentence, or nothing
@@ -235,8 +262,14 @@ th = 0.5
 "#;
 
     /// How a front end other than the CLI spells its settings.
-    const PYTHON: Terms =
-        Terms { step: "dt", start_at: "at", full_output: "the report's fields", animation: "animate()" };
+    const PYTHON: Terms = Terms {
+        step: "dt",
+        start_at: "at",
+        full_output: "the report's fields",
+        animation: "animate()",
+        until: "until",
+        method: "method",
+    };
 
     /// The pendulum run to t = 1 with `config`'s method and step.
     fn run(config: mech::RunConfig) -> (mech::Derivation, RunReport, Vec<String>) {
@@ -301,5 +334,22 @@ th = 0.5
         let text = summary_text(&r, &names, &d, Some(&before), &PYTHON);
         assert!(text.contains("interrupted before the first row (SIGTERM)\n"), "{text}");
         assert!(!text.contains("reached t ="), "{text}");
+    }
+
+    #[test]
+    fn warnings_name_the_settings_as_the_front_end_names_them() {
+        let outgrown = RunWarning::PilotOutgrown { drift: 2e-6, bound: 1e-6 };
+        let text = warning(&outgrown, &PYTHON);
+        assert!(text.contains("give a smaller dt, or a longer pilot with a shorter until)"), "{text}");
+        assert!(!text.contains("--"), "{text}");
+        let sub = num::Subdivisions { steps: 2, first_t: 0.5, shortest: 1e-3 };
+        let text = warning(&RunWarning::Subdivided(sub), &PYTHON);
+        assert!(text.starts_with("the stage equations of 2 steps of the fixed step did not converge, and were taken"));
+        assert!(text.ends_with("(the default, without method) follows such motion"), "{text}");
+        let drift = RunWarning::Drift { invariant: "H".into(), drift: 3e-5, explained: 1e-6 };
+        assert_eq!(
+            warning(&drift, &PYTHON),
+            "H is conserved, but drifted by 3.000e-5 (relative), more than the tolerance explains (1.0e-6)"
+        );
     }
 }

@@ -16,6 +16,10 @@ pub struct Terms {
     pub full_output: &'static str,
     /// The animation of the normal modes (the CLI's `--animate`).
     pub animation: &'static str,
+    /// The end time of a run (the CLI's `--until`).
+    pub until: &'static str,
+    /// The choice of integration method (the CLI's `--method`).
+    pub method: &'static str,
 }
 
 #[cfg(test)]
@@ -23,6 +27,12 @@ pub(crate) mod tests {
     use super::Terms;
 
     /// Words no flag of the CLI uses, so that a test sees where they land.
-    pub(crate) const OTHER: Terms =
-        Terms { step: "dt=", start_at: "at=", full_output: "the report", animation: "animate()" };
+    pub(crate) const OTHER: Terms = Terms {
+        step: "dt=",
+        start_at: "at=",
+        full_output: "the report",
+        animation: "animate()",
+        until: "until=",
+        method: "method=",
+    };
 }

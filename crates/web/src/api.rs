@@ -12,8 +12,14 @@ use wasm_bindgen::prelude::wasm_bindgen;
 use web_time::Instant;
 
 /// How the texts name the settings: the page's option names.
-const TERMS: view::Terms =
-    view::Terms { step: "dt", start_at: "at", full_output: "the JSON", animation: "the animation" };
+const TERMS: view::Terms = view::Terms {
+    step: "dt",
+    start_at: "at",
+    full_output: "the JSON",
+    animation: "the animation",
+    until: "until",
+    method: "method",
+};
 
 /// A failure of a call, as its `lagrange.error/1` value.
 type Failure = Value;

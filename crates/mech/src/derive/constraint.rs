@@ -104,7 +104,7 @@ impl Derivation {
                 c.span.clone(),
                 format!("{what} does not handle [[constraints]] yet: it would analyse the unconstrained system"),
             )
-            .with_help("use `lagrange derive` and `lagrange simulate`, which enforce constraints with multipliers, or eliminate the constraint by generalized coordinates")),
+            .with_help("the derivation and simulation enforce constraints with multipliers; or eliminate the constraint by generalized coordinates")),
         }
     }
 }

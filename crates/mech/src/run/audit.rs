@@ -1,7 +1,7 @@
 //! The audit of a run's invariants, row by row, and the warnings for those the
 //! derivation calls conserved that drifted more than the tolerance explains.
 
-use super::Audit;
+use super::{Audit, RunWarning};
 use crate::derive::Derivation;
 use crate::run::dynamics::Dynamics;
 
@@ -75,15 +75,10 @@ impl InvariantAudit {
 
 /// A warning for each conserved invariant that drifted by more than
 /// `explained` (relative), the drift the method's tolerance accounts for.
-pub(crate) fn drift_warnings(audits: &[Audit], explained: f64) -> Vec<String> {
+pub(crate) fn drift_warnings(audits: &[Audit], explained: f64) -> Vec<RunWarning> {
     audits
         .iter()
         .filter(|a| a.conserved && a.max_rel_drift > explained)
-        .map(|a| {
-            format!(
-                "{} is conserved, but drifted by {:.3e} (relative), more than the tolerance explains ({:.1e})",
-                a.name, a.max_rel_drift, explained
-            )
-        })
+        .map(|a| RunWarning::Drift { invariant: a.name.clone(), drift: a.max_rel_drift, explained })
         .collect()
 }

@@ -28,8 +28,8 @@ use crate::error::ModelError;
 use crate::model::ConstraintKind;
 use crate::run::dynamics::{Dynamics, Form, Kernel};
 use crate::run::{
-    Audit, ConstraintAudit, ProjectionMap, RowBuffer, RunConfig, RunError, RunFailure, Start, Stepping, TimeScale,
-    VelocityMap,
+    Audit, ConstraintAudit, ProjectionMap, RowBuffer, RunConfig, RunError, RunFailure, RunWarning, Start, Stepping,
+    TimeScale, VelocityMap,
 };
 use num::{LinearSolver, Method, OdeSystem, RhsError, SolveError};
 use sym::{ExprId, Tape};
@@ -539,14 +539,13 @@ impl Stepping for Constrained {
         constraints.clone_from(&self.audits);
     }
 
-    fn warnings(&self, warnings: &mut Vec<String>) {
+    fn warnings(&self, warnings: &mut Vec<RunWarning>) {
         for a in &self.audits {
             if a.max_abs_residual > 1e-9 || a.max_abs_velocity_residual > 1e-9 {
-                warnings.push(format!(
-                    "the constraint {} is violated by up to {:.3e} despite the projection",
-                    a.name,
-                    a.max_abs_residual.max(a.max_abs_velocity_residual)
-                ));
+                warnings.push(RunWarning::ConstraintViolated {
+                    constraint: a.name.clone(),
+                    residual: a.max_abs_residual.max(a.max_abs_velocity_residual),
+                });
             }
         }
     }

@@ -6,7 +6,9 @@
 //! the user's terms.
 
 use super::dynamics::{Dynamics, Form, System};
-use super::{choose_method, RowBuffer, RunConfig, RunError, RunFailure, Start, StepBudget, Stepping, TimeScale};
+use super::{
+    choose_method, RowBuffer, RunConfig, RunError, RunFailure, RunWarning, Start, StepBudget, Stepping, TimeScale,
+};
 use crate::derive::Derivation;
 use crate::error::ModelError;
 use crate::probe;
@@ -174,13 +176,10 @@ impl Stepping for Plain {
         Ok(())
     }
 
-    fn warnings(&self, warnings: &mut Vec<String>) {
+    fn warnings(&self, warnings: &mut Vec<RunWarning>) {
         if let Some(p) = &self.promise {
             if p.drift > p.bound && p.drift <= p.explained {
-                warnings.push(format!(
-                    "H drifted by {:.3e} (relative), more than the {:.1e} the pilot runs chose the step for: the motion after them needed a shorter step (give a smaller --dt, or a longer pilot with a shorter --until)",
-                    p.drift, p.bound
-                ));
+                warnings.push(RunWarning::PilotOutgrown { drift: p.drift, bound: p.bound });
             }
         }
     }

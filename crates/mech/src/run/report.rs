@@ -9,6 +9,44 @@ use num::Method;
 use super::budget::StepBudget;
 use super::dynamics::Form;
 
+/// Something a run noticed that did not stop it. Data, not text: a front
+/// end words it with its own names for the settings (`view::simulate::warning`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum RunWarning {
+    /// A conserved invariant drifted by more than the method's tolerance
+    /// explains (`explained`, relative).
+    Drift {
+        /// The invariant's name.
+        invariant: String,
+        /// Its largest relative drift.
+        drift: f64,
+        /// The drift the tolerance accounts for.
+        explained: f64,
+    },
+    /// H drifted past the bound the pilot runs chose the fixed step for
+    /// (though within what the tolerance explains): the motion after the
+    /// pilots needed a shorter step.
+    PilotOutgrown {
+        /// H's largest relative drift.
+        drift: f64,
+        /// The bound the step was chosen for.
+        bound: f64,
+    },
+    /// A constraint violated beyond 1e-9 despite the projection.
+    ConstraintViolated {
+        /// The constraint's name.
+        constraint: String,
+        /// The largest residual, of position or velocity.
+        residual: f64,
+    },
+    /// The Taylor method ran on equations with abs(), whose kink its series
+    /// does not see.
+    TaylorAcrossKink,
+    /// A fixed step whose stage equations did not converge was taken as
+    /// shorter sub-steps.
+    Subdivided(num::Subdivisions),
+}
+
 /// One output row.
 #[derive(Debug)]
 pub struct Row<'a> {
@@ -82,8 +120,9 @@ pub struct RunReport {
     pub invariants: Vec<Audit>,
     /// Why the run ended (`finished`, or the stop condition's text).
     pub stopped_by: Option<String>,
-    /// Warnings (an invariant drifting beyond what the tolerance explains).
-    pub warnings: Vec<String>,
+    /// What the run noticed that did not stop it (an invariant drifting
+    /// beyond what the tolerance explains, …); a front end words them.
+    pub warnings: Vec<RunWarning>,
     /// Why the run failed midway, if it did.
     pub failure: Option<String>,
     /// The same as data: what failed, when and where.

@@ -113,10 +113,7 @@ impl SweepHeader {
     pub fn parse(first: &str, second: &str, file: &str) -> Result<SweepHeader, SweepError> {
         let err = |line: usize, reason: String| SweepError::Table { file: file.to_string(), line, reason };
         let Some(rest) = first.strip_prefix(CSV_MAGIC) else {
-            return Err(err(
-                1,
-                format!("not the output of `lagrange sweep` (the first line should start with '{CSV_MAGIC}')"),
-            ));
+            return Err(err(1, format!("not a sweep's table (the first line should start with '{CSV_MAGIC}')")));
         };
         let mut meta = Vec::new();
         for pair in rest.split("; ").map(str::trim).filter(|p| !p.is_empty()) {

@@ -70,7 +70,10 @@ pub(crate) fn import(
 /// What a model naming a URDF may not give as well: the URDF gives the
 /// coordinates and the bodies, and a Lagrangian would leave them out.
 pub(crate) fn refuse_clashes(raw: &RawModel, i: &Imported) -> Result<(), ModelError> {
-    let help = format!("the coordinates and bodies come from {}; `lagrange import` writes them out to edit", i.name);
+    let help = format!(
+        "the coordinates and bodies come from {}; importing the URDF as a model file writes them out to edit",
+        i.name
+    );
     if let Some(c) = &raw.coordinates {
         return Err(
             ModelError::at(c.span(), "a model that names a `urdf` takes its `coordinates` from it").with_help(help)
