@@ -37,17 +37,13 @@ use crate::model::ConstraintKind;
 use crate::probe::{self, Decision};
 use crate::report::Ordered;
 use nalgebra::{DMatrix, DVector};
+use num::{GaussNewtonConfig, GaussNewtonError, LeastSquares};
 use serde::Serialize;
 use sym::{ExprId, Pool, Tape};
 
-/// Gauss–Newton iterations of the search for the operating point.
-const MAX_ITERATIONS: usize = 100;
-/// Forward-difference step of the search's Jacobian, relative to (1 + |x|):
-/// about the square root of the rounding error, for a step that is exact to
-/// eight digits (Newton then converges linearly with that factor).
-const JACOBIAN_STEP: f64 = 1e-7;
-/// Converged when a step is below this, relative to (1 + |x|).
-const STEP_TOL: f64 = 1e-13;
+/// The search for the operating point: `num`'s Gauss–Newton with its default
+/// tolerances, asking [`Problem::accept`] once a step is below [`ACCEPT`].
+const SEARCH: GaussNewtonConfig = GaussNewtonConfig { accept: ACCEPT, ..GaussNewtonConfig::DEFAULT };
 /// A point is an operating point when Newton's step from it is below this,
 /// relative to (1 + |x|), and what of the residual (accelerations and
 /// holonomic constraints) that step cannot remove is below this fraction of
@@ -56,9 +52,6 @@ const STEP_TOL: f64 = 1e-13;
 /// cancelled by anything and is not zero; a residual that a step of 1e-20
 /// removes is.
 const ACCEPT: f64 = 1e-8;
-/// Singular values of the search's Jacobian below this fraction of the largest
-/// are zero (a flat direction gets no step).
-const SINGULAR: f64 = 1e-10;
 /// A column of the constraint Jacobian is a pivot only when its part outside
 /// the pivots already chosen is above this fraction of the largest column.
 const PIVOT: f64 = 1e-9;
@@ -583,30 +576,6 @@ impl Problem<'_> {
         rows.iter().all(|v| v.is_finite()).then(|| DVector::from_vec(rows))
     }
 
-    /// The forward-difference Jacobian at x (residual r there) and the
-    /// Gauss–Newton step; flat directions (singular values below [`SINGULAR`]
-    /// of the largest) get none.
-    fn newton_step(&mut self, x: &[f64], r: &DVector<f64>) -> Result<(DMatrix<f64>, DVector<f64>), String> {
-        let nx = x.len();
-        let mut jac = DMatrix::zeros(r.len(), nx);
-        for j in 0..nx {
-            let h = JACOBIAN_STEP * (1.0 + x[j].abs());
-            let mut xp = x.to_vec();
-            xp[j] += h;
-            let rp = self.residual(&xp).ok_or_else(|| "the equations cannot be evaluated".to_string())?;
-            jac.set_column(j, &((rp - r) / h));
-        }
-        if nx == 0 {
-            return Ok((jac, DVector::zeros(0)));
-        }
-        let svd = jac.clone().svd(true, true);
-        let smax = svd.singular_values.amax();
-        let step = svd
-            .solve(&(-r), SINGULAR * smax.max(f64::MIN_POSITIVE))
-            .map_err(|e| format!("the Jacobian cannot be solved: {e}"))?;
-        Ok((jac, step))
-    }
-
     /// Whether x (residual r, Jacobian, step) is an operating point: the step
     /// is below [`ACCEPT`] of (1 + |x|), and the residual the step leaves is
     /// below [`ACCEPT`] of the size of its terms. The error says why not.
@@ -651,56 +620,28 @@ impl Problem<'_> {
         format!("({})", at.join(", "))
     }
 
-    /// Gauss–Newton on the residual with a forward-difference Jacobian and
-    /// backtracking on |r|², then the test of [`Problem::accept`].
+    /// The search for the operating point from x0 ([`num::gauss_newton`],
+    /// ended by [`Problem::accept`]), its failures in the analysis' words.
     fn gauss_newton(&mut self, x0: &[f64]) -> Result<Solved, String> {
-        let mut x = x0.to_vec();
-        let mut r = self.residual(&x).ok_or_else(|| "the equations cannot be evaluated at the start".to_string())?;
-        let mut it = 0;
-        loop {
-            let (jac, step) = self.newton_step(&x, &r)?;
-            let size = 1.0 + x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            let done = x.is_empty() || step.amax() <= STEP_TOL * size || r.amax() == 0.0 || it == MAX_ITERATIONS;
-            // Stop as soon as the point passes the test (or at the end, with its verdict).
-            if !done && step.amax() <= ACCEPT * size && self.accept(&x, &r, &jac, &step).is_ok() {
-                // One more step (quadratic convergence: to rounding) when it does not worsen r.
-                let xt: Vec<f64> = x.iter().zip(step.iter()).map(|(a, s)| a + s).collect();
-                if let Some(rt) = self.residual(&xt).filter(|rt| rt.norm() <= r.norm()) {
-                    return Ok(Solved { x: xt, iterations: it + 1, residual: rt.norm() });
-                }
-                return Ok(Solved { x, iterations: it, residual: r.norm() });
-            }
-            if done {
-                // Forces that vanish only by underflow (e^x far out) leave a
-                // zero residual and a zero Jacobian after real steps.
-                if it > 0 && r.amax() == 0.0 && jac.amax() == 0.0 {
-                    return Err(format!(
-                        "the forces only underflow to zero at {}, far from where Newton's method started",
-                        self.point_text(&x)
-                    ));
-                }
-                self.accept(&x, &r, &jac, &step)?;
-                return Ok(Solved { x, iterations: it, residual: r.norm() });
-            }
-            it += 1;
-            let mut t = 1.0;
-            loop {
-                let xt: Vec<f64> = x.iter().zip(step.iter()).map(|(a, s)| a + t * s).collect();
-                if let Some(rt) = self.residual(&xt) {
-                    if rt.norm() < r.norm() || t < 1e-4 {
-                        x = xt;
-                        r = rt;
-                        break;
-                    }
-                }
-                t *= 0.5;
-                if t < 1e-6 {
-                    return Err(format!("Newton's method stalls at {}", self.point_text(&x)));
-                }
-            }
-            if x.iter().zip(x0).any(|(a, b)| (a - b).abs() > 1e3 * (1.0 + b.abs())) {
-                return Err(format!("Newton's method runs away at {}", self.point_text(&x)));
-            }
+        match num::gauss_newton(self, x0, &SEARCH) {
+            Ok(s) => Ok(Solved { x: s.x, iterations: s.iterations, residual: s.residual }),
+            Err(e) => Err(self.search_failure(e)),
+        }
+    }
+
+    /// A failure of the search, said for the point where it happened.
+    fn search_failure(&self, e: GaussNewtonError) -> String {
+        match e {
+            GaussNewtonError::StartNotEvaluable => "the equations cannot be evaluated at the start".into(),
+            GaussNewtonError::NotEvaluable => "the equations cannot be evaluated".into(),
+            GaussNewtonError::Solve(why) => format!("the Jacobian cannot be solved: {why}"),
+            GaussNewtonError::Underflow { x } => format!(
+                "the forces only underflow to zero at {}, far from where Newton's method started",
+                self.point_text(&x)
+            ),
+            GaussNewtonError::Stalls { x } => format!("Newton's method stalls at {}", self.point_text(&x)),
+            GaussNewtonError::RunsAway { x } => format!("Newton's method runs away at {}", self.point_text(&x)),
+            GaussNewtonError::Refused(why) => why,
         }
     }
 
@@ -710,7 +651,7 @@ impl Problem<'_> {
     fn uncertainty(&mut self, x: &[f64]) -> Vec<f64> {
         let floor: Vec<f64> = x.iter().map(|v| ACCEPT * (1.0 + v.abs())).collect();
         let Some(r) = self.residual(x) else { return floor };
-        let Ok((_, step)) = self.newton_step(x, &r) else { return floor };
+        let Ok((_, step)) = num::gauss_newton_step(self, x, &r, &SEARCH) else { return floor };
         floor.iter().zip(step.iter()).map(|(f, s)| f.max(4.0 * s.abs())).collect()
     }
 
@@ -870,6 +811,16 @@ impl Problem<'_> {
             dependent_q: dq.clone(),
             dependent_v: dv.clone(),
         })
+    }
+}
+
+impl LeastSquares for Problem<'_> {
+    fn residual(&mut self, x: &[f64]) -> Option<DVector<f64>> {
+        Problem::residual(self, x)
+    }
+
+    fn accept(&mut self, x: &[f64], r: &DVector<f64>, jac: &DMatrix<f64>, step: &DVector<f64>) -> Result<(), String> {
+        Problem::accept(self, x, r, jac, step)
     }
 }
 

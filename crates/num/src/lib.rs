@@ -38,7 +38,8 @@
 //! - [`integrate`] drives a solver with output sampling and [`Event`]s.
 //! - [`eigenvalues`] of a general matrix, [`symmetric_definite`] of K v = μ M v.
 //! - [`LinearSolver`] solves `M x = f` (dense or banded LU); [`brent`] finds roots
-//!   of a function of one variable, [`newton`] and [`newton_fd`] of small systems.
+//!   of a function of one variable, [`newton`] and [`newton_fd`] of small systems,
+//!   [`gauss_newton`] of overdetermined ones with the caller's acceptance test.
 //! - Quadrature: the [`midpoint`] rule (Gauss–Chebyshev after `x = cos φ`),
 //!   Gauss–Legendre rules ([`gauss_legendre_rule`], [`gauss_legendre`],
 //!   [`gauss_legendre_doubling`]), [`tanh_sinh`] for endpoint singularities, and
@@ -57,6 +58,7 @@ mod dopri5;
 mod eigen;
 mod error;
 mod gauss;
+mod gauss_newton;
 mod integrate;
 pub mod lanes;
 mod linalg;
@@ -84,6 +86,9 @@ pub use dopri5::Dopri5;
 pub use eigen::{balanced, eigenvalue_rounding, eigenvalues, symmetric_definite, symmetric_rounding, EigenError};
 pub use error::{LinalgError, NewtonError, QuadratureError, RhsError, SolveError};
 pub use gauss::Gauss;
+pub use gauss_newton::{
+    gauss_newton, gauss_newton_step, GaussNewtonConfig, GaussNewtonError, GaussNewtonSolution, LeastSquares,
+};
 pub use integrate::{
     integrate, integrate_projected, integrate_to, probe_spacing, Direction, Event, Observation, ObservationKind,
     Output, Projection, StopReason, Summary, FORESIGHT_MARGIN,
