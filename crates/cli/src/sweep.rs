@@ -127,7 +127,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     derivation.reject_constraints("`lagrange sweep`").map_err(|e| Failure::model(path, &source, e))?;
     let grid = Grid::parse(args.grid.as_deref().unwrap_or_default(), derivation.model()).map_err(usage)?;
     let sweep = mech::Sweep::new(&derivation, &grid, &config).map_err(|e| match e {
-        SweepError::Model(e) => Failure::model(path, &source, e),
+        SweepError::Model(e) => Failure::model(path, &source, *e),
         other => usage(other),
     })?;
     let header = sweep.header();

@@ -48,7 +48,7 @@ pub(crate) fn check_model(text: &str, model: Model) -> Outcome {
         Ok(d) => d,
         Err(err) => {
             let outcome = error_outcome(text, &err, "derive error");
-            if outcome.problem.is_none() && err.message.contains("singular") {
+            if outcome.problem.is_none() && err.kind == mech::ModelErrorKind::SingularMassMatrix {
                 if let Some(o) = &oracle {
                     if let Some(problem) = regular_mass_matrix(o, text) {
                         return problem;

@@ -159,7 +159,14 @@ pub fn report_page(text: &str) -> Result<(String, serde_json::Value), String> {
     };
     let names: Vec<String> = d.coordinate_names().iter().map(|s| s.to_string()).collect();
     let timing = view::simulate::Timing { derive_seconds: 0.0, setup_seconds: None };
-    let terms = view::Terms { step: "--dt", start_at: "--at", full_output: "--format json", animation: "--animate" };
+    let terms = view::Terms {
+        step: "--dt",
+        start_at: "--at",
+        full_output: "--format json",
+        animation: "--animate",
+        until: "--until",
+        method: "--method",
+    };
     let summary = view::simulate::summary_json(&report, &names, &timing, None, &terms);
     let data = rows.data(&d, config.until, summary);
     Ok((view::report::page(&data), data))

@@ -7,7 +7,7 @@
 //! symbolically for the equations of motion; only the Hamiltonian needs
 //! `M⁻¹(p − b)`, built block by block (diagonal and small blocks in closed form).
 
-use crate::error::ModelError;
+use crate::error::{ModelError, ModelErrorKind};
 use crate::model::Model;
 use crate::probe::{self, Decision};
 use quadratic::{Quadratic, Sparsity, Vars as QVars};
@@ -211,18 +211,18 @@ impl Derivation {
     /// earlier one's verdicts. Fails on a singular mass matrix.
     pub fn new(model: Model) -> Result<Derivation, ModelError> {
         if shared::wanted(&model) {
-            return Derivation::derive(model, Path::Shared).map_err(Stop::into_error);
+            return Derivation::derive(model, Path::Shared);
         }
         let fallback = model.clone();
+        // The expanded path passing its bound is no error: the shared one takes over.
         match Derivation::derive(model, Path::Expanded) {
-            Err(Stop::TooLong(_)) => Derivation::derive(fallback, Path::Shared),
+            Err(e) if e.kind == ModelErrorKind::TooLarge => Derivation::derive(fallback, Path::Shared),
             result => result,
         }
-        .map_err(Stop::into_error)
     }
 
     /// [`Derivation::new`] along one path.
-    fn derive(mut model: Model, path: Path) -> Result<Derivation, Stop> {
+    fn derive(mut model: Model, path: Path) -> Result<Derivation, ModelError> {
         let started = crate::clock::Instant::now();
         // The pool is taken out of the model while the model's other parts are read.
         let mut pool_owned = std::mem::take(&mut model.pool);
@@ -238,7 +238,7 @@ impl Derivation {
             (false, false) => EXPANDED_CONSTRAINED_WORK_LIMIT,
         };
         pool.set_work_limit(Some(start + stage_limit));
-        let within = |pool: &Pool, model: &Model| within_work_limit(pool, model, path);
+        let within = within_work_limit;
         let frames = crate::model::frames::frames(pool, &model.bodies, &s.q, &s.qd);
         let (energies, ext, motion) = if shared {
             let mut energies = shared::energies(pool, &model, &s, &frames);
@@ -346,7 +346,7 @@ impl Derivation {
             input_matrix,
             inputs_affine,
         };
-        within_work_limit(&derivation.model.pool, &derivation.model, path)?;
+        within_work_limit(&derivation.model.pool, &derivation.model)?;
         // The bound is the derivation's: analyses rewrite in copies of the pool.
         derivation.model.pool.set_work_limit(None);
         Ok(derivation)
@@ -675,29 +675,6 @@ enum Path {
     Shared,
 }
 
-/// Why a derivation along one path stopped.
-enum Stop {
-    /// The expanded path passed its work bound: the shared one takes over
-    /// (the error is what the shared path reports at its own bound).
-    TooLong(ModelError),
-    /// An error to report.
-    Model(ModelError),
-}
-
-impl From<ModelError> for Stop {
-    fn from(e: ModelError) -> Stop {
-        Stop::Model(e)
-    }
-}
-
-impl Stop {
-    fn into_error(self) -> ModelError {
-        match self {
-            Stop::Model(e) | Stop::TooLong(e) => e,
-        }
-    }
-}
-
 /// Decides a zero: by rewriting on the expanded path; on the shared path
 /// without expanding long expressions ([`shared::decide_zero`]).
 fn decide(pool: &mut Pool, e: ExprId, shared: bool) -> Decision {
@@ -711,7 +688,7 @@ fn decide(pool: &mut Pool, e: ExprId, shared: bool) -> Decision {
 /// An error, located at the first body (or at L, T or the first particle), when
 /// the derivation has done more than [`WORK_LIMIT`] work: its rewrites have
 /// stopped, so nothing it would go on to claim could be trusted.
-fn within_work_limit(pool: &Pool, model: &Model, path: Path) -> Result<(), Stop> {
+fn within_work_limit(pool: &Pool, model: &Model) -> Result<(), ModelError> {
     if !pool.work_exhausted() {
         return Ok(());
     }
@@ -721,11 +698,7 @@ fn within_work_limit(pool: &Pool, model: &Model, path: Path) -> Result<(), Stop>
         WORK_LIMIT / 1_000_000
     );
     let help = "long chains of bodies, each turning relative to the one before, and long products of sums make the expressions grow quickly; a shorter chain, or a Lagrangian written out by hand, stays within the bound";
-    let error = ModelError { message, span, help: Some(help.into()), setting: None, within: None };
-    Err(match path {
-        Path::Expanded => Stop::TooLong(error),
-        Path::Shared => Stop::Model(error),
-    })
+    Err(ModelError::located(span, message).with_help(help).with_kind(ModelErrorKind::TooLarge))
 }
 
 /// Rayleigh's R and the generalized forces Q (`[forces]` and the loads' virtual
@@ -896,7 +869,7 @@ fn check_regular(pool: &mut Pool, model: &Model, mass_matrix: &[Vec<ExprId>]) ->
         Some(_) => "a body with a zero principal moment (a thin rod about its axis) has no inertia for a spin about that axis: leave that angle out of the coordinates, or give the body its moment",
         None => "each coordinate needs its own kinetic energy; a coordinate whose velocity never appears, or two that only appear as one combination, leave the motion undetermined",
     };
-    Err(ModelError { message, span, help: Some(help.into()), setting: None, within: None })
+    Err(ModelError::located(span, message).with_help(help).with_kind(ModelErrorKind::SingularMassMatrix))
 }
 
 /// Largest tree size of an expression that is simplified (beyond it, expansion

@@ -9,6 +9,9 @@ use std::ops::Range;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{message}")]
 pub struct ModelError {
+    /// What kind of problem it is, for callers that branch on it; the
+    /// message says the rest.
+    pub kind: ModelErrorKind,
     /// What is wrong and what was expected, as one sentence.
     pub message: String,
     /// Where, as a byte range into the model file (None: the file as a whole).
@@ -21,6 +24,49 @@ pub struct ModelError {
     /// When the error is inside another file the model names (a body file):
     /// that file and the error there, for a front end to locate.
     pub within: Option<Box<Within>>,
+}
+
+/// What kind of problem a [`ModelError`] is: what a caller can act on without
+/// reading the message (fall back to another path, skip a case, map it to its
+/// language's own exception).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum ModelErrorKind {
+    /// The model as written is wrong: its text does not read, a name is
+    /// unknown or repeated, a value is out of its range, a section is missing.
+    #[default]
+    Invalid,
+    /// A file the model names (a body file, a URDF) could not be read.
+    File,
+    /// The mass matrix is singular: the equations of motion do not determine
+    /// every acceleration.
+    SingularMassMatrix,
+    /// The derivation passed its bound on the work of building expressions.
+    TooLarge,
+    /// A constraint, force or torque that does nothing: it restricts no
+    /// motion or acts on no coordinate.
+    DoesNothing,
+    /// The start is not one the motion can begin from: it violates a
+    /// constraint, a value there is not real, or it is at a gimbal singularity.
+    Start,
+    /// The analysis asked for does not handle this model (constraints in
+    /// the normal modes).
+    Unsupported,
+}
+
+impl ModelErrorKind {
+    /// Its name in snake case (`singular_mass_matrix`), for JSON and Python.
+    pub fn code(self) -> &'static str {
+        match self {
+            ModelErrorKind::Invalid => "invalid",
+            ModelErrorKind::File => "file",
+            ModelErrorKind::SingularMassMatrix => "singular_mass_matrix",
+            ModelErrorKind::TooLarge => "too_large",
+            ModelErrorKind::DoesNothing => "does_nothing",
+            ModelErrorKind::Start => "start",
+            ModelErrorKind::Unsupported => "unsupported",
+        }
+    }
 }
 
 /// An error inside a file named by the model file (`message` of the outer error
@@ -54,19 +100,38 @@ pub enum Setting {
 }
 
 impl ModelError {
+    /// An error (of kind [`ModelErrorKind::Invalid`]) at a span, or about the
+    /// file as a whole when there is none.
+    pub fn located(span: Option<Range<usize>>, message: impl Into<String>) -> ModelError {
+        ModelError {
+            kind: ModelErrorKind::Invalid,
+            message: message.into(),
+            span,
+            help: None,
+            setting: None,
+            within: None,
+        }
+    }
+
     /// An error at a span.
     pub fn at(span: Range<usize>, message: impl Into<String>) -> ModelError {
-        ModelError { message: message.into(), span: Some(span), help: None, setting: None, within: None }
+        ModelError::located(Some(span), message)
     }
 
     /// An error about the file as a whole.
     pub fn whole(message: impl Into<String>) -> ModelError {
-        ModelError { message: message.into(), span: None, help: None, setting: None, within: None }
+        ModelError::located(None, message)
     }
 
     /// An error about a setting of the caller's.
     pub fn setting(setting: Setting, message: impl Into<String>) -> ModelError {
-        ModelError { message: message.into(), span: None, help: None, setting: Some(setting), within: None }
+        ModelError { setting: Some(setting), ..ModelError::whole(message) }
+    }
+
+    /// Sets its kind.
+    pub fn with_kind(mut self, kind: ModelErrorKind) -> ModelError {
+        self.kind = kind;
+        self
     }
 
     /// Adds a hint.

@@ -93,7 +93,7 @@ pub use derive::{
     RateTerm, Verdicts,
 };
 pub use equilibria::{Equilibrium, EquilibriumReport, Stability};
-pub use error::{ModelError, Setting, Within};
+pub use error::{ModelError, ModelErrorKind, Setting, Within};
 pub use extremal::{
     extremal, Candidate, Euler, EulerError, ExtremalConfig, ExtremalError, ExtremalReport, ExtremalSummary, Problem,
     SecondVariation, Start, EXTREMAL_FORMAT,

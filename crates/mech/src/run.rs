@@ -32,7 +32,7 @@ pub(crate) mod tree;
 
 use crate::clock::Instant;
 use crate::derive::Derivation;
-use crate::error::ModelError;
+use crate::error::{ModelError, ModelErrorKind};
 use audit::InvariantAudit;
 pub use budget::{approx, BudgetAdvice, BudgetStage, StepBudget, TimeScale, STEPS_PER_TIME_SCALE};
 pub(crate) use config::is_positive_time;
@@ -172,16 +172,15 @@ pub fn simulate(
     if let Some(g) = guards.iter().find(|g| g.violated(&q0)) {
         let span =
             d.model.initial.iter().find(|iv| iv.coord == g.beta && iv.order == 0).map(|iv| iv.value.span.clone());
-        let e = ModelError {
-            message: format!(
+        let e = ModelError::located(
+            span,
+            format!(
                 "the initial state is at the gimbal singularity of body '{}': |sin {}| < {:.1e}",
                 g.body, g.beta_name, g.threshold
             ),
-            span,
-            help: Some(g.advice()),
-            setting: None,
-            within: None,
-        };
+        )
+        .with_help(g.advice())
+        .with_kind(ModelErrorKind::Start);
         return Err(RunError::Input(e));
     }
     let dynamics = Dynamics::new(d);

@@ -176,7 +176,7 @@ pub enum SweepError {
     },
     /// A model problem (a missing initial value, an impossible method).
     #[error("{0}")]
-    Model(ModelError),
+    Model(Box<ModelError>),
     /// A CSV that is not a sweep's output.
     #[error("{file}, line {line}: {reason}")]
     Table {
@@ -222,6 +222,13 @@ pub enum SweepError {
     /// Nothing to merge.
     #[error("no shard files to merge")]
     NothingToMerge,
+}
+
+impl SweepError {
+    /// A model error, boxed (it is the largest of the variants).
+    fn model(e: ModelError) -> SweepError {
+        SweepError::Model(Box::new(e))
+    }
 }
 
 /// Options of a sweep.
@@ -337,26 +344,26 @@ impl<'a> Sweep<'a> {
         if !crate::run::is_positive_time(config.until) {
             return Err(SweepError::Until { until: config.until });
         }
-        d.model.check_inputs_applied().map_err(SweepError::Model)?;
+        d.model.check_inputs_applied().map_err(SweepError::model)?;
         let dynamics = Dynamics::new(d);
         // Rigid bodies need the gimbal guard's events, which the lock-step batches
         // do not check, and equations with a kink (abs) that a Taylor series does
         // not see: DOP853 by default there.
         let default = if d.model.bodies.is_empty() && dynamics.is_analytic() { Method::Taylor } else { Method::Dop853 };
         let (method, form) =
-            choose_method(d, &dynamics, Some(config.method.unwrap_or(default)), false).map_err(SweepError::Model)?;
+            choose_method(d, &dynamics, Some(config.method.unwrap_or(default)), false).map_err(SweepError::model)?;
         // Initial values from the model; a value neither in [initial] nor on an axis
         // is an error before anything runs.
-        let base = initial_values(&d.model).map_err(SweepError::Model)?;
+        let base = initial_values(&d.model).map_err(SweepError::model)?;
         if grid.is_empty() {
             return Err(SweepError::EmptyGrid);
         }
-        complete(&base, grid, &grid.point(0), &d.model).map_err(SweepError::Model)?;
+        complete(&base, grid, &grid.point(0), &d.model).map_err(SweepError::model)?;
         // Rigid bodies: a run through the Euler angles' gimbal singularity fails
         // there (as `simulate` does) instead of integrating garbage.
         let guards = crate::run::body::gimbal_guards(d, config.rtol);
         let names = dynamics.coordinate_names();
-        refuse_duplicates(&columns(&d.model, grid, names), "the sweep's CSV").map_err(SweepError::Model)?;
+        refuse_duplicates(&columns(&d.model, grid, names), "the sweep's CSV").map_err(SweepError::model)?;
         let header = header(d, grid, config, method, names);
         Ok(Sweep { d, grid, config, dynamics, method, form, base, guards, header, batched: OnceLock::new() })
     }

@@ -24,27 +24,34 @@ pub fn model_error(py: Python<'_>, place: &Place<'_>, e: &mech::ModelError) -> P
         // The error is in a file the model names (a body file): locate it there.
         let inner = Place { file: &w.name, text: &w.text };
         let message = format!("in the {} {}: {}", w.what, w.name, w.error.message);
-        return located(py, &inner, &message, w.error.span.clone(), w.error.help.as_deref());
+        return located(py, &inner, &message, w.error.span.clone(), w.error.help.as_deref(), e.kind);
     }
     let message = match &e.setting {
         Some(mech::Setting::Parameter { name }) => format!("set[{name:?}]: {}", e.message),
         Some(mech::Setting::Start { name }) => format!("at[{name:?}]: {}", e.message),
         None => e.message.clone(),
     };
-    located(py, place, &message, e.span.clone(), e.help.as_deref())
+    located(py, place, &message, e.span.clone(), e.help.as_deref(), e.kind)
 }
 
 /// A `lagrange.ModelError` with no place in a file (a setting, an option).
 pub fn plain_error(py: Python<'_>, file: &str, message: &str, help: Option<&str>) -> PyErr {
-    located(py, &Place { file, text: "" }, message, None, help)
+    located(py, &Place { file, text: "" }, message, None, help, mech::ModelErrorKind::Invalid)
 }
 
 /// A `lagrange.ModelError` about an expression the caller passed (`what` names it).
 pub fn expression_error(py: Python<'_>, what: &str, text: &str, e: &mech::ModelError) -> PyErr {
-    located(py, &Place { file: what, text }, &e.message, e.span.clone(), e.help.as_deref())
+    located(py, &Place { file: what, text }, &e.message, e.span.clone(), e.help.as_deref(), e.kind)
 }
 
-fn located(py: Python<'_>, place: &Place<'_>, message: &str, span: Option<Range<usize>>, help: Option<&str>) -> PyErr {
+fn located(
+    py: Python<'_>,
+    place: &Place<'_>,
+    message: &str,
+    span: Option<Range<usize>>,
+    help: Option<&str>,
+    kind: mech::ModelErrorKind,
+) -> PyErr {
     let (line, column, snippet) = match span {
         Some(span) => {
             let span = clamp(span, place.text);
@@ -71,6 +78,7 @@ fn located(py: Python<'_>, place: &Place<'_>, message: &str, span: Option<Range<
         kw.set_item("column", column)?;
         kw.set_item("help", help)?;
         kw.set_item("snippet", &snippet)?;
+        kw.set_item("kind", kind.code())?;
         kw.set_item("text", &full)
     })
 }

@@ -29,6 +29,20 @@ def test_model_error_points_into_the_text():
     assert "^" in e.snippet.splitlines()[-1]
     assert str(e).startswith(f"spring.toml:3:{e.column}: ")
     assert isinstance(e, ValueError) and isinstance(e, lagrange.LagrangeError)
+    assert e.kind == "invalid"
+
+
+def test_the_kind_of_a_model_error_says_what_to_branch_on():
+    no_inertia = """name = "no inertia"
+coordinates = ["x", "y"]
+
+[[particles]]
+mass = "1"
+position = ["x + y"]
+"""
+    with pytest.raises(lagrange.ModelError) as info:
+        lagrange.Model.from_toml(no_inertia).derive()
+    assert info.value.kind == "singular_mass_matrix"
 
 
 def test_missing_file():

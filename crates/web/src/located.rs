@@ -40,7 +40,7 @@ pub fn place(text: &str, offset: usize) -> Place {
 
 /// A model error (`mech::ModelError`) located in `source`.
 pub fn model_error(source: &str, e: &mech::ModelError) -> Value {
-    match &e.within {
+    let mut v = match &e.within {
         Some(w) => {
             let mut v = error(&e.message, e.help.as_deref(), w.error.span.clone().map(|s| (w.text.as_str(), s)));
             v["file"] = json!(w.name);
@@ -48,7 +48,9 @@ pub fn model_error(source: &str, e: &mech::ModelError) -> Value {
             v
         }
         None => error(&e.message, e.help.as_deref(), e.span.clone().map(|s| (source, s))),
-    }
+    };
+    v["kind"] = json!(e.kind.code());
+    v
 }
 
 /// An error value: `message`, optional `help`, and where in which text.

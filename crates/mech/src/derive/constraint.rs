@@ -17,7 +17,7 @@
 //! `model/constraint.rs`, and the numbers of a run are in `run/constrained.rs`.
 
 use super::{Derivation, Symbols};
-use crate::error::ModelError;
+use crate::error::{ModelError, ModelErrorKind};
 use crate::model::{ConstraintKind, Model};
 use crate::probe::Decision;
 use crate::probe::{self, Subst};
@@ -104,6 +104,7 @@ impl Derivation {
                 c.span.clone(),
                 format!("{what} does not handle [[constraints]] yet: it would analyse the unconstrained system"),
             )
+            .with_kind(ModelErrorKind::Unsupported)
             .with_help("the derivation and simulation enforce constraints with multipliers; or eliminate the constraint by generalized coordinates")),
         }
     }
@@ -164,6 +165,7 @@ impl Derivation {
             if !subject.is_empty() {
                 let how = if bad.is_nan() { "has no real value" } else { "is infinite" };
                 return Err(ModelError::at(c.span.clone(), format!("{subject} {how} at the start {}", point()))
+                    .with_kind(ModelErrorKind::Start)
                     .with_help("a square root or logarithm of a negative number, or a division by zero, at the start: give [initial] values where the constraint is defined, or write it so that it is"));
             }
             if !holonomic {
@@ -180,6 +182,7 @@ impl Derivation {
                         INITIAL_TOLERANCE * size,
                     ),
                 )
+                .with_kind(ModelErrorKind::Start)
                 .with_help("give [initial] values that satisfy the constraint (velocities too: A q' + a_t = 0); residuals within the tolerance are round-off and projected away"));
             }
             let vanishes = c.jacobian.iter().all(|&e| probe::zero_to_rounding_at(pool, e, &env).unwrap_or(false));
@@ -201,7 +204,7 @@ impl Derivation {
                     )),
                     None => err.with_help("write the constraint so that its gradient is not zero where it holds (not as a square, a product with a repeated factor or a sum of squares), or start where it is not zero"),
                 };
-                return Err(err);
+                return Err(err.with_kind(ModelErrorKind::Start));
             }
         }
         Ok(())
@@ -385,7 +388,11 @@ fn derive_all(pool: &mut Pool, d: &Symbols, specs: &[crate::model::ConstraintSpe
                     spec.name
                 ),
             };
-            return Err(ModelError::at(span, msg));
+            let kind = match spec.kind {
+                ConstraintKind::Holonomic => ModelErrorKind::DoesNothing,
+                ConstraintKind::Velocity => ModelErrorKind::Invalid,
+            };
+            return Err(ModelError::at(span, msg).with_kind(kind));
         }
         // g = A·q' + a_t and A q'' = c = −(Σ ∂g/∂q_j q_j' + ∂g/∂t).
         let mut g_terms: Vec<ExprId> = (0..n).map(|i| pool.mul2(jacobian[i], d.qd[i])).collect();

@@ -241,7 +241,7 @@ center_of_mass = ["0", "0", "-l/2"]
         for (name, text) in MODELS {
             let model = Model::parse(text, &[]).unwrap_or_else(|e| panic!("{name}: {e:?}"));
             let along = |model: Model, path: Path| {
-                Derivation::derive(model, path).unwrap_or_else(|e| panic!("{name}: {path:?}: {:?}", e.into_error()))
+                Derivation::derive(model, path).unwrap_or_else(|e| panic!("{name}: {path:?}: {e:?}"))
             };
             let expanded = along(model.clone(), Path::Expanded);
             let shared = along(model, Path::Shared);

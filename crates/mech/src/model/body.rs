@@ -36,7 +36,7 @@
 //! condition to stop on before the integrator produces garbage there. This file
 //! reads the tables; `derive/body.rs` turns a body into T, U, ω and L.
 
-use crate::error::ModelError;
+use crate::error::{ModelError, ModelErrorKind};
 use crate::model::check::{CheckKind, ValueCheck};
 use crate::model::{Located, NumOrText, Reader, Scope};
 use crate::probe;
@@ -493,8 +493,9 @@ struct FileBody {
 /// Reads and evaluates the body file `name` (see `lagrange inertia`): its
 /// origin is the body's reference point and its axes are the body axes.
 fn load_body_file(r: &mut Reader<'_>, name: &str, span: Range<usize>) -> Result<FileBody, ModelError> {
-    let text = (r.files)(name)
-        .map_err(|e| ModelError::at(span.clone(), format!("cannot read the body file '{name}': {e}")))?;
+    let text = (r.files)(name).map_err(|e| {
+        ModelError::at(span.clone(), format!("cannot read the body file '{name}': {e}")).with_kind(ModelErrorKind::File)
+    })?;
     let nested = |e: ModelError| {
         let mut err = ModelError::at(span.clone(), format!("in the body file {name}: {}", e.message));
         err.help.clone_from(&e.help);

@@ -15,7 +15,7 @@
 //! constraint `NAME_z` too (the default, `"kept"`, leaves it to the wheel's
 //! position, as a centre at height R sin θ keeps a leaning disc on the ground).
 
-use crate::error::ModelError;
+use crate::error::{ModelError, ModelErrorKind};
 use crate::model::check::{CheckKind, ValueCheck};
 use crate::model::{Body, Located, NumOrText, Orientation, Reader, Scope};
 use crate::probe;
@@ -231,7 +231,8 @@ pub(crate) fn read_rolling(
             span,
             "the rolling contact constrains nothing: the contact point's velocity is identically 0",
         )
-        .with_help("the wheel's motion already keeps it from slipping; leave the rolling contact out"));
+        .with_help("the wheel's motion already keeps it from slipping; leave the rolling contact out")
+        .with_kind(ModelErrorKind::DoesNothing));
     }
     for (axis, kind, expr) in parts {
         let full = format!("{name}_{axis}");

@@ -23,7 +23,7 @@
 //! parameters and inputs; points are expressions of the coordinates and time.
 
 use super::{Body, NumOrText, Reader, Scope};
-use crate::error::ModelError;
+use crate::error::{ModelError, ModelErrorKind};
 use serde::Deserialize;
 use std::ops::Range;
 use sym::ExprId;
@@ -98,7 +98,8 @@ pub(crate) fn read_all(
                 let span =
                     table.at.as_ref().map(|a| a.span()).or(table.body.as_ref().map(|b| b.span())).unwrap_or(l.span());
                 return Err(ModelError::at(span, "the force acts at a point that no coordinate moves, so it does nothing")
-                    .with_help("a force enters the equations through F·∂r/∂q: give a point that moves with the coordinates (`at`, or a `body` that moves)"));
+                    .with_help("a force enters the equations through F·∂r/∂q: give a point that moves with the coordinates (`at`, or a `body` that moves)")
+                    .with_kind(ModelErrorKind::DoesNothing));
             }
         }
         out.push(load);
@@ -187,7 +188,8 @@ fn read(r: &mut Reader<'_>, l: &Spanned<RawLoad>, bodies: &[Body], dimension: us
                     torque.span(),
                     format!("body '{}' does not turn (no angle of its own or of a parent), so a torque on it does nothing", bodies[b].name),
                 )
-                .with_help("a torque acts on a body with `angle` or `angles` (or a parent that has them); a force at a point takes `force` and `at`"));
+                .with_help("a torque acts on a body with `angle` or `angles` (or a parent that has them); a force at a point takes `force` and `at`")
+                .with_kind(ModelErrorKind::DoesNothing));
             }
             let vector = match torque.get_ref() {
                 toml::Value::Array(_) if dimension == 2 => {

@@ -25,8 +25,14 @@ class ModelError(LagrangeError, ValueError):
     option's name), ``line`` and ``column`` (1-based, or None when the error
     is about the file as a whole), ``message`` (what is wrong and what was
     expected), ``help`` (a hint, or None) and ``snippet`` (the offending line
-    with carets under the place). ``str(error)`` is all of it, as the CLI
-    prints it.
+    with carets under the place), and ``kind``, what kind of problem it is,
+    for code that branches on it: ``"invalid"`` (the input as written is
+    wrong), ``"file"`` (a file the model names could not be read),
+    ``"singular_mass_matrix"``, ``"too_large"`` (the derivation passed its
+    bound), ``"does_nothing"`` (a constraint, force or torque that acts on
+    nothing), ``"start"`` (a start the motion cannot begin from) or
+    ``"unsupported"`` (an analysis that does not handle this model).
+    ``str(error)`` is all of it, as the CLI prints it.
     """
 
     def __init__(
@@ -38,8 +44,10 @@ class ModelError(LagrangeError, ValueError):
         help: Optional[str] = None,
         snippet: str = "",
         text: Optional[str] = None,
+        kind: str = "invalid",
     ) -> None:
         self.message = message
+        self.kind = kind
         self.file = file
         self.line = line
         self.column = column

@@ -8,7 +8,7 @@
 //! is placed, in the model file, at the `urdf` value ([`Imported::span`]);
 //! errors inside the URDF or the imported text are nested ([`Imported::nest`]).
 
-use crate::error::{ModelError, Within};
+use crate::error::{ModelError, ModelErrorKind, Within};
 use crate::model::body::Body;
 use crate::model::gravity::Gravity;
 use crate::model::{FileReader, Located, RawModel, Reader};
@@ -52,8 +52,9 @@ pub(crate) fn import(
 ) -> Result<Imported, ModelError> {
     let name = urdf.get_ref().clone();
     let span = urdf.span();
-    let text =
-        files(&name).map_err(|e| ModelError::at(span.clone(), format!("cannot read the URDF file '{name}': {e}")))?;
+    let text = files(&name).map_err(|e| {
+        ModelError::at(span.clone(), format!("cannot read the URDF file '{name}': {e}")).with_kind(ModelErrorKind::File)
+    })?;
     let config = super::UrdfConfig { floating_base: floating_base.is_some_and(|f| *f.get_ref()) };
     let model = super::urdf_to_model(&text, &name, &config).map_err(|e| {
         let mut err = ModelError::at(span.clone(), format!("in the URDF file {name}: {}", e.message));
