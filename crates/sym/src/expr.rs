@@ -11,11 +11,20 @@
 //! cheaply): sums and products are flattened, numeric parts folded exactly, like
 //! terms and like powers collected, and operands sorted by [`Pool::cmp`]. Entry
 //! points: [`Pool::add`], [`Pool::mul`], [`Pool::pow`], [`Pool::func`].
+//!
+//! Two parts have files of their own: the hash-consing table (`expr/intern.rs`)
+//! and the canonical order (`expr/order.rs`).
 
 use crate::number::{Number, Rational};
-use rustc_hash::{FxHashMap, FxHasher};
-use std::cmp::Ordering;
-use std::hash::{Hash, Hasher};
+use rustc_hash::FxHashMap;
+use std::hash::Hash;
+
+mod intern;
+mod order;
+
+use intern::{hash_seq, Seq, EMPTY};
+
+pub(crate) use order::natural_cmp;
 
 /// The id of a node in a [`Pool`].
 #[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Debug)]
@@ -204,47 +213,6 @@ impl Default for Pool {
     }
 }
 
-/// An empty slot of the intern table.
-const EMPTY: u32 = u32::MAX;
-
-/// Which n-ary node an operand slice is looked up as.
-#[derive(Clone, Copy, PartialEq, Eq, Hash)]
-enum Seq {
-    Add,
-    Mul,
-}
-
-fn hash_seq(kind: Seq, items: &[ExprId]) -> u64 {
-    let mut h = FxHasher::default();
-    kind.hash(&mut h);
-    items.hash(&mut h);
-    h.finish()
-}
-
-fn hash_node(node: &Node) -> u64 {
-    match node {
-        Node::Add(ts) => hash_seq(Seq::Add, ts),
-        Node::Mul(fs) => hash_seq(Seq::Mul, fs),
-        other => {
-            let mut h = FxHasher::default();
-            other.hash(&mut h);
-            h.finish()
-        }
-    }
-}
-
-/// Where a hash starts probing in a table of `mask + 1` slots (the high half of
-/// a Fibonacci product: well mixed even when the hash's low bits are not).
-fn home_slot(hash: u64, mask: usize) -> usize {
-    (hash.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32) as usize & mask
-}
-
-/// The Bloom-filter bit of a symbol.
-fn symbol_bit(s: Symbol) -> u64 {
-    let h = (u64::from(s.name.0) << 8 | u64::from(s.order)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    1 << (h >> 58)
-}
-
 /// Below this many operands, sums and products find like terms by a linear scan.
 const SMALL: usize = 16;
 
@@ -289,95 +257,6 @@ impl Pool {
     /// The node behind an id.
     pub fn node(&self, id: ExprId) -> &Node {
         &self.nodes[id.index()]
-    }
-
-    fn intern(&mut self, node: Node) -> ExprId {
-        self.work += 1;
-        let hash = hash_node(&node);
-        match self.lookup(hash, |n| *n == node) {
-            Ok(id) => id,
-            Err(slot) => self.insert(node, hash, slot),
-        }
-    }
-
-    /// Interns the sum or product of `items` (already canonical), allocating
-    /// only when it is new.
-    fn intern_seq(&mut self, kind: Seq, items: &[ExprId]) -> ExprId {
-        self.work += 1 + items.len() as u64;
-        let hash = hash_seq(kind, items);
-        let found = self.lookup(hash, |n| match (kind, n) {
-            (Seq::Add, Node::Add(ts)) => **ts == *items,
-            (Seq::Mul, Node::Mul(fs)) => **fs == *items,
-            _ => false,
-        });
-        match found {
-            Ok(id) => id,
-            Err(slot) => {
-                let items: Box<[ExprId]> = items.into();
-                let node = if kind == Seq::Add { Node::Add(items) } else { Node::Mul(items) };
-                self.insert(node, hash, slot)
-            }
-        }
-    }
-
-    /// The id of the node with this hash for which `eq` holds, or the empty
-    /// slot where it would go.
-    fn lookup(&self, hash: u64, eq: impl Fn(&Node) -> bool) -> Result<ExprId, usize> {
-        let mask = self.table.len() - 1;
-        let mut slot = home_slot(hash, mask);
-        loop {
-            let id = self.table[slot];
-            if id == EMPTY {
-                return Err(slot);
-            }
-            if self.hashes[id as usize] == hash && eq(&self.nodes[id as usize]) {
-                return Ok(ExprId(id));
-            }
-            slot = (slot + 1) & mask;
-        }
-    }
-
-    /// Stores a new node at `slot` of the table (from a failed [`Pool::lookup`]).
-    fn insert(&mut self, node: Node, hash: u64, slot: usize) -> ExprId {
-        let raw =
-            u32::try_from(self.nodes.len()).ok().filter(|&i| i != EMPTY).expect("more than 2^32 expression nodes");
-        let sz = |c: &ExprId| self.tree_sizes[c.index()];
-        let size = 1u64.saturating_add(match &node {
-            Node::Num(_) | Node::Pi | Node::Sym(_) => 0,
-            Node::Add(ts) | Node::Mul(ts) => ts.iter().map(sz).fold(0u64, u64::saturating_add),
-            Node::Pow(a, b) | Node::Atan2(a, b) => sz(a).saturating_add(sz(b)),
-            Node::Func(_, a) => sz(a),
-        });
-        let mk = |c: &ExprId| self.sym_masks[c.index()];
-        let mask = match &node {
-            Node::Num(_) | Node::Pi => 0,
-            Node::Sym(s) => symbol_bit(*s),
-            Node::Add(ts) | Node::Mul(ts) => ts.iter().map(mk).fold(0, |a, b| a | b),
-            Node::Pow(a, b) | Node::Atan2(a, b) => mk(a) | mk(b),
-            Node::Func(_, a) => mk(a),
-        };
-        self.tree_sizes.push(size);
-        self.sym_masks.push(mask);
-        self.hashes.push(hash);
-        self.nodes.push(node);
-        self.table[slot] = raw;
-        if self.nodes.len() * 2 > self.table.len() {
-            self.grow_table();
-        }
-        ExprId(raw)
-    }
-
-    fn grow_table(&mut self) {
-        let mut table = vec![EMPTY; self.table.len() * 2];
-        let mask = table.len() - 1;
-        for (id, &hash) in self.hashes.iter().enumerate() {
-            let mut slot = home_slot(hash, mask);
-            while table[slot] != EMPTY {
-                slot = (slot + 1) & mask;
-            }
-            table[slot] = id as u32;
-        }
-        self.table = table;
     }
 
     /// The node `id` with each child `c` replaced by `new(c)`, rebuilt in
@@ -962,93 +841,6 @@ impl Pool {
             _ => false,
         }
     }
-
-    // ---- canonical order ----------------------------------------------------------
-
-    fn class(&self, id: ExprId) -> u8 {
-        match self.node(id) {
-            Node::Num(_) => 0,
-            Node::Pi => 1,
-            Node::Sym(_) => 2,
-            Node::Func(..) | Node::Atan2(..) => 3,
-            Node::Add(_) => 4,
-            Node::Mul(_) => 5,
-            Node::Pow(..) => 6,
-        }
-    }
-
-    /// The total order that sorts factors of products: numbers, then symbols by
-    /// rank, derivative order and name, then functions, then sums. Powers sort
-    /// by their base, then by exponent.
-    pub fn cmp(&self, a: ExprId, b: ExprId) -> Ordering {
-        if a == b {
-            return Ordering::Equal;
-        }
-        let (ba, ea) = self.base_exp(a);
-        let (bb, eb) = self.base_exp(b);
-        if ba != bb {
-            return self.cmp_base(ba, bb);
-        }
-        self.cmp(ea, eb)
-    }
-
-    fn cmp_base(&self, a: ExprId, b: ExprId) -> Ordering {
-        if a == b {
-            return Ordering::Equal;
-        }
-        let (ca, cb) = (self.class(a), self.class(b));
-        if ca != cb {
-            return ca.cmp(&cb);
-        }
-        match (self.node(a), self.node(b)) {
-            (Node::Num(x), Node::Num(y)) => x.to_f64().total_cmp(&y.to_f64()),
-            (Node::Sym(x), Node::Sym(y)) => {
-                let rank = |s: &Symbol| self.name_rank[s.name.0 as usize];
-                rank(x)
-                    .cmp(&rank(y))
-                    .then(natural_cmp(self.name_str(x.name), self.name_str(y.name)))
-                    .then(x.order.cmp(&y.order))
-            }
-            (Node::Func(f, x), Node::Func(g, y)) => f.cmp(g).then_with(|| self.cmp(*x, *y)),
-            (Node::Func(..), Node::Atan2(..)) => Ordering::Less,
-            (Node::Atan2(..), Node::Func(..)) => Ordering::Greater,
-            (Node::Atan2(y1, x1), Node::Atan2(y2, x2)) => self.cmp(*y1, *y2).then_with(|| self.cmp(*x1, *x2)),
-            (Node::Add(xs), Node::Add(ys)) | (Node::Mul(xs), Node::Mul(ys)) => {
-                for (x, y) in xs.iter().zip(ys.iter()) {
-                    let o = self.cmp(*x, *y);
-                    if o != Ordering::Equal {
-                        return o;
-                    }
-                }
-                xs.len().cmp(&ys.len())
-            }
-            _ => a.cmp(&b),
-        }
-    }
-
-    /// The order of terms in a sum: by their non-numeric factors compared from
-    /// the most significant (last) one, so that terms in the same coordinates sit
-    /// together; the constant last.
-    fn cmp_terms(&self, a: ExprId, b: ExprId) -> Ordering {
-        let xs = self.term_factors(&a);
-        let ys = self.term_factors(&b);
-        for (x, y) in xs.iter().rev().zip(ys.iter().rev()) {
-            let o = self.cmp(*x, *y);
-            if o != Ordering::Equal {
-                return o;
-            }
-        }
-        xs.len().cmp(&ys.len()).then(a.cmp(&b))
-    }
-
-    /// The non-numeric factors of a term.
-    fn term_factors<'a>(&'a self, id: &'a ExprId) -> &'a [ExprId] {
-        match self.node(*id) {
-            Node::Mul(fs) if self.as_number(fs[0]).is_some() => &fs[1..],
-            Node::Mul(fs) => fs,
-            _ => std::slice::from_ref(id),
-        }
-    }
 }
 
 /// A sum being built by [`Pool::add`]: the constant, and the coefficient of
@@ -1085,53 +877,5 @@ fn fold_number_pow(b: Number, e: Number) -> Option<Number> {
             let v = b.to_f64().powf(e.to_f64());
             v.is_finite().then(|| Number::float(v))
         }
-    }
-}
-
-/// Orders names as people count: `x2` before `x10` (digit runs compare as numbers).
-pub(crate) fn natural_cmp(a: &str, b: &str) -> Ordering {
-    let (mut a, mut b) = (a.as_bytes(), b.as_bytes());
-    loop {
-        match (a.first(), b.first()) {
-            (None, None) => return Ordering::Equal,
-            (None, Some(_)) => return Ordering::Less,
-            (Some(_), None) => return Ordering::Greater,
-            (Some(x), Some(y)) if x.is_ascii_digit() && y.is_ascii_digit() => {
-                let da = a.iter().take_while(|c| c.is_ascii_digit()).count();
-                let db = b.iter().take_while(|c| c.is_ascii_digit()).count();
-                let (na, nb) = (&a[..da], &b[..db]);
-                // Compare digit runs as numbers: strip leading zeros, then length, then digits.
-                let trim = |n: &[u8]| -> usize { n.iter().take_while(|&&c| c == b'0').count() };
-                let (ta, tb) = (&na[trim(na)..], &nb[trim(nb)..]);
-                let o = ta.len().cmp(&tb.len()).then(ta.cmp(tb)).then(da.cmp(&db));
-                if o != Ordering::Equal {
-                    return o;
-                }
-                a = &a[da..];
-                b = &b[db..];
-            }
-            (Some(x), Some(y)) => {
-                if x != y {
-                    return x.cmp(y);
-                }
-                a = &a[1..];
-                b = &b[1..];
-            }
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn names_sort_as_people_count() {
-        assert_eq!(natural_cmp("x2", "x10"), Ordering::Less);
-        assert_eq!(natural_cmp("x10", "x9"), Ordering::Greater);
-        assert_eq!(natural_cmp("m1", "m1"), Ordering::Equal);
-        assert_eq!(natural_cmp("a", "b"), Ordering::Less);
-        assert_eq!(natural_cmp("th1", "th"), Ordering::Greater);
-        assert_eq!(natural_cmp("x01", "x1"), Ordering::Greater);
     }
 }
