@@ -19,6 +19,7 @@ mod ad;
 #[cfg(feature = "jit")]
 mod cc;
 mod diff;
+pub mod emit;
 mod eval;
 mod expr;
 #[cfg(not(feature = "jit"))]
