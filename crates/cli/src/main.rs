@@ -9,6 +9,7 @@
 mod budget;
 mod decimal;
 mod diagnostics;
+mod export;
 mod extremal;
 mod files;
 mod import;
@@ -122,6 +123,8 @@ enum Command {
     Report(report::Args),
     /// A URDF robot as a model file: a body per moving joint, fixed joints merged, limits and meshes left out.
     Import(import::Args),
+    /// The equations of motion as code for another program: a C99 file or a numpy module (rhs, jac, M, f, h, energy).
+    Export(export::Args),
 }
 
 /// Summary formats of `simulate`.
@@ -179,6 +182,7 @@ fn main() -> ExitCode {
         Command::Extremal(args) => extremal::run(&args),
         Command::Report(args) => report::run(&args),
         Command::Import(args) => import::run(&args),
+        Command::Export(args) => export::run(&args),
         Command::Simulate { list_methods: true, .. } => write_stdout(&simulate::list_methods()),
         Command::Simulate {
             model,

@@ -70,7 +70,8 @@ mod report;
 mod run;
 // Equilibria found from a start, and trusted (shared by the analyses).
 mod equilibria;
-// Analyses of a derivation.
+// Analyses of a derivation, and its equations as code for other programs.
+pub mod export;
 mod linearize;
 mod modes;
 mod sweep;
