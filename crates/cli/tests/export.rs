@@ -4,9 +4,13 @@
 //! `lagrange simulate` of the double pendulum (with its default parameters
 //! and with g changed through `params`, as `--set g=` does), of Kepler's
 //! problem and of a chain of ten rods (a tree of bodies: q'' by the
-//! articulated-body algorithm); M, h and the energy agree with the derivation's values at the
-//! start; a singular M makes `lagrange_rhs` return 1; constrained models are
-//! refused with exit 2, and a failed export leaves an existing file alone.
+//! articulated-body algorithm); the cart pendulum with its inputs in t and as
+//! arguments (`lagrange_rhs_u` against `--set F0=`, B against f(u) − f(0)); the
+//! Cartesian pendulum with its constraint (the multiplier against the run's);
+//! M, h and the energy agree with the derivation's values at the start; a
+//! singular M makes `lagrange_rhs` return 1; a failed export (bad model, or
+//! abs() where Python's Jacobian is asked) is exit 2 and leaves an existing
+//! file alone.
 
 mod common;
 use common::{json, ok, run, scratch};
@@ -188,14 +192,99 @@ int main(void) {
 }
 
 #[test]
-fn a_constrained_model_is_refused_and_an_existing_file_is_kept() {
-    let out = scratch("export", "kept.c");
-    std::fs::write(&out, "/* an earlier export */\n").unwrap();
-    let r = run(&["export", "examples/constraints/pendulum_cartesian.toml", "--to", "c", "-o", out.to_str().unwrap()]);
+fn a_failed_export_keeps_an_existing_file() {
+    let out = scratch("export", "kept.py");
+    std::fs::write(&out, "# an earlier export\n").unwrap();
+    let model = scratch("export", "kinked.toml");
+    std::fs::write(&model, "coordinates = [\"x\"]\nkinetic = \"x'^2/2\"\npotential = \"abs(x)\"\n").unwrap();
+    let r = run(&["export", model.to_str().unwrap(), "--to", "python", "-o", out.to_str().unwrap()]);
     assert_eq!(r.code, Some(2), "{}", r.describe());
-    assert!(r.stderr.contains("pendulum_cartesian.toml:"), "{}", r.describe());
-    assert!(r.stderr.contains("does not write [[constraints]] yet"), "{}", r.describe());
-    assert_eq!(std::fs::read_to_string(&out).unwrap(), "/* an earlier export */\n");
+    assert!(r.stderr.contains("abs()"), "{}", r.describe());
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "# an earlier export\n");
     let r = run(&["export", "examples/pendulum.toml", "--to", "fortran", "-o", out.to_str().unwrap()]);
     assert_eq!(r.code, Some(2), "{}", r.describe());
+    std::fs::write(&model, "coordinates = [\"x\"]\nkinetic = \"x'^2/2\"\npotential = \"x^2 +\"\n").unwrap();
+    let r = run(&["export", model.to_str().unwrap(), "--to", "c", "-o", out.to_str().unwrap()]);
+    assert_eq!(r.code, Some(2), "{}", r.describe());
+    assert!(r.stderr.contains("kinked.toml:3:"), "{}", r.describe());
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "# an earlier export\n");
+}
+
+#[test]
+fn the_cart_pendulum_in_c_takes_its_inputs_in_t_or_as_arguments() {
+    let c = export("examples/cart_pendulum.toml", "cart_pendulum.c");
+    let y0 = [0.0, 0.2, 0.0, 0.0];
+    // lagrange_rhs: the inputs take their values in t, F = F0 sin 2t.
+    let got = compile_and_run(&c, &rk4_main(&y0, 3.0, 30000, ""), "cart");
+    agree(&got, &simulated("examples/cart_pendulum.toml", 3.0, &[]), 1e-8);
+    // lagrange_rhs_u with u = (3 sin 2t, 0) moves as --set F0=3 does.
+    let main = rk4_main(&y0, 3.0, 30000, "").replace("lagrange_rhs(", "rhs_of_u(");
+    let driven = format!(
+        "static int rhs_of_u(double t, const double *y, const double *p, double *dy) {{\n    \
+         double u[LAGRANGE_N_INPUTS] = {{3.0 * sin(2.0 * t), 0.0}};\n    \
+         return lagrange_rhs_u(t, y, p, u, dy);\n}}\n{main}"
+    );
+    let got = compile_and_run(&c, &driven, "cart_u");
+    agree(&got, &simulated("examples/cart_pendulum.toml", 3.0, &["F0=3"]), 1e-8);
+    // B: f(u) − f(0) = B u, and f with the values in t is f at lagrange_inputs.
+    let main = r#"
+int main(void) {
+    const double *p = lagrange_parameter_defaults;
+    double y[4] = {0.1, 0.7, 0.3, -0.2}, u[2] = {1.5, -0.25}, zero[2] = {0.0, 0.0}, values[2];
+    double f[2], f0[2], b[4], fu[2], ft[2];
+    lagrange_forcing_u(0.4, y, p, u, f);
+    lagrange_forcing_u(0.4, y, p, zero, f0);
+    lagrange_input_matrix(0.4, y, p, u, b);
+    for (int i = 0; i < 2; i++) printf("%.17g\n%.17g\n", f[i] - f0[i], b[2 * i] * u[0] + b[2 * i + 1] * u[1]);
+    lagrange_inputs(0.4, y, p, values);
+    lagrange_forcing_u(0.4, y, p, values, fu);
+    lagrange_forcing(0.4, y, p, ft);
+    for (int i = 0; i < 2; i++) printf("%.17g\n%.17g\n", fu[i], ft[i]);
+    printf("%.17g\n%d\n", values[0], lagrange_input_names[0][0] == 'F' && lagrange_input_names[1][0] == 't');
+    return 0;
+}
+"#;
+    let got = compile_and_run(&c, main, "cart_b");
+    for pair in got[..8].chunks(2) {
+        agree(&pair[..1], &pair[1..], 1e-13);
+    }
+    agree(&got[8..], &[(0.8f64).sin(), 1.0], 1e-15);
+}
+
+#[test]
+fn a_constrained_model_in_c_moves_with_its_multipliers() {
+    let model = "examples/constraints/pendulum_cartesian.toml";
+    let c = export(model, "pendulum_cartesian.c");
+    let (x0, y0) = (1f64.sin(), -1f64.cos());
+    let start = [x0, y0, 0.5 * 1f64.cos(), 0.5 * 1f64.sin()];
+    let until = 2.0;
+    let got = compile_and_run(&c, &rk4_main(&start, until, 20000, ""), "cartesian");
+    agree(&got, &simulated(model, until, &[]), 1e-8);
+    // At the end: the residual and its rate are round-off, λ is the run's.
+    let finish: Vec<String> = got.iter().map(|v| format!("{v:?}")).collect();
+    let main = format!(
+        r#"
+int main(void) {{
+    double y[4] = {{{}}}, r[1], rate[1], lambda[1], a[2];
+    lagrange_constraint_residuals({until:?}, y, lagrange_parameter_defaults, r);
+    lagrange_constraint_rates({until:?}, y, lagrange_parameter_defaults, rate);
+    if (lagrange_multipliers({until:?}, y, lagrange_parameter_defaults, lambda)) return 1;
+    lagrange_constraint_jacobian({until:?}, y, lagrange_parameter_defaults, a);
+    printf("%.17g\n%.17g\n%.17g\n%.17g\n%.17g\n%d\n", r[0], rate[0], lambda[0], a[0] - 2 * y[0], a[1] - 2 * y[1], LAGRANGE_N_CONSTRAINTS);
+    return 0;
+}}
+"#,
+        finish.join(", ")
+    );
+    let got = compile_and_run(&c, &main, "cartesian_lambda");
+    assert!(got[0].abs() < 1e-9 && got[1].abs() < 1e-9, "residuals {got:?}");
+    let csv = scratch("export", "cartesian.csv");
+    ok(&["simulate", model, "--until", "2", "--rtol", "1e-12", "--out", csv.to_str().unwrap()]);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut rows = text.lines().filter(|l| !l.starts_with('#'));
+    let column = rows.next().unwrap().split(',').position(|c| c == "lambda_rod").expect("a lambda_rod column");
+    let last = rows.next_back().unwrap();
+    let lambda: f64 = last.split(',').nth(column).unwrap().parse().unwrap();
+    agree(&got[2..3], &[lambda], 1e-7);
+    agree(&got[3..], &[0.0, 0.0, 1.0], 1e-15);
 }

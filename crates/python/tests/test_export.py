@@ -1,7 +1,9 @@
 """`lagrange export --to python`: the module needs only numpy, and under
 scipy's solve_ivp (vectorized rhs, and Radau with the exported jac) it
 reproduces `lagrange simulate`; jac agrees with differences of rhs; p as a
-dict changes one parameter as `--set` does and refuses unknown names."""
+dict changes one parameter as `--set` does and refuses unknown names; inputs
+are taken in t or as given (u as a function, dict or sequence) and B is
+∂f/∂u; a constrained model moves with its multipliers."""
 
 from __future__ import annotations
 
@@ -83,3 +85,56 @@ def test_a_model_with_abs_is_refused_for_its_jacobian(tmp_path):
     r = cli("export", model, "--to", "python", "-o", out, check=False)
     assert r.returncode == 2, r.stderr
     assert "abs()" in r.stderr and not out.exists()
+
+
+def test_the_cart_pendulum_takes_its_inputs_in_t_or_as_given(tmp_path):
+    cart = exported(EXAMPLES / "cart_pendulum.toml", tmp_path, "cart_export")
+    assert list(cart.INPUTS) == ["F", "tau"]
+    y0 = [0.0, 0.2, 0.0, 0.0]
+    kw = dict(method="DOP853", rtol=1e-12, atol=1e-12)
+    # u=None: the inputs' values in t, as a run takes them.
+    sol = solve_ivp(cart.rhs, (0, 3), y0, vectorized=True, **kw)
+    assert np.allclose(sol.y[:, -1], simulated(EXAMPLES / "cart_pendulum.toml", 3), rtol=0, atol=1e-8)
+    # u as a function of (t, y), as a dict of those to change, and as a sequence.
+    want = simulated(EXAMPLES / "cart_pendulum.toml", 3, "F0=3")
+    for u in (
+        lambda t, y: {"F": 3 * np.sin(2 * t)},
+        lambda t, y: [3 * np.sin(2 * t), 0.0],
+    ):
+        sol = solve_ivp(cart.rhs, (0, 3), y0, args=(None, u), **kw)
+        assert np.allclose(sol.y[:, -1], want, rtol=0, atol=1e-8)
+    # B = ∂f/∂u: f(u) − f(0) = B u; jac holds u and agrees with differences.
+    y = np.array([0.1, 0.7, 0.3, -0.2])
+    u = np.array([1.5, -0.25])
+    f_u, f_0 = cart.forcing(0.4, y, None, u), cart.forcing(0.4, y, None, [0.0, 0.0])
+    assert np.allclose(f_u - f_0, cart.input_matrix(0.4, y) @ u, rtol=1e-13, atol=1e-13)
+    h = 1e-6
+    numeric = np.column_stack([(cart.rhs(0.4, y + h * e, None, u) - cart.rhs(0.4, y - h * e, None, u)) / (2 * h) for e in np.eye(4)])
+    assert np.allclose(cart.jac(0.4, y, None, u), numeric, rtol=1e-6, atol=1e-6)
+    with pytest.raises(KeyError, match="'G' is not an input"):
+        cart.rhs(0, y0, None, {"G": 1.0})
+
+
+def test_a_constrained_model_moves_with_its_multipliers(tmp_path):
+    model = EXAMPLES / "constraints" / "pendulum_cartesian.toml"
+    pend = exported(model, tmp_path, "cartesian_export")
+    assert pend.CONSTRAINTS == ["rod"]
+    y0 = [np.sin(1), -np.cos(1), 0.5 * np.cos(1), 0.5 * np.sin(1)]
+    sol = solve_ivp(pend.rhs, (0, 2), y0, method="DOP853", rtol=1e-12, atol=1e-12, vectorized=True)
+    end = sol.y[:, -1]
+    assert np.allclose(end, simulated(model, 2), rtol=0, atol=1e-8)
+    assert abs(pend.constraint_residuals(2, end)[0]) < 1e-9
+    assert abs(pend.constraint_rates(2, end)[0]) < 1e-9
+    assert np.allclose(pend.constraint_jacobian(2, end), [2 * end[:2]], rtol=1e-14)
+    # λ against the run's lambda_rod at its last row.
+    csv = tmp_path / "run.csv"
+    cli("simulate", model, "--until", 2, "--rtol", "1e-12", "--out", csv)
+    rows = [line for line in csv.read_text().splitlines() if not line.startswith("#")]
+    header, last = rows[0].split(","), rows[-1].split(",")
+    assert pend.multipliers(2, end)[0] == pytest.approx(float(last[header.index("lambda_rod")]), rel=1e-7)
+    # Radau with the exported Jacobian of the saddle-point system.
+    stiff = solve_ivp(pend.rhs, (0, 2), y0, method="Radau", jac=pend.jac, rtol=1e-10, atol=1e-12)
+    assert np.allclose(stiff.y[:, -1], end, rtol=0, atol=1e-6)
+    h = 1e-6
+    numeric = np.column_stack([(pend.rhs(0, end + h * e) - pend.rhs(0, end - h * e)) / (2 * h) for e in np.eye(4)])
+    assert np.allclose(pend.jac(0, end), numeric, rtol=1e-6, atol=1e-6)
