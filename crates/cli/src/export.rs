@@ -1,12 +1,12 @@
 //! `lagrange export`: a model's equations of motion as code for another
 //! program (`--to c`: one C99 file, `mech::export::to_c`; `--to python`: a
-//! numpy module, `mech::export::to_python`). The file is written
+//! numpy module, `mech::export::to_python`; `--to fmu`: an FMI 2.0 FMU,
+//! `mech::export::fmu`, its binary built by the system's C compiler). The file is written
 //! beside its destination and moved into place whole, so an existing output is
 //! never replaced by a half-written one.
 
 use crate::diagnostics::Failure;
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// The language written (`--to`).
 #[derive(Clone, Copy, clap::ValueEnum, PartialEq)]
@@ -15,6 +15,8 @@ pub enum To {
     C,
     /// A Python module needing only numpy: rhs and jac for scipy's solve_ivp, M, f, h and the energy.
     Python,
+    /// An FMI 2.0 FMU for Model Exchange and Co-Simulation, its binary built by the system's C compiler.
+    Fmu,
 }
 
 /// Options of `export`.
@@ -40,29 +42,30 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let source = crate::read_source(path)?;
     let model = crate::parse_model(path, &source, &args.set)?;
     let d = mech::Derivation::new(model).map_err(|e| Failure::model(path, &source, e))?;
-    let text = match args.to {
-        To::C => mech::export::to_c(&d, env!("CARGO_PKG_VERSION")),
-        To::Python => mech::export::to_python(&d, env!("CARGO_PKG_VERSION")),
+    let version = env!("CARGO_PKG_VERSION");
+    let bytes = match args.to {
+        To::C => mech::export::to_c(&d, version).map(String::into_bytes),
+        To::Python => mech::export::to_python(&d, version).map(String::into_bytes),
+        To::Fmu => return fmu(&d, args, &source),
     }
     .map_err(|e| Failure::model(path, &source, e))?;
-    replace_whole(&args.out, text.as_bytes())
+    mech::export::write_whole(&args.out, &bytes)
         .map_err(|e| Failure::run(format!("cannot write {}: {e}", args.out.display())))
 }
 
-/// Writes `bytes` to a new file beside `path` and renames it to `path`: the
-/// file at `path` is the old one or the whole new one, never a part.
-fn replace_whole(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let name = path.file_name().map_or_else(|| "export".into(), |n| n.to_string_lossy().into_owned());
-    let temporary = path.with_file_name(format!(".{name}.{}.part", std::process::id()));
-    let written = std::fs::File::create(&temporary).and_then(|mut f| {
-        f.write_all(bytes)?;
-        f.sync_all()
-    });
-    match written.and_then(|()| std::fs::rename(&temporary, path)) {
-        Ok(()) => Ok(()),
-        Err(e) => {
-            let _ = std::fs::remove_file(&temporary);
-            Err(e)
-        }
-    }
+/// `--to fmu`: the sources, the binary from the system's C compiler (exit 2
+/// naming how to choose one where there is none), the archive.
+fn fmu(d: &mech::Derivation, args: &Args, source: &str) -> Result<(), Failure> {
+    use mech::export::fmu;
+    let stem = args.out.file_stem().map_or_else(|| "model".into(), |s| s.to_string_lossy().into_owned());
+    let sources = fmu::sources(d, env!("CARGO_PKG_VERSION"), &fmu::identifier(&stem))
+        .map_err(|e| Failure::model(&args.model, source, e))?;
+    let compiler = sym::c_compiler().map_err(|e| {
+        Failure::usage(format!(
+            "the FMU's binary is compiled at export time and needs a C compiler: {e}; install one (cc, gcc or clang), or name it with CC=/path/to/cc"
+        ))
+    })?;
+    let bytes = fmu::package(&sources, &compiler).map_err(|e| Failure::run(format!("cannot build the FMU: {e}")))?;
+    mech::export::write_whole(&args.out, &bytes)
+        .map_err(|e| Failure::run(format!("cannot write {}: {e}", args.out.display())))
 }

@@ -123,7 +123,7 @@ enum Command {
     Report(report::Args),
     /// A URDF robot as a model file: a body per moving joint, fixed joints merged, limits and meshes left out.
     Import(import::Args),
-    /// The equations of motion as code for another program: a C99 file or a numpy module (rhs, jac, M, f, h, energy).
+    /// The equations of motion as code for another program: a C99 file, a numpy module (rhs, jac) or an FMI 2.0 FMU.
     Export(export::Args),
 }
 

@@ -10,7 +10,8 @@
 //! M, h and the energy agree with the derivation's values at the start; a
 //! singular M makes `lagrange_rhs` return 1; a failed export (bad model, or
 //! abs() where Python's Jacobian is asked) is exit 2 and leaves an existing
-//! file alone.
+//! file alone; an FMU holds its description, source and binary, and without a
+//! C compiler is refused with exit 2 (FMPy runs the FMUs: `test_fmu.py`).
 
 mod common;
 use common::{json, ok, run, scratch};
@@ -287,4 +288,46 @@ int main(void) {{
     let lambda: f64 = last.split(',').nth(column).unwrap().parse().unwrap();
     agree(&got[2..3], &[lambda], 1e-7);
     agree(&got[3..], &[0.0, 0.0, 1.0], 1e-15);
+}
+
+#[test]
+fn an_fmu_without_a_c_compiler_is_refused_and_an_existing_file_is_kept() {
+    let out = scratch("export", "kept.fmu");
+    std::fs::write(&out, "an earlier export").unwrap();
+    let r = Command::new(env!("CARGO_BIN_EXE_lagrange"))
+        .args(["export", "examples/double_pendulum.toml", "--to", "fmu", "-o", out.to_str().unwrap()])
+        .current_dir(common::repo_root())
+        .env("LAGRANGE_CC", "/nonexistent/cc")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("needs a C compiler") && stderr.contains("/nonexistent/cc"), "{stderr}");
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "an earlier export");
+}
+
+#[test]
+fn an_fmu_holds_its_description_its_source_and_a_binary_for_this_machine() {
+    let out = scratch("export", "cart_pendulum.fmu");
+    ok(&["export", "examples/cart_pendulum.toml", "--to", "fmu", "-o", out.to_str().unwrap()]);
+    let bytes = std::fs::read(&out).unwrap();
+    // A zip (local file header) holding the three entries, by name.
+    assert_eq!(&bytes[..4], b"PK\x03\x04");
+    let text = String::from_utf8_lossy(&bytes);
+    let binary = if cfg!(target_os = "macos") {
+        "binaries/darwin64/cart_pendulum.dylib"
+    } else {
+        "binaries/linux64/cart_pendulum.so"
+    };
+    for entry in ["modelDescription.xml", "sources/cart_pendulum.c", binary] {
+        assert!(text.contains(entry), "no {entry} in the archive");
+    }
+    for line in [
+        r#"modelIdentifier="cart_pendulum""#,
+        r#"<ScalarVariable name="F" valueReference="13""#,
+        r#"causality="input""#,
+        r#"<ScalarVariable name="solver.tolerance""#,
+    ] {
+        assert!(text.contains(line), "no {line} in the model description");
+    }
 }

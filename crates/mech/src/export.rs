@@ -22,7 +22,7 @@
 //! measure by how much), and the audit.
 
 mod c;
-// pub mod fmu;
+pub mod fmu;
 mod python;
 
 pub use c::{to_c, SINGULAR_PIVOT_RATIO};
@@ -32,6 +32,26 @@ use crate::derive::Derivation;
 use crate::error::ModelError;
 use std::ops::Range;
 use sym::{ExprId, Pool, Tape};
+
+/// Writes `bytes` to a new file beside `path` and renames it to `path`: the
+/// file at `path` is the old one or the whole new one, never a part (an export
+/// that fails, or is stopped, leaves an earlier export as it was).
+pub fn write_whole(path: &std::path::Path, bytes: &[u8]) -> std::io::Result<()> {
+    use std::io::Write;
+    let name = path.file_name().map_or_else(|| "export".into(), |n| n.to_string_lossy().into_owned());
+    let temporary = path.with_file_name(format!(".{name}.{}.part", std::process::id()));
+    let written = std::fs::File::create(&temporary).and_then(|mut f| {
+        f.write_all(bytes)?;
+        f.sync_all()
+    });
+    match written.and_then(|()| std::fs::rename(&temporary, path)) {
+        Ok(()) => Ok(()),
+        Err(e) => {
+            let _ = std::fs::remove_file(&temporary);
+            Err(e)
+        }
+    }
+}
 
 /// The symbols exported code reads, in the order of a tape's inputs: the
 /// derivation's layout `[q, q', t, parameters]`, then the inputs u, then what a

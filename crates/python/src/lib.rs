@@ -14,6 +14,7 @@ use pyo3::prelude::*;
 
 mod analyses;
 mod errors;
+mod export;
 mod expr;
 mod model;
 mod rhs;

@@ -138,3 +138,25 @@ def test_a_constrained_model_moves_with_its_multipliers(tmp_path):
     h = 1e-6
     numeric = np.column_stack([(pend.rhs(0, end + h * e) - pend.rhs(0, end - h * e)) / (2 * h) for e in np.eye(4)])
     assert np.allclose(pend.jac(0, end), numeric, rtol=1e-6, atol=1e-6)
+
+
+def test_model_export_writes_what_the_cli_writes(tmp_path):
+    import lagrange
+
+    cart = lagrange.load(EXAMPLES / "cart_pendulum.toml")
+    for to, suffix in (("c", "c"), ("python", "py")):
+        mine, theirs = tmp_path / f"mine.{suffix}", tmp_path / f"theirs.{suffix}"
+        cart.export(to, mine)
+        cli("export", EXAMPLES / "cart_pendulum.toml", "--to", to, "-o", theirs)
+        assert mine.read_text() == theirs.read_text()
+    module = exported(EXAMPLES / "cart_pendulum.toml", tmp_path, "cart_again")
+    assert list(module.INPUTS) == ["F", "tau"]
+    with pytest.raises(ValueError, match='the targets are "c", "python" and "fmu"'):
+        cart.export("fortran", tmp_path / "cart.f")
+    kink = lagrange.load(Path(__file__).resolve().parents[2] / "cli" / "tests" / "bad" / "kink_for_jacobian.toml")
+    kept = tmp_path / "kept.py"
+    kept.write_text("# an earlier export\n")
+    with pytest.raises(lagrange.ModelError, match="abs()") as e:
+        kink.export("python", kept)
+    assert e.value.kind == "unsupported"
+    assert kept.read_text() == "# an earlier export\n"

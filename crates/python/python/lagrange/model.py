@@ -207,6 +207,18 @@ class Model:
         for ``scipy.integrate.solve_ivp`` or any integrator of your own."""
         return self._native.rhs()
 
+    # --- code that leaves lagrange ---------------------------------------------
+    def export(self, to: str, path: PathLike) -> None:
+        """Writes the equations of motion for another program, as ``lagrange
+        export --to`` does: ``"c"`` (one C99 file needing only libm),
+        ``"python"`` (a module needing only numpy: ``rhs`` and ``jac`` for
+        ``scipy.integrate.solve_ivp``) or ``"fmu"`` (an FMI 2.0 FMU for Model
+        Exchange and Co-Simulation, compiled by the system's C compiler). The
+        file is written whole or not at all; a model that cannot be exported
+        raises ``ModelError`` with the reason, a missing C compiler
+        ``LagrangeError``."""
+        self._native.export(to, os.fspath(path))
+
     # --- analyses -------------------------------------------------------------
     def modes(self, at: Optional[Mapping[str, float]] = None, allow_unstable: bool = False) -> Report:
         """Normal modes about the equilibrium nearest ``[initial]`` (or ``at``):
