@@ -36,7 +36,7 @@ pub struct Args {
     /// End time of every run (each starts at t = 0).
     #[arg(long, required_unless_present = "merge", allow_negative_numbers = true)]
     pub until: Option<f64>,
-    /// The grid: NAME=START:STOP:COUNT, comma separated (coordinates a, velocities a', parameters).
+    /// The grid: NAME=START:STOP:COUNT (evenly spaced) or NAME=V1;V2;... (the values listed), comma separated (coordinates a, velocities a', parameters).
     #[arg(long, required_unless_present = "merge", allow_hyphen_values = true)]
     pub grid: Option<String>,
     /// Override a parameter for every run: --set g=1.62 (repeatable).
@@ -307,6 +307,9 @@ fn heatmap_usage(e: HeatMapError) -> Failure {
     Failure::usage(match e {
         HeatMapError::NotTwoDimensional { axes } => format!(
             "--heatmap needs a 2-D grid (two axes, as in --grid \"a=-3:3:100,b=-3:3:100\"); this one has {axes}; the CSV has every run"
+        ),
+        HeatMapError::UnevenAxis { name } => format!(
+            "--heatmap draws evenly spaced axes, and the values of '{name}' are not (give it as START:STOP:COUNT); the CSV has every run"
         ),
         HeatMapError::TooManyCells { first, second } => format!(
             "--heatmap draws at most {MAX_CELLS} cells, and this grid has {first} × {second} = {}; the CSV has every run (draw a coarser grid, or plot the CSV)",

@@ -1,6 +1,6 @@
 //! `lagrange sweep` end to end: the real binary on a small double-pendulum grid
 //! (rows, shards merged back to the unsharded output, the heat map) and bad
-//! grids (exit 2).
+//! grids (exit 2); an axis of listed values (`a=0;1;5`).
 
 mod common;
 
@@ -127,7 +127,12 @@ fn bad_grids_and_requests_exit_2() {
     let model = repo_root().join("examples/double_pendulum.toml");
     let model = model.to_str().unwrap();
     let cases: &[(&[&str], &str)] = &[
-        (&["--grid", "a=0:1"], "'a=0:1' is not NAME=START:STOP:COUNT"),
+        (&["--grid", "a=0:1"], "'a=0:1' is not NAME=START:STOP:COUNT (evenly spaced) or NAME=V1;V2;..."),
+        (&["--grid", "a=0;x;1"], "the value of 'a' must be a finite number, not 'x'"),
+        (
+            &["--grid", "a=0;1;5,b=0:1:3", "--heatmap", "x.svg"],
+            "the values of 'a' are not (give it as START:STOP:COUNT)",
+        ),
         (
             &["--grid", "z=0:1:3"],
             "'z' is not a coordinate, a velocity or a parameter of the model (known: a, a', b, b'",
@@ -239,4 +244,45 @@ fn an_axis_named_like_a_sweep_column_is_refused() {
         "{}",
         r.stderr
     );
+}
+
+#[test]
+fn an_axis_of_listed_values_runs_those_values_and_merges_back() {
+    let model = repo_root().join("examples/double_pendulum.toml");
+    let model = model.to_str().unwrap();
+    let whole = scratch("sweep", "listed.csv");
+    let args = ["sweep", model, "--until", "0.1", "--grid", "a=0;1;5,g=1.62;9.81", "--no-lyapunov"];
+    ok(&[&args[..], &["--out", whole.to_str().unwrap()]].concat());
+    let text = text(&whole);
+    assert!(
+        text.starts_with("# lagrange sweep; model=planar double pendulum; grid=a=0.0;1.0;5.0,g=1.62;9.81;"),
+        "{text}"
+    );
+    let values: Vec<(String, String)> = text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with("run"))
+        .map(|l| {
+            let cells: Vec<&str> = l.split(',').collect();
+            (cells[1].to_string(), cells[2].to_string())
+        })
+        .collect();
+    let want: Vec<(String, String)> =
+        [("0.0", "1.62"), ("0.0", "9.81"), ("1.0", "1.62"), ("1.0", "9.81"), ("5.0", "1.62"), ("5.0", "9.81")]
+            .iter()
+            .map(|(a, g)| (a.to_string(), g.to_string()))
+            .collect();
+    assert_eq!(values, want);
+    // Shards of it merge to the whole, the provenance read back from the header.
+    let parts: Vec<_> = (0..2).map(|i| scratch("sweep", &format!("listed_{i}.csv"))).collect();
+    for (i, part) in parts.iter().enumerate() {
+        ok(&[&args[..], &["--shard", &format!("{i}/2"), "--out", part.to_str().unwrap()]].concat());
+    }
+    let merged = scratch("sweep", "listed_merged.csv");
+    ok(&["sweep", "--merge", merged.to_str().unwrap(), parts[0].to_str().unwrap(), parts[1].to_str().unwrap()]);
+    assert_eq!(text_rows(&merged), text_rows(&whole));
+}
+
+/// The rows of a sweep's CSV without its timing-free header line.
+fn text_rows(path: &Path) -> Vec<String> {
+    text(path).lines().filter(|l| !l.starts_with('#')).map(str::to_string).collect()
 }

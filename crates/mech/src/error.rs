@@ -140,3 +140,16 @@ impl ModelError {
         self
     }
 }
+
+/// A parameter override's value (`--set`, Python's `set=` and
+/// `with_parameters`), refused where it is not finite: every front end's
+/// overrides arrive in the readers that call this.
+pub(crate) fn finite_override(name: &str, value: f64) -> Result<f64, ModelError> {
+    if value.is_finite() {
+        return Ok(value);
+    }
+    Err(ModelError::setting(
+        Setting::Parameter { name: name.to_string() },
+        format!("the value of parameter '{name}' must be a finite number, not {value}"),
+    ))
+}

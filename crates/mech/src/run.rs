@@ -154,7 +154,9 @@ pub(crate) trait Stepping {
 }
 
 /// Runs a simulation, with or without constraints. `on_row` receives every
-/// output row in time order and may stop the run with `ControlFlow::Break`.
+/// output row in time order and may stop the run with `ControlFlow::Break`,
+/// which declines that row: the report's final state (`t_final`, `final_q`,
+/// `final_qd`) and its audit end at the last row `on_row` took.
 pub fn simulate(
     d: &Derivation,
     config: &RunConfig,
@@ -294,10 +296,6 @@ fn drive(
             row_error = Some((RunFailure::Row { t: obs.t }, format!("at t = {}: {e}", obs.t)));
             return ControlFlow::Break(());
         }
-        invariant_audit.observe(&row.invariants);
-        last.0 = obs.t;
-        last.1.copy_from_slice(&row.q);
-        last.2.copy_from_slice(&row.qd);
         let flow = on_row(&Row {
             t: obs.t,
             q: &row.q,
@@ -310,6 +308,14 @@ fn drive(
             },
             constraints: &row.constraints,
         });
+        if flow.is_break() {
+            // Not taken: the run ends at the row before, which the summary reports.
+            return flow;
+        }
+        invariant_audit.observe(&row.invariants);
+        last.0 = obs.t;
+        last.1.copy_from_slice(&row.q);
+        last.2.copy_from_slice(&row.qd);
         // The row is kept; past a gimbal guard the run ends as a failure.
         if let Some(g) = guards.iter().find(|g| g.violated(&row.q)) {
             row_error = Some((g.failure(obs.t), g.message(obs.t)));
@@ -379,7 +385,9 @@ fn drive(
     };
     match result {
         Ok(summary) => {
-            report.t_final = summary.t;
+            if summary.stop != StopReason::Observer {
+                report.t_final = summary.t;
+            }
             if let StopReason::Event { index } = summary.stop {
                 if index >= first_guard {
                     let g = &guards[(index - first_guard) / 2];

@@ -106,20 +106,22 @@ pub const CSV_MAGIC: &str = "# lagrange sweep";
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SweepError {
     /// An empty `--grid`.
-    #[error("the grid is empty; expected NAME=START:STOP:COUNT, comma separated")]
+    #[error("the grid is empty; expected NAME=START:STOP:COUNT or NAME=V1;V2;..., comma separated")]
     EmptyGrid,
-    /// An axis that is not `NAME=START:STOP:COUNT`.
-    #[error("in the grid: '{item}' is not NAME=START:STOP:COUNT")]
+    /// An axis that is not `NAME=START:STOP:COUNT` or `NAME=V1;V2;...`.
+    #[error(
+        "in the grid: '{item}' is not NAME=START:STOP:COUNT (evenly spaced) or NAME=V1;V2;... (the values listed)"
+    )]
     AxisSyntax {
         /// The offending axis text.
         item: String,
     },
-    /// A start or stop that is not a finite number.
+    /// A start, stop or listed value that is not a finite number.
     #[error("in the grid: the {what} of '{name}' must be a finite number, not '{text}'")]
     AxisNumber {
         /// The axis name.
         name: String,
-        /// `start` or `stop`.
+        /// `start`, `stop` or `value`.
         what: &'static str,
         /// The text found.
         text: String,

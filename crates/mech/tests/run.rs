@@ -142,3 +142,26 @@ fn the_example_program_derives_runs_and_audits() {
     assert_eq!(lines[13], format!("{:.2}  0.010000", period()));
     assert!(lines.iter().any(|l| l.starts_with("H (conserved): drifted by")), "{text}");
 }
+
+#[test]
+fn a_row_the_caller_declines_ends_the_run_at_the_row_before() {
+    // As Ctrl-C does: the sink stops at the 6th row without keeping it, and the
+    // summary's final state is the 5th, the last one kept.
+    for model in [PENDULUM, CONSTRAINED_PENDULUM] {
+        let d = derive(model);
+        let mut kept: Vec<(f64, Vec<f64>, Vec<f64>)> = Vec::new();
+        let config = RunConfig { until: 10.0, ..RunConfig::default() };
+        let report = mech::simulate(&d, &config, |row| {
+            if kept.len() == 5 {
+                return std::ops::ControlFlow::Break(());
+            }
+            kept.push((row.t, row.q.to_vec(), row.qd.to_vec()));
+            std::ops::ControlFlow::Continue(())
+        })
+        .unwrap();
+        let (t, q, qd) = kept.last().unwrap();
+        assert_eq!(report.t_final, *t);
+        assert_eq!((&report.final_q, &report.final_qd), (q, qd));
+        assert!(report.t_final < 10.0);
+    }
+}

@@ -93,6 +93,8 @@ impl Derived {
     ) -> PyResult<Bound<'py, PyBytes>> {
         let mut pool = Pool::default();
         let e = parse(py, &mut pool, text)?;
+        let used: Vec<String> = pool.symbols(e).into_iter().map(|s| pool.symbol_text(s)).collect();
+        refuse_unknown(&self.d, &names, &used)?;
         let mut inputs = Vec::new();
         let mut values: Vec<Vec<f64>> = Vec::new();
         for s in pool.symbols(e) {
@@ -135,4 +137,37 @@ impl Derived {
         }
         Ok(crate::f64_bytes(py, out))
     }
+}
+
+/// Refuses a given name that is neither in the expression nor a name of the
+/// model (a misspelt `gg=1.0` would otherwise be ignored), naming the closest.
+fn refuse_unknown(d: &mech::Derivation, given: &[String], used: &[String]) -> PyResult<()> {
+    let model = d.model();
+    let mut known: Vec<String> = vec!["t".into()];
+    for c in d.coordinate_names() {
+        known.extend([c.to_string(), format!("{c}'"), format!("{c}''"), format!("p_{c}")]);
+    }
+    known.extend(model.parameters.iter().map(|p| p.name.clone()));
+    known.extend(model.inputs.iter().map(|u| u.name.clone()));
+    known.extend(d.constraints().list.iter().map(|c| format!("lambda_{}", c.name)));
+    for name in given {
+        if used.contains(name) || known.contains(name) {
+            continue;
+        }
+        let closest = known
+            .iter()
+            .map(|k| (strsim::damerau_levenshtein(name, k), k))
+            .min_by_key(|(distance, _)| *distance)
+            .filter(|(distance, _)| *distance <= name.chars().count().max(2))
+            .map(|(_, k)| format!(" (did you mean {k:?}?)"))
+            .unwrap_or_default();
+        let mut list = known.iter().take(20).map(String::as_str).collect::<Vec<_>>().join(", ");
+        if known.len() > 20 {
+            list.push_str(", …");
+        }
+        return Err(PyValueError::new_err(format!(
+            "{name:?} is not a name of this model{closest}: the names are the coordinates, their velocities and momenta, the parameters and t ({list})"
+        )));
+    }
+    Ok(())
 }

@@ -107,3 +107,24 @@ def test_hostile_text_does_not_panic():
     for text in ["", "coordinates = 3", "coordinates = [\"x\"]\nlagrangian = \"x'^\"", "\x00\xff", "[[particles]]\nmass = 1e400"]:
         with pytest.raises(lagrange.ModelError):
             lagrange.Model.from_toml(text)
+
+
+def test_a_parameter_set_to_nan_is_refused_everywhere():
+    # As Model(parameters=...) and the CLI's --set refuse it.
+    for bad in (float("nan"), float("inf")):
+        with pytest.raises(lagrange.ModelError, match="must be a finite number") as info:
+            lagrange.load(EXAMPLES / "pendulum.toml", set={"g": bad})
+        assert "parameter 'g'" in str(info.value)
+        model = lagrange.load(EXAMPLES / "pendulum.toml")
+        with pytest.raises(lagrange.ModelError, match="must be a finite number"):
+            model.with_parameters(g=bad)
+
+
+def test_a_misspelt_name_in_an_evaluation_raises_naming_the_closest():
+    d = lagrange.load(EXAMPLES / "spherical_pendulum.toml").derive()
+    names = lagrange.load(EXAMPLES / "spherical_pendulum.toml").coordinates
+    q = names[-1]
+    with pytest.raises(ValueError, match='"gg" is not a name of this model \\(did you mean "g"\\?\\)'):
+        d.hamiltonian(**{q: 0.0, f"p_{q}": 0.0, "gg": 1.0})
+    # Names of the model that the expression does not use are fine.
+    assert isinstance(d.hamiltonian(**{n: 0.1 for n in names}, **{f"p_{n}": 0.0 for n in names}, g=1.0), float)

@@ -32,6 +32,10 @@ def test_ctrl_c_stops_simulate_and_keeps_the_rows():
     assert run is not None and len(run) >= 1
     assert run.t[-1] < 1e6
     assert run.summary["interrupted"]["t"] == run.t[-1]
+    # The final state is the last row kept, not a step past it.
+    assert run.summary["t_final"] == run.t[-1]
+    first = model.coordinates[0]
+    assert run.final[first] == run[first][-1]
 
 
 def test_ctrl_c_stops_a_sweep_and_keeps_the_finished_runs():

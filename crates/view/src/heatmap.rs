@@ -61,6 +61,12 @@ pub enum HeatMapError {
         /// How many axes it has.
         axes: usize,
     },
+    /// An axis lists values that are not evenly spaced, which cells of one
+    /// width cannot show.
+    UnevenAxis {
+        /// The axis's name.
+        name: String,
+    },
     /// The grid has more than [`MAX_CELLS`] cells.
     TooManyCells {
         /// The points along the first axis.
@@ -104,6 +110,9 @@ impl HeatMap {
         let [ax, ay] = axes.as_slice() else {
             return Err(HeatMapError::NotTwoDimensional { axes: axes.len() });
         };
+        if let Some(a) = [ax, ay].into_iter().find(|a| !a.is_even()) {
+            return Err(HeatMapError::UnevenAxis { name: a.name.clone() });
+        }
         let cells = ax.count * ay.count;
         if cells > MAX_CELLS {
             return Err(HeatMapError::TooManyCells { first: ax.count, second: ay.count });

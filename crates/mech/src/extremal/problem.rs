@@ -123,7 +123,7 @@ impl Problem {
         }
         for (name, value) in overrides {
             match parameters.iter_mut().find(|(n, _)| n == name) {
-                Some(p) => p.1 = *value,
+                Some(p) => p.1 = crate::error::finite_override(name, *value)?,
                 None => {
                     return Err(ModelError::setting(
                         crate::error::Setting::Parameter { name: name.clone() },

@@ -590,7 +590,7 @@ impl BodyFile {
         }
         for (name, value) in overrides {
             match parameters.iter_mut().find(|p| &p.name == name) {
-                Some(p) => p.value = *value,
+                Some(p) => p.value = crate::error::finite_override(name, *value)?,
                 None => {
                     let known: Vec<&str> = parameters.iter().map(|p| p.name.as_str()).collect();
                     return Err(ModelError::setting(

@@ -80,7 +80,7 @@ pub(super) fn parameters(
     }
     for (name, value) in overrides {
         match r.parameters.iter_mut().find(|p| &p.name == name) {
-            Some(p) => p.value = *value,
+            Some(p) => p.value = crate::error::finite_override(name, *value)?,
             None => {
                 let known: Vec<&str> = r.parameters.iter().map(|p| p.name.as_str()).collect();
                 return Err(ModelError::setting(

@@ -1,4 +1,4 @@
-//! The grid of a sweep: its axes (`a=0:1:5,g=9.8,9.81`), which coordinates,
+//! The grid of a sweep: its axes (`a=0:1:5,g=9.78;9.81`), which coordinates,
 //! velocities or parameters they set, the runs they make in order, and the
 //! shards that split them between machines.
 
@@ -16,7 +16,8 @@ pub enum Target {
     Parameter(usize),
 }
 
-/// One axis: `count` evenly spaced values from `start` to `stop`, both included.
+/// One axis: `count` evenly spaced values from `start` to `stop`, both
+/// included (`a=0:1:5`), or the values listed (`g=9.78;9.81;9.83`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Axis {
     /// The name as written (`a`, `a'`, `g`).
@@ -27,11 +28,16 @@ pub struct Axis {
     pub stop: f64,
     /// Number of values, at least 1.
     pub count: usize,
+    /// The values, where they were listed rather than spaced evenly.
+    pub values: Option<Vec<f64>>,
 }
 
 impl Axis {
     /// The `k`-th value.
     pub fn value(&self, k: usize) -> f64 {
+        if let Some(values) = &self.values {
+            return values[k];
+        }
         if self.count <= 1 {
             self.start
         } else if k + 1 == self.count {
@@ -40,10 +46,20 @@ impl Axis {
             self.start + (self.stop - self.start) * (k as f64 / (self.count - 1) as f64)
         }
     }
+
+    /// Whether the values are evenly spaced (a range, or a list that is one to
+    /// round-off): a heat map's cells need it.
+    pub fn is_even(&self) -> bool {
+        let Some(values) = &self.values else { return true };
+        let even = Axis { values: None, ..self.clone() };
+        let scale = values.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
+        values.iter().enumerate().all(|(k, v)| (v - even.value(k)).abs() <= 1e-12 * scale)
+    }
 }
 
-/// Parses `name=start:stop:count,...` without a model: the axes of a grid as text
-/// describes them (used again to read a merged CSV's provenance).
+/// Parses `name=start:stop:count` or `name=v1;v2;...`, comma separated,
+/// without a model: the axes of a grid as text describes them (used again to
+/// read a merged CSV's provenance).
 pub fn parse_axes(spec: &str) -> Result<Vec<Axis>, SweepError> {
     let mut axes: Vec<Axis> = Vec::new();
     for item in spec.split(',').map(str::trim) {
@@ -56,8 +72,7 @@ pub fn parse_axes(spec: &str) -> Result<Vec<Axis>, SweepError> {
         let syntax = || SweepError::AxisSyntax { item: item.to_string() };
         let (name, range) = item.split_once('=').ok_or_else(syntax)?;
         let name = name.trim();
-        let parts: Vec<&str> = range.split(':').map(str::trim).collect();
-        if name.is_empty() || parts.len() != 3 {
+        if name.is_empty() || range.trim().is_empty() {
             return Err(syntax());
         }
         let number = |what: &'static str, text: &str| {
@@ -67,17 +82,34 @@ pub fn parse_axes(spec: &str) -> Result<Vec<Axis>, SweepError> {
                 text: text.to_string(),
             })
         };
-        let start = number("start", parts[0])?;
-        let stop = number("stop", parts[1])?;
-        let count = parts[2]
-            .parse::<usize>()
-            .ok()
-            .filter(|&c| c >= 1)
-            .ok_or_else(|| SweepError::AxisCount { name: name.to_string(), text: parts[2].to_string() })?;
+        let axis = if range.contains(':') {
+            let parts: Vec<&str> = range.split(':').map(str::trim).collect();
+            if parts.len() != 3 {
+                return Err(syntax());
+            }
+            let start = number("start", parts[0])?;
+            let stop = number("stop", parts[1])?;
+            let count = parts[2]
+                .parse::<usize>()
+                .ok()
+                .filter(|&c| c >= 1)
+                .ok_or_else(|| SweepError::AxisCount { name: name.to_string(), text: parts[2].to_string() })?;
+            Axis { name: name.to_string(), start, stop: if count == 1 { start } else { stop }, count, values: None }
+        } else {
+            let values =
+                range.split(';').map(|v| number("value", v.trim())).collect::<Result<Vec<f64>, SweepError>>()?;
+            Axis {
+                name: name.to_string(),
+                start: values[0],
+                stop: values[values.len() - 1],
+                count: values.len(),
+                values: Some(values),
+            }
+        };
         if axes.iter().any(|a| a.name == name) {
             return Err(SweepError::DuplicateAxis { name: name.to_string() });
         }
-        axes.push(Axis { name: name.to_string(), start, stop: if count == 1 { start } else { stop }, count });
+        axes.push(axis);
     }
     let runs = axes.iter().fold(1u128, |acc, a| acc.saturating_mul(a.count as u128));
     if runs > MAX_RUNS as u128 {
@@ -88,7 +120,13 @@ pub fn parse_axes(spec: &str) -> Result<Vec<Axis>, SweepError> {
 
 /// The axes as text that [`parse_axes`] reads back.
 pub fn format_axes(axes: &[Axis]) -> String {
-    axes.iter().map(|a| format!("{}={:?}:{:?}:{}", a.name, a.start, a.stop, a.count)).collect::<Vec<_>>().join(",")
+    let axis = |a: &Axis| match &a.values {
+        Some(values) => {
+            format!("{}={}", a.name, values.iter().map(|v| format!("{v:?}")).collect::<Vec<_>>().join(";"))
+        }
+        None => format!("{}={:?}:{:?}:{}", a.name, a.start, a.stop, a.count),
+    };
+    axes.iter().map(axis).collect::<Vec<_>>().join(",")
 }
 
 /// A grid of runs: the cartesian product of its axes, the first axis varying

@@ -1,7 +1,7 @@
 """Sweeps: a grid of runs, here or on a Dask cluster.
 
-``lagrange.sweep(model, until=20, grid={"a": (-3.1, 3.1, 100)})`` runs the
-grid on this machine's cores. With ``client=`` (a ``dask.distributed.Client``)
+``lagrange.sweep(model, until=20, grid={"a": lagrange.grid(-3.1, 3.1, 100)})``
+runs the grid on this machine's cores. With ``client=`` (a ``dask.distributed.Client``)
 the grid is cut into shards, the CLI's ``--shard i/n``, which the cluster's
 workers run; their tables are merged into the one a single process computes,
 bit for bit.
@@ -9,14 +9,35 @@ bit for bit.
 
 from __future__ import annotations
 
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Mapping, NamedTuple, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
 from . import _native
 from .errors import Interrupted
 
-Axis = Tuple[float, float, int]
+
+class Linspace(NamedTuple):
+    """An axis of a sweep's grid: ``count`` values evenly spaced from
+    ``start`` to ``stop``, both included (the CLI's ``NAME=START:STOP:COUNT``).
+    Made by :func:`grid`; a plain tuple ``(start, stop, count)`` means the same."""
+
+    start: float
+    stop: float
+    count: int
+
+
+def grid(start: float, stop: float, count: int) -> Linspace:
+    """``count`` values evenly spaced from ``start`` to ``stop``, both
+    included, as an axis of :func:`sweep`'s ``grid``:
+    ``grid={"a": lagrange.grid(-3, 3, 100)}``. A list or array is the values
+    themselves: ``grid={"g": [1.62, 3.71, 9.81]}``."""
+    return Linspace(float(start), float(stop), int(count))
+
+
+#: An axis: a :class:`Linspace` (or a tuple ``(start, stop, count)``), or the
+#: values themselves as a list or array (or one number).
+Axis = Union[Linspace, Tuple[float, float, int], Sequence[float], np.ndarray, float]
 
 
 class Table:
@@ -70,18 +91,34 @@ class Table:
         return f"<Table of {len(self)} runs: {self.meta.get('model', '')!s}, grid {self.meta.get('grid', '')}>"
 
 
-def grid_spec(grid: Union[str, Mapping[str, Union[Axis, Sequence[float]]]]) -> str:
-    """The CLI's ``--grid`` text of a grid given as ``{"a": (start, stop, count)}``."""
+def grid_spec(grid: Union[str, Mapping[str, Axis]]) -> str:
+    """The CLI's ``--grid`` text of a grid: a tuple (a :class:`Linspace`) is
+    ``(start, stop, count)``, ``NAME=START:STOP:COUNT``; a list, an array or a
+    number is the values themselves, ``NAME=V1;V2;...``."""
     if isinstance(grid, str):
         return grid
     parts = []
     for name, axis in grid.items():
-        if len(axis) != 3:
-            raise ValueError(f"grid[{name!r}]: expected (start, stop, count), not {axis!r}")
-        start, stop, count = axis
-        if int(count) != count:
-            raise ValueError(f"grid[{name!r}]: the count must be a whole number, not {count!r}")
-        parts.append(f"{name}={float(start)!r}:{float(stop)!r}:{int(count)}")
+        if isinstance(axis, tuple):
+            if len(axis) != 3:
+                raise ValueError(
+                    f"grid[{name!r}]: a tuple is (start, stop, count), not {axis!r}; "
+                    "give the values themselves as a list or an array"
+                )
+            start, stop, count = axis
+            if int(count) != count or count < 1:
+                raise ValueError(f"grid[{name!r}]: the count must be a whole number of at least 1, not {count!r}")
+            parts.append(f"{name}={float(start)!r}:{float(stop)!r}:{int(count)}")
+            continue
+        try:
+            values = np.asarray(axis, dtype=float).reshape(-1) if np.ndim(axis) <= 1 else None
+        except (TypeError, ValueError):
+            values = None
+        if values is None or values.size == 0:
+            raise ValueError(f"grid[{name!r}]: expected values (a list or an array of numbers) or lagrange.grid(start, stop, count), not {axis!r}")
+        if not np.all(np.isfinite(values)):
+            raise ValueError(f"grid[{name!r}]: every value must be a finite number, not {axis!r}")
+        parts.append(f"{name}=" + ";".join(repr(float(v)) for v in values))
     return ",".join(parts)
 
 
@@ -103,7 +140,7 @@ def _run_shard(source: str, file: str, set: Dict[str, float], folder: Optional[s
 def sweep(
     model: Any,
     until: float,
-    grid: Union[str, Mapping[str, Union[Axis, Sequence[float]]]],
+    grid: Union[str, Mapping[str, Axis]],
     *,
     method: Optional[str] = None,
     rtol: Optional[float] = None,
@@ -118,9 +155,11 @@ def sweep(
     sweep`` does: the final state, the drift of the energy and (unless
     ``lyapunov=False``) the largest Lyapunov exponent per run.
 
-    ``grid``: ``{"a": (start, stop, count), ...}`` over initial coordinates
-    (``"a"``), velocities (``"a'"``) and parameters; the first axis varies
-    slowest. ``shard=(i, n)``: only runs i, i+n, i+2n, ... (the CLI's
+    ``grid``: ``{"a": lagrange.grid(start, stop, count), "g": [1.62, 9.81]}``
+    over initial coordinates (``"a"``), velocities (``"a'"``) and
+    parameters: :func:`grid` (or a tuple ``(start, stop, count)``) spaces
+    ``count`` values evenly; a list or an array is the values themselves. The
+    first axis varies slowest. ``shard=(i, n)``: only runs i, i+n, i+2n, ... (the CLI's
     ``--shard i/n``). ``threads``: worker threads here (default: one per core).
 
     ``client``: a ``dask.distributed.Client``. The grid is cut into
