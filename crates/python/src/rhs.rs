@@ -32,12 +32,16 @@ pub struct Rhs {
     /// numpy's array type and its native float64 dtype, for the fast read of y
     /// (None if numpy cannot be imported: then every y goes the general way).
     numpy: Option<(Py<PyAny>, Py<PyAny>)>,
+    /// The Python model it was made from, which it pickles as (None: made
+    /// without one, and not picklable).
+    owner: Option<Py<PyAny>>,
 }
 
 #[pymethods]
 impl Derived {
     /// The compiled right-hand side (see the module documentation).
-    fn rhs(&self, py: Python<'_>) -> PyResult<Rhs> {
+    #[pyo3(signature = (owner=None))]
+    fn rhs(&self, py: Python<'_>, owner: Option<Py<PyAny>>) -> PyResult<Rhs> {
         if !self.d.constraints().is_empty() {
             let message = "rhs() needs a model without constraints: the constraint forces depend on the multipliers, which simulate() solves for at every step";
             return Err(errors::plain_error(py, &self.file, message, None));
@@ -48,7 +52,7 @@ impl Derived {
             let float64 = np.getattr("dtype")?.call1(("float64",))?;
             Ok((np.getattr("ndarray")?.unbind(), float64.unbind()))
         });
-        Ok(Rhs { system: Mutex::new(system), dim, name: self.d.model().name.clone(), numpy: numpy.ok() })
+        Ok(Rhs { system: Mutex::new(system), dim, name: self.d.model().name.clone(), numpy: numpy.ok(), owner })
     }
 }
 
@@ -86,6 +90,18 @@ impl Rhs {
 
     fn __repr__(&self) -> String {
         format!("<compiled right-hand side of {}: y = [q, q'], {} components>", self.name, self.dim)
+    }
+
+    /// Pickles as `model.rhs()`: the model travels as its text and the
+    /// right-hand side is compiled again where it is unpickled.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (Py<PyAny>,))> {
+        let Some(owner) = &self.owner else {
+            return Err(pyo3::exceptions::PyTypeError::new_err(
+                "this right-hand side was made without its lagrange.Model and cannot be pickled; pickle the model, or take model.rhs()",
+            ));
+        };
+        let call = py.import("operator")?.getattr("methodcaller")?.call1(("rhs",))?;
+        Ok((call, (owner.clone_ref(py),)))
     }
 }
 

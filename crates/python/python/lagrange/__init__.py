@@ -27,13 +27,13 @@ from .errors import Interrupted, LagrangeError, ModelError, RunError
 from .expr import Expr, Matrix
 from .model import Model, PathLike, load
 from .run import Run
-from .sweeps import Linspace, Table, grid, sweep
+from .sweeps import Linspace, ShardsFailed, Table, grid, sweep
 
 __version__: str = _native.VERSION
 
 __all__ = [
     "Derivation", "Expr", "Interrupted", "LagrangeError", "Linspace", "Matrix", "Model", "ModelError", "Report",
-    "Run", "RunError", "Table", "expression", "extremal", "grid", "inertia", "load", "methods", "sweep",
+    "Run", "RunError", "ShardsFailed", "Table", "expression", "extremal", "grid", "inertia", "load", "methods", "sweep",
 ]
 
 

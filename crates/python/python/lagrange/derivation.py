@@ -63,6 +63,10 @@ class Derivation:
 
         self._fields = {k: _convert(k, v, make) for k, v in self.json.items()}
 
+    def __reduce__(self) -> Any:
+        # Pickled as its model, derived again where it is unpickled.
+        return (Derivation, (self.model,))
+
     def __getattr__(self, name: str) -> Any:
         fields = self.__dict__.get("_fields", {})
         if name in fields:

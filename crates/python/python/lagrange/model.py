@@ -4,7 +4,7 @@ Python, derived once, then simulated and analysed."""
 from __future__ import annotations
 
 import os
-from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Union
+from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _native, toml_writer
 from .analyses import Report
@@ -142,6 +142,11 @@ class Model:
     def __repr__(self) -> str:
         return f"<Model {self.name!r}: coordinates {', '.join(self.coordinates)}>"
 
+    def __reduce__(self) -> Tuple[Any, Tuple[Any, ...]]:
+        # Pickled as its text, settings and folder, and derived again where it
+        # is unpickled (a Dask worker, a multiprocessing child).
+        return (_rebuilt, (self.source, self.file, self._set, self._folder))
+
     # --- derivation ---------------------------------------------------------
     def derive(self) -> Derivation:
         """The equations of motion, momenta, Hamiltonian, cyclic coordinates,
@@ -204,8 +209,9 @@ class Model:
 
     def rhs(self) -> Any:
         """The compiled right-hand side ``f(t, y) -> dy/dt`` with ``y = [q, q']``,
-        for ``scipy.integrate.solve_ivp`` or any integrator of your own."""
-        return self._native.rhs()
+        for ``scipy.integrate.solve_ivp`` or any integrator of your own. It
+        pickles as its model, compiled again where it is unpickled."""
+        return self._native.rhs(self)
 
     # --- code that leaves lagrange ---------------------------------------------
     def export(self, to: str, path: PathLike) -> None:
@@ -238,6 +244,11 @@ class Model:
         from .sweeps import sweep
 
         return sweep(self, until=until, grid=grid, **options)
+
+
+def _rebuilt(source: str, file: str, set: Dict[str, float], folder: Optional[str]) -> Model:
+    """A pickled model, derived again from its text."""
+    return Model._wrap(_native.from_toml(source, file, set, folder), set, folder)
 
 
 def load(path: PathLike, set: Optional[Mapping[str, float]] = None) -> Model:

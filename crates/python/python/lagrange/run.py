@@ -33,6 +33,16 @@ class Run:
         self.coordinates: List[str] = list(model.coordinates)
         self._plot = raw["plot"]
 
+    def __getstate__(self) -> Dict[str, Any]:
+        # The plot travels drawn: the native keeper of its points stays here.
+        state = dict(self.__dict__)
+        state["_plot"] = _DrawnPlot(self._plot.svg())
+        return state
+
+    def __setstate__(self, state: Dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self.data.flags.writeable = False
+
     # --- the table ----------------------------------------------------------
     def __len__(self) -> int:
         return self.data.shape[0]
@@ -120,3 +130,13 @@ class Run:
 
     def _repr_svg_(self) -> str:
         return self.svg()
+
+
+class _DrawnPlot:
+    """A run's plot as drawn before the run was pickled."""
+
+    def __init__(self, svg: str) -> None:
+        self._svg = svg
+
+    def svg(self) -> str:
+        return self._svg

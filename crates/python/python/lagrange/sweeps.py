@@ -14,7 +14,7 @@ from typing import Any, Dict, List, Mapping, NamedTuple, Optional, Sequence, Tup
 import numpy as np
 
 from . import _native
-from .errors import Interrupted
+from .errors import Interrupted, LagrangeError
 
 
 class Linspace(NamedTuple):
@@ -53,6 +53,7 @@ class Table:
     def __init__(self, csv: str, name: str = "sweep") -> None:
         raw = _native.table(csv, name)
         self.csv = csv
+        self._name = name
         self.meta: Dict[str, str] = dict(raw["meta"])
         self.columns: List[str] = list(raw["columns"])
         self.runs = np.array(raw["runs"], dtype=np.int64)
@@ -62,6 +63,10 @@ class Table:
 
     def __len__(self) -> int:
         return len(self.runs)
+
+    def __reduce__(self) -> Any:
+        # Pickled as its CSV, read again where it is unpickled.
+        return (Table, (self.csv, self._name))
 
     def __getitem__(self, name: str) -> np.ndarray:
         try:
@@ -150,6 +155,7 @@ def sweep(
     shard: Optional[Tuple[int, int]] = None,
     client: Any = None,
     shards: Optional[int] = None,
+    resume: Optional["ShardsFailed"] = None,
 ) -> Table:
     """Runs ``model`` from every point of ``grid`` to ``until``, as ``lagrange
     sweep`` does: the final state, the drift of the energy and (unless
@@ -166,7 +172,9 @@ def sweep(
     ``shards`` parts (default: one per worker), each run on a worker with all
     its cores, and the tables merged; the result equals a one-process sweep's.
     Files a model names (body files) must be readable at the same path on the
-    workers.
+    workers. Shards that fail raise :class:`lagrange.ShardsFailed`, which
+    keeps the runs of the shards that finished; ``resume=`` that exception
+    runs only the failed shards.
 
     Ctrl-C stops a local sweep and raises :class:`lagrange.Interrupted` holding
     the runs finished so far, in grid order.
@@ -180,14 +188,69 @@ def sweep(
         return table
     if shard is not None:
         raise ValueError("give either shard= (one part, here) or client= (every part, on the cluster)")
-    n = shards if shards is not None else max(1, len(client.scheduler_info().get("workers", {})))
+    options = _options(until, spec, method, rtol, atol, lyapunov, threads, None)
+    sweep_of = (model.source, model.file, dict(model._set), model._folder, options)
+    done: Dict[int, str] = {}
+    if resume is not None:
+        if not isinstance(resume, ShardsFailed):
+            raise TypeError(f"resume= takes the lagrange.ShardsFailed a sweep raised, not {type(resume).__name__}")
+        if resume.sweep_of != sweep_of:
+            raise ValueError("resume= continues the same sweep: the same model, settings, grid and options")
+        if shards is not None and shards != resume.count:
+            raise ValueError(f"resume= continues a sweep of {resume.count} shards, not {shards}")
+        n, done = resume.count, dict(resume.shards)
+    else:
+        n = shards if shards is not None else max(1, len(client.scheduler_info().get("workers", {})))
     if n < 1:
         raise ValueError(f"shards must be at least 1, not {n}")
-    futures = [
-        client.submit(_run_shard, model.source, model.file, model._set, model._folder,
-                      _options(until, spec, method, rtol, atol, lyapunov, threads, (i, n)), pure=False)
+    futures = {
+        i: client.submit(_run_shard, model.source, model.file, model._set, model._folder,
+                         {**options, "shard": (i, n)}, pure=False)
         for i in range(n)
-    ]
-    texts = client.gather(futures)
-    merged = _native.merge([(f"shard {i}/{n}", text) for i, text in enumerate(texts)])
+        if i not in done
+    }
+    failed: Dict[int, BaseException] = {}
+    for i, future in futures.items():
+        error = future.exception()
+        if error is None:
+            done[i] = future.result()
+        else:
+            failed[i] = error
+    if failed:
+        raise ShardsFailed(sweep_of, n, done, failed)
+    merged = _native.merge([(f"shard {i}/{n}", done[i]) for i in range(n)])
     return Table(merged)
+
+
+class ShardsFailed(LagrangeError):
+    """Shards of a sweep on a cluster failed (a worker died, a file a worker
+    could not read). ``run`` is a :class:`Table` of the runs of the shards
+    that finished, in grid order; ``shards`` their CSVs by shard index;
+    ``failed`` the exceptions by shard index. ``lagrange.sweep(..., client=,
+    resume=e)`` runs only the failed shards and merges them with the rest."""
+
+    def __init__(self, sweep_of: Any, count: int, shards: Dict[int, str], failed: Dict[int, BaseException]) -> None:
+        self.sweep_of = sweep_of
+        self.count = count
+        self.shards = shards
+        self.failed = failed
+        self.run = _partial(shards)
+        which = ", ".join(f"{i}/{count}" for i in sorted(failed))
+        first = failed[min(failed)]
+        super().__init__(
+            f"{len(failed)} of {count} shards failed ({which}; shard {min(failed)}/{count}: "
+            f"{type(first).__name__}: {first}); the exception's .run keeps the {len(self.run)} runs of the "
+            f"{len(shards)} that finished; lagrange.sweep(..., client=client, resume=e) runs only the failed ones"
+        )
+
+
+def _partial(shards: Dict[int, str]) -> Table:
+    """The runs of some shards as one table in grid order (empty without any)."""
+    if not shards:
+        return Table("# lagrange sweep; partial\nrun,t_final,failure\n")
+    texts = [shards[i] for i in sorted(shards)]
+    lines = texts[0].splitlines()
+    header = [line for line in lines if line.startswith("#")] + [next(line for line in lines if line.startswith("run,"))]
+    rows = [line for text in texts for line in text.splitlines()[len(header):] if line]
+    rows.sort(key=lambda line: int(line.split(",", 1)[0]))
+    return Table("\n".join(header + rows) + "\n")
