@@ -117,6 +117,7 @@ pub use report::{
 pub use run::body::BodyRecorder;
 pub use run::constrained::constraint_columns;
 pub use run::dynamics::{invariants_of, Dynamics, Form, Invariant, System};
+pub use run::jacobian::StateJacobian;
 pub use run::series::SeriesCode;
 pub use run::{
     approx, row_columns, simulate, Audit, BudgetAdvice, BudgetStage, ConstraintAudit, Row, RunConfig, RunError,

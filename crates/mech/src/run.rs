@@ -25,6 +25,7 @@ mod config;
 pub(crate) mod constrained;
 pub(crate) mod dynamics;
 pub(crate) mod ensemble;
+pub(crate) mod jacobian;
 mod plain;
 mod report;
 pub(crate) mod series;

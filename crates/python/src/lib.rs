@@ -43,6 +43,7 @@ pub fn f64_bytes<'py>(py: Python<'py>, values: impl IntoIterator<Item = f64>) ->
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<model::Derived>()?;
     m.add_class::<rhs::Rhs>()?;
+    m.add_class::<rhs::Jac>()?;
     m.add_class::<run::Plot>()?;
     m.add_function(wrap_pyfunction!(model::load, m)?)?;
     m.add_function(wrap_pyfunction!(model::from_toml, m)?)?;

@@ -19,7 +19,7 @@ use num::OdeSystem;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::intern;
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyList};
+use pyo3::types::{PyByteArray, PyBytes, PyList};
 use std::sync::Mutex;
 
 /// The right-hand side of a model's equations of motion as a Python callable.
@@ -32,16 +32,12 @@ pub struct Rhs {
     /// numpy's array type and its native float64 dtype, for the fast read of y
     /// (None if numpy cannot be imported: then every y goes the general way).
     numpy: Option<(Py<PyAny>, Py<PyAny>)>,
-    /// The Python model it was made from, which it pickles as (None: made
-    /// without one, and not picklable).
-    owner: Option<Py<PyAny>>,
 }
 
 #[pymethods]
 impl Derived {
     /// The compiled right-hand side (see the module documentation).
-    #[pyo3(signature = (owner=None))]
-    fn rhs(&self, py: Python<'_>, owner: Option<Py<PyAny>>) -> PyResult<Rhs> {
+    fn rhs(&self, py: Python<'_>) -> PyResult<Rhs> {
         if !self.d.constraints().is_empty() {
             let message = "rhs() needs a model without constraints: the constraint forces depend on the multipliers, which simulate() solves for at every step";
             return Err(errors::plain_error(py, &self.file, message, None));
@@ -52,7 +48,7 @@ impl Derived {
             let float64 = np.getattr("dtype")?.call1(("float64",))?;
             Ok((np.getattr("ndarray")?.unbind(), float64.unbind()))
         });
-        Ok(Rhs { system: Mutex::new(system), dim, name: self.d.model().name.clone(), numpy: numpy.ok(), owner })
+        Ok(Rhs { system: Mutex::new(system), dim, name: self.d.model().name.clone(), numpy: numpy.ok() })
     }
 }
 
@@ -72,14 +68,32 @@ impl Rhs {
         let mut dy = vec![0.0; self.dim];
         {
             let mut system = self.system.lock().unwrap_or_else(|e| e.into_inner());
-            system.rhs(t, &y, &mut dy).map_err(|e| {
-                errors::raise(py, "RunError", |kw| {
-                    kw.set_item("message", format!("the right-hand side at t = {t}: {e}"))?;
-                    kw.set_item("t", t)
-                })
-            })?;
+            system.rhs(t, &y, &mut dy).map_err(|e| right_hand_side_error(py, t, &e))?;
         }
         PyList::new(py, dy)
+    }
+
+    /// dy/dt of `k` states given as little-endian f64 bytes, state after
+    /// state (2n values each), as bytes in the same layout: the batch path of
+    /// the Python wrapper, which reads and returns numpy arrays.
+    fn many<'py>(&self, py: Python<'py>, t: f64, y: &[u8], k: usize) -> PyResult<Bound<'py, PyByteArray>> {
+        if y.len() != 8 * k * self.dim {
+            return Err(PyValueError::new_err(format!(
+                "y has {} values; {} states of {} have {}",
+                y.len() / 8,
+                k,
+                self.name,
+                k * self.dim
+            )));
+        }
+        let y: Vec<f64> = y.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes"))).collect();
+        let mut dy = vec![0.0; y.len()];
+        let result = py.detach(|| {
+            let mut system = self.system.lock().unwrap_or_else(|e| e.into_inner());
+            y.chunks_exact(self.dim).zip(dy.chunks_exact_mut(self.dim)).try_for_each(|(y, dy)| system.rhs(t, y, dy))
+        });
+        result.map_err(|e| right_hand_side_error(py, t, &e))?;
+        Ok(PyByteArray::new(py, &dy.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>()))
     }
 
     /// The length of y.
@@ -90,18 +104,6 @@ impl Rhs {
 
     fn __repr__(&self) -> String {
         format!("<compiled right-hand side of {}: y = [q, q'], {} components>", self.name, self.dim)
-    }
-
-    /// Pickles as `model.rhs()`: the model travels as its text and the
-    /// right-hand side is compiled again where it is unpickled.
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (Py<PyAny>,))> {
-        let Some(owner) = &self.owner else {
-            return Err(pyo3::exceptions::PyTypeError::new_err(
-                "this right-hand side was made without its lagrange.Model and cannot be pickled; pickle the model, or take model.rhs()",
-            ));
-        };
-        let call = py.import("operator")?.getattr("methodcaller")?.call1(("rhs",))?;
-        Ok((call, (owner.clone_ref(py),)))
     }
 }
 
@@ -130,5 +132,53 @@ impl Rhs {
         y.extract().map_err(|e: PyErr| {
             PyTypeError::new_err(format!("y must be a sequence of floats ([q, q']): {}", e.value(py)))
         })
+    }
+}
+
+/// A failed evaluation as `lagrange.RunError`.
+fn right_hand_side_error(py: Python<'_>, t: f64, e: &num::RhsError) -> PyErr {
+    errors::raise(py, "RunError", |kw| {
+        kw.set_item("message", format!("the right-hand side at t = {t}: {e}"))?;
+        kw.set_item("t", t)
+    })
+}
+
+/// The Jacobian of a model's right-hand side with respect to y, from the
+/// symbolic derivatives (`mech::StateJacobian`).
+#[pyclass(module = "lagrange._native", frozen)]
+pub struct Jac {
+    jacobian: Mutex<mech::StateJacobian>,
+    dim: usize,
+}
+
+#[pymethods]
+impl Derived {
+    /// The compiled Jacobian of the right-hand side.
+    fn jac(&self, py: Python<'_>) -> PyResult<Jac> {
+        let jacobian = py.detach(|| mech::StateJacobian::new(&self.d)).map_err(|e| self.error(py, &e))?;
+        let dim = jacobian.dim();
+        Ok(Jac { jacobian: Mutex::new(jacobian), dim })
+    }
+}
+
+#[pymethods]
+impl Jac {
+    /// ∂(dy/dt)/∂y at (t, y), y as 2n little-endian f64 bytes: (2n)² values,
+    /// row by row, as bytes.
+    fn eval<'py>(&self, py: Python<'py>, t: f64, y: &[u8]) -> PyResult<Bound<'py, PyByteArray>> {
+        if y.len() != 8 * self.dim {
+            return Err(PyValueError::new_err(format!("y has {} values, not {}", y.len() / 8, self.dim)));
+        }
+        let y: Vec<f64> = y.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes"))).collect();
+        let mut out = vec![0.0; self.dim * self.dim];
+        let mut jacobian = self.jacobian.lock().unwrap_or_else(|e| e.into_inner());
+        jacobian.eval(t, &y, &mut out).map_err(|e| right_hand_side_error(py, t, &e))?;
+        Ok(PyByteArray::new(py, &out.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>()))
+    }
+
+    /// The length of y.
+    #[getter]
+    fn dim(&self) -> usize {
+        self.dim
     }
 }

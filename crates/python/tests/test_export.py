@@ -153,7 +153,7 @@ def test_model_export_writes_what_the_cli_writes(tmp_path):
     assert list(module.INPUTS) == ["F", "tau"]
     with pytest.raises(ValueError, match='the targets are "c", "python" and "fmu"'):
         cart.export("fortran", tmp_path / "cart.f")
-    kink = lagrange.load(Path(__file__).resolve().parents[2] / "cli" / "tests" / "bad" / "kink_for_jacobian.toml")
+    kink = lagrange.load(Path(__file__).resolve().parents[2] / "cli" / "tests" / "bad_export" / "kink_for_jacobian.toml")
     kept = tmp_path / "kept.py"
     kept.write_text("# an earlier export\n")
     with pytest.raises(lagrange.ModelError, match="abs()") as e:

@@ -1,5 +1,5 @@
 """Objects that travel: a model, its derivation, an expression, a run, a sweep's
-table and a compiled right-hand side pickle (a model as its text, settings and
+table, a compiled right-hand side and its Jacobian pickle (a model as its text, settings and
 folder, derived again where it lands; results as their data), so that
 multiprocessing and a Dask cluster of processes take them as arguments and
 give them back."""
@@ -43,7 +43,9 @@ def test_a_model_and_what_it_gives_pickle(model):
     assert again(table) == table
     f = model.rhs()
     y = [0.3, -0.2, 0.1, 0.5]
-    assert again(f)(0.0, y) == f(0.0, y)
+    assert np.array_equal(again(f)(0.0, y), f(0.0, y))
+    jac = model.jac()
+    assert np.array_equal(again(jac)(0.0, y), jac(0.0, y))
 
 
 def test_a_model_built_in_python_pickles_with_its_settings():

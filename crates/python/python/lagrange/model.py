@@ -11,6 +11,7 @@ from .analyses import Report
 from .derivation import Derivation
 from .expr import _name
 from .errors import Interrupted, RunError
+from .rhs import Jac, Rhs
 from .run import Run
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -207,11 +208,19 @@ class Model:
             raise RunError(run.failure, float(run.summary["t_final"]), run)
         return run
 
-    def rhs(self) -> Any:
+    def rhs(self) -> Rhs:
         """The compiled right-hand side ``f(t, y) -> dy/dt`` with ``y = [q, q']``,
-        for ``scipy.integrate.solve_ivp`` or any integrator of your own. It
-        pickles as its model, compiled again where it is unpickled."""
-        return self._native.rhs(self)
+        for ``scipy.integrate.solve_ivp`` or any integrator of your own: an
+        array of shape ``(2n,)``, or ``(2n, k)`` for y of shape ``(2n, k)``
+        (``vectorized=True``). It pickles as its model, compiled again where it
+        is unpickled."""
+        return Rhs(self, self._native.rhs())
+
+    def jac(self) -> Jac:
+        """The Jacobian ``J(t, y) = ∂f/∂y`` of :meth:`rhs`, shape ``(2n, 2n)``,
+        from the symbolic derivatives: ``solve_ivp(..., method="Radau",
+        jac=model.jac())`` needs no differences. Models without constraints."""
+        return Jac(self, self._native.jac())
 
     # --- code that leaves lagrange ---------------------------------------------
     def export(self, to: str, path: PathLike) -> None:

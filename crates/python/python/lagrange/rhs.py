@@ -1,0 +1,67 @@
+"""A model's right-hand side and its Jacobian as SciPy's integrators call them.
+
+``model.rhs()`` is ``f(t, y) -> dy/dt`` with ``y = [q, q']``: y of shape
+``(2n,)`` gives an array of shape ``(2n,)``, y of shape ``(2n, k)`` (what
+``solve_ivp(..., vectorized=True)`` passes) an array of shape ``(2n, k)``.
+``model.jac()`` is ``J(t, y) = ∂f/∂y``, shape ``(2n, 2n)``, from the symbolic
+derivatives, for the stiff methods (``solve_ivp(..., method="Radau",
+jac=model.jac())``). Both are compiled once and pickle as their model.
+"""
+
+from __future__ import annotations
+
+import operator
+from typing import Any, Tuple
+
+import numpy as np
+
+
+class Rhs:
+    """``f(t, y) -> dy/dt``, compiled: see the module text."""
+
+    __slots__ = ("_model", "_native", "dim")
+
+    def __init__(self, model: Any, native: Any) -> None:
+        self._model = model
+        self._native = native
+        self.dim: int = native.dim
+
+    def __call__(self, t: float, y: Any) -> np.ndarray:
+        y = np.asarray(y, dtype=np.float64)
+        if y.ndim == 1 and y.shape[0] == self.dim:
+            return np.frombuffer(self._native.many(float(t), y.astype("<f8").tobytes(), 1), dtype="<f8")
+        if y.ndim == 2 and y.shape[0] == self.dim:
+            k = y.shape[1]
+            states = np.ascontiguousarray(y.T, dtype="<f8").tobytes()
+            return np.frombuffer(self._native.many(float(t), states, k), dtype="<f8").reshape(k, self.dim).T
+        raise ValueError(f"y has shape {y.shape}: give [q, q'] of length {self.dim}, or {self.dim} rows of states")
+
+    def __repr__(self) -> str:
+        return repr(self._native)
+
+    def __reduce__(self) -> Tuple[Any, Tuple[Any, ...]]:
+        return (operator.methodcaller("rhs"), (self._model,))
+
+
+class Jac:
+    """``J(t, y) = ∂f/∂y``, shape ``(2n, 2n)``, compiled: see the module text."""
+
+    __slots__ = ("_model", "_native", "dim")
+
+    def __init__(self, model: Any, native: Any) -> None:
+        self._model = model
+        self._native = native
+        self.dim: int = native.dim
+
+    def __call__(self, t: float, y: Any) -> np.ndarray:
+        y = np.asarray(y, dtype=np.float64)
+        if y.shape != (self.dim,):
+            raise ValueError(f"jac takes one state [q, q'] of shape ({self.dim},), not {y.shape}")
+        out = self._native.eval(float(t), y.astype("<f8").tobytes())
+        return np.frombuffer(out, dtype="<f8").reshape(self.dim, self.dim)
+
+    def __repr__(self) -> str:
+        return f"<Jacobian of the right-hand side of {self._model.name}: {self.dim} × {self.dim}>"
+
+    def __reduce__(self) -> Tuple[Any, Tuple[Any, ...]]:
+        return (operator.methodcaller("jac"), (self._model,))
