@@ -607,9 +607,14 @@ mod tests {
         check_grid("a=0:3:4,b=-1:1:3", "12 runs: a=0.0:3.0:4,b=-1.0:1.0:3 [Coordinate(0), Coordinate(1)]");
         check_grid(" a' = 0 : 1 : 2 , g=1:2:2", "4 runs: a'=0.0:1.0:2,g=1.0:2.0:2 [Velocity(0), Parameter(4)]");
         check_grid("a=1:5:1", "1 runs: a=1.0:1.0:1 [Coordinate(0)]");
-        check_grid("", "error: the grid is empty; expected NAME=START:STOP:COUNT, comma separated");
-        check_grid("a=0:1", "error: in the grid: 'a=0:1' is not NAME=START:STOP:COUNT");
-        check_grid("a=0:1:2,", "error: in the grid: 'a=0:1:2,' is not NAME=START:STOP:COUNT");
+        check_grid("a=0;1;5,g=9.81", "3 runs: a=0.0;1.0;5.0,g=9.81 [Coordinate(0), Parameter(4)]");
+        check_grid(" b = -1 ; 2 ", "2 runs: b=-1.0;2.0 [Coordinate(1)]");
+        check_grid("a=0;;1", "error: in the grid: the value of 'a' must be a finite number, not ''");
+        check_grid("a=0;nan", "error: in the grid: the value of 'a' must be a finite number, not 'nan'");
+        check_grid("a=", "error: in the grid: 'a=' is not NAME=START:STOP:COUNT (evenly spaced) or NAME=V1;V2;... (the values listed)");
+        check_grid("", "error: the grid is empty; expected NAME=START:STOP:COUNT or NAME=V1;V2;..., comma separated");
+        check_grid("a=0:1", "error: in the grid: 'a=0:1' is not NAME=START:STOP:COUNT (evenly spaced) or NAME=V1;V2;... (the values listed)");
+        check_grid("a=0:1:2,", "error: in the grid: 'a=0:1:2,' is not NAME=START:STOP:COUNT (evenly spaced) or NAME=V1;V2;... (the values listed)");
         check_grid("a=x:1:2", "error: in the grid: the start of 'a' must be a finite number, not 'x'");
         check_grid("a=0:inf:2", "error: in the grid: the stop of 'a' must be a finite number, not 'inf'");
         check_grid("a=0:1:0", "error: in the grid: the count of 'a' must be a whole number of at least 1, not '0'");
