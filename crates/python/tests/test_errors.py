@@ -3,6 +3,7 @@ snippet; a failed run raises RunError with its rows; nothing panics."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 import lagrange
@@ -45,9 +46,31 @@ position = ["x + y"]
     assert info.value.kind == "singular_mass_matrix"
 
 
-def test_missing_file():
-    with pytest.raises(lagrange.ModelError, match="cannot read the file"):
+def test_a_missing_file_is_file_not_found():
+    with pytest.raises(FileNotFoundError) as info:
         lagrange.load(EXAMPLES / "no_such_model.toml")
+    assert info.value.filename == str(EXAMPLES / "no_such_model.toml")
+    with pytest.raises(FileNotFoundError, match="a folder, not a file"):
+        lagrange.load(EXAMPLES)
+    for analysis in (lagrange.inertia, lagrange.extremal):
+        with pytest.raises(FileNotFoundError):
+            analysis(EXAMPLES / "no_such_file.toml")
+
+
+def test_the_package_namespace_and_the_reports_read_well():
+    public = [name for name in dir(lagrange) if not name.startswith("_")]
+    assert not {"List", "Mapping", "Optional", "Tuple", "Union", "annotations"} & set(public)
+    report = lagrange.load(EXAMPLES / "coupled_oscillators.toml").modes()
+    assert repr(report).startswith("<Report lagrange.modes/1 of 'two coupled oscillators': equilibrium, T, U, frequencies")
+
+
+def test_a_matrix_of_numbers_converts_to_an_array():
+    oscillators = lagrange.load(EXAMPLES / "coupled_oscillators.toml").derive()
+    assert np.array_equal(np.array(oscillators.mass_matrix), np.eye(2))
+    pendulum = lagrange.load(EXAMPLES / "double_pendulum.toml").derive()
+    with pytest.raises(TypeError, match="evaluate it at a state first"):
+        np.array(pendulum.mass_matrix)
+    assert np.array(pendulum.mass_matrix(a=0.3, b=0.3)).shape == (2, 2)
 
 
 def test_unknown_parameter_override():

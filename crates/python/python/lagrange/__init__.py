@@ -16,16 +16,14 @@ The package is the Rust library behind the ``lagrange`` command line; results
 mirror its JSON output (DESIGN.md) field for field.
 """
 
-from __future__ import annotations
-
-from typing import List, Mapping, Optional, Tuple, Union
+import typing as _t
 
 from . import _native
 from .analyses import Report
 from .derivation import Derivation
 from .errors import Interrupted, LagrangeError, ModelError, RunError
 from .expr import Expr, Matrix
-from .model import Model, PathLike, load
+from .model import Model, PathLike, _existing, load
 from .run import Run
 from .sweeps import Linspace, ShardsFailed, Table, grid, sweep
 
@@ -37,7 +35,7 @@ __all__ = [
 ]
 
 
-def methods() -> List[Tuple[str, str]]:
+def methods() -> _t.List[_t.Tuple[str, str]]:
     """The integrators ``simulate(method=...)`` takes: (name, description)."""
     return list(_native.METHODS)
 
@@ -49,33 +47,29 @@ def expression(text: str) -> Expr:
 
 
 def inertia(
-    path: Optional[PathLike] = None,
+    path: _t.Optional[PathLike] = None,
     *,
-    text: Optional[str] = None,
-    set: Optional[Mapping[str, float]] = None,
+    text: _t.Optional[str] = None,
+    set: _t.Optional[_t.Mapping[str, float]] = None,
     about: str = "com",
 ) -> Report:
     """The mass properties of a body file (``lagrange inertia``): mass,
     centre of mass, the inertia tensor about ``about`` (``"com"``, or a point
     ``"x,y,z"`` of expressions in the parameters, as the CLI's ``--about``) and its principal axes.
     Give the file's ``path``, or its ``text``."""
-    import os
-
-    p = None if path is None else os.fspath(path)
+    p = None if path is None else _existing(path)
     return Report(*_native.inertia(p, text, {k: float(v) for k, v in (set or {}).items()}, about))
 
 
 def extremal(
-    path: Optional[PathLike] = None,
+    path: _t.Optional[PathLike] = None,
     *,
-    text: Optional[str] = None,
-    set: Optional[Mapping[str, float]] = None,
+    text: _t.Optional[str] = None,
+    set: _t.Optional[_t.Mapping[str, float]] = None,
     check_minimum: bool = False,
     points: int = 201,
 ) -> Report:
     """The extremal of a variational problem file (``lagrange extremal``):
     the Euler–Lagrange equation, its first integral, the path and the value."""
-    import os
-
-    p = None if path is None else os.fspath(path)
+    p = None if path is None else _existing(path)
     return Report(*_native.extremal(p, text, {k: float(v) for k, v in (set or {}).items()}, check_minimum, points))

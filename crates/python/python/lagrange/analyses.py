@@ -57,7 +57,11 @@ class Report:
         return self.text
 
     def __repr__(self) -> str:
-        return f"<{self.json.get('format', 'report')}>"
+        what = self.json.get("format", "report")
+        name = self.json.get("name")
+        of = f" of {name!r}" if name else ""
+        fields = ", ".join(k for k in self._fields if k not in ("format", "name"))
+        return f"<Report {what}{of}: {fields}; print() it for the text>"
 
     def _repr_pretty_(self, p: Any, cycle: bool) -> None:
         p.text(self.text)

@@ -34,7 +34,12 @@ def _name(key: str) -> str:
 
 class Expr:
     """An expression of the expression language, tied to its model (for the
-    parameters' values and the names of the coordinates)."""
+    parameters' values and the names of the coordinates).
+
+    It prints (``str``, ``latex()``), evaluates (``e(th=0.1, th_dot=2.0)``)
+    and converts (``to_sympy()``). It has no arithmetic or ``diff`` of its
+    own: for algebra, go through SymPy, ``e.to_sympy().diff(...)``, and back
+    with ``lagrange.expression(str(result))`` where a string is wanted."""
 
     __slots__ = ("_text", "_model", "_coordinates")
 
@@ -140,6 +145,19 @@ class Matrix:
     def __call__(self, values: Optional[Mapping[str, ArrayLike]] = None, **kwargs: ArrayLike) -> np.ndarray:
         """The numeric matrix at a point (scalars only)."""
         return np.array([[float(e(values, **kwargs)) for e in r] for r in self.rows])
+
+    def __array__(self, dtype: Any = None, copy: Any = None) -> np.ndarray:
+        """``np.array(d.mass_matrix)``: the numbers, where every entry is
+        constant or a function of the parameters alone (their values in the
+        model); a matrix of the coordinates needs them: ``d.mass_matrix(th=0.3)``."""
+        try:
+            values = self()
+        except ValueError as e:
+            raise TypeError(
+                f"the matrix depends on more than the parameters ({e}); evaluate it at a state first, "
+                "e.g. np.array(d.mass_matrix(th=0.3))"
+            ) from None
+        return values if dtype is None else values.astype(dtype)
 
     def _repr_latex_(self) -> str:
         body = r" \\ ".join(" & ".join(e.latex() for e in r) for r in self.rows)

@@ -264,7 +264,18 @@ def load(path: PathLike, set: Optional[Mapping[str, float]] = None) -> Model:
     """Reads and derives a model file; ``set`` overrides parameters
     (``set={"g": 1.62}``). Body files it names are read from its folder."""
     folder = os.path.dirname(os.fspath(path)) or "."
-    return Model._wrap(_native.load(os.fspath(path), _floats(set)), set, folder)
+    return Model._wrap(_native.load(_existing(path), _floats(set)), set, folder)
+
+
+def _existing(path: PathLike) -> str:
+    """The path as text; a file that is not there raises ``FileNotFoundError``."""
+    text = os.fspath(path)
+    if not os.path.isfile(text):
+        import errno
+
+        what = "a folder, not a file" if os.path.isdir(text) else "no such file"
+        raise FileNotFoundError(errno.ENOENT, what, text)
+    return text
 
 
 def _floats(values: Optional[Mapping[str, float]]) -> Dict[str, float]:
