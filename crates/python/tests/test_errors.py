@@ -151,3 +151,19 @@ def test_a_misspelt_name_in_an_evaluation_raises_naming_the_closest():
         d.hamiltonian(**{q: 0.0, f"p_{q}": 0.0, "gg": 1.0})
     # Names of the model that the expression does not use are fine.
     assert isinstance(d.hamiltonian(**{n: 0.1 for n in names}, **{f"p_{n}": 0.0 for n in names}, g=1.0), float)
+
+
+def test_an_error_in_a_model_built_in_python_names_the_argument():
+    with pytest.raises(lagrange.ModelError) as info:
+        lagrange.Model(coordinates=["x"], parameters={"k": 1.0}, kinetic="x'^2/2", potential="k*x^")
+    e = info.value
+    assert e.file is None and e.line is None
+    assert e.argument == "Model(potential=...)"
+    assert str(e).startswith("Model(potential=...): in the potential: expected an exponent")
+    with pytest.raises(lagrange.ModelError) as info:
+        lagrange.Model(
+            coordinates=["x"], parameters={"m": 1.0},
+            particles=[{"mass": "m", "position": ["x", "0"]}, {"mass": "q", "position": ["x", "1"]}],
+        )
+    assert info.value.argument == "Model(particles[1]['mass'])", str(info.value)
+    assert "unknown name 'q'" in str(info.value)

@@ -32,23 +32,27 @@ class ModelError(LagrangeError, ValueError):
     bound), ``"does_nothing"`` (a constraint, force or torque that acts on
     nothing), ``"start"`` (a start the motion cannot begin from) or
     ``"unsupported"`` (an analysis that does not handle this model).
-    ``str(error)`` is all of it, as the CLI prints it.
+    ``str(error)`` is all of it, as the CLI prints it. For a model built
+    with ``lagrange.Model(...)``, ``file`` is None and ``argument`` names the
+    argument at fault (``Model(potential=...)``, ``Model(particles[0]['mass'])``).
     """
 
     def __init__(
         self,
         message: str = "",
-        file: str = "<string>",
+        file: Optional[str] = "<string>",
         line: Optional[int] = None,
         column: Optional[int] = None,
         help: Optional[str] = None,
         snippet: str = "",
         text: Optional[str] = None,
         kind: str = "invalid",
+        argument: Optional[str] = None,
     ) -> None:
         self.message = message
         self.kind = kind
         self.file = file
+        self.argument = argument
         self.line = line
         self.column = column
         self.help = help

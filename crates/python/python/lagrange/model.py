@@ -10,7 +10,7 @@ from . import _native, toml_writer
 from .analyses import Report
 from .derivation import Derivation
 from .expr import _name
-from .errors import Interrupted, RunError
+from .errors import Interrupted, ModelError, RunError
 from .rhs import Jac, Rhs
 from .run import Run
 
@@ -66,7 +66,7 @@ class Model:
     ) -> None:
         if coordinates is None:
             raise TypeError("Model() needs coordinates=[...] (or use lagrange.load / Model.from_toml)")
-        text = toml_writer.model(
+        text, origins = toml_writer.model(
             name_=name,
             coordinates=coordinates,
             parameters=parameters or {},
@@ -75,7 +75,11 @@ class Model:
             tables={"forces": forces or {}, "initial": initial or {}},
             arrays={"particles": particles or [], "bodies": bodies or [], "constraints": constraints or []},
         )
-        self._init(_native.from_toml(text, "<model>", _floats(set), _folder(folder)), set, folder)
+        try:
+            native = _native.from_toml(text, "<model>", _floats(set), _folder(folder))
+        except ModelError as e:
+            raise _at_argument(e, origins) from None
+        self._init(native, set, folder)
 
     def _init(self, native: Any, set: Optional[Mapping[str, float]], folder: Optional[PathLike]) -> None:
         self._native = native
@@ -253,6 +257,21 @@ class Model:
         from .sweeps import sweep
 
         return sweep(self, until=until, grid=grid, **options)
+
+
+def _at_argument(e: ModelError, origins: List[str]) -> ModelError:
+    """An error in the text ``Model(...)`` wrote, pointed at the argument the
+    line came from (``Model(potential=...)``) rather than at the text."""
+    if e.file != "<model>":
+        return e
+    where = origins[e.line - 1] if e.line is not None and 0 < e.line <= len(origins) else ""
+    place = f"Model({where}...)" if where.endswith("=") else (f"Model({where})" if where else "Model(...)")
+    text = f"{place}: {e.message}"
+    if e.snippet:
+        text += "\n" + e.snippet
+    if e.help:
+        text += f"\nhelp: {e.help}"
+    return ModelError(e.message, file=None, help=e.help, snippet=e.snippet, text=text, kind=e.kind, argument=place)
 
 
 def _rebuilt(source: str, file: str, set: Dict[str, float], folder: Optional[str]) -> Model:

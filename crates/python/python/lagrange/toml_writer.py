@@ -10,7 +10,7 @@ from __future__ import annotations
 import json
 import math
 from numbers import Number
-from typing import Any, Dict, List, Mapping, Sequence
+from typing import Any, Dict, List, Mapping, Sequence, Tuple
 
 from .sympy_bridge import from_sympy, is_sympy
 
@@ -67,25 +67,33 @@ def model(
     top: Mapping[str, Any],
     tables: Mapping[str, Mapping[Any, Any]],
     arrays: Mapping[str, Sequence[Mapping[str, Any]]],
-) -> str:
-    """The TOML text of a model: top-level keys, then tables, then arrays of tables."""
+) -> Tuple[str, List[str]]:
+    """The TOML text of a model (top-level keys, then tables, then arrays of
+    tables), and for each of its lines the Python argument it came from
+    (``potential=``, ``parameters["g"]``, ``particles[0]["position"]``; empty
+    for headers), so that an error in the text can name the argument."""
     lines: List[str] = [f"name = {json.dumps(name_, ensure_ascii=False)}"]
+    origins: List[str] = ["name="]
     lines.append("coordinates = [" + ", ".join(json.dumps(name(c), ensure_ascii=False) for c in coordinates) + "]")
+    origins.append("coordinates=")
     for key, v in top.items():
         if v is not None:
             lines.append(f"{key} = {_value(v)}")
+            origins.append(f"{key}=")
     sections: Dict[str, Mapping[Any, Any]] = {"parameters": parameters, **tables}
     for table, entries in sections.items():
         if entries:
-            lines.append("")
-            lines.append(f"[{table}]")
+            lines += ["", f"[{table}]"]
+            origins += ["", f"{table}="]
             for k, v in entries.items():
                 lines.append(f"{_key(k)} = {_number(v) if table == 'parameters' else _value(v)}")
+                origins.append(f"{table}[{name(k)!r}]")
     for table, items in arrays.items():
-        for item in items or ():
-            lines.append("")
-            lines.append(f"[[{table}]]")
+        for i, item in enumerate(items or ()):
+            lines += ["", f"[[{table}]]"]
+            origins += ["", f"{table}[{i}]"]
             for k, v in item.items():
                 if v is not None:
                     lines.append(f"{k} = {_value(v)}")
-    return "\n".join(lines) + "\n"
+                    origins.append(f"{table}[{i}][{k!r}]")
+    return "\n".join(lines) + "\n", origins
