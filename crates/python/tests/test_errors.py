@@ -167,3 +167,14 @@ def test_an_error_in_a_model_built_in_python_names_the_argument():
         )
     assert info.value.argument == "Model(particles[1]['mass'])", str(info.value)
     assert "unknown name 'q'" in str(info.value)
+
+
+def test_option_errors_name_the_option_not_an_internal_field():
+    model = lagrange.load(EXAMPLES / "pendulum.toml")
+    for options, message in (
+        ({"samples": 2.5}, "samples must be a whole number, not 2.5"),
+        ({"stop_when": 3}, "expected a condition or a list of them"),
+    ):
+        with pytest.raises(TypeError) as info:
+            model.simulate(until=1, **options)
+        assert message in str(info.value) and "Options" not in str(info.value)

@@ -198,7 +198,7 @@ class Model:
             "rtol": None if rtol is None else float(rtol),
             "atol": None if atol is None else float(atol),
             "dt": None if dt is None else float(dt),
-            "samples": samples,
+            "samples": _count("samples", samples),
             "every_step": bool(every_step),
             "stop_when": _strings(stop_when),
             "crossing": _strings(crossing),
@@ -310,4 +310,16 @@ def _strings(value: Union[str, Iterable[str], None]) -> List[str]:
         return []
     if isinstance(value, str):
         return [value]
-    return [str(v) for v in value]
+    try:
+        return [str(v) for v in value]
+    except TypeError:
+        raise TypeError(f"expected a condition or a list of them (strings), not {value!r}") from None
+
+
+def _count(what: str, value: Any) -> Optional[int]:
+    """A whole number of the caller's, refused with its name where it is not one."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not float(value).is_integer() or value < 0:
+        raise TypeError(f"{what} must be a whole number, not {value!r}")
+    return int(value)
