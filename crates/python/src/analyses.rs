@@ -112,6 +112,55 @@ impl Derived {
         })
     }
 
+    /// The state-space matrices A (and B, with inputs) of the small motion about
+    /// an equilibrium or a steady motion, their eigenvalues and the verdict.
+    #[pyo3(signature = (about="equilibrium", at=None, rates=None, allow_unstable=false))]
+    fn linearize(
+        &self,
+        py: Python<'_>,
+        about: &str,
+        at: Option<HashMap<String, f64>>,
+        rates: Option<HashMap<String, f64>>,
+        allow_unstable: bool,
+    ) -> PyResult<Analysis> {
+        guarded("linearize", || {
+            let about = match about {
+                "equilibrium" => mech::About::Equilibrium,
+                "steady" => mech::About::Steady,
+                other => {
+                    let message = format!("about must be \"equilibrium\" or \"steady\", not {other:?}");
+                    return Err(errors::plain_error(py, "linearize", &message, None));
+                }
+            };
+            let rates = overrides(rates);
+            if let (mech::About::Equilibrium, Some((name, _))) = (about, rates.first()) {
+                let message = format!(
+                    "rates[{name:?}]: a rate applies to a steady motion (about=\"steady\"); at an equilibrium every speed is zero"
+                );
+                return Err(errors::plain_error(py, "linearize", &message, None));
+            }
+            let config = mech::LinearizeConfig { about, at: overrides(at), rates, keep_unstable: allow_unstable };
+            // The inputs stay symbols: B is the response to them.
+            let d = self.shown();
+            let lin = py.detach(|| mech::linearize(d, &config)).map_err(|e| {
+                let help = match &e {
+                    mech::LinearizeError::NoPoint { .. } => Some(
+                        "start elsewhere with at={\"q\": v}, or change the rates with rates={\"q\": v}".to_string(),
+                    ),
+                    other => other.help(),
+                };
+                let inner = match e {
+                    mech::LinearizeError::Model(m) => Ok(m),
+                    mech::LinearizeError::Rate { name, message } => Err(format!("rates[{name:?}]: {message}")),
+                    other => Err(other.to_string()),
+                };
+                self.analysis_error(py, inner, help)
+            })?;
+            let report = mech::LinearizeReport::new(d, &lin);
+            Ok((json(&report)?, view::linearize::text(d, &lin, &config, &crate::TERMS), None))
+        })
+    }
+
     /// The symmetric top's constants of the motion, nutation and precession.
     fn top(&self, py: Python<'_>) -> PyResult<Analysis> {
         guarded("top", || {

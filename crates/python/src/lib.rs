@@ -17,6 +17,7 @@ mod errors;
 mod export;
 mod expr;
 mod model;
+mod report;
 mod rhs;
 mod run;
 mod signals;

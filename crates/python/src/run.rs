@@ -33,7 +33,6 @@ pub struct Options {
 
 impl Derived {
     fn config(&self, py: Python<'_>, o: &Options) -> PyResult<RunConfig> {
-        let usage = |message: String| errors::plain_error(py, "simulate", &message, None);
         let settings = RunSettings {
             until: Some(o.until),
             method: o.method.as_deref(),
@@ -43,13 +42,7 @@ impl Derived {
             samples: o.samples,
             every_step: o.every_step,
         };
-        let base = RunConfig::from_settings(&settings).map_err(|e| match e {
-            SettingError::UnknownMethod(message) => usage(format!("method: {message}")),
-            SettingError::NotPositive { setting, value } => {
-                usage(format!("{setting} must be a positive number, not {value}"))
-            }
-            SettingError::TooFewSamples { .. } => usage("samples needs at least 2 rows (both ends)".into()),
-        })?;
+        let base = RunConfig::from_settings(&settings).map_err(|e| setting_error(py, "simulate", e))?;
         let conditions = |texts: &[String], what: &str| -> PyResult<Vec<StopCondition>> {
             texts
                 .iter()
@@ -222,4 +215,15 @@ impl Derived {
         out.set_item("plot", Bound::new(py, plot)?)?;
         Ok(out)
     }
+}
+
+/// A run's setting that cannot be used, as `lagrange.ModelError` naming the
+/// option (`what` is the method that took it).
+pub(crate) fn setting_error(py: Python<'_>, what: &str, e: SettingError) -> PyErr {
+    let message = match e {
+        SettingError::UnknownMethod(message) => format!("method: {message}"),
+        SettingError::NotPositive { setting, value } => format!("{setting} must be a positive number, not {value}"),
+        SettingError::TooFewSamples { .. } => "samples needs at least 2 rows (both ends)".into(),
+    };
+    errors::plain_error(py, what, &message, None)
 }

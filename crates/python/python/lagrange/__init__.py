@@ -23,14 +23,14 @@ from .analyses import Report
 from .derivation import Derivation
 from .errors import Interrupted, LagrangeError, ModelError, RunError
 from .expr import Expr, Matrix
-from .model import Model, PathLike, _existing, load
+from .model import Model, Page, PathLike, _existing, load
 from .run import Run
 from .sweeps import Linspace, ShardsFailed, Table, grid, sweep
 
 __version__: str = _native.VERSION
 
 __all__ = [
-    "Derivation", "Expr", "Interrupted", "LagrangeError", "Linspace", "Matrix", "Model", "ModelError", "Report",
+    "Derivation", "Expr", "Interrupted", "LagrangeError", "Linspace", "Matrix", "Model", "ModelError", "Page", "Report",
     "Run", "RunError", "ShardsFailed", "Table", "expression", "extremal", "grid", "inertia", "load", "methods", "sweep",
 ]
 

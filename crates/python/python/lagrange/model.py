@@ -244,6 +244,46 @@ class Model:
         ``lagrange.modes/1`` (frequencies, modes, T, U, equilibrium, stable)."""
         return Report(*self._native.modes(_floats(at) or None, allow_unstable))
 
+    def linearize(
+        self,
+        about: str = "equilibrium",
+        at: Optional[Mapping[str, float]] = None,
+        rates: Optional[Mapping[str, float]] = None,
+        allow_unstable: bool = False,
+    ) -> Report:
+        """The state-space matrix A of the small motion about an equilibrium
+        (``about="equilibrium"``, found from ``[initial]`` or ``at``) or a
+        steady motion (``about="steady"``, cyclic coordinates at their
+        ``[initial]`` rates or ``rates``), with B for a model with inputs, the
+        eigenvalues and the verdict on stability, as ``lagrange linearize``:
+        ``lagrange.linearize/1``, ``report.A`` and ``report.B`` as arrays."""
+        return Report(*self._native.linearize(about, _floats(at) or None, _floats(rates) or None, allow_unstable))
+
+    def report(
+        self,
+        until: float = 10.0,
+        path: Optional[PathLike] = None,
+        samples: int = 2001,
+        method: Optional[str] = None,
+        rtol: Optional[float] = None,
+    ) -> "Page":
+        """The page ``lagrange report`` writes: the derivation typeset, the
+        mechanism animated, the run to ``until`` plotted, the audit and the
+        analyses that apply, in one HTML file that opens offline. It shows in
+        a notebook (``_repr_html_``); ``path`` (or ``page.save(path)``) writes
+        it. A run that fails midway gives the page of the rows up to there,
+        with the reason in ``page.failure`` and a warning."""
+        html, failure = self._native.report(float(until), _count("samples", samples), method,
+                                            None if rtol is None else float(rtol))
+        page = Page(html, failure)
+        if failure is not None:
+            import warnings
+
+            warnings.warn(f"the run failed: {failure}; the page shows the rows up to there", RuntimeWarning, stacklevel=2)
+        if path is not None:
+            page.save(path)
+        return page
+
     def orbit(self) -> Report:
         """The orbit of a central-force model: ``lagrange.orbit/1``."""
         return Report(*self._native.orbit())
@@ -257,6 +297,34 @@ class Model:
         from .sweeps import sweep
 
         return sweep(self, until=until, grid=grid, **options)
+
+
+class Page:
+    """An HTML page of :meth:`Model.report`: ``html`` (the text), ``failure``
+    (why the run stopped early, or None); ``save(path)`` writes it whole."""
+
+    def __init__(self, html: str, failure: Optional[str] = None) -> None:
+        self.html = html
+        self.failure = failure
+
+    def save(self, path: PathLike) -> None:
+        """Writes the page to ``path``: the whole page or, on failure, the file as it was."""
+        target = os.fspath(path)
+        part = f"{target}.{os.getpid()}.part"
+        try:
+            with open(part, "w", encoding="utf-8") as f:
+                f.write(self.html)
+            os.replace(part, target)
+        finally:
+            if os.path.exists(part):
+                os.remove(part)
+
+    def _repr_html_(self) -> str:
+        return self.html
+
+    def __repr__(self) -> str:
+        failed = f", the run failed: {self.failure}" if self.failure else ""
+        return f"<Page of {len(self.html) // 1000} kB{failed}; save(path) writes it>"
 
 
 def _at_argument(e: ModelError, origins: List[str]) -> ModelError:
