@@ -6,14 +6,15 @@ motion derived symbolically, its motion integrated with an audit of every
 conserved quantity, and the analyses of a mechanics course::
 
     import lagrange
-    model = lagrange.load("examples/double_pendulum.toml")
+    model = lagrange.load("double_pendulum.toml")   # a model file
     d = model.derive()              # momenta, equations, M, f, H, ...
     d.hamiltonian.to_sympy()
     run = model.simulate(until=20)  # run.t, run.q, run.qd: numpy arrays
     f = model.rhs()                 # for scipy.integrate.solve_ivp
 
 The package is the Rust library behind the ``lagrange`` command line; results
-mirror its JSON output (DESIGN.md) field for field.
+mirror its JSON output field for field (the guide's chapter "Python"
+and the reports' formats, ``lagrange.derive/1`` and the others).
 """
 
 import typing as _t

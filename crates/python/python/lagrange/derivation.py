@@ -1,6 +1,6 @@
 """The derivation of a model, as the ``lagrange.derive/1`` report.
 
-Fields are named as in the JSON contract (DESIGN.md): ``d.lagrangian``,
+Fields are named as in ``lagrange derive --format json`` (``lagrange.derive/1``): ``d.lagrangian``,
 ``d.momenta["th"]``, ``d.equations``, ``d.mass_matrix``, ``d.forcing``,
 ``d.hamiltonian``, ``d.hamilton["th"]["dp"]``, ``d.cyclic``, ``d.conserved``,
 ``d.hamiltonian_is_energy``, ``d.explanations``... Every expression is an

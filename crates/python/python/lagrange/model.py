@@ -34,7 +34,7 @@ class Model:
             initial={"th": 0.5, "th'": 0.0},
         )
 
-    Keyword arguments mirror the model file (DESIGN.md, "Model files"):
+    Keyword arguments mirror the model file (the guide's chapter "Model files"):
     ``name``, ``coordinates``, ``parameters``, ``gravity``, ``lagrangian``,
     ``kinetic``, ``potential``, ``dissipation``, ``forces`` (coordinate →
     generalized force), ``initial`` (``"th"``/``"th'"`` → value),
