@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import json
 import re
-from typing import Any, Dict, List, Optional
+from typing import TYPE_CHECKING, Any, Dict, List, Optional
 
 from .expr import Expr, Matrix
 
@@ -53,6 +53,23 @@ class Derivation:
     of plain values (expressions as strings), ``model`` the model.
     """
 
+    # What mypy sees of the report's main fields (the values come from
+    # __getattr__; a field a model does not have is None).
+    if TYPE_CHECKING:
+        lagrangian: Optional[Expr]
+        kinetic: Optional[Expr]
+        potential: Optional[Expr]
+        dissipation: Optional[Expr]
+        hamiltonian: Optional[Expr]
+        energy: Optional[Expr]
+        energy_function: Expr
+        momenta: Dict[str, Expr]
+        equations: Dict[str, Expr]
+        mass_matrix: Matrix
+        forcing: List[Expr]
+        coordinates: List[str]
+        hamiltonian_is_energy: Optional[bool]
+
     def __init__(self, model: Any) -> None:
         self.model = model
         self.json: Dict[str, Any] = json.loads(model._native.derive_json())
@@ -89,14 +106,14 @@ class Derivation:
         return {c["name"]: c["expr"] for c in self._fields.get("conserved", [])}
 
     def __str__(self) -> str:
-        return self.model._native.text()
+        return str(self.model._native.text())
 
     def __repr__(self) -> str:
         return f"<Derivation of {self.json.get('name')!r}: coordinates {', '.join(self.json.get('coordinates', []))}>"
 
     def latex(self) -> str:
         """The derivation as LaTeX (``align*`` blocks), as ``derive --format latex``."""
-        return self.model._native.latex()
+        return str(self.model._native.latex())
 
     def _repr_latex_(self) -> str:
         # Each `align*` block as `$$\begin{aligned}...$$`, which MathJax and

@@ -88,9 +88,10 @@ class Expr:
         return to_sympy(_native.tree(self._text), self._coordinates, dynamic)
 
     # --- values ---------------------------------------------------------
-    def __call__(self, values: Optional[Mapping[str, ArrayLike]] = None, **kwargs: ArrayLike) -> Any:
+    def __call__(self, values: Optional[Mapping[str, ArrayLike]] = None, **kwargs: ArrayLike) -> Union[float, np.ndarray]:
         """The value at the given coordinates, velocities, momenta, t and
-        parameters; arrays broadcast as numpy's arithmetic does."""
+        parameters (a float; an array where arrays are given, broadcast as
+        numpy's arithmetic does)."""
         given: Dict[str, Any] = {}
         for key, v in (values or {}).items():
             given[key] = v
@@ -138,7 +139,7 @@ class Matrix:
 
     def to_sympy(self, dynamic: bool = True) -> Any:
         """The matrix as a ``sympy.Matrix``."""
-        import sympy
+        import sympy  # type: ignore[import-untyped,unused-ignore]
 
         return sympy.Matrix([[e.to_sympy(dynamic) for e in r] for r in self.rows])
 

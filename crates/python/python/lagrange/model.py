@@ -81,8 +81,8 @@ class Model:
             raise _at_argument(e, origins) from None
         self._init(native, set, folder)
 
-    def _init(self, native: Any, set: Optional[Mapping[str, float]], folder: Optional[PathLike]) -> None:
-        self._native = native
+    def _init(self, native: _native.Derived, set: Optional[Mapping[str, float]], folder: Optional[PathLike]) -> None:
+        self._native: _native.Derived = native
         self._set = _floats(set)
         self._folder = _folder(folder)
         self._derivation: Optional[Derivation] = None
@@ -273,7 +273,7 @@ class Model:
         a notebook (``_repr_html_``); ``path`` (or ``page.save(path)``) writes
         it. A run that fails midway gives the page of the rows up to there,
         with the reason in ``page.failure`` and a warning."""
-        html, failure = self._native.report(float(until), _count("samples", samples), method,
+        html, failure = self._native.report(float(until), _count("samples", samples) or 2001, method,
                                             None if rtol is None else float(rtol))
         page = Page(html, failure)
         if failure is not None:

@@ -45,7 +45,7 @@ class Run:
 
     # --- the table ----------------------------------------------------------
     def __len__(self) -> int:
-        return self.data.shape[0]
+        return int(self.data.shape[0])
 
     def column(self, name: str) -> np.ndarray:
         """One column of the CSV table by its header name (``"th'"``, ``"H"``)."""
@@ -103,7 +103,7 @@ class Run:
     def to_pandas(self) -> Any:
         """The table as a ``pandas.DataFrame`` (needs pandas), with an
         ``event`` column when the run recorded crossings."""
-        import pandas as pd
+        import pandas as pd  # type: ignore[import-untyped,unused-ignore]
 
         frame = pd.DataFrame(np.array(self.data), columns=self.columns)
         if self.events:
@@ -126,7 +126,7 @@ class Run:
 
     def svg(self) -> str:
         """The plot ``simulate --plot`` draws, as SVG text."""
-        return self._plot.svg()
+        return str(self._plot.svg())
 
     def _repr_svg_(self) -> str:
         return self.svg()

@@ -18,21 +18,21 @@ from .errors import Interrupted, LagrangeError
 
 
 class Linspace(NamedTuple):
-    """An axis of a sweep's grid: ``count`` values evenly spaced from
+    """An axis of a sweep's grid: ``num`` values evenly spaced from
     ``start`` to ``stop``, both included (the CLI's ``NAME=START:STOP:COUNT``).
     Made by :func:`grid`; a plain tuple ``(start, stop, count)`` means the same."""
 
     start: float
     stop: float
-    count: int
+    num: int
 
 
-def grid(start: float, stop: float, count: int) -> Linspace:
-    """``count`` values evenly spaced from ``start`` to ``stop``, both
-    included, as an axis of :func:`sweep`'s ``grid``:
+def grid(start: float, stop: float, num: int) -> Linspace:
+    """``num`` values evenly spaced from ``start`` to ``stop``, both
+    included (as ``numpy.linspace``), as an axis of :func:`sweep`'s ``grid``:
     ``grid={"a": lagrange.grid(-3, 3, 100)}``. A list or array is the values
     themselves: ``grid={"g": [1.62, 3.71, 9.81]}``."""
-    return Linspace(float(start), float(stop), int(count))
+    return Linspace(float(start), float(stop), int(num))
 
 
 #: An axis: a :class:`Linspace` (or a tuple ``(start, stop, count)``), or the
@@ -86,7 +86,7 @@ class Table:
 
     def to_pandas(self) -> Any:
         """The table as a ``pandas.DataFrame`` indexed by run."""
-        import pandas as pd
+        import pandas as pd  # type: ignore[import-untyped,unused-ignore]
 
         frame = pd.DataFrame(np.array(self.data), columns=self.columns, index=pd.Index(self.runs, name="run"))
         frame["failure"] = self.failures
@@ -139,7 +139,7 @@ def _run_shard(source: str, file: str, set: Dict[str, float], folder: Optional[s
     out = native.sweep(options)
     if out["interrupt"] is not None:
         raise out["interrupt"]
-    return out["csv"]
+    return str(out["csv"])
 
 
 def sweep(
@@ -161,10 +161,10 @@ def sweep(
     sweep`` does: the final state, the drift of the energy and (unless
     ``lyapunov=False``) the largest Lyapunov exponent per run.
 
-    ``grid``: ``{"a": lagrange.grid(start, stop, count), "g": [1.62, 9.81]}``
+    ``grid``: ``{"a": lagrange.grid(start, stop, num), "g": [1.62, 9.81]}``
     over initial coordinates (``"a"``), velocities (``"a'"``) and
-    parameters: :func:`grid` (or a tuple ``(start, stop, count)``) spaces
-    ``count`` values evenly; a list or an array is the values themselves. The
+    parameters: :func:`grid` (or a tuple ``(start, stop, num)``) spaces
+    ``num`` values evenly; a list or an array is the values themselves. The
     first axis varies slowest. ``shard=(i, n)``: only runs i, i+n, i+2n, ... (the CLI's
     ``--shard i/n``). ``threads``: worker threads here (default: one per core).
 

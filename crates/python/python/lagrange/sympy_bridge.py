@@ -17,7 +17,7 @@ _FUNCTIONS = ("sin", "cos", "tan", "asin", "acos", "atan", "sinh", "cosh", "tanh
 
 def to_sympy(tree: Any, coordinates: Sequence[str], dynamic: bool) -> Any:
     """A SymPy expression from a tree of ``_native.tree``."""
-    import sympy
+    import sympy  # type: ignore[import-untyped,unused-ignore]
 
     t = sympy.Symbol("t")
     coords = set(coordinates)
@@ -63,7 +63,7 @@ def from_sympy(expr: Any) -> str:
     """The expression language's text of a SymPy expression (fully
     parenthesized; lagrange simplifies it when it reads it)."""
     import sympy
-    from sympy.core.function import AppliedUndef
+    from sympy.core.function import AppliedUndef  # type: ignore[import-untyped,unused-ignore]
 
     def p(e: Any) -> str:
         if isinstance(e, sympy.Integer):
@@ -77,7 +77,7 @@ def from_sympy(expr: Any) -> str:
         if e is sympy.E:
             return "exp(1)"
         if isinstance(e, sympy.Symbol):
-            return e.name
+            return str(e.name)
         if isinstance(e, AppliedUndef):
             if len(e.args) == 1 and isinstance(e.args[0], sympy.Symbol) and e.args[0].name == "t":
                 return type(e).__name__
