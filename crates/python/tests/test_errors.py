@@ -178,3 +178,10 @@ def test_option_errors_name_the_option_not_an_internal_field():
         with pytest.raises(TypeError) as info:
             model.simulate(until=1, **options)
         assert message in str(info.value) and "Options" not in str(info.value)
+
+
+def test_the_file_of_an_error_in_text_is_none():
+    with pytest.raises(lagrange.ModelError) as info:
+        lagrange.Model.from_toml(BAD)
+    assert info.value.file is None and info.value.line == 3
+    assert str(info.value).startswith("<string>:3:")

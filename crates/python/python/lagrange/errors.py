@@ -21,9 +21,10 @@ class LagrangeError(Exception):
 class ModelError(LagrangeError, ValueError):
     """Bad input: a model, body or problem file, an expression, or an option.
 
-    Attributes: ``file`` (the file's name, ``"<string>"`` for text, or the
-    option's name), ``line`` and ``column`` (1-based, or None when the error
-    is about the file as a whole), ``message`` (what is wrong and what was
+    Attributes: ``file`` (the file's name, the option's name, or None for a
+    model given as text without ``name=`` or built with ``lagrange.Model``),
+    ``line`` and ``column`` (1-based, or None when the error is about the
+    file as a whole), ``message`` (what is wrong and what was
     expected), ``help`` (a hint, or None) and ``snippet`` (the offending line
     with carets under the place), and ``kind``, what kind of problem it is,
     for code that branches on it: ``"invalid"`` (the input as written is
@@ -51,7 +52,10 @@ class ModelError(LagrangeError, ValueError):
     ) -> None:
         self.message = message
         self.kind = kind
-        self.file = file
+        # A file's name, or None for text and values that came from no file
+        # (the name the text was given under stays in `_source`).
+        self._source = file
+        self.file = None if file in ("<string>", "<model>") else file
         self.argument = argument
         self.line = line
         self.column = column

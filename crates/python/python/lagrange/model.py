@@ -330,7 +330,7 @@ class Page:
 def _at_argument(e: ModelError, origins: List[str]) -> ModelError:
     """An error in the text ``Model(...)`` wrote, pointed at the argument the
     line came from (``Model(potential=...)``) rather than at the text."""
-    if e.file != "<model>":
+    if e._source != "<model>":
         return e
     where = origins[e.line - 1] if e.line is not None and 0 < e.line <= len(origins) else ""
     place = f"Model({where}...)" if where.endswith("=") else (f"Model({where})" if where else "Model(...)")
