@@ -88,10 +88,12 @@ impl Rhs {
         }
         let y: Vec<f64> = y.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes"))).collect();
         let mut dy = vec![0.0; y.len()];
-        let result = py.detach(|| {
+        let mut all = || {
             let mut system = self.system.lock().unwrap_or_else(|e| e.into_inner());
             y.chunks_exact(self.dim).zip(dy.chunks_exact_mut(self.dim)).try_for_each(|(y, dy)| system.rhs(t, y, dy))
-        });
+        };
+        // Releasing the GIL costs more than one evaluation takes: only for batches.
+        let result = if k >= 64 { py.detach(all) } else { all() };
         result.map_err(|e| right_hand_side_error(py, t, &e))?;
         Ok(PyByteArray::new(py, &dy.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>()))
     }

@@ -15,6 +15,8 @@ from typing import Any, Tuple
 
 import numpy as np
 
+_F8 = np.dtype("<f8")
+
 
 class Rhs:
     """``f(t, y) -> dy/dt``, compiled: see the module text."""
@@ -27,13 +29,16 @@ class Rhs:
         self.dim: int = native.dim
 
     def __call__(self, t: float, y: Any) -> np.ndarray:
-        y = np.asarray(y, dtype=np.float64)
+        # Read and written as little-endian float64 bytes; the dtype object is
+        # made once (numpy parses a dtype string on every call).
+        if type(y) is not np.ndarray or y.dtype != _F8:
+            y = np.asarray(y, dtype=_F8)
         if y.ndim == 1 and y.shape[0] == self.dim:
-            return np.frombuffer(self._native.many(float(t), y.astype("<f8").tobytes(), 1), dtype="<f8")
+            return np.frombuffer(self._native.many(float(t), y.tobytes(), 1), dtype=_F8)
         if y.ndim == 2 and y.shape[0] == self.dim:
             k = y.shape[1]
-            states = np.ascontiguousarray(y.T, dtype="<f8").tobytes()
-            return np.frombuffer(self._native.many(float(t), states, k), dtype="<f8").reshape(k, self.dim).T
+            states = np.ascontiguousarray(y.T).tobytes()
+            return np.frombuffer(self._native.many(float(t), states, k), dtype=_F8).reshape(k, self.dim).T
         raise ValueError(f"y has shape {y.shape}: give [q, q'] of length {self.dim}, or {self.dim} rows of states")
 
     def __repr__(self) -> str:
@@ -54,11 +59,11 @@ class Jac:
         self.dim: int = native.dim
 
     def __call__(self, t: float, y: Any) -> np.ndarray:
-        y = np.asarray(y, dtype=np.float64)
+        y = np.asarray(y, dtype=_F8)
         if y.shape != (self.dim,):
             raise ValueError(f"jac takes one state [q, q'] of shape ({self.dim},), not {y.shape}")
-        out = self._native.eval(float(t), y.astype("<f8").tobytes())
-        return np.frombuffer(out, dtype="<f8").reshape(self.dim, self.dim)
+        out = self._native.eval(float(t), y.tobytes())
+        return np.frombuffer(out, dtype=_F8).reshape(self.dim, self.dim)
 
     def __repr__(self) -> str:
         return f"<Jacobian of the right-hand side of {self._model.name}: {self.dim} × {self.dim}>"
