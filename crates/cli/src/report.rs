@@ -4,8 +4,6 @@
 //! module runs the model, keeps its rows and writes the file.
 
 use crate::diagnostics::Failure;
-use mech::RunError;
-use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -53,37 +51,18 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let config = crate::simulate::run_config(path, &settings)?;
     config.check().map_err(|e| crate::simulate::input_failure(path, &source, e))?;
 
-    let mut rows = view::report::Recorder::new();
-    let mut first_row = None;
-    let result = mech::simulate(&d, &config, |row| {
-        first_row.get_or_insert_with(|| started.elapsed().as_secs_f64());
-        rows.push(row);
-        ControlFlow::Continue(())
-    });
-    let (report, failure) = match result {
-        Ok(r) => (r, None),
-        Err(RunError::Failed { message, report }) => {
-            let message = report.failure.clone().unwrap_or(message);
-            (*report, Some(message))
-        }
-        Err(e) => return Err(crate::simulate::input_failure(path, &source, e)),
-    };
-    let names: Vec<String> = d.coordinate_names().iter().map(|s| s.to_string()).collect();
-    let timing = view::simulate::Timing { derive_seconds: derived, setup_seconds: first_row };
-    let summary = view::simulate::summary_json(&report, &names, &timing, None, &crate::TERMS);
-    let data = rows.data(&d, args.until, summary);
-    let page = view::report::page(&data);
-    crate::files::write_whole(&args.out, page.as_bytes())
+    let page = view::report::run_page(&d, &config, args.until, started, derived, &crate::TERMS)
+        .map_err(|e| crate::simulate::input_failure(path, &source, e))?;
+    crate::files::write_whole(&args.out, page.html.as_bytes())
         .map_err(|e| Failure::run(format!("cannot write the report {}: {e}", args.out.display())))?;
-    let shown = data["time"].as_array().map_or(0, Vec::len);
     crate::write_stdout(&format!(
         "{}: {} of {} rows shown, {:.0} kB\n",
         args.out.display(),
-        shown,
-        rows.len(),
-        page.len() as f64 / 1000.0
+        page.shown,
+        page.rows,
+        page.html.len() as f64 / 1000.0
     ))?;
-    match failure {
+    match page.failure {
         // The page shows the rows up to the failure; the failure is the exit code's.
         Some(message) => Err(Failure::run(format!("{message} ({} shows the rows up to there)", args.out.display()))),
         None => Ok(()),

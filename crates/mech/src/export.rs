@@ -119,12 +119,3 @@ fn hamiltonian(d: &Derivation) -> ExprId {
         _ => d.energy_function,
     }
 }
-
-/// The residual a constraint's `residual_NAME` column shows: its expression for
-/// a holonomic constraint, `A q' + a_t` for a velocity constraint.
-fn residual(c: &crate::Constraint) -> ExprId {
-    match c.kind {
-        crate::model::ConstraintKind::Holonomic => c.expr,
-        crate::model::ConstraintKind::Velocity => c.velocity_form,
-    }
-}

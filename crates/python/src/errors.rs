@@ -94,6 +94,16 @@ pub fn raise(py: Python<'_>, name: &str, fill: impl FnOnce(&Bound<'_, PyDict>) -
     build().unwrap_or_else(|e| e)
 }
 
+/// A `lagrange.LagrangeError` with `message` (the base class, which takes
+/// its message alone: for failures that are no model's, file's or run's).
+pub fn lagrange_error(py: Python<'_>, message: &str) -> PyErr {
+    let build = || -> PyResult<PyErr> {
+        let class = py.import("lagrange.errors")?.getattr("LagrangeError")?;
+        Ok(PyErr::from_value(class.call1((message,))?))
+    };
+    build().unwrap_or_else(|e| e)
+}
+
 /// A Rust panic caught at an entry point, as a Python error that says so.
 pub fn panicked(what: &str, payload: Box<dyn std::any::Any + Send>) -> PyErr {
     let detail = payload

@@ -2,7 +2,7 @@
 //! module or an FMI 2.0 FMU, as `lagrange export --to` writes them
 //! (`mech::export`), written whole or not at all.
 
-use crate::errors::guarded;
+use crate::errors::{self, guarded};
 use crate::model::Derived;
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
@@ -41,7 +41,7 @@ impl Derived {
             .detach(|| fmu::sources(self.shown(), env!("CARGO_PKG_VERSION"), &fmu::identifier(&stem)))
             .map_err(|e| self.error(py, &e))?;
         let compiler = sym::c_compiler().map_err(|e| {
-            lagrange_error(
+            errors::lagrange_error(
                 py,
                 &format!(
                     "the FMU's binary is compiled at export time and needs a C compiler: {e}; install one (cc, gcc or clang), or name it with the CC environment variable"
@@ -50,7 +50,7 @@ impl Derived {
         })?;
         let bytes = py
             .detach(|| fmu::package(&sources, &compiler))
-            .map_err(|e| lagrange_error(py, &format!("cannot build the FMU: {e}")))?;
+            .map_err(|e| errors::lagrange_error(py, &format!("cannot build the FMU: {e}")))?;
         write(path, &bytes)
     }
 }
@@ -59,13 +59,4 @@ impl Derived {
 fn write(path: &std::path::Path, bytes: &[u8]) -> PyResult<()> {
     mech::export::write_whole(path, bytes)
         .map_err(|e| PyOSError::new_err(format!("cannot write {}: {e}", path.display())))
-}
-
-/// A `lagrange.LagrangeError` with `message`.
-fn lagrange_error(py: Python<'_>, message: &str) -> PyErr {
-    let build = || -> PyResult<PyErr> {
-        let class = py.import("lagrange.errors")?.getattr("LagrangeError")?;
-        Ok(PyErr::from_value(class.call1((message,))?))
-    };
-    build().unwrap_or_else(|e| e)
 }

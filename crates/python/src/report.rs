@@ -6,7 +6,6 @@ use crate::errors::{self, guarded};
 use crate::model::Derived;
 use mech::{RunConfig, RunError, RunSettings};
 use pyo3::prelude::*;
-use std::ops::ControlFlow;
 use std::time::Instant;
 
 #[pymethods]
@@ -37,29 +36,11 @@ impl Derived {
             let config = RunConfig::from_settings(&settings).map_err(|e| crate::run::setting_error(py, "report", e))?;
             config.check().map_err(|e| usage(e.to_string()))?;
             let d = &self.d;
-            let mut rows = view::report::Recorder::new();
-            let mut first_row = None;
-            let result = py.detach(|| {
-                mech::simulate(d, &config, |row| {
-                    first_row.get_or_insert_with(|| started.elapsed().as_secs_f64());
-                    rows.push(row);
-                    ControlFlow::Continue(())
-                })
-            });
-            let (report, failure) = match result {
-                Ok(r) => (r, None),
-                Err(RunError::Failed { message, report }) => {
-                    let message = report.failure.clone().unwrap_or(message);
-                    (*report, Some(message))
-                }
-                Err(RunError::Input(e)) => return Err(self.error(py, &e)),
-                Err(e) => return Err(usage(e.to_string())),
-            };
-            let names: Vec<String> = d.coordinate_names().iter().map(|s| s.to_string()).collect();
-            let timing = view::simulate::Timing { derive_seconds: 0.0, setup_seconds: first_row };
-            let summary = view::simulate::summary_json(&report, &names, &timing, None, &crate::TERMS);
-            let data = rows.data(d, until, summary);
-            Ok((view::report::page(&data), failure))
+            match py.detach(|| view::report::run_page(d, &config, until, started, 0.0, &crate::TERMS)) {
+                Ok(page) => Ok((page.html, page.failure)),
+                Err(RunError::Input(e)) => Err(self.error(py, &e)),
+                Err(e) => Err(usage(e.to_string())),
+            }
         })
     }
 }

@@ -322,6 +322,55 @@ fn budget(per_row: usize) -> usize {
     (NUMBER_BUDGET / per_row.max(1)).clamp(MIN_ROWS, MAX_ROWS)
 }
 
+/// A model's run and its page, as [`run_page`] makes them.
+#[derive(Debug)]
+pub struct RunPage {
+    /// The page's HTML.
+    pub html: String,
+    /// Rows the run gave.
+    pub rows: usize,
+    /// Rows the page shows.
+    pub shown: usize,
+    /// Why the run stopped midway, if it did: the page shows the rows up to there.
+    pub failure: Option<String>,
+}
+
+/// Runs `d` with `config` to `until` and makes its page: what `lagrange
+/// report` and Python's `Model.report` both do. `started` is when the front
+/// end began (reading the model), `derive_seconds` how long reading and
+/// deriving took. A run that fails midway is a page with its failure; the
+/// other errors (the run's input) are the front end's to word.
+pub fn run_page(
+    d: &Derivation,
+    config: &mech::RunConfig,
+    until: f64,
+    started: std::time::Instant,
+    derive_seconds: f64,
+    terms: &crate::Terms,
+) -> Result<RunPage, mech::RunError> {
+    let mut rows = Recorder::new();
+    let mut first_row = None;
+    let result = mech::simulate(d, config, |row| {
+        first_row.get_or_insert_with(|| started.elapsed().as_secs_f64());
+        rows.push(row);
+        std::ops::ControlFlow::Continue(())
+    });
+    let (report, failure) = match result {
+        Ok(r) => (r, None),
+        Err(mech::RunError::Failed { message, report }) => {
+            let message = report.failure.clone().unwrap_or(message);
+            (*report, Some(message))
+        }
+        Err(e) => return Err(e),
+    };
+    let names: Vec<String> = d.coordinate_names().iter().map(|s| s.to_string()).collect();
+    let timing = crate::simulate::Timing { derive_seconds, setup_seconds: first_row };
+    let summary = crate::simulate::summary_json(&report, &names, &timing, None, terms);
+    let data = rows.data(d, until, summary);
+    let shown = data["time"].as_array().map_or(0, Vec::len);
+    Ok(RunPage { html: page(&data), rows: rows.len(), shown, failure })
+}
+
 /// The page: the template with the style, the script and the data inlined.
 pub fn page(data: &Value) -> String {
     let title = crate::markup::quoted(data["name"].as_str().unwrap_or("lagrange report"));

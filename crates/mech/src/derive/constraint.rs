@@ -86,6 +86,19 @@ pub struct Constraints {
     pub work_balances_h: bool,
 }
 
+impl Constraint {
+    /// What the run's `residual_NAME` column shows, as an expression: f for a
+    /// holonomic constraint, A q' + a_t for a velocity constraint. The run
+    /// computes the same numbers from its compiled geometry
+    /// (`run::constrained`'s `residuals`); the exports write this.
+    pub fn residual(&self) -> ExprId {
+        match self.kind {
+            ConstraintKind::Holonomic => self.expr,
+            ConstraintKind::Velocity => self.velocity_form,
+        }
+    }
+}
+
 impl Constraints {
     /// True when the model has no constraints.
     pub fn is_empty(&self) -> bool {

@@ -1,6 +1,6 @@
 //! The C99 file of `lagrange export --to c`: see [`to_c`].
 
-use super::{hamiltonian, residual, Read, Reads};
+use super::{hamiltonian, Read, Reads};
 use crate::derive::Derivation;
 use crate::error::ModelError;
 use sym::emit::{literal, Emit, Language};
@@ -137,7 +137,7 @@ pub fn to_c(d: &Derivation, version: &str) -> Result<String, ModelError> {
     let signature = |name: &str, with_u: bool, last: &str| format!("int {name}({}, double *{last})", arguments(with_u));
     if !constraints.is_empty() {
         let a: Vec<ExprId> = constraints.iter().flat_map(|c| c.jacobian.iter().copied()).collect();
-        let residuals: Vec<ExprId> = constraints.iter().map(residual).collect();
+        let residuals: Vec<ExprId> = constraints.iter().map(crate::Constraint::residual).collect();
         let rates: Vec<ExprId> = constraints.iter().map(|c| c.velocity_form).collect();
         let c: Vec<ExprId> = constraints.iter().map(|c| c.acceleration_rhs).collect();
         w.function(&mut out, "lagrange_constraint_residuals", false, "r", "The constraints' residuals: f(q, t) for a holonomic constraint, A q' + a_t for a velocity one (0 on the constraint)", &reads.compile(pool, &residuals)?);

@@ -277,7 +277,7 @@ impl ConstrainedSystem {
     }
 
     /// The residuals at (q, q', t): per constraint, f (holonomic) or A q' + a_t
-    /// (velocity) into `position`, and A q' + a_t into `velocity`; `scale` gets the
+    /// (velocity, the rule of [`crate::Constraint::residual`]) into `position`, and A q' + a_t into `velocity`; `scale` gets the
     /// size of each constraint's terms at position and at velocity level (at least
     /// 1), for relative tests.
     fn residuals(&mut self, t: f64, y: &[f64], position: &mut [f64], velocity: &mut [f64], scale: &mut [(f64, f64)]) {

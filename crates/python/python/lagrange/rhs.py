@@ -18,15 +18,28 @@ import numpy as np
 _F8 = np.dtype("<f8")
 
 
-class Rhs:
-    """``f(t, y) -> dy/dt``, compiled: see the module text."""
+class _Compiled:
+    """What Rhs and Jac share: the model they came from (what they pickle as:
+    the model's method ``_method`` called again), the compiled native
+    function and the state's length 2n."""
 
     __slots__ = ("_model", "_native", "dim")
+    _method = ""
 
     def __init__(self, model: Any, native: Any) -> None:
         self._model = model
         self._native = native
         self.dim: int = native.dim
+
+    def __reduce__(self) -> Tuple[Any, Tuple[Any, ...]]:
+        return (operator.methodcaller(self._method), (self._model,))
+
+
+class Rhs(_Compiled):
+    """``f(t, y) -> dy/dt``, compiled: see the module text."""
+
+    __slots__ = ()
+    _method = "rhs"
 
     def __call__(self, t: float, y: Any) -> np.ndarray:
         # Read and written as little-endian float64 bytes; the dtype object is
@@ -44,19 +57,12 @@ class Rhs:
     def __repr__(self) -> str:
         return repr(self._native)
 
-    def __reduce__(self) -> Tuple[Any, Tuple[Any, ...]]:
-        return (operator.methodcaller("rhs"), (self._model,))
 
-
-class Jac:
+class Jac(_Compiled):
     """``J(t, y) = ∂f/∂y``, shape ``(2n, 2n)``, compiled: see the module text."""
 
-    __slots__ = ("_model", "_native", "dim")
-
-    def __init__(self, model: Any, native: Any) -> None:
-        self._model = model
-        self._native = native
-        self.dim: int = native.dim
+    __slots__ = ()
+    _method = "jac"
 
     def __call__(self, t: float, y: Any) -> np.ndarray:
         y = np.asarray(y, dtype=_F8)
@@ -67,6 +73,3 @@ class Jac:
 
     def __repr__(self) -> str:
         return f"<Jacobian of the right-hand side of {self._model.name}: {self.dim} × {self.dim}>"
-
-    def __reduce__(self) -> Tuple[Any, Tuple[Any, ...]]:
-        return (operator.methodcaller("jac"), (self._model,))
