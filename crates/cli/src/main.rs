@@ -101,6 +101,14 @@ enum Command {
         /// Record the crossings of a condition as extra CSV rows without stopping, e.g. "th = 0" or "x' > 0" (repeatable).
         #[arg(long = "crossing", value_name = "CONDITION")]
         crossing: Vec<String>,
+        /// A Poincaré section: keep only the one-way crossings of a surface, e.g. "x = 0" (x increasing)
+        /// or "th < 0" (decreasing); --out writes them, --plot draws them.
+        #[arg(long, value_name = "CONDITION", conflicts_with = "crossing")]
+        section: Option<String>,
+        /// The plane the section is drawn in: two expressions, e.g. "y, p_y" (default: the first coordinate
+        /// the section's condition does not name, and its momentum).
+        #[arg(long, value_name = "X, Y", requires = "section")]
+        section_axes: Option<String>,
         /// List the integrators and exit.
         #[arg(long)]
         list_methods: bool,
@@ -199,6 +207,8 @@ fn main() -> ExitCode {
             set,
             stop_when,
             crossing,
+            section,
+            section_axes,
             list_methods: false,
         } => simulate::run(&simulate::Options {
             model: model.unwrap_or_default(),
@@ -215,6 +225,8 @@ fn main() -> ExitCode {
             set,
             stop_when,
             crossing,
+            section,
+            section_axes,
         }),
     };
     match result {

@@ -36,6 +36,10 @@ pub struct Options {
     pub set: Vec<(String, f64)>,
     pub stop_when: Vec<String>,
     pub crossing: Vec<String>,
+    /// `--section`: keep only this condition's one-way crossings.
+    pub section: Option<String>,
+    /// `--section-axes`: the plane the section is drawn in.
+    pub section_axes: Option<String>,
 }
 
 /// Lists the methods, one line each.
@@ -77,6 +81,17 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     for text in &opts.crossing {
         config.crossings.push(parse_stop(&derivation, text, "--crossing")?);
     }
+    let mut section = match &opts.section {
+        Some(text) => {
+            let condition = parse_stop(&derivation, text, "--section")?;
+            let axes = opts.section_axes.as_deref();
+            let s = mech::Section::new(&derivation, condition, axes)
+                .map_err(|e| Failure::expression("--section-axes", axes.unwrap_or_default(), e, 0))?;
+            config.crossings.push(s.condition().clone());
+            Some(s)
+        }
+        None => None,
+    };
 
     // Bad settings are reported before any file is created.
     config.check().map_err(|e| input_failure(path, &source, e))?;
@@ -84,6 +99,8 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     // Columns: t, coordinates, velocities, invariants.
     let names: Vec<String> = derivation.coordinate_names().iter().map(|s| s.to_string()).collect();
     let with_events = !opts.crossing.is_empty();
+    // A section's CSV: its points' rows, then the plane's axes where they are not columns already.
+    let mut section_columns: Vec<usize> = Vec::new();
     let inv_names: Vec<String> = mech::invariants_of(&derivation).into_iter().map(|i| i.name).collect();
     // Rigid bodies: ω and L per body as extra columns.
     let mut bodies = mech::BodyRecorder::new(&derivation);
@@ -99,6 +116,10 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     let mut created: Option<&Path> = None;
     if let Some(p) = &opts.out {
         let mut cols = mech::row_columns(&derivation);
+        if let Some(s) = &section {
+            section_columns = (0..2).filter(|&k| !cols.contains(&s.axes()[k])).collect();
+            cols.extend(section_columns.iter().map(|&k| s.axes()[k].clone()));
+        }
         if with_events {
             cols.push("event".into());
         }
@@ -118,6 +139,8 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     }
     let mut line: Vec<u8> = Vec::with_capacity(256);
     let mut crossings_seen = 0usize;
+    // The section's points, for the plot (16 bytes each: a run of 10⁷ steps crosses fewer times).
+    let mut section_points: Vec<[f64; 2]> = Vec::new();
     let mut csv_error: Option<std::io::Error> = None;
     let mut plot_data = opts.plot.is_some().then(|| view::plot::PlotKeeper::of(&derivation));
     let progress = progress_bar(until);
@@ -144,6 +167,18 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
                 }
             }
         }
+        let point = match section.as_mut() {
+            Some(s) if s.takes(row) => Some(s.point(row.t, row.q, row.qd)),
+            Some(_) => {
+                // Not a point of the section: not written, not drawn.
+                last_row = Some(row.t);
+                if let Some(pb) = &progress {
+                    pb.set_position((row.t / until * 1000.0) as u64);
+                }
+                return ControlFlow::Continue(());
+            }
+            None => None,
+        };
         if let Some(w) = csv.as_mut() {
             let r = (|| -> std::io::Result<()> {
                 line.clear();
@@ -154,6 +189,12 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
                 for &v in row.q.iter().chain(row.qd).chain(row.invariants).chain(&body_values).chain(row.constraints) {
                     line.push(b',');
                     crate::decimal::push_f64(&mut line, v);
+                }
+                if let Some(point) = point {
+                    for &k in &section_columns {
+                        line.push(b',');
+                        crate::decimal::push_f64(&mut line, point[k]);
+                    }
                 }
                 if with_events {
                     // Conditions are quoted: they may contain commas (atan2(y, x) < 0).
@@ -174,6 +215,11 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
         last_row = Some(row.t);
         if row.event.is_some() {
             crossings_seen += 1;
+        }
+        if let Some(point) = point {
+            if opts.plot.is_some() {
+                section_points.push(point);
+            }
         }
         if let Some(keeper) = plot_data.as_mut().filter(|_| row.event.is_none()) {
             keeper.push(row.t, row.q, row.qd, row.invariants);
@@ -224,18 +270,50 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
         stopped_by.map(|signal| view::simulate::Interrupted { signal: signal.name().into(), t: last_row });
 
     if let (Some(plot_path), Some(keeper)) = (&opts.plot, plot_data) {
-        let data = keeper.into_plot(&derivation.model().name, &report, &names, &inv_names);
-        crate::files::write_figure(plot_path, "the plot", view::plot::svg(&data)).map_err(Failure::run)?;
+        let figure = match &section {
+            Some(s) => {
+                let subtitle = format!(
+                    "section {} ({}), {} points, {} rtol {}",
+                    s.condition().text,
+                    if s.condition().direction == num::Direction::Falling { "decreasing" } else { "increasing" },
+                    crossings_seen,
+                    report.method.name(),
+                    num::Shortest(report.rtol)
+                );
+                view::plot::section_svg(&view::plot::SectionPlot {
+                    title: derivation.model().name.clone(),
+                    subtitle,
+                    axes: s.axes().clone(),
+                    sets: vec![view::plot::SectionSet { label: String::new(), points: section_points }],
+                })
+            }
+            None => view::plot::svg(&keeper.into_plot(&derivation.model().name, &report, &names, &inv_names)),
+        };
+        crate::files::write_figure(plot_path, "the plot", figure).map_err(Failure::run)?;
     }
     let mut text = if opts.summary_json {
         let timing = view::simulate::Timing { derive_seconds: derived, setup_seconds: first_row };
-        let value = view::simulate::summary_json(&report, &names, &timing, interrupted.as_ref(), &crate::TERMS);
+        let mut value = view::simulate::summary_json(&report, &names, &timing, interrupted.as_ref(), &crate::TERMS);
+        if let (Some(s), serde_json::Value::Object(map)) = (&section, &mut value) {
+            map.insert(
+                "section".into(),
+                serde_json::json!({"condition": s.condition().text, "axes": s.axes(), "points": crossings_seen}),
+            );
+        }
         let mut s = serde_json::to_string_pretty(&value).unwrap_or_default();
         s.push('\n');
         s
     } else {
         view::simulate::summary_text(&report, &names, &derivation, interrupted.as_ref(), &crate::TERMS)
     };
+    if let (false, Some(s)) = (opts.summary_json, &section) {
+        text.push_str(&format!(
+            "{crossings_seen} point{} on the section {}{}\n",
+            if crossings_seen == 1 { "" } else { "s" },
+            s.condition().text,
+            if opts.out.is_some() { " in the CSV" } else { " (give --out to keep them)" }
+        ));
+    }
     if !opts.summary_json && !opts.crossing.is_empty() {
         text.push_str(&format!(
             "{crossings_seen} crossing{} recorded{}\n",

@@ -68,6 +68,8 @@ mod derive;
 mod report;
 // Runs: the derivation compiled, integrated, audited.
 mod run;
+// A run seen where it crosses a surface: Poincaré sections.
+mod section;
 // Equilibria found from a start, and trusted (shared by the analyses).
 mod equilibria;
 // Analyses of a derivation, and its equations as code for other programs.
@@ -124,6 +126,7 @@ pub use run::{
     RunFailure, RunReport, RunSettings, RunWarning, SettingError, StepBudget, StopCondition, TimeScale, MAX_SAMPLES,
     STEPS_PER_TIME_SCALE,
 };
+pub use section::Section;
 pub use source::MAX_FILE_BYTES;
 pub use sweep::{
     merge, sweep, Axis, Grid, Shard, Sweep, SweepConfig, SweepError, SweepHeader, SweepSettings, SweepTable, TableRow,

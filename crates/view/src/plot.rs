@@ -21,8 +21,10 @@
 //! [`MAX_POINTS`] points per curve by keeping the extremes of each bucket, so spikes survive and files stay small.
 
 mod keeper;
+mod section;
 
 pub use keeper::PlotKeeper;
+pub use section::{section_svg, SectionPlot, SectionSet};
 
 use crate::DrawError;
 use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint};
