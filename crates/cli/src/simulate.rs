@@ -272,14 +272,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     if let (Some(plot_path), Some(keeper)) = (&opts.plot, plot_data) {
         let figure = match &section {
             Some(s) => {
-                let subtitle = format!(
-                    "section {} ({}), {} points, {} rtol {}",
-                    s.condition().text,
-                    if s.condition().direction == num::Direction::Falling { "decreasing" } else { "increasing" },
-                    crossings_seen,
-                    report.method.name(),
-                    num::Shortest(report.rtol)
-                );
+                let subtitle = view::plot::section_subtitle(s, crossings_seen, &report);
                 view::plot::section_svg(&view::plot::SectionPlot {
                     title: derivation.model().name.clone(),
                     subtitle,

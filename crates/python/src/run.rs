@@ -9,7 +9,7 @@
 use crate::errors::{self, guarded};
 use crate::model::Derived;
 use crate::signals::Signals;
-use mech::{BudgetAdvice, RunConfig, RunError, RunSettings, SettingError, StepBudget, StopCondition};
+use mech::{BudgetAdvice, RunConfig, RunError, RunSettings, Section, SettingError, StepBudget, StopCondition};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::ops::ControlFlow;
@@ -28,11 +28,15 @@ pub struct Options {
     every_step: bool,
     stop_when: Vec<String>,
     crossing: Vec<String>,
+    section: Option<String>,
+    section_axes: Option<String>,
     initial: Vec<(String, f64)>,
 }
 
 impl Derived {
-    fn config(&self, py: Python<'_>, o: &Options) -> PyResult<RunConfig> {
+    /// The run's configuration, and its Poincaré section when one is asked for
+    /// (its condition is then the configuration's one crossing).
+    fn config(&self, py: Python<'_>, o: &Options) -> PyResult<(RunConfig, Option<Section>)> {
         let settings = RunSettings {
             until: Some(o.until),
             method: o.method.as_deref(),
@@ -51,14 +55,32 @@ impl Derived {
                 })
                 .collect()
         };
-        let config = RunConfig {
+        let mut config = RunConfig {
             stop_when: conditions(&o.stop_when, "stop_when")?,
             crossings: conditions(&o.crossing, "crossing")?,
             initial: o.initial.clone(),
             ..base
         };
+        let section = match &o.section {
+            Some(_) if !o.crossing.is_empty() => {
+                let message = "section= and crossing= do not go together: a section's table holds its points only";
+                return Err(errors::plain_error(py, "simulate", message, None));
+            }
+            Some(text) => {
+                let condition = conditions(std::slice::from_ref(text), "section")?.remove(0);
+                let axes = o.section_axes.as_deref();
+                let s = Section::new(&self.d, condition, axes)
+                    .map_err(|e| errors::expression_error(py, "section_axes", axes.unwrap_or_default(), &e))?;
+                config.crossings.push(s.condition().clone());
+                Some(s)
+            }
+            None if o.section_axes.is_some() => {
+                return Err(errors::plain_error(py, "simulate", "section_axes= needs section=", None));
+            }
+            None => None,
+        };
         config.check().map_err(|e| self.refused(py, e))?;
-        Ok(config)
+        Ok((config, section))
     }
 
     /// A run that could not start, in the Python API's terms.
@@ -93,18 +115,27 @@ impl Derived {
 }
 
 /// The plot of a run, as `simulate --plot` draws it: kept decimated (at most
-/// a few thousand points) and drawn on demand.
+/// a few thousand points) and drawn on demand; a section's, its points.
 #[pyclass(module = "lagrange._native", frozen)]
 pub struct Plot {
-    data: view::plot::PlotData,
+    figure: Figure,
+}
+
+/// What a [`Plot`] draws.
+enum Figure {
+    Run(view::plot::PlotData),
+    Section(view::plot::SectionPlot),
 }
 
 #[pymethods]
 impl Plot {
     /// The plot as SVG text.
     fn svg(&self) -> PyResult<String> {
-        view::plot::svg(&self.data)
-            .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(format!("cannot draw the plot: {e}")))
+        match &self.figure {
+            Figure::Run(data) => view::plot::svg(data),
+            Figure::Section(data) => view::plot::section_svg(data),
+        }
+        .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(format!("cannot draw the plot: {e}")))
     }
 }
 
@@ -142,12 +173,19 @@ impl Derived {
 impl Derived {
     fn simulate_inner<'py>(&self, py: Python<'py>, options: Options) -> PyResult<Bound<'py, PyDict>> {
         let started = Instant::now();
-        let config = self.config(py, &options)?;
+        let (config, mut section) = self.config(py, &options)?;
         let d = &self.d;
         let names: Vec<String> = d.coordinate_names().iter().map(|s| s.to_string()).collect();
         let inv_names: Vec<String> = mech::invariants_of(d).into_iter().map(|i| i.name).collect();
         let mut bodies = mech::BodyRecorder::new(d);
-        let columns = mech::row_columns(d);
+        let mut columns = mech::row_columns(d);
+        // A section's table: its points' rows, then the plane's axes that are not columns already.
+        let mut section_columns: Vec<usize> = Vec::new();
+        if let Some(s) = &section {
+            section_columns = (0..2).filter(|&k| !columns.contains(&s.axes()[k])).collect();
+            columns.extend(section_columns.iter().map(|&k| s.axes()[k].clone()));
+        }
+        let mut section_points: Vec<[f64; 2]> = Vec::new();
         let width = columns.len();
         let mut body_values = vec![0.0; bodies.as_ref().map_or(0, |b| b.columns().len())];
 
@@ -164,7 +202,12 @@ impl Derived {
                     interrupt = Some(e);
                     return ControlFlow::Break(());
                 }
-                if let Some(label) = row.event {
+                let point = match section.as_mut() {
+                    Some(s) if s.takes(row) => Some(s.point(row.t, row.q, row.qd)),
+                    Some(_) => return ControlFlow::Continue(()),
+                    None => None,
+                };
+                if let (Some(label), None) = (row.event, point) {
                     events.push((data.len() / width, label.to_string()));
                 }
                 if row.event.is_none() {
@@ -177,6 +220,10 @@ impl Derived {
                 data.extend(
                     row.q.iter().chain(row.qd).chain(row.invariants).chain(&body_values).chain(row.constraints),
                 );
+                if let Some(point) = point {
+                    data.extend(section_columns.iter().map(|&k| point[k]));
+                    section_points.push(point);
+                }
                 ControlFlow::Continue(())
             })
         });
@@ -197,9 +244,31 @@ impl Derived {
         });
         // The model was derived when it was loaded, not as part of this call.
         let timing = view::simulate::Timing { derive_seconds: 0.0, setup_seconds: first_row };
-        let summary = view::simulate::summary_json(&report, &names, &timing, interrupted.as_ref(), &crate::TERMS);
-        let text = view::simulate::summary_text(&report, &names, d, interrupted.as_ref(), &crate::TERMS);
-        let plot = Plot { data: plot.into_plot(&d.model().name, &report, &names, &inv_names) };
+        let mut summary = view::simulate::summary_json(&report, &names, &timing, interrupted.as_ref(), &crate::TERMS);
+        let mut text = view::simulate::summary_text(&report, &names, d, interrupted.as_ref(), &crate::TERMS);
+        let figure = match &section {
+            Some(s) => {
+                let points = section_points.len();
+                if let serde_json::Value::Object(map) = &mut summary {
+                    let value =
+                        serde_json::json!({"condition": s.condition().text, "axes": s.axes(), "points": points});
+                    map.insert("section".into(), value);
+                }
+                text.push_str(&format!(
+                    "{points} point{} on the section {}\n",
+                    if points == 1 { "" } else { "s" },
+                    s.condition().text
+                ));
+                Figure::Section(view::plot::SectionPlot {
+                    title: d.model().name.clone(),
+                    subtitle: view::plot::section_subtitle(s, points, &report),
+                    axes: s.axes().clone(),
+                    sets: vec![view::plot::SectionSet { label: String::new(), points: section_points }],
+                })
+            }
+            None => Figure::Run(plot.into_plot(&d.model().name, &report, &names, &inv_names)),
+        };
+        let plot = Plot { figure };
 
         let out = PyDict::new(py);
         out.set_item("columns", columns)?;

@@ -24,7 +24,7 @@ mod keeper;
 mod section;
 
 pub use keeper::PlotKeeper;
-pub use section::{section_svg, SectionPlot, SectionSet};
+pub use section::{section_subtitle, section_svg, SectionPlot, SectionSet};
 
 use crate::DrawError;
 use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint};

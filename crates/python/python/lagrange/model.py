@@ -173,6 +173,8 @@ class Model:
         stop_when: Union[str, Iterable[str], None] = None,
         crossing: Union[str, Iterable[str], None] = None,
         initial: Optional[Mapping[str, float]] = None,
+        section: Optional[str] = None,
+        section_axes: Optional[str] = None,
     ) -> Run:
         """Integrates the motion from ``[initial]`` to ``until``, as ``lagrange
         simulate`` does (the same default method, tolerances and audit).
@@ -185,7 +187,12 @@ class Model:
         (``"x < 0"``); ``crossing``: conditions whose crossings are recorded
         as extra rows (``run.events``); ``initial``: values that replace
         ``[initial]``'s for this run (``{"a": 1.0, "a'": 0.0}``, or ``a_dot=``
-        spelled as a key).
+        spelled as a key); ``section``: a Poincaré section (``"x = 0"``: the
+        crossings where x increases through 0; ``"x < 0"``: decreasing), whose
+        points are then the run's only rows, drawn by its plot in the plane
+        ``section_axes`` (``"y, p_y"``: two expressions, ``p_NAME`` the
+        momentum; default the first coordinate the condition does not name
+        and its momentum), with ``run.section`` the points in that plane.
 
         The GIL is released while it runs. Ctrl-C stops it between rows and
         raises :class:`lagrange.Interrupted` (a KeyboardInterrupt) holding the
@@ -202,6 +209,8 @@ class Model:
             "every_step": bool(every_step),
             "stop_when": _strings(stop_when),
             "crossing": _strings(crossing),
+            "section": None if section is None else _string("section", section),
+            "section_axes": None if section_axes is None else _string("section_axes", section_axes),
             "initial": [(_name(k), float(v)) for k, v in (initial or {}).items()],
         })
         run = Run(self, raw)
@@ -382,6 +391,13 @@ def _strings(value: Union[str, Iterable[str], None]) -> List[str]:
         return [str(v) for v in value]
     except TypeError:
         raise TypeError(f"expected a condition or a list of them (strings), not {value!r}") from None
+
+
+def _string(what: str, value: Any) -> str:
+    """A text of the caller's (a condition, axes), refused with its name where it is not one."""
+    if not isinstance(value, str):
+        raise TypeError(f"{what} must be a string, not {value!r}")
+    return value
 
 
 def _count(what: str, value: Any) -> Optional[int]:

@@ -3,7 +3,7 @@
 ``run.t`` (rows), ``run.q`` and ``run.qd`` (rows × coordinates), ``run.columns``
 and ``run.data`` (the CSV's table), ``run.invariants`` (name → array),
 ``run.multipliers`` (constraint name → λ along the run), ``run.events`` (row,
-condition) for crossings, ``run.summary`` (the ``lagrange.simulate/1`` dict),
+condition) for crossings, ``run.section`` (a Poincaré section's points), ``run.summary`` (the ``lagrange.simulate/1`` dict),
 ``run.to_pandas()``. ``str(run)`` is the CLI's summary; in Jupyter a run
 displays as the plot ``simulate --plot`` draws.
 """
@@ -94,6 +94,16 @@ class Run:
     def constraint_forces(self) -> Dict[str, np.ndarray]:
         """|Aᵀλ| per constraint along the run."""
         return {c[len("force_"):]: self.column(c) for c in self.columns if c.startswith("force_")}
+
+    @property
+    def section(self) -> Optional[np.ndarray]:
+        """A Poincaré section's points in its plane (``simulate(section=...)``),
+        rows × 2, the axes named by ``summary["section"]["axes"]``; None for
+        a run without a section."""
+        info = self.summary.get("section")
+        if info is None:
+            return None
+        return np.column_stack([self.column(name) for name in info["axes"]])
 
     @property
     def final(self) -> Dict[str, float]:

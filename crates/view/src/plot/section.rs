@@ -29,6 +29,21 @@ pub struct SectionPlot {
     pub sets: Vec<SectionSet>,
 }
 
+/// The figure's subtitle for `points` points of `section` in the run `report`:
+/// the surface and the way it is crossed, the count, the method.
+pub fn section_subtitle(section: &mech::Section, points: usize, report: &mech::RunReport) -> String {
+    let condition = section.condition();
+    format!(
+        "section {} ({}), {} point{}, {} rtol {}",
+        condition.text,
+        if condition.direction == num::Direction::Falling { "decreasing" } else { "increasing" },
+        points,
+        if points == 1 { "" } else { "s" },
+        report.method.name(),
+        num::Shortest(report.rtol)
+    )
+}
+
 const SECTION_WIDTH: u32 = 1000;
 const SECTION_HEIGHT: u32 = 860;
 /// Sub-pixel cells per figure pixel in which one point per set is drawn.
