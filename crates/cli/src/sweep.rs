@@ -16,6 +16,7 @@
 //! whole rows, and appends the rest.
 
 mod resume;
+mod section;
 
 use crate::diagnostics::Failure;
 use crate::interrupt;
@@ -75,6 +76,17 @@ pub struct Args {
     /// Join the shard CSV files given in place of MODEL into OUT.csv.
     #[arg(long, value_name = "OUT.csv", conflicts_with_all = ["until", "grid", "set", "method", "rtol", "atol", "out", "shard", "threads", "no_lyapunov", "resume"])]
     pub merge: Option<PathBuf>,
+    /// Poincaré sections of every run on one plot: the one-way crossings of a surface, e.g. "x = 0"; the CSV
+    /// holds the points (see `simulate --section`).
+    #[arg(long, value_name = "CONDITION", conflicts_with_all = ["merge", "heatmap", "shard", "resume", "no_lyapunov"])]
+    pub section: Option<String>,
+    /// The plane the sections are drawn in: two expressions, e.g. "y, p_y" (default: the first coordinate the
+    /// condition does not name, and its momentum).
+    #[arg(long, value_name = "X, Y", requires = "section")]
+    pub section_axes: Option<String>,
+    /// Draw the sections, a colour per run, to this SVG file.
+    #[arg(long, value_name = "FILE.svg", requires = "section")]
+    pub plot: Option<PathBuf>,
 }
 
 /// Most worker threads a sweep starts: far above any machine's cores, far
@@ -88,7 +100,8 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     }
     interrupt::install();
     let inputs: Vec<&Path> = args.files.iter().map(PathBuf::as_path).collect();
-    crate::files::refuse_overwrite(&inputs, &[args.out.as_deref(), args.heatmap.as_deref()]).map_err(Failure::usage)?;
+    crate::files::refuse_overwrite(&inputs, &[args.out.as_deref(), args.heatmap.as_deref(), args.plot.as_deref()])
+        .map_err(Failure::usage)?;
     let [path] = args.files.as_slice() else {
         return Err(Failure::usage(format!(
             "sweep takes one model file, not {} files (to join shards: sweep --merge OUT.csv SHARD.csv...)",
@@ -123,9 +136,37 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         SettingError::UnknownMethod(message) => Failure::usage(message),
         SettingError::TooFewSamples { .. } => Failure::usage("--samples needs at least 2 rows (both ends)"),
     })?;
-    let (source, derivation) = crate::derive_file(path, &args.set, &[args.out.as_deref(), args.heatmap.as_deref()])?;
+    let (source, derivation) =
+        crate::derive_file(path, &args.set, &[args.out.as_deref(), args.heatmap.as_deref(), args.plot.as_deref()])?;
     derivation.reject_constraints("`lagrange sweep`").map_err(|e| Failure::model(path, &source, e))?;
     let grid = Grid::parse(args.grid.as_deref().unwrap_or_default(), derivation.model()).map_err(usage)?;
+    if let Some(condition) = &args.section {
+        // Each run is simulate's, at the sweep's tolerance.
+        let settings = mech::RunSettings {
+            until: Some(until),
+            method: args.method.as_deref(),
+            rtol: Some(args.rtol.unwrap_or(mech::DEFAULT_RTOL)),
+            atol: args.atol,
+            dt: None,
+            samples: Some(2),
+            every_step: false,
+        };
+        let run_config = crate::simulate::run_config(path, &settings)?;
+        run_config.check().map_err(|e| crate::simulate::input_failure(path, &source, e))?;
+        let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+        let options = section::Options {
+            path,
+            source: &source,
+            set: &args.set,
+            config: run_config,
+            condition,
+            axes: args.section_axes.as_deref(),
+            threads,
+            out: args.out.as_deref(),
+            plot: args.plot.as_deref(),
+        };
+        return section::run(&derivation, &grid, &options);
+    }
     let sweep = mech::Sweep::new(&derivation, &grid, &config).map_err(|e| match e {
         SweepError::Model(e) => Failure::model(path, &source, *e),
         other => usage(other),

@@ -135,3 +135,93 @@ fn bad_sections_are_refused_with_exit_2() {
         assert!(r.stderr.contains(says), "{says}: {}", r.describe());
     }
 }
+
+#[test]
+fn a_sweep_of_sections_is_each_runs_simulate_section_in_grid_order() {
+    // A parameter grid (the start follows from E and y0) and a grid of initial values.
+    for (grid, set, one) in [
+        ("y0=0.05;-0.1;0.2", "E=0.125", Some(["--set", "E=0.125", "--set", "y0=-0.1"])),
+        // y' overrides the start after x' followed from E: no simulate command runs the same.
+        ("y'=0:0.2:3", "E=0.0833", None),
+    ] {
+        let out = TempFile::new("section-sweep", "csv");
+        let svg = TempFile::new("section-sweep", "svg");
+        let r = ok(&[
+            "sweep",
+            "examples/henon_heiles.toml",
+            "--until",
+            "200",
+            "--grid",
+            grid,
+            "--set",
+            set,
+            "--section",
+            "x = 0",
+            "--threads",
+            "2",
+            "--out",
+            out.path(),
+            "--plot",
+            svg.path(),
+        ]);
+        assert!(r.stderr.contains("3 runs, 0 failed, on the section x = 0"), "{}", r.describe());
+        let sweep = Csv::read(out.path());
+        let runs = sweep.column("run");
+        assert!(runs.windows(2).all(|w| w[0] <= w[1]), "grid order");
+        assert_eq!(runs.iter().fold(0.0f64, |m, &r| m.max(r)), 2.0);
+        assert!(sweep.column("x").iter().all(|x| x.abs() < 1e-10));
+        let figure = std::fs::read_to_string(svg.path()).unwrap();
+        assert!(figure.contains("3 runs"), "{}", &figure[..300]);
+        let Some(one) = one else { continue };
+        // Run 1 against simulate --section at the sweep's tolerance, digit for digit.
+        let single = TempFile::new("section-sweep-one", "csv");
+        let mut args = vec!["simulate", "examples/henon_heiles.toml", "--until", "200", "--rtol", "1e-10"];
+        args.extend(one);
+        args.extend(["--section", "x = 0", "--out", single.path()]);
+        ok(&args);
+        let single = Csv::read(single.path());
+        let rows: Vec<&Vec<f64>> = sweep.rows.iter().filter(|row| row[0] == 1.0).collect();
+        assert_eq!(rows.len(), single.rows.len());
+        for (a, b) in rows.iter().zip(&single.rows) {
+            assert_eq!(&a[2..], &b[..], "the sweep's point is simulate's");
+        }
+        assert!(figure.contains("y0 = -0.1"));
+    }
+}
+
+#[test]
+fn a_run_that_cannot_start_fails_the_sweep_and_the_others_are_kept() {
+    let out = TempFile::new("section-sweep-fail", "csv");
+    // At E = 1/8 the start y0 = 0.8 has no real x' (2E − y0² + 2y0³/3 < 0).
+    let r = lagrange(&[
+        "sweep",
+        "examples/henon_heiles.toml",
+        "--until",
+        "100",
+        "--grid",
+        "y0=0.1;0.8",
+        "--set",
+        "E=0.125",
+        "--section",
+        "x = 0",
+        "--out",
+        out.path(),
+    ]);
+    assert_eq!(r.code, Some(1), "{}", r.describe());
+    assert!(r.stderr.contains("run 1 (y0 = 0.8)") && r.stderr.contains("1 of 2 runs failed"), "{}", r.describe());
+    let csv = Csv::read(out.path());
+    assert!(!csv.rows.is_empty() && csv.rows.iter().all(|row| row[0] == 0.0));
+}
+
+#[test]
+fn sweep_section_options_that_do_not_go_together_exit_2() {
+    for extra in [["--heatmap", "h.svg"], ["--shard", "0/2"], ["--plot", "p.svg"]] {
+        let mut args = vec!["sweep", "examples/henon_heiles.toml", "--until", "1", "--grid", "y0=0.1;0.2"];
+        if extra[0] != "--plot" {
+            args.extend(["--section", "x = 0"]);
+        }
+        args.extend(extra);
+        let r = lagrange(&args);
+        assert_eq!(r.code, Some(2), "{}", r.describe());
+    }
+}
