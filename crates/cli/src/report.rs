@@ -27,6 +27,12 @@ pub struct Args {
     /// Relative tolerance.
     #[arg(long, allow_negative_numbers = true)]
     pub rtol: Option<f64>,
+    /// A Poincaré section drawn among the analyses: the one-way crossings of a surface, e.g. "x = 0".
+    #[arg(long, value_name = "CONDITION")]
+    pub section: Option<String>,
+    /// The plane the section is drawn in: two expressions, e.g. "y, p_y".
+    #[arg(long, value_name = "X, Y", requires = "section")]
+    pub section_axes: Option<String>,
     /// Override a parameter: --set g=1.62 (repeatable).
     #[arg(long = "set", value_name = "NAME=VALUE", value_parser = crate::parse_set)]
     pub set: Vec<(String, f64)>,
@@ -48,10 +54,22 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         samples: Some(args.samples),
         every_step: false,
     };
-    let config = crate::simulate::run_config(path, &settings)?;
+    let mut config = crate::simulate::run_config(path, &settings)?;
+    let mut section = match &args.section {
+        Some(text) => {
+            let condition = mech::StopCondition::parse(&d, text, "--section")
+                .map_err(|e| Failure::expression("--section", text, e, 0))?;
+            let axes = args.section_axes.as_deref();
+            let s = mech::Section::new(&d, condition, axes)
+                .map_err(|e| Failure::expression("--section-axes", axes.unwrap_or_default(), e, 0))?;
+            config.crossings.push(s.condition().clone());
+            Some(s)
+        }
+        None => None,
+    };
     config.check().map_err(|e| crate::simulate::input_failure(path, &source, e))?;
 
-    let page = view::report::run_page(&d, &config, args.until, started, derived, &crate::TERMS)
+    let page = view::report::run_page(&d, &config, args.until, started, derived, &crate::TERMS, section.as_mut())
         .map_err(|e| crate::simulate::input_failure(path, &source, e))?;
     crate::files::write_whole(&args.out, page.html.as_bytes())
         .map_err(|e| Failure::run(format!("cannot write the report {}: {e}", args.out.display())))?;

@@ -242,3 +242,31 @@ fn toml_string(s: &str) -> String {
     out.push('"');
     out
 }
+
+#[test]
+fn a_section_in_the_report_is_simulate_sections_points() {
+    let page = scratch("report-section", "hh.html");
+    let csv = scratch("report-section", "hh.csv");
+    // The same rows on both sides (the samples are states the steps land on).
+    let common =
+        ["examples/henon_heiles.toml", "--until", "300", "--samples", "2001", "--set", "E=0.125", "--section", "x = 0"];
+    let mut args = vec!["report"];
+    args.extend(common);
+    args.extend(["-o", page.to_str().unwrap()]);
+    ok(&args);
+    let mut args = vec!["simulate"];
+    args.extend(common);
+    args.extend(["--out", csv.to_str().unwrap()]);
+    ok(&args);
+    let data = data(&page);
+    let section = &data["analyses"]["section"];
+    assert_eq!(section["condition"], "x = 0");
+    assert_eq!(section["axes"], serde_json::json!(["y", "p_y"]));
+    let csv = Csv::read(csv.to_str().unwrap());
+    assert_eq!(section["points"].as_u64(), Some(csv.rows.len() as u64));
+    assert_eq!(numbers(&section["t"]), csv.column("t"));
+    assert_eq!(numbers(&section["x"]), csv.column("y"));
+    assert_eq!(numbers(&section["y"]), csv.column("p_y"));
+    // The section's points are not the run's events.
+    assert!(data["events"].as_array().is_none_or(|e| e.is_empty()), "{}", data["events"]);
+}

@@ -12,7 +12,8 @@ use std::time::Instant;
 impl Derived {
     /// The page and, where the run failed midway, why (the page shows the
     /// rows up to there).
-    #[pyo3(signature = (until, samples=2001, method=None, rtol=None))]
+    #[pyo3(signature = (until, samples=2001, method=None, rtol=None, section=None, section_axes=None))]
+    #[allow(clippy::too_many_arguments)]
     fn report(
         &self,
         py: Python<'_>,
@@ -20,6 +21,8 @@ impl Derived {
         samples: usize,
         method: Option<String>,
         rtol: Option<f64>,
+        section: Option<String>,
+        section_axes: Option<String>,
     ) -> PyResult<(String, Option<String>)> {
         guarded("report", || {
             let started = Instant::now();
@@ -33,10 +36,26 @@ impl Derived {
                 every_step: false,
             };
             let usage = |message: String| errors::plain_error(py, "report", &message, None);
-            let config = RunConfig::from_settings(&settings).map_err(|e| crate::run::setting_error(py, "report", e))?;
-            config.check().map_err(|e| usage(e.to_string()))?;
+            let mut config =
+                RunConfig::from_settings(&settings).map_err(|e| crate::run::setting_error(py, "report", e))?;
             let d = &self.d;
-            match py.detach(|| view::report::run_page(d, &config, until, started, 0.0, &crate::TERMS)) {
+            let mut section = match &section {
+                Some(text) => {
+                    let condition = mech::StopCondition::parse(d, text, "section")
+                        .map_err(|e| errors::expression_error(py, "section", text, &e))?;
+                    let axes = section_axes.as_deref();
+                    let s = mech::Section::new(d, condition, axes)
+                        .map_err(|e| errors::expression_error(py, "section_axes", axes.unwrap_or_default(), &e))?;
+                    config.crossings.push(s.condition().clone());
+                    Some(s)
+                }
+                None if section_axes.is_some() => return Err(usage("section_axes= needs section=".into())),
+                None => None,
+            };
+            config.check().map_err(|e| usage(e.to_string()))?;
+            let page =
+                py.detach(|| view::report::run_page(d, &config, until, started, 0.0, &crate::TERMS, section.as_mut()));
+            match page {
                 Ok(page) => Ok((page.html, page.failure)),
                 Err(RunError::Input(e)) => Err(self.error(py, &e)),
                 Err(e) => Err(usage(e.to_string())),

@@ -74,3 +74,19 @@ def test_bad_sections_raise_naming_the_argument(kwargs, says) -> None:
 def test_a_section_that_is_not_a_string_is_refused() -> None:
     with pytest.raises(TypeError, match="section must be a string"):
         lagrange.load(HH).simulate(until=1, section=0.0)  # type: ignore[arg-type]
+
+
+def test_the_report_draws_the_section_among_the_analyses(tmp_path: Path) -> None:
+    import json
+    import re
+
+    page = lagrange.load(HH, set={"E": 0.125}).report(until=300, section="x = 0", path=tmp_path / "hh.html")
+    html = (tmp_path / "hh.html").read_text()
+    body = re.search(r'<script type="application/json" id="lagrange-data">(.*?)</script>', html, re.S)
+    assert body is not None and page.failure is None
+    section = json.loads(body.group(1).replace("<\\/", "</"))["analyses"]["section"]
+    run = lagrange.load(HH, set={"E": 0.125}).simulate(until=300, samples=2001, section="x = 0")
+    assert section["points"] == len(run) and section["axes"] == ["y", "p_y"]
+    assert np.array_equal(np.array(section["x"]), run["y"]) and np.array_equal(np.array(section["y"]), run["p_y"])
+    with pytest.raises(lagrange.ModelError, match="needs section="):
+        lagrange.load(HH).report(until=1, section_axes="y, p_y")

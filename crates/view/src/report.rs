@@ -335,11 +335,17 @@ pub struct RunPage {
     pub failure: Option<String>,
 }
 
+/// Most points of a Poincaré section a page holds: beyond, every k-th.
+const MAX_SECTION_POINTS: usize = 20_000;
+
 /// Runs `d` with `config` to `until` and makes its page: what `lagrange
 /// report` and Python's `Model.report` both do. `started` is when the front
 /// end began (reading the model), `derive_seconds` how long reading and
-/// deriving took. A run that fails midway is a page with its failure; the
-/// other errors (the run's input) are the front end's to word.
+/// deriving took. With a Poincaré `section` (whose condition the caller has
+/// made one of `config`'s crossings), its points are drawn among the analyses
+/// rather than listed as events. A run that fails midway is a page with its
+/// failure; the other errors (the run's input) are the front end's to word.
+#[allow(clippy::too_many_arguments)]
 pub fn run_page(
     d: &Derivation,
     config: &mech::RunConfig,
@@ -347,12 +353,20 @@ pub fn run_page(
     started: std::time::Instant,
     derive_seconds: f64,
     terms: &crate::Terms,
+    mut section: Option<&mut mech::Section>,
 ) -> Result<RunPage, mech::RunError> {
     let mut rows = Recorder::new();
     let mut first_row = None;
+    let mut points: Vec<[f64; 3]> = Vec::new();
     let result = mech::simulate(d, config, |row| {
         first_row.get_or_insert_with(|| started.elapsed().as_secs_f64());
-        rows.push(row);
+        match section.as_deref_mut() {
+            Some(s) if s.takes(row) => {
+                let [x, y] = s.point(row.t, row.q, row.qd);
+                points.push([row.t, x, y]);
+            }
+            _ => rows.push(row),
+        }
         std::ops::ControlFlow::Continue(())
     });
     let (report, failure) = match result {
@@ -366,9 +380,29 @@ pub fn run_page(
     let names: Vec<String> = d.coordinate_names().iter().map(|s| s.to_string()).collect();
     let timing = crate::simulate::Timing { derive_seconds, setup_seconds: first_row };
     let summary = crate::simulate::summary_json(&report, &names, &timing, None, terms);
-    let data = rows.data(d, until, summary);
+    let mut data = rows.data(d, until, summary);
+    if let (Some(s), Some(analyses)) = (section, data["analyses"].as_object_mut()) {
+        analyses.insert("section".into(), section_data(s, &points));
+    }
     let shown = data["time"].as_array().map_or(0, Vec::len);
     Ok(RunPage { html: page(&data), rows: rows.len(), shown, failure })
+}
+
+/// A section's points for the page: its condition and axes, the time and
+/// plane coordinates of each point (every k-th beyond [`MAX_SECTION_POINTS`]).
+fn section_data(s: &mech::Section, points: &[[f64; 3]]) -> Value {
+    let stride = points.len().div_ceil(MAX_SECTION_POINTS).max(1);
+    let kept: Vec<&[f64; 3]> = points.iter().step_by(stride).collect();
+    let column = |k: usize| -> Vec<f64> { kept.iter().map(|p| p[k]).collect() };
+    json!({
+        "condition": s.condition().text,
+        "falling": s.condition().direction == num::Direction::Falling,
+        "axes": s.axes(),
+        "points": points.len(),
+        "t": column(0),
+        "x": column(1),
+        "y": column(2),
+    })
 }
 
 /// The page: the template with the style, the script and the data inlined.

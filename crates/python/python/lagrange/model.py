@@ -275,15 +275,21 @@ class Model:
         samples: int = 2001,
         method: Optional[str] = None,
         rtol: Optional[float] = None,
+        section: Optional[str] = None,
+        section_axes: Optional[str] = None,
     ) -> "Page":
         """The page ``lagrange report`` writes: the derivation typeset, the
         mechanism animated, the run to ``until`` plotted, the audit and the
         analyses that apply, in one HTML file that opens offline. It shows in
         a notebook (``_repr_html_``); ``path`` (or ``page.save(path)``) writes
         it. A run that fails midway gives the page of the rows up to there,
-        with the reason in ``page.failure`` and a warning."""
-        html, failure = self._native.report(float(until), _count("samples", samples) or 2001, method,
-                                            None if rtol is None else float(rtol))
+        with the reason in ``page.failure`` and a warning. ``section`` (and
+        ``section_axes``) adds a Poincaré section to the analyses, as in
+        :meth:`simulate`."""
+        html, failure = self._native.report(
+            float(until), _count("samples", samples) or 2001, method, None if rtol is None else float(rtol),
+            None if section is None else _string("section", section),
+            None if section_axes is None else _string("section_axes", section_axes))
         page = Page(html, failure)
         if failure is not None:
             import warnings

@@ -764,6 +764,16 @@
 
   /** One curve, broken where a value is missing or where `breaks(a, b)` says (an angle's wrap). */
   function drawCurve(context, frame, s) {
+    if (s.dots) {
+      // Points, not a curve: a Poincaré section.
+      context.save();
+      context.fillStyle = s.colour;
+      for (let i = 0; i < s.xs.length; i++) {
+        if (Number.isFinite(s.xs[i]) && Number.isFinite(s.ys[i])) context.fillRect(frame.px(s.xs[i]) - 1, frame.py(s.ys[i]) - 1, 2, 2);
+      }
+      context.restore();
+      return;
+    }
     context.save();
     context.strokeStyle = s.colour;
     context.lineWidth = s.width || 1.4;
@@ -1118,11 +1128,12 @@
 
   function setUpAnalyses() {
     const holder = document.getElementById('analyses-content');
-    const { modes, orbit, top } = data.analyses;
+    const { modes, orbit, top, section } = data.analyses;
     let any = false;
     if (modes && Array.isArray(modes.frequencies) && modes.frequencies.length) any = setUpModes(holder, modes) || any;
     if (orbit && typeof orbit === 'object') any = setUpOrbit(holder, orbit) || any;
     if (top && typeof top === 'object') any = setUpTop(holder, top) || any;
+    if (section && typeof section === 'object') any = setUpSection(holder, section) || any;
     document.getElementById('analyses').hidden = !any;
   }
 
@@ -1130,6 +1141,44 @@
     const h = document.createElement('h3');
     h.textContent = text;
     parent.append(h);
+  }
+
+  /**
+   * A Poincaré section (`report --section`): its points in the plane; the point last
+   * reached at the shown time is marked, and hovering a point tells when it was reached.
+   */
+  function setUpSection(holder, section) {
+    const numbers = (value) => (Array.isArray(value) ? value.map((v) => (Number.isFinite(v) ? v : NaN)) : []);
+    const [ts, xs, ys] = [numbers(section.t), numbers(section.x), numbers(section.y)];
+    const axes = Array.isArray(section.axes) && section.axes.length === 2 ? section.axes.map(String) : ['x', 'y'];
+    const total = Number.isInteger(section.points) ? section.points : xs.length;
+    const way = section.falling ? 'decreasing' : 'increasing';
+    heading(holder, `Poincaré section ${String(section.condition || '')} (${way})`);
+    const grid = document.createElement('div');
+    grid.className = 'analysis-grid';
+    holder.append(grid);
+    if (!xs.length || xs.length !== ys.length || xs.length !== ts.length) {
+      const note = document.createElement('p');
+      note.className = 'note';
+      note.textContent = 'The run did not cross the section.';
+      holder.append(note);
+      return true;
+    }
+    const shown = xs.length < total ? `, every ${Math.ceil(total / xs.length)}th shown` : '';
+    makePlot(grid, {
+      title: `${total} points in the plane (${axes[0]}, ${axes[1]})${shown}`,
+      xLabel: axes[0],
+      yLabel: axes[1],
+      hover: 'nearest',
+      series: () => [{ label: 'points', colour: PALETTE[0], xs, ys, dots: true }],
+      describe: (s, i) => [`t = ${fmt(ts[i], 6)}`, `${axes[0]} = ${fmt(xs[i], 6)}`, `${axes[1]} = ${fmt(ys[i], 6)}`],
+      marker: () => {
+        let k = -1;
+        while (k + 1 < ts.length && ts[k + 1] <= clock.t) k++;
+        return { dots: k < 0 ? [] : [{ x: xs[k], y: ys[k], colour: PALETTE[1] }] };
+      },
+    });
+    return true;
   }
 
   /** How a mode's shape reads: (q1, q2) ∝ (v1, v2). */
