@@ -289,6 +289,7 @@ impl Derivation {
                 &motion,
                 &ext,
                 &constraints,
+                &energies.bodies,
                 &cyclic.indices,
                 &conserved,
                 &is_var,

@@ -15,7 +15,7 @@
 //! symmetries (the Runge–Lenz vector) are not searched for.
 
 use super::constraint::Constraints;
-use super::{decide, Conserved, ConservedReason, External, Motion, Symbols};
+use super::{decide, BodyMotion, Conserved, ConservedReason, External, Motion, Symbols};
 use crate::derive::verdict::{Generator, GeneratorKind};
 use crate::model::Model;
 use crate::probe::{Decision, Subst};
@@ -48,6 +48,7 @@ pub(super) fn symmetries(
     m: &Motion,
     ext: &External,
     constraints: &Constraints,
+    bodies: &[BodyMotion],
     cyclic: &[usize],
     existing: &[Conserved],
     is_var: &dyn Fn(Symbol) -> bool,
@@ -56,7 +57,7 @@ pub(super) fn symmetries(
     if n == 0 || n > MAX_COORDINATES {
         return Vec::new();
     }
-    let mut candidates = rigid_candidates(pool, model, s, is_var);
+    let mut candidates = rigid_candidates(pool, model, s, bodies, is_var);
     candidates.extend(shift_candidates(pool, model, s, m, cyclic));
     let mut found: Vec<Conserved> = Vec::new();
     // Coordinates whose own shift is a symmetry: a pair with one of them adds
@@ -83,7 +84,13 @@ pub(super) fn symmetries(
                 .filter(|&j| !pool.is_zero(c.xi[j]))
                 .map(|j| (s.names[j].clone(), pool.display(c.xi[j]).to_string()))
                 .collect(),
-            bodies: !model.bodies.is_empty(),
+            moved: match (model.particles.is_empty(), model.bodies.len()) {
+                (false, 0) => "every particle",
+                (false, _) => "every particle and body",
+                (true, 1) => "the body",
+                (true, _) => "every body",
+            }
+            .to_string(),
         };
         if let [i] = c.coordinates[..] {
             shifted.push(i);
@@ -108,14 +115,21 @@ const AXES: [&str; 3] = ["x", "y", "z"];
 
 /// Translations and rotations of every particle and body, in the model's
 /// coordinates: the solutions of the kinematics' linear system, where it has
-/// one. Bodies take part in translations (their angles unchanged), not yet in
-/// rotations; a body placed on another body keeps the search to shifts.
-fn rigid_candidates(pool: &mut Pool, model: &Model, s: &Symbols, is_var: &dyn Fn(Symbol) -> bool) -> Vec<Candidate> {
-    let n = s.n();
+/// one. A body's reference point moves as a particle does, and its turn is
+/// its angular velocity with ξ for q': ω(ξ) = 0 for a translation, and for a
+/// rotation about e, ω(ξ) = e (body components: e's along the body axes). A
+/// body placed on another body keeps the search to shifts.
+fn rigid_candidates(
+    pool: &mut Pool,
+    model: &Model,
+    s: &Symbols,
+    bodies: &[BodyMotion],
+    is_var: &dyn Fn(Symbol) -> bool,
+) -> Vec<Candidate> {
     if model.particles.is_empty() && model.bodies.is_empty() {
         return Vec::new();
     }
-    if model.bodies.iter().any(|b| b.parent.is_some()) {
+    if model.bodies.iter().any(|b| b.parent.is_some()) || bodies.len() != model.bodies.len() {
         return Vec::new();
     }
     // All positions in one dimension: 2 for the plane, 3 for space.
@@ -126,10 +140,9 @@ fn rigid_candidates(pool: &mut Pool, model: &Model, s: &Symbols, is_var: &dyn Fn
     }
     // The points that move: particles' and bodies' reference points.
     let mut points: Vec<Vec<ExprId>> = model.particles.iter().map(|p| p.position.clone()).collect();
-    points.extend(model.bodies.iter().map(|b| b.position[..dim].to_vec()));
-    let angle_rows: Vec<usize> = model.bodies.iter().flat_map(|b| b.orientation.angles()).collect();
-    // The right-hand sides δr: translations along each axis, rotations about
-    // z (in the plane) or about each axis (in space).
+    points.extend(bodies.iter().map(|b| b.position[..dim].to_vec()));
+    // The right-hand sides δr (and each body's ω): translations along each
+    // axis, rotations about z (in the plane) or about each axis (in space).
     let zero = pool.zero();
     let one = pool.one();
     let mut rhs: Vec<(GeneratorKind, usize, Vec<ExprId>)> = Vec::new();
@@ -138,24 +151,24 @@ fn rigid_candidates(pool: &mut Pool, model: &Model, s: &Symbols, is_var: &dyn Fn
         for _ in &points {
             col.extend((0..dim).map(|c| if c == k { one } else { zero }));
         }
-        col.extend(angle_rows.iter().map(|_| zero));
+        col.extend(bodies.iter().flat_map(|_| [zero; 3]));
         rhs.push((GeneratorKind::Translation, k, col));
     }
-    if model.bodies.is_empty() {
-        let axes: &[usize] = if dim == 2 { &[2] } else { &[0, 1, 2] };
-        for &k in axes {
-            let mut col = Vec::new();
-            for r in &points {
-                let at = |c: usize| if c < dim { r[c] } else { zero };
-                // e_k × r.
-                let (a, b) = ((k + 1) % 3, (k + 2) % 3);
-                let mut d = [zero; 3];
-                d[a] = pool.neg(at(b));
-                d[b] = at(a);
-                col.extend(d[..dim].iter().copied());
-            }
-            rhs.push((GeneratorKind::Rotation, k, col));
+    let axes: &[usize] = if dim == 2 { &[2] } else { &[0, 1, 2] };
+    for &k in axes {
+        let mut col = Vec::new();
+        for r in &points {
+            let at = |c: usize| if c < dim { r[c] } else { zero };
+            // e_k × r.
+            let (a, b) = ((k + 1) % 3, (k + 2) % 3);
+            let mut d = [zero; 3];
+            d[a] = pool.neg(at(b));
+            d[b] = at(a);
+            col.extend(d[..dim].iter().copied());
         }
+        // e_k in body components: its component along each body axis.
+        col.extend(bodies.iter().flat_map(|b| [b.axes[0][k], b.axes[1][k], b.axes[2][k]]));
+        rhs.push((GeneratorKind::Rotation, k, col));
     }
     // The rows: ∂r/∂q per point component, and ξ_angle = 0 for bodies' angles.
     let mut rows: Vec<Vec<ExprId>> = Vec::new();
@@ -164,8 +177,10 @@ fn rigid_candidates(pool: &mut Pool, model: &Model, s: &Symbols, is_var: &dyn Fn
             rows.push(s.q.iter().map(|&q| pool.diff(x, q)).collect());
         }
     }
-    for &a in &angle_rows {
-        rows.push((0..n).map(|j| if j == a { one } else { zero }).collect());
+    for b in bodies {
+        for &w in &b.omega {
+            rows.push(s.qd.iter().map(|&v| pool.diff(w, v)).collect());
+        }
     }
     let columns: Vec<Vec<ExprId>> = rhs.iter().map(|(_, _, c)| c.clone()).collect();
     let solutions = solve(pool, &rows, &columns, is_var);

@@ -175,9 +175,10 @@ pub struct Generator {
     /// ξ per coordinate that moves, printed in the expression language.
     #[serde(serialize_with = "ordered_map")]
     pub xi: Vec<(String, String)>,
-    /// Whether the model has rigid bodies (they move with the particles).
+    /// What moves, for the sentence: "every particle", "every particle and
+    /// body", "every body" or "the body".
     #[serde(skip)]
-    pub bodies: bool,
+    pub moved: String,
 }
 
 /// Serializes pairs as a map in their order.
@@ -193,7 +194,7 @@ fn ordered_map<S: serde::Serializer>(pairs: &[(String, String)], s: S) -> Result
 impl Generator {
     /// What the transformation does, as a phrase ("rotating every particle about z").
     fn action(&self) -> String {
-        let what = if self.bodies { "every particle and body" } else { "every particle" };
+        let what = &self.moved;
         let axis = self.axis.as_deref().unwrap_or("?");
         match self.kind {
             GeneratorKind::Translation => format!("translating {what} along {axis}"),
