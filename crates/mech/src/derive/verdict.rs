@@ -205,7 +205,11 @@ impl Generator {
                     let moves: Vec<String> = self
                         .xi
                         .iter()
-                        .map(|(q, x)| if x == "1" { format!("{q} by ε") } else { format!("{q} by {x}·ε") })
+                        .map(|(q, x)| match x.as_str() {
+                            "1" => format!("{q} by ε"),
+                            "-1" => format!("{q} by −ε"),
+                            _ => format!("{q} by {x}·ε"),
+                        })
                         .collect();
                     format!("shifting {}", moves.join(" and "))
                 }
@@ -491,6 +495,43 @@ mod tests {
         check_rate(
             &[RateTerm::ExplicitTime, RateTerm::Dissipation, RateTerm::GeneralizedForces],
             "So dH/dt = −∂L/∂t − Σ q'·∂R/∂q' + Σ Q·q' ≠ 0.",
+        );
+    }
+
+    #[test]
+    fn a_symmetry_serializes_with_its_generator_and_f() {
+        let generator = Generator {
+            kind: GeneratorKind::Rotation,
+            axis: Some("z".into()),
+            coordinates: Vec::new(),
+            xi: vec![("x".into(), "-y".into()), ("y".into(), "x".into())],
+            moved: "every particle".into(),
+        };
+        let r = ConservedReason::Symmetry { generator: generator.clone(), f: None };
+        assert_eq!(
+            serde_json::to_string(&r).unwrap(),
+            r#"{"code":"symmetry","generator":{"kind":"rotation","axis":"z","xi":{"x":"-y","y":"x"}}}"#
+        );
+        assert_eq!(r.code(), "symmetry");
+        assert_eq!(
+            r.to_string(),
+            "L is unchanged by rotating every particle about z: the angular momentum about z is conserved"
+        );
+        let shift = Generator {
+            kind: GeneratorKind::Shift,
+            axis: None,
+            coordinates: vec!["a".into(), "b".into()],
+            xi: vec![("a".into(), "1".into()), ("b".into(), "-1".into())],
+            moved: "every particle".into(),
+        };
+        let r = ConservedReason::Symmetry { generator: shift, f: Some("k*t".into()) };
+        assert_eq!(
+            serde_json::to_string(&r).unwrap(),
+            r#"{"code":"symmetry","generator":{"kind":"shift","coordinates":["a","b"],"xi":{"a":"1","b":"-1"}},"F":"k*t"}"#
+        );
+        assert_eq!(
+            r.to_string(),
+            "Shifting a by ε and b by −ε changes L only by a total time derivative dF/dt, F = k*t: Σ p·ξ − F is conserved"
         );
     }
 
