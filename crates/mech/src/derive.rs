@@ -20,6 +20,7 @@ mod judge;
 mod layout;
 mod load;
 mod no_inertia;
+mod noether;
 mod quadratic;
 mod shared;
 mod solve;
@@ -33,7 +34,8 @@ pub use layout::Layout;
 pub use no_inertia::NoInertia;
 use solve::blocks;
 pub use verdict::{
-    ConservationReason, ConservedReason, CyclicReason, EnergyReason, HamiltonianReason, RateTerm, Verdicts,
+    ConservationReason, ConservedReason, CyclicReason, EnergyReason, Generator, GeneratorKind, HamiltonianReason,
+    RateTerm, Verdicts,
 };
 
 /// A quantity the derivation shows to be conserved.
@@ -275,6 +277,25 @@ impl Derivation {
                     None => ConservedReason::HamiltonianConservedEnergyUnknown,
                 },
             });
+        }
+        // Noether: the point symmetries of L, on the expanded path, within a
+        // bound of its own (a proof made before the bound stays a proof).
+        if !shared && pool.work() - start + noether::SEARCH_WORK < WORK_LIMIT {
+            pool.set_work_limit(Some(pool.work() + noether::SEARCH_WORK));
+            let found = noether::symmetries(
+                pool,
+                &model,
+                &s,
+                &motion,
+                &ext,
+                &constraints,
+                &energies.bodies,
+                &cyclic.indices,
+                &conserved,
+                &is_var,
+            );
+            conserved.extend(found);
+            pool.set_work_limit(Some(start + WORK_LIMIT));
         }
         let legendre = hamiltonian(pool, &s, &energies, &motion, &ext, &mut judged.verdicts, &is_var);
         let constraints = constraints.explained(cyclic.lost, judged.work_balances_h, legendre.is_some());

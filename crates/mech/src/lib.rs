@@ -92,8 +92,8 @@ extern crate self as mech;
 
 pub use derive::{BodyMotion, Constraint, Constraints, NoInertia};
 pub use derive::{
-    ConservationReason, Conserved, ConservedReason, CyclicReason, Derivation, EnergyReason, HamiltonianReason, Layout,
-    RateTerm, Verdicts,
+    ConservationReason, Conserved, ConservedReason, CyclicReason, Derivation, EnergyReason, Generator, GeneratorKind,
+    HamiltonianReason, Layout, RateTerm, Verdicts,
 };
 pub use equilibria::{Equilibrium, EquilibriumReport, Stability};
 pub use error::{ModelError, ModelErrorKind, Setting, Within};

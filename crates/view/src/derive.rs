@@ -121,6 +121,8 @@ enum Item<'a> {
     ConstraintForces,
     /// The cyclic coordinates and what they conserve.
     Cyclic,
+    /// The conserved quantities of symmetries of L (Noether), when there are any.
+    Symmetries,
     /// H, or why it has no closed form.
     Hamiltonian(Option<ExprId>),
     /// Whether H is the energy and whether it is conserved, with the reasons.
@@ -196,6 +198,9 @@ fn layout<'a>(d: &'a Derivation, emit: &mut impl FnMut(Item<'a>)) {
         emit(Item::ConstraintForces);
     }
     emit(Item::Cyclic);
+    if symmetries(d).next().is_some() {
+        emit(Item::Symmetries);
+    }
     emit(Item::Heading(Section::Hamiltonian));
     emit(Item::Hamiltonian(d.hamiltonian()));
     emit(Item::Verdicts);
@@ -205,6 +210,11 @@ fn layout<'a>(d: &'a Derivation, emit: &mut impl FnMut(Item<'a>)) {
             emit(Item::HamiltonEquation(i, dq, dp));
         }
     }
+}
+
+/// The conserved quantities found from symmetries of L (Noether).
+fn symmetries(d: &Derivation) -> impl Iterator<Item = &mech::Conserved> {
+    d.conserved().iter().filter(|c| matches!(c.reason, mech::ConservedReason::Symmetry { .. }))
 }
 
 /// "" for one, "s" otherwise.

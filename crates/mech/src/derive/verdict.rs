@@ -137,6 +137,95 @@ pub enum ConservedReason {
     /// H is conserved; whether it is the energy T + U is not known (the model
     /// gives only L, or it could not be decided).
     HamiltonianConservedEnergyUnknown,
+    /// Noether: L is unchanged by the generator, or changes only by a total
+    /// time derivative dF/dt; Q = Σ p·ξ − F is constant.
+    Symmetry {
+        /// The transformation.
+        generator: Generator,
+        /// F(q, t) with δL = dF/dt, printed; absent when L is unchanged (F = 0).
+        #[serde(rename = "F", skip_serializing_if = "Option::is_none")]
+        f: Option<String>,
+    },
+}
+
+/// What a symmetry transformation does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GeneratorKind {
+    /// Every particle and body moved by the same vector.
+    Translation,
+    /// Every particle turned about an axis through the origin.
+    Rotation,
+    /// Coordinates shifted by constants.
+    Shift,
+}
+
+/// A continuous point transformation q → q + ε ξ(q, t), as found by the
+/// symmetry search.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Generator {
+    /// Translation, rotation, or shift of coordinates.
+    pub kind: GeneratorKind,
+    /// The axis of a translation or rotation (`x`, `y`, `z`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub axis: Option<String>,
+    /// The coordinates a shift moves.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub coordinates: Vec<String>,
+    /// ξ per coordinate that moves, printed in the expression language.
+    #[serde(serialize_with = "ordered_map")]
+    pub xi: Vec<(String, String)>,
+    /// What moves, for the sentence: "every particle", "every particle and
+    /// body", "every body" or "the body".
+    #[serde(skip)]
+    pub moved: String,
+}
+
+/// Serializes pairs as a map in their order.
+fn ordered_map<S: serde::Serializer>(pairs: &[(String, String)], s: S) -> Result<S::Ok, S::Error> {
+    use serde::ser::SerializeMap;
+    let mut map = s.serialize_map(Some(pairs.len()))?;
+    for (k, v) in pairs {
+        map.serialize_entry(k, v)?;
+    }
+    map.end()
+}
+
+impl Generator {
+    /// What the transformation does, as a phrase ("rotating every particle about z").
+    fn action(&self) -> String {
+        let what = &self.moved;
+        let axis = self.axis.as_deref().unwrap_or("?");
+        match self.kind {
+            GeneratorKind::Translation => format!("translating {what} along {axis}"),
+            GeneratorKind::Rotation => format!("rotating {what} about {axis}"),
+            GeneratorKind::Shift => match self.coordinates.as_slice() {
+                [one] => format!("shifting {one}"),
+                _ => {
+                    let moves: Vec<String> = self
+                        .xi
+                        .iter()
+                        .map(|(q, x)| match x.as_str() {
+                            "1" => format!("{q} by ε"),
+                            "-1" => format!("{q} by −ε"),
+                            _ => format!("{q} by {x}·ε"),
+                        })
+                        .collect();
+                    format!("shifting {}", moves.join(" and "))
+                }
+            },
+        }
+    }
+
+    /// What the conserved quantity is called in physics.
+    fn meaning(&self) -> String {
+        let axis = self.axis.as_deref().unwrap_or("?");
+        match self.kind {
+            GeneratorKind::Translation => format!("the momentum along {axis}"),
+            GeneratorKind::Rotation => format!("the angular momentum about {axis}"),
+            GeneratorKind::Shift => "Σ p·ξ".to_string(),
+        }
+    }
 }
 
 /// Why H is or is not the energy, and is or is not conserved.
@@ -346,6 +435,7 @@ impl ConservedReason {
             ConservedReason::EnergyConserved => "energy_conserved",
             ConservedReason::HamiltonianConserved => "hamiltonian_conserved",
             ConservedReason::HamiltonianConservedEnergyUnknown => "hamiltonian_conserved_energy_unknown",
+            ConservedReason::Symmetry { .. } => "symmetry",
         }
     }
 }
@@ -361,7 +451,30 @@ impl fmt::Display for ConservedReason {
             ConservedReason::HamiltonianConservedEnergyUnknown => {
                 f.write_str("H is conserved (whether it is the energy T + U is not known)")
             }
+            ConservedReason::Symmetry { generator: g, f: None } => {
+                write!(f, "L is unchanged by {}: {} is conserved", g.action(), g.meaning())
+            }
+            ConservedReason::Symmetry { generator: g, f: Some(big_f) } => {
+                let meaning = match g.kind {
+                    GeneratorKind::Shift => "Σ p·ξ − F".to_string(),
+                    _ => format!("{} less F (Σ p·ξ − F)", g.meaning()),
+                };
+                write!(
+                    f,
+                    "{} changes L only by a total time derivative dF/dt, F = {big_f}: {meaning} is conserved",
+                    capitalize(&g.action())
+                )
+            }
         }
+    }
+}
+
+/// The phrase with its first letter upper case.
+fn capitalize(s: &str) -> String {
+    let mut chars = s.chars();
+    match chars.next() {
+        Some(c) => c.to_uppercase().chain(chars).collect(),
+        None => String::new(),
     }
 }
 
@@ -382,6 +495,43 @@ mod tests {
         check_rate(
             &[RateTerm::ExplicitTime, RateTerm::Dissipation, RateTerm::GeneralizedForces],
             "So dH/dt = −∂L/∂t − Σ q'·∂R/∂q' + Σ Q·q' ≠ 0.",
+        );
+    }
+
+    #[test]
+    fn a_symmetry_serializes_with_its_generator_and_f() {
+        let generator = Generator {
+            kind: GeneratorKind::Rotation,
+            axis: Some("z".into()),
+            coordinates: Vec::new(),
+            xi: vec![("x".into(), "-y".into()), ("y".into(), "x".into())],
+            moved: "every particle".into(),
+        };
+        let r = ConservedReason::Symmetry { generator: generator.clone(), f: None };
+        assert_eq!(
+            serde_json::to_string(&r).unwrap(),
+            r#"{"code":"symmetry","generator":{"kind":"rotation","axis":"z","xi":{"x":"-y","y":"x"}}}"#
+        );
+        assert_eq!(r.code(), "symmetry");
+        assert_eq!(
+            r.to_string(),
+            "L is unchanged by rotating every particle about z: the angular momentum about z is conserved"
+        );
+        let shift = Generator {
+            kind: GeneratorKind::Shift,
+            axis: None,
+            coordinates: vec!["a".into(), "b".into()],
+            xi: vec![("a".into(), "1".into()), ("b".into(), "-1".into())],
+            moved: "every particle".into(),
+        };
+        let r = ConservedReason::Symmetry { generator: shift, f: Some("k*t".into()) };
+        assert_eq!(
+            serde_json::to_string(&r).unwrap(),
+            r#"{"code":"symmetry","generator":{"kind":"shift","coordinates":["a","b"],"xi":{"a":"1","b":"-1"}},"F":"k*t"}"#
+        );
+        assert_eq!(
+            r.to_string(),
+            "Shifting a by ε and b by −ε changes L only by a total time derivative dF/dt, F = k*t: Σ p·ξ − F is conserved"
         );
     }
 

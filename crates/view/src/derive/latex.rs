@@ -77,6 +77,7 @@ impl Latex<'_> {
             | Item::ConstraintNotes
             | Item::ConstraintForces
             | Item::Cyclic
+            | Item::Symmetries
             | Item::Hamiltonian(None)
             | Item::Verdicts => return,
         };

@@ -5,7 +5,9 @@ use mech::Derivation;
 use std::fmt::Write;
 use sym::{ExprId, PrintOptions, Printout};
 
-use super::{conservation_verdict, constraint_tags, cyclic_momentum, energy_verdict, plural, Defined, Item, Section};
+use super::{
+    conservation_verdict, constraint_tags, cyclic_momentum, energy_verdict, plural, symmetries, Defined, Item, Section,
+};
 use crate::markup::text as escape;
 
 /// The MathML rendering: an HTML fragment with a heading per section, the
@@ -238,6 +240,7 @@ impl<'a> MathMl<'a> {
             }
             Item::ConstraintForces => self.constraint_forces(),
             Item::Cyclic => self.cyclic(),
+            Item::Symmetries => self.symmetries(),
             Item::Hamiltonian(Some(h)) => self.row("<mi>H</mi>".into(), self.m(h), None),
             Item::Hamiltonian(None) => {
                 self.para("Not in closed form; the energy function is");
@@ -297,6 +300,7 @@ impl<'a> MathMl<'a> {
                 }
             }
             Item::Cyclic => self.cyclic(),
+            Item::Symmetries => self.symmetries(),
             Item::Heading(Section::Hamiltonian) => self.heading("Hamiltonian"),
             Item::Hamiltonian(None) => {
                 self.para("H has no closed form:");
@@ -461,6 +465,19 @@ impl<'a> MathMl<'a> {
         }
         for reason in undecided {
             self.para(&escape(&reason.to_string()));
+        }
+    }
+
+    /// The conserved quantities of symmetries of L, each with its reason.
+    fn symmetries(&mut self) {
+        let d = self.d;
+        self.heading("Symmetries of L (Noether)");
+        for c in symmetries(d) {
+            let value = match self.outline {
+                None => inline(&format!("<mi>{}</mi>{EQUALS}{}", escape(&c.name), self.m(c.expr))),
+                Some(_) => inline(&format!("<mi>{}</mi>", escape(&c.name))),
+            };
+            self.para(&format!("{value}: {}.", escape(&c.reason.to_string())));
         }
     }
 

@@ -5,7 +5,9 @@ use mech::Derivation;
 use std::fmt::Write;
 use sym::{ExprId, PrintOptions, Printout};
 
-use super::{conservation_verdict, constraint_tags, cyclic_momentum, energy_verdict, plural, Defined, Item, Section};
+use super::{
+    conservation_verdict, constraint_tags, cyclic_momentum, energy_verdict, plural, symmetries, Defined, Item, Section,
+};
 
 /// The text rendering: every item, one or more lines each.
 pub(super) struct Text<'a> {
@@ -149,6 +151,13 @@ impl Text<'_> {
                 }
             }
             Item::Cyclic => self.cyclic(&mut o),
+            Item::Symmetries => {
+                let _ = writeln!(o, "\nsymmetries of L (Noether: Q = Σ p·ξ − F is conserved when δL = dF/dt)");
+                for c in symmetries(d) {
+                    let _ = writeln!(o, "  {} = {}", c.name, self.s(c.expr));
+                    let _ = writeln!(o, "    {}.", c.reason);
+                }
+            }
             Item::Hamiltonian(Some(h)) => {
                 let _ = writeln!(o, "  H = {}", self.s(h));
             }
