@@ -98,7 +98,7 @@ pub fn run(d: &Derivation, grid: &Grid, opts: &Options<'_>) -> Result<(), Failur
         for (run, points) in receive.iter() {
             waiting.insert(run, points);
             while let Some(points) = waiting.remove(&finished) {
-                if failed_write.is_none() {
+                if failed_write.is_none() && !points.lines.is_empty() {
                     if let Err(e) = writer.push(points.lines.as_bytes()) {
                         failed_write = Some(e);
                         // The workers stop at their next run.
