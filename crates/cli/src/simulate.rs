@@ -98,7 +98,8 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
 
     // Columns: t, coordinates, velocities, invariants.
     let names: Vec<String> = derivation.coordinate_names().iter().map(|s| s.to_string()).collect();
-    let with_events = !opts.crossing.is_empty();
+    // Crossings and impacts mark their rows in an `event` column.
+    let with_events = !opts.crossing.is_empty() || !derivation.impacts().is_empty();
     // A section's CSV: its points' rows, then the plane's axes where they are not columns already.
     let mut section_columns: Vec<usize> = Vec::new();
     let inv_names: Vec<String> = mech::invariants_of(&derivation).into_iter().map(|i| i.name).collect();
@@ -221,7 +222,9 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
                 section_points.push(point);
             }
         }
-        if let Some(keeper) = plot_data.as_mut().filter(|_| row.event.is_none()) {
+        // Impact rows are drawn (the kink of a bounce); crossings are not samples.
+        let drawn = row.event.is_none_or(|e| e.starts_with("impact "));
+        if let Some(keeper) = plot_data.as_mut().filter(|_| drawn) {
             keeper.push(row.t, row.q, row.qd, row.invariants);
         }
         if let Some(pb) = &progress {

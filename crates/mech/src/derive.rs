@@ -16,6 +16,7 @@ use sym::{ExprId, NameId, Pool, Symbol};
 mod body;
 pub(crate) mod constraint;
 mod hamilton;
+mod impact;
 mod judge;
 mod layout;
 mod load;
@@ -29,6 +30,7 @@ mod verdict;
 pub use body::BodyMotion;
 pub use constraint::{Constraint, Constraints};
 use hamilton::hamiltonian;
+pub use impact::ImpactLaw;
 use judge::{cyclic_coordinates, judge};
 pub use layout::Layout;
 pub use no_inertia::NoInertia;
@@ -115,6 +117,8 @@ pub struct Derivation {
     pub(crate) bodies: Vec<BodyMotion>,
     /// The constraints and the equations with multipliers (empty without `[[constraints]]`).
     pub(crate) constraints: Constraints,
+    /// The impact law of each `[[impacts]]` surface.
+    pub(crate) impacts: Vec<ImpactLaw>,
     /// The input layout of every compiled expression: `[q, q', t, parameters]`.
     pub(crate) layout: Layout,
     /// The symbols of the model's inputs u (`[inputs]`), in file order.
@@ -261,6 +265,13 @@ impl Derivation {
         check_regular(pool, &model, &motion.mass_matrix)?;
         let constraints = constraint::derive(pool, &model, &s, &motion.equations)?;
         within(pool, &model)?;
+        let impacts = impact::derive(pool, &model, &s.q, &s.qd, s.t, &motion.mass_matrix, &mut |pool, e| {
+            if shared {
+                simplify_bounded(pool, e, &is_var)
+            } else {
+                pool.simplify_in(e, &is_var)
+            }
+        })?;
         let cyclic = cyclic_coordinates(pool, &s, &motion, &ext, &constraints, shared);
         let mut conserved = cyclic.conserved;
         within(pool, &model)?;
@@ -362,6 +373,7 @@ impl Derivation {
             bodies: energies.bodies,
             equations_seconds,
             constraints,
+            impacts,
             layout,
             inputs,
             input_matrix,
@@ -371,6 +383,11 @@ impl Derivation {
         // The bound is the derivation's: analyses rewrite in copies of the pool.
         derivation.model.pool.set_work_limit(None);
         Ok(derivation)
+    }
+
+    /// The impact law of each `[[impacts]]` surface, in file order.
+    pub fn impacts(&self) -> &[ImpactLaw] {
+        &self.impacts
     }
 
     /// The symbols of the model's inputs u, in file order (empty without `[inputs]`).

@@ -90,7 +90,7 @@ mod test_models;
 #[cfg(test)]
 extern crate self as mech;
 
-pub use derive::{BodyMotion, Constraint, Constraints, NoInertia};
+pub use derive::{BodyMotion, Constraint, Constraints, ImpactLaw, NoInertia};
 pub use derive::{
     ConservationReason, Conserved, ConservedReason, CyclicReason, Derivation, EnergyReason, Generator, GeneratorKind,
     HamiltonianReason, Layout, RateTerm, Verdicts,
@@ -114,7 +114,8 @@ pub use modes::{
 pub use num::{Method, Output};
 pub use orbit::{Kepler, Orbit, OrbitError, OrbitKind, OrbitReport};
 pub use report::{
-    prints_shared, BodyReport, ConstraintReport, Definition, DeriveReport, HamiltonEquations, NamedExpr, Ordered,
+    prints_shared, BodyReport, ConstraintReport, Definition, DeriveReport, HamiltonEquations, ImpactReport, NamedExpr,
+    Ordered, IMPACT_LAW,
 };
 pub use run::body::BodyRecorder;
 pub use run::constrained::constraint_columns;
@@ -122,9 +123,9 @@ pub use run::dynamics::{invariants_of, Dynamics, Form, Invariant, System};
 pub use run::jacobian::StateJacobian;
 pub use run::series::SeriesCode;
 pub use run::{
-    approx, row_columns, simulate, Audit, BudgetAdvice, BudgetStage, ConstraintAudit, Row, RunConfig, RunError,
-    RunFailure, RunReport, RunSettings, RunWarning, SettingError, StepBudget, StopCondition, TimeScale, MAX_SAMPLES,
-    STEPS_PER_TIME_SCALE,
+    approx, row_columns, simulate, Audit, BudgetAdvice, BudgetStage, ConstraintAudit, ImpactTally, Row, RunConfig,
+    RunError, RunFailure, RunReport, RunSettings, RunWarning, SettingError, StepBudget, StopCondition, TimeScale,
+    MAX_SAMPLES, STEPS_PER_TIME_SCALE,
 };
 pub use section::Section;
 pub use source::MAX_FILE_BYTES;

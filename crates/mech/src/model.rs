@@ -23,6 +23,7 @@ pub(crate) mod columns;
 pub(crate) mod constraint;
 pub(crate) mod frames;
 pub(crate) mod gravity;
+pub(crate) mod impact;
 pub(crate) mod load;
 mod read;
 pub(crate) mod urdf;
@@ -32,6 +33,7 @@ pub use body::{Body, Orientation};
 pub use check::{CheckKind, ValueCheck};
 pub use constraint::{ConstraintKind, ConstraintSpec};
 pub use gravity::Gravity;
+pub use impact::ImpactSpec;
 pub use load::{Load, LoadKind};
 pub use urdf::{urdf_to_model, UrdfConfig};
 
@@ -108,6 +110,8 @@ pub struct Model {
     pub bodies: Vec<Body>,
     /// Constraints from `[[constraints]]`, in file order.
     pub constraints: Vec<ConstraintSpec>,
+    /// Unilateral contacts from `[[impacts]]`, in file order.
+    pub impacts: Vec<ImpactSpec>,
     /// Forces at points and torques on bodies (`[[loads]]`).
     pub loads: Vec<Load>,
     /// Named inputs u(t) (`[inputs]`): symbols in the forces and loads, with
@@ -156,6 +160,8 @@ pub(crate) struct RawModel {
     bodies: Vec<Spanned<body::RawBody>>,
     #[serde(default)]
     constraints: Vec<Spanned<constraint::RawConstraint>>,
+    #[serde(default)]
+    impacts: Vec<Spanned<impact::RawImpact>>,
     #[serde(default)]
     loads: Vec<Spanned<load::RawLoad>>,
     #[serde(default)]
@@ -456,6 +462,7 @@ impl Model {
         let forces = read::forces(&mut r, &raw)?;
         let initial = read::initial(&mut r, &raw, imported.as_ref())?;
         let constraints = read::constraints(&mut r, &raw, &bodies)?;
+        let impacts = impact::read_all(&mut r, &raw.impacts, !constraints.is_empty())?;
 
         let model = Model {
             pool: r.pool,
@@ -475,6 +482,7 @@ impl Model {
             initial,
             bodies,
             constraints,
+            impacts,
             loads,
             inputs,
             checks: r.checks,

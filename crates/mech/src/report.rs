@@ -137,6 +137,9 @@ pub struct DeriveReport {
     /// With constraints: the teaching text about the set.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub constraint_explanations: Vec<String>,
+    /// The impacts' surfaces and laws (extra field, present only with `[[impacts]]`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub impacts: Vec<ImpactReport>,
     /// The model's inputs u with their values in runs (extra field, present
     /// only with `[inputs]`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -219,6 +222,29 @@ pub struct ConstraintReport {
     /// The teaching text.
     pub explanation: Vec<String>,
 }
+
+/// One impact in the report: the surface φ(q, t) ≥ 0 and the law at φ = 0,
+/// q'⁺ = q'⁻ − (1 + e) M⁻¹∇φ v_n⁻/(∇φᵀM⁻¹∇φ).
+#[derive(Debug, Clone, Serialize)]
+pub struct ImpactReport {
+    /// Its name.
+    pub name: String,
+    /// φ(q, t), kept ≥ 0.
+    pub surface: String,
+    /// ∇φ = ∂φ/∂q, one entry per coordinate.
+    pub gradient: Vec<String>,
+    /// ∂φ/∂t.
+    pub rate: String,
+    /// v_n = ∇φ·q' + ∂φ/∂t.
+    pub normal_velocity: String,
+    /// Newton's coefficient of restitution e.
+    pub restitution: String,
+    /// The law, in words and symbols.
+    pub law: &'static str,
+}
+
+/// The impact law as the reports state it.
+pub const IMPACT_LAW: &str = "q'⁺ = q'⁻ − (1 + e) M⁻¹∇φ v_n⁻/(∇φᵀ M⁻¹ ∇φ), so that v_n⁺ = −e v_n⁻";
 
 /// The teaching text behind the verdicts.
 #[derive(Debug, Clone, Serialize)]
@@ -351,6 +377,19 @@ impl DeriveReport {
             degrees_of_freedom: (!d.constraints.is_empty()).then_some(d.constraints.degrees_of_freedom),
             constraints_integrable: d.constraints.integrable,
             constraint_explanations: d.constraints.explanation.clone(),
+            impacts: d
+                .impacts
+                .iter()
+                .map(|i| ImpactReport {
+                    name: i.name.clone(),
+                    surface: s(i.surface),
+                    gradient: i.gradient.iter().map(|&g| s(g)).collect(),
+                    rate: s(i.rate),
+                    normal_velocity: s(i.normal_velocity),
+                    restitution: s(i.restitution),
+                    law: IMPACT_LAW,
+                })
+                .collect(),
             inputs: d
                 .model
                 .inputs

@@ -25,6 +25,8 @@ mod config;
 pub(crate) mod constrained;
 pub(crate) mod dynamics;
 pub(crate) mod ensemble;
+mod impacts;
+pub use impacts::ImpactTally;
 pub(crate) mod jacobian;
 mod plain;
 mod report;
@@ -39,8 +41,13 @@ pub use budget::{approx, BudgetAdvice, BudgetStage, StepBudget, TimeScale, STEPS
 pub(crate) use config::is_positive_time;
 pub use config::{RunConfig, RunSettings, SettingError, StopCondition, MAX_SAMPLES};
 use dynamics::{Dynamics, Form};
-use num::{integrate, integrate_projected, Event, Method, ObservationKind, RhsError, SolveError, Solver, StopReason};
+
+use num::{
+    integrate, integrate_projected, integrate_resumed, Event, Method, ObservationKind, Resume, RhsError, SolveError,
+    Solver, StopReason, Summary,
+};
 pub use report::{Audit, ConstraintAudit, Row, RunError, RunFailure, RunReport, RunWarning};
+use std::cell::{Cell, RefCell};
 use std::ops::ControlFlow;
 
 /// The default method and the form it integrates, or the form a requested method needs.
@@ -114,7 +121,13 @@ pub(crate) struct Start {
     /// The fixed step, for fixed-step methods.
     pub(crate) dt: Option<f64>,
     pub(crate) pilot_rhs_evaluations: usize,
+    /// A solver of the same method and step started afresh at (t, q, q'),
+    /// after an impact; None where impacts are not supported (constraints).
+    pub(crate) restart: Option<Restart>,
 }
+
+/// Builds a run's solver afresh at (t, q, q'); the error is a sentence.
+pub(crate) type Restart = Box<dyn FnMut(f64, &[f64], &[f64]) -> Result<Box<dyn Solver>, String>>;
 
 /// q' of a solver state (t, y), for the stop conditions.
 pub(crate) type VelocityMap = Box<dyn FnMut(f64, &[f64], &mut [f64]) -> Result<(), RhsError>>;
@@ -249,16 +262,18 @@ fn drive(
     started: Instant,
     mut on_row: impl FnMut(&Row<'_>) -> ControlFlow<()>,
 ) -> Result<RunReport, RunError> {
-    let Start { mut solver, y0, initial, method, form, dt, pilot_rhs_evaluations } = begin;
+    let Start { mut solver, y0, initial, method, form, dt, pilot_rhs_evaluations, restart } = begin;
     let n = d.q.len();
     let layout = &d.layout;
     let mut invariant_audit = InvariantAudit::new(d, dynamics);
 
     // Stop conditions first (terminal), then crossings (recorded, not stopping),
-    // then one guard per body.
+    // then the impact surfaces (terminal), then one guard per body.
     let conditions: Vec<(&StopCondition, bool)> =
         config.stop_when.iter().map(|c| (c, true)).chain(config.crossings.iter().map(|c| (c, false))).collect();
-    let first_guard = conditions.len();
+    let first_impact = conditions.len();
+    let impacts = impacts::Impacts::new(d, dynamics).map_err(RunError::Input)?;
+    let first_guard = first_impact + impacts.as_ref().map_or(0, |i| i.len());
     let mut events: Vec<Event<'_>> = Vec::new();
     for &(cond, terminal) in &conditions {
         let mut velocities = stepping.velocity_map();
@@ -278,7 +293,16 @@ fn drive(
             .with_terminal(terminal),
         );
     }
+    if let Some(i) = &impacts {
+        events.extend(i.events(d));
+    }
     events.extend(body::guard_events(guards));
+    let impact_labels: Vec<[String; 2]> = impacts.as_ref().map_or_else(Vec::new, |i| i.labels.clone());
+    let impacts = impacts.map(RefCell::new);
+    // Set while the row after an impact is handed over: that impact's index.
+    let after_impact: Cell<Option<usize>> = Cell::new(None);
+    // The state at the impact an event stopped at.
+    let struck_at: RefCell<Option<impacts::StateAt>> = RefCell::new(None);
 
     // The rows and their audit.
     let mut row = RowBuffer {
@@ -291,11 +315,47 @@ fn drive(
     let projection = stepping.projection();
     let mut last = (0.0, initial.0, initial.1);
     let mut row_error: Option<(RunFailure, String)> = None;
-    let observer = |obs: &num::Observation<'_>| {
+    let mut observer = |obs: &num::Observation<'_>| {
         row.is_event = matches!(obs.kind, ObservationKind::Event { .. });
         if let Err(e) = stepping.row(obs.t, obs.y, &mut row) {
             row_error = Some((RunFailure::Row { t: obs.t }, format!("at t = {}: {e}", obs.t)));
             return ControlFlow::Break(());
+        }
+        let event = match obs.kind {
+            ObservationKind::Event { index } if index < first_impact => Some(conditions[index].0.text.as_str()),
+            ObservationKind::Event { index } if index < first_guard => {
+                let k = index - first_impact;
+                let after = after_impact.get() == Some(k);
+                if after {
+                    // The audit follows the invariants across the jump.
+                    if let Some(before) = struck_at.borrow().as_ref() {
+                        invariant_audit.jump(&before.invariants, &row.invariants);
+                    }
+                } else {
+                    *struck_at.borrow_mut() = Some(impacts::StateAt {
+                        t: obs.t,
+                        q: row.q.clone(),
+                        qd: row.qd.clone(),
+                        invariants: row.invariants.clone(),
+                    });
+                }
+                Some(impact_labels[k][usize::from(after)].as_str())
+            }
+            _ => None,
+        };
+        if let Some(i) = &impacts {
+            if let Some((k, phi)) = i.borrow_mut().crossed(obs.t, &row.q, &row.qd, layout) {
+                let name = &impact_labels[k][0]["impact ".len()..impact_labels[k][0].len() - " before".len()];
+                row_error = Some((
+                    RunFailure::SurfaceCrossed { t: obs.t, impact: name.to_string() },
+                    format!(
+                        "the surface of impact '{name}' is crossed at t = {} (it is {} there) without an impact found: two crossings within one probe of the events; more output samples or a tighter tolerance find them",
+                        num::Shortest(obs.t),
+                        num::Shortest(phi)
+                    ),
+                ));
+                return ControlFlow::Break(());
+            }
         }
         let flow = on_row(&Row {
             t: obs.t,
@@ -303,10 +363,7 @@ fn drive(
             qd: &row.qd,
             invariants: &row.invariants,
             is_event: row.is_event,
-            event: match obs.kind {
-                ObservationKind::Event { index } if index < first_guard => Some(conditions[index].0.text.as_str()),
-                _ => None,
-            },
+            event,
             constraints: &row.constraints,
         });
         if flow.is_break() {
@@ -324,13 +381,72 @@ fn drive(
         }
         flow
     };
-    let result = match projection {
-        Some(mut project) => {
-            integrate_projected(&mut solver, config.until, config.output, &mut events, &mut project, observer)
+    // The run, in parts between impacts: each impact stops a part; its jump
+    // starts the next from a fresh solver at the state after it.
+    let mut projection = projection;
+    let mut resume: Option<Resume> = None;
+    let mut spent = num::Statistics::default();
+    let mut impact_error: Option<(RunFailure, String)> = None;
+    let mut restart = restart;
+    let result = loop {
+        let part = match (projection.as_mut(), resume) {
+            (Some(project), _) => {
+                integrate_projected(&mut solver, config.until, config.output, &mut events, project, &mut observer)
+            }
+            (None, Some(resume)) => {
+                integrate_resumed(&mut solver, config.until, config.output, resume, &mut events, &mut observer)
+            }
+            (None, None) => integrate(&mut solver, config.until, config.output, &mut events, &mut observer),
+        };
+        let (summary, k) = match part {
+            Ok(summary @ Summary { stop: StopReason::Event { index }, .. })
+                if (first_impact..first_guard).contains(&index) =>
+            {
+                (summary, index - first_impact)
+            }
+            other => break other,
+        };
+        let (Some(impacts), Some(restart)) = (&impacts, restart.as_mut()) else { break Ok(summary) };
+        let Some(impacts::StateAt { t, mut q, mut qd, .. }) = struck_at.borrow().clone() else { break Ok(summary) };
+        let struck = impacts.borrow_mut().strike(k, t, &mut q, &mut qd, layout);
+        let struck = match struck {
+            Ok(struck) => struck,
+            Err(failure) => {
+                impact_error = Some(failure);
+                break Ok(Summary { stop: StopReason::Observer, ..summary });
+            }
+        };
+        add_statistics(&mut spent, &solver.statistics());
+        solver = match restart(t, &q, &qd) {
+            Ok(fresh) => fresh,
+            Err(why) => {
+                impact_error =
+                    Some((RunFailure::Step { t }, format!("the run cannot go on after the impact at t = {t}: {why}")));
+                break Ok(Summary { stop: StopReason::Observer, ..summary });
+            }
+        };
+        // The row after: labelled with the last surface struck.
+        let last_struck = struck.surfaces.last().copied().unwrap_or(k);
+        after_impact.set(Some(last_struck));
+        let y_after = solver.state().to_vec();
+        let flow = observer(&num::Observation {
+            t,
+            y: &y_after,
+            kind: ObservationKind::Event { index: first_impact + last_struck },
+        });
+        after_impact.set(None);
+        if flow.is_break() {
+            break Ok(Summary { stop: StopReason::Observer, ..summary });
         }
-        None => integrate(&mut solver, config.until, config.output, &mut events, observer),
+        if let Some(ends) = struck.ends {
+            impact_error = Some(ends);
+            break Ok(Summary { stop: StopReason::Observer, ..summary });
+        }
+        resume = Some(Resume { t0: 0.0, next_sample: summary.next_sample });
     };
     drop(events);
+    let row_error = row_error.or(impact_error);
+    let tallies = impacts.map(|i| i.into_inner().tallies).unwrap_or_default();
     // A run that failed ends where its solver stands: the summary's final state
     // is the last one reached, audited like a row, not the last row written.
     if result.is_err() && solver.t() > last.0 {
@@ -345,7 +461,8 @@ fn drive(
         }
     }
 
-    let stats = solver.statistics();
+    let mut stats = solver.statistics();
+    add_statistics(&mut stats, &spent);
     let mut audits = invariant_audit.audits();
     let mut constraint_audits = Vec::new();
     stepping.audits(&mut audits, &mut constraint_audits);
@@ -383,6 +500,7 @@ fn drive(
         pilot_rhs_evaluations,
         wall_seconds: started.elapsed().as_secs_f64(),
         constraints: constraint_audits,
+        impacts: tallies,
     };
     match result {
         Ok(summary) => {
@@ -413,6 +531,17 @@ fn drive(
             Err(failed(report, reason, message))
         }
     }
+}
+
+/// Adds the work of one solver to a run's total (a run with impacts uses one per part).
+fn add_statistics(total: &mut num::Statistics, part: &num::Statistics) {
+    total.steps += part.steps;
+    total.rejected += part.rejected;
+    total.rhs_evaluations += part.rhs_evaluations;
+    total.jacobian_evaluations += part.jacobian_evaluations;
+    total.lu_decompositions += part.lu_decompositions;
+    total.newton_iterations += part.newton_iterations;
+    total.look_ahead_evaluations += part.look_ahead_evaluations;
 }
 
 /// The end of a run that integrated to its end or stopped: why it stopped (a

@@ -347,6 +347,13 @@ impl<'a> Sweep<'a> {
             return Err(SweepError::Until { until: config.until });
         }
         d.model.check_inputs_applied().map_err(SweepError::model)?;
+        if let Some(i) = d.model.impacts.first() {
+            // The sweep's runs (lock-step batches among them) have no events to jump at.
+            return Err(SweepError::model(
+                ModelError::at(i.name_span.clone(), "a sweep does not run models with [[impacts]] yet")
+                    .with_help("simulate each start on its own; a sweep of Poincaré sections runs whole simulations and takes impacts"),
+            ));
+        }
         let dynamics = Dynamics::new(d);
         // Rigid bodies need the gimbal guard's events, which the lock-step batches
         // do not check, and equations with a kink (abs) that a Taylor series does

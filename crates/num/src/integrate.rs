@@ -163,6 +163,22 @@ pub struct Summary {
     pub stop: StopReason,
     /// Number of event crossings located.
     pub events: usize,
+    /// The index of the first sample of [`Output::Samples`] not yet observed
+    /// (the count of samples for [`Output::EveryStep`]: 0): where a run
+    /// resumed after a terminal event picks up its grid ([`integrate_resumed`]).
+    pub next_sample: usize,
+}
+
+/// Where a run resumed after a terminal event stands on its output grid: the
+/// grid's start and the next sample to observe (the previous part's
+/// [`Summary::next_sample`]). The samples and the event probes stay on the
+/// grid of the whole run from `t0`, as if it had not stopped.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Resume {
+    /// The start of the whole run.
+    pub t0: f64,
+    /// The next sample to observe.
+    pub next_sample: usize,
 }
 
 /// How many times its step budget an adaptive run's foreseen steps must exceed
@@ -193,7 +209,22 @@ pub fn integrate<V: Solver + ?Sized>(
     events: &mut [Event<'_>],
     observer: impl FnMut(&Observation<'_>) -> ControlFlow<()>,
 ) -> Result<Summary, SolveError> {
-    drive(solver, t_end, output, events, None, observer)
+    drive(solver, t_end, output, events, None, None, observer)
+}
+
+/// [`integrate`] continued after a terminal event from a solver started
+/// afresh at a new state (the state after an impact): the observer does not
+/// see the solver's initial point again, and the samples are those of the
+/// whole run's grid ([`Resume`]) after the point where the last part stopped.
+pub fn integrate_resumed<V: Solver + ?Sized>(
+    solver: &mut V,
+    t_end: f64,
+    output: Output,
+    resume: Resume,
+    events: &mut [Event<'_>],
+    observer: impl FnMut(&Observation<'_>) -> ControlFlow<()>,
+) -> Result<Summary, SolveError> {
+    drive(solver, t_end, output, events, None, Some(resume), observer)
 }
 
 /// A post-step map of the state: `project(t, y)` replaces `y` in place (e.g. by
@@ -213,7 +244,7 @@ pub fn integrate_projected<V: Solver + ?Sized>(
     project: Projection<'_>,
     observer: impl FnMut(&Observation<'_>) -> ControlFlow<()>,
 ) -> Result<Summary, SolveError> {
-    drive(solver, t_end, output, events, Some(project), observer)
+    drive(solver, t_end, output, events, Some(project), None, observer)
 }
 
 /// Runs [`drive_lazily`] with the solver's dense output computed only for the
@@ -225,10 +256,11 @@ fn drive<V: Solver + ?Sized>(
     output: Output,
     events: &mut [Event<'_>],
     project: Option<Projection<'_>>,
+    resume: Option<Resume>,
     observer: impl FnMut(&Observation<'_>) -> ControlFlow<()>,
 ) -> Result<Summary, SolveError> {
     solver.set_lazy_dense(true);
-    let result = drive_lazily(solver, t_end, output, events, project, observer);
+    let result = drive_lazily(solver, t_end, output, events, project, resume, observer);
     let prepared = solver.prepare_dense();
     solver.set_lazy_dense(false);
     let summary = result?;
@@ -242,12 +274,15 @@ fn drive_lazily<V: Solver + ?Sized>(
     output: Output,
     events: &mut [Event<'_>],
     mut project: Option<Projection<'_>>,
+    resume: Option<Resume>,
     mut observer: impl FnMut(&Observation<'_>) -> ControlFlow<()>,
 ) -> Result<Summary, SolveError> {
-    let t0 = solver.t();
-    if t_end.is_nan() || t_end < t0 {
-        return Err(SolveError::EndBeforeStart { t: t0, t_end });
+    let t_start = solver.t();
+    if t_end.is_nan() || t_end < t_start {
+        return Err(SolveError::EndBeforeStart { t: t_start, t_end });
     }
+    // The grid's start: this call's, or the whole run's when resumed.
+    let t0 = resume.map_or(t_start, |r| r.t0);
     if let Output::Samples(n) = output {
         if n < 2 {
             return Err(SolveError::InvalidConfig {
@@ -265,13 +300,13 @@ fn drive_lazily<V: Solver + ?Sized>(
     let mut found: Vec<(f64, usize)> = Vec::with_capacity(events.len());
     let mut n_events = 0;
     for (k, ev) in events.iter_mut().enumerate() {
-        g_prev[k] = eval_event(ev, k, t0, solver.state())?;
+        g_prev[k] = eval_event(ev, k, t_start, solver.state())?;
     }
     let kind = match output {
         Output::EveryStep => ObservationKind::Step,
         Output::Samples(_) => ObservationKind::Sample,
     };
-    let mut next_sample = 1usize;
+    let mut next_sample = resume.map_or(1, |r| r.next_sample);
     let sample_time = |k: usize, n: usize| {
         if k + 1 == n {
             t_end
@@ -284,8 +319,23 @@ fn drive_lazily<V: Solver + ?Sized>(
     let mut probes: Vec<f64> = Vec::new();
     let mut brackets: Vec<(f64, f64, f64, f64)> = Vec::new();
     let stopped = |flow: ControlFlow<()>| flow.is_break();
-    if stopped(observer(&Observation { t: t0, y: solver.state(), kind })) {
-        return Ok(Summary { t: t0, stop: StopReason::Observer, events: 0 });
+    let summary =
+        |t: f64, stop: StopReason, events: usize, next_sample: usize| Summary { t, stop, events, next_sample };
+    if resume.is_none() && stopped(observer(&Observation { t: t0, y: solver.state(), kind })) {
+        return Ok(summary(t0, StopReason::Observer, 0, next_sample));
+    }
+    if t_end == t_start && resume.is_some() {
+        // Resumed at the end: the samples left are all at the end.
+        if let Output::Samples(n) = output {
+            for k in next_sample..n {
+                y.copy_from_slice(solver.state());
+                if stopped(observer(&Observation { t: t_end, y: &y, kind })) {
+                    return Ok(summary(t_end, StopReason::Observer, 0, k + 1));
+                }
+            }
+            next_sample = n;
+        }
+        return Ok(summary(t_end, StopReason::Finished, 0, next_sample));
     }
     if t_end == t0 {
         if let Output::Samples(n) = output {
@@ -293,11 +343,11 @@ fn drive_lazily<V: Solver + ?Sized>(
             for _ in 1..n {
                 y.copy_from_slice(solver.state());
                 if stopped(observer(&Observation { t: t0, y: &y, kind })) {
-                    return Ok(Summary { t: t0, stop: StopReason::Observer, events: 0 });
+                    return Ok(summary(t0, StopReason::Observer, 0, n));
                 }
             }
         }
-        return Ok(Summary { t: t0, stop: StopReason::Finished, events: 0 });
+        return Ok(summary(t0, StopReason::Finished, 0, next_sample));
     }
     solver.set_stop_time(t_end)?;
     // A terminal event may end the run long before t_end (a shot stopped where
@@ -318,7 +368,7 @@ fn drive_lazily<V: Solver + ?Sized>(
         found.clear();
         probes.clear();
         if !events.is_empty() && probe_spacing > 0.0 {
-            let first = ((t_a - t0) / probe_spacing).floor() as usize + 1;
+            let first = ((t_a - t0) / probe_spacing).floor().max(0.0) as usize + 1;
             probes.extend((first..).map(|j| t0 + j as f64 * probe_spacing).take_while(|&t| t < t_b));
         }
         for (k, ev) in events.iter_mut().enumerate() {
@@ -421,21 +471,21 @@ fn drive_lazily<V: Solver + ?Sized>(
                 state_at(solver, t, &mut y)?;
             }
             if stopped(observer(&Observation { t, y: &y, kind: obs_kind })) {
-                return Ok(Summary { t, stop: StopReason::Observer, events: n_events });
+                return Ok(summary(t, StopReason::Observer, n_events, next_sample));
             }
             if let (ObservationKind::Event { index }, Some(_)) = (obs_kind, cut) {
                 if events[index].terminal {
-                    return Ok(Summary { t, stop: StopReason::Event { index }, events: n_events });
+                    return Ok(summary(t, StopReason::Event { index }, n_events, next_sample));
                 }
             }
         }
         if output == Output::EveryStep
             && stopped(observer(&Observation { t: t_b, y: solver.state(), kind: ObservationKind::Step }))
         {
-            return Ok(Summary { t: t_b, stop: StopReason::Observer, events: n_events });
+            return Ok(summary(t_b, StopReason::Observer, n_events, next_sample));
         }
         if outcome == StepOutcome::ReachedStop {
-            return Ok(Summary { t: t_b, stop: StopReason::Finished, events: n_events });
+            return Ok(summary(t_b, StopReason::Finished, n_events, next_sample));
         }
     }
 }
@@ -583,6 +633,57 @@ mod tests {
         assert!(matches!(lazy.interpolate(t, &mut mid), Err(SolveError::DenseOutputNotPrepared { .. })));
         lazy.prepare_dense().unwrap();
         lazy.interpolate(t, &mut mid).unwrap();
+    }
+
+    /// A run stopped at a terminal event and resumed from a fresh solver at the
+    /// event's state, with its velocity reversed (a bounce off x = 0), keeps
+    /// the whole run's sample grid: every sample of the uninterrupted grid is
+    /// observed once, in order, and the samples after the bounce are the
+    /// reflected oscillator's, |x| = |sin t|.
+    #[test]
+    fn a_resumed_run_keeps_the_grid_of_the_whole_run() {
+        let config = Config { rtol: 1e-12, atol: 1e-12, ..Config::default() };
+        let (t_end, n) = (5.0, 51);
+        let mut solver = Method::Dop853.build(Oscillator, 0.0, &[0.0, -1.0], &config).unwrap();
+        let mut times = Vec::new();
+        let mut xs = Vec::new();
+        let mut event_state = vec![0.0; 2];
+        let mut events = [Event::new(|_, y: &[f64]| y[0] + 0.5).with_direction(Direction::Falling).with_terminal(true)];
+        let first = integrate(&mut solver, t_end, Output::Samples(n), &mut events, |o| {
+            match o.kind {
+                ObservationKind::Event { .. } => event_state.copy_from_slice(o.y),
+                _ => {
+                    times.push(o.t);
+                    xs.push(o.y[0]);
+                }
+            }
+            ControlFlow::Continue(())
+        })
+        .unwrap();
+        // x = −sin t reaches −1/2 at t = π/6.
+        assert!((first.t - std::f64::consts::FRAC_PI_6).abs() < 1e-10, "{first:?}");
+        assert_eq!(first.stop, StopReason::Event { index: 0 });
+        assert_eq!(first.next_sample, times.len());
+        event_state[1] = -event_state[1];
+        let mut fresh = Method::Dop853.build(Oscillator, first.t, &event_state, &config).unwrap();
+        let resume = Resume { t0: 0.0, next_sample: first.next_sample };
+        // (It would cross x = −1/2 falling again at t = 3π/2: no events now.)
+        let second = integrate_resumed(&mut fresh, t_end, Output::Samples(n), resume, &mut [], |o| {
+            times.push(o.t);
+            xs.push(o.y[0]);
+            ControlFlow::Continue(())
+        })
+        .unwrap();
+        assert_eq!(second.stop, StopReason::Finished);
+        assert_eq!(second.next_sample, n);
+        let grid: Vec<f64> =
+            (0..n).map(|k| if k + 1 == n { t_end } else { t_end * (k as f64 / (n - 1) as f64) }).collect();
+        assert_eq!(times, grid);
+        // After the bounce: x = −sin(π/3 − t) (the reflected motion), i.e. x(π/6) = −1/2 rising.
+        for (&t, &x) in times.iter().zip(&xs).filter(|(&t, _)| t > first.t) {
+            let expected = -(std::f64::consts::FRAC_PI_3 - t).sin();
+            assert!((x - expected).abs() < 1e-9, "t = {t}: {x} vs {expected}");
+        }
     }
 
     /// Over 100 periods the projection keeps x² + v² = 1 at round-off, where the

@@ -90,8 +90,8 @@ pub use gauss_newton::{
     gauss_newton, gauss_newton_step, GaussNewtonConfig, GaussNewtonError, GaussNewtonSolution, LeastSquares,
 };
 pub use integrate::{
-    integrate, integrate_projected, integrate_to, probe_spacing, Direction, Event, Observation, ObservationKind,
-    Output, Projection, StopReason, Summary, FORESIGHT_MARGIN,
+    integrate, integrate_projected, integrate_resumed, integrate_to, probe_spacing, Direction, Event, Observation,
+    ObservationKind, Output, Projection, Resume, StopReason, Summary, FORESIGHT_MARGIN,
 };
 pub use linalg::{LinearSolver, DEFAULT_PIVOT_RATIO};
 pub use method::Method;

@@ -210,7 +210,8 @@ impl Derived {
                 if let (Some(label), None) = (row.event, point) {
                     events.push((data.len() / width, label.to_string()));
                 }
-                if row.event.is_none() {
+                // Impact rows are drawn (the kink of a bounce); crossings are not samples.
+                if row.event.is_none_or(|e| e.starts_with("impact ")) {
                     plot.push(row.t, row.q, row.qd, row.invariants);
                 }
                 data.push(row.t);

@@ -119,6 +119,8 @@ enum Item<'a> {
     MultiplierEquation(usize, ExprId),
     /// How q'' and λ are found, and the constraint forces.
     ConstraintForces,
+    /// One impact: its surface, ∇φ and v_n.
+    Impact(&'a mech::ImpactLaw),
     /// The cyclic coordinates and what they conserve.
     Cyclic,
     /// The conserved quantities of symmetries of L (Noether), when there are any.
@@ -147,6 +149,7 @@ enum Section {
     Equations,
     Constraints,
     Multipliers,
+    Impacts,
     Hamiltonian,
     Hamilton,
 }
@@ -196,6 +199,12 @@ fn layout<'a>(d: &'a Derivation, emit: &mut impl FnMut(Item<'a>)) {
             emit(Item::MultiplierEquation(i, e));
         }
         emit(Item::ConstraintForces);
+    }
+    if !d.impacts().is_empty() {
+        emit(Item::Heading(Section::Impacts));
+        for i in d.impacts() {
+            emit(Item::Impact(i));
+        }
     }
     emit(Item::Cyclic);
     if symmetries(d).next().is_some() {

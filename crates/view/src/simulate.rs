@@ -47,16 +47,17 @@ pub fn summary_json(
     }
     let mut inv = serde_json::Map::new();
     for a in &r.invariants {
-        inv.insert(
-            a.name.clone(),
-            json!({
-                "initial": a.initial,
-                "final": a.final_value,
-                "max_abs_drift": a.max_abs_drift,
-                "max_rel_drift": a.max_rel_drift,
-                "conserved": a.conserved,
-            }),
-        );
+        let mut entry = json!({
+            "initial": a.initial,
+            "final": a.final_value,
+            "max_abs_drift": a.max_abs_drift,
+            "max_rel_drift": a.max_rel_drift,
+            "conserved": a.conserved,
+        });
+        if !r.impacts.is_empty() {
+            entry["impact_change"] = json!(a.impact_change);
+        }
+        inv.insert(a.name.clone(), entry);
     }
     let v = json!({
         "format": "lagrange.simulate/1",
@@ -102,7 +103,22 @@ pub fn summary_json(
         v["constraints"] = Value::Object(cs);
         v["stabilization"] = json!("projection after every step (positions by Gauss-Newton, then velocities)");
     }
+    if !r.impacts.is_empty() {
+        v["impacts"] = impacts_json(&r.impacts);
+        v["energy_lost_at_impacts"] = json!(r.impacts.iter().map(|i| i.energy_lost).sum::<f64>());
+    }
     v
+}
+
+/// Each impact surface's count, the kinetic energy its impacts took and its
+/// fastest impact's normal speed.
+pub fn impacts_json(impacts: &[mech::ImpactTally]) -> Value {
+    Value::Array(
+        impacts
+            .iter()
+            .map(|i| json!({"name": i.name, "count": i.count, "energy_lost": i.energy_lost, "fastest_normal_speed": i.fastest}))
+            .collect(),
+    )
 }
 
 /// A run's warning in words, with the settings a user can change spelled as
@@ -217,6 +233,15 @@ pub fn summary_text(
             ));
         }
         s.push_str("  (* conserved according to the derivation)\n");
+        if !r.impacts.is_empty() {
+            s.push_str("  (the drifts leave out the jumps at impacts)\n");
+        }
+    }
+    if !r.impacts.is_empty() {
+        s.push_str("impacts             count    energy lost    fastest |v_n|\n");
+        for i in &r.impacts {
+            s.push_str(&format!("  {:<16} {:>7} {:>14.6e} {:>16.6e}\n", i.name, i.count, i.energy_lost, i.fastest));
+        }
     }
     if !r.constraints.is_empty() {
         s.push_str("constraints (the state is projected onto them after every step)\n");

@@ -53,12 +53,26 @@ pub enum CheckKind {
         /// Its value, an expression of t and the parameters.
         value: ExprId,
     },
+    /// The impact `name`'s coefficient of restitution: in [0, 1].
+    Restitution {
+        /// The impact's name.
+        name: String,
+        /// e, an expression of the parameters.
+        e: ExprId,
+    },
+    /// At the start: the impact `name`'s surface φ(q, t) is not crossed, φ ≥ 0.
+    Surface {
+        /// The impact's name.
+        name: String,
+        /// φ, an expression of (q, t).
+        phi: ExprId,
+    },
 }
 
 impl ValueCheck {
     /// Whether the check needs the start (coordinates and t), not only the parameters.
     pub fn at_start(&self) -> bool {
-        matches!(self.kind, CheckKind::Axle { .. } | CheckKind::Input { .. })
+        matches!(self.kind, CheckKind::Axle { .. } | CheckKind::Input { .. } | CheckKind::Surface { .. })
     }
 
     /// Runs the check; `env` gives the parameters (and, for a start check,
@@ -126,6 +140,25 @@ impl ValueCheck {
                 )
                 .with_help("give the input a value that is finite at t = 0, e.g. shifted in time: 1/(t + 1) rather than 1/t"))
             }
+            CheckKind::Restitution { name, e } => match value(*e) {
+                Some(e) if !(0.0..=1.0).contains(&e) => Err(ModelError::at(
+                    at(),
+                    format!("the restitution of impact '{name}' must be between 0 and 1, not {}", num::Shortest(e)),
+                )
+                .with_help("e = 1 is an elastic bounce (no energy lost), e = 0 a plastic one (the normal velocity lost)")),
+                _ => Ok(()),
+            },
+            CheckKind::Surface { name, phi } => match value(*phi) {
+                Some(phi) if phi.is_nan() || phi < 0.0 => Err(ModelError::at(
+                    at(),
+                    format!(
+                        "the start is on the wrong side of the surface of impact '{name}': the surface is {} there, and the motion keeps it ≥ 0",
+                        num::Shortest(phi)
+                    ),
+                )
+                .with_help("start where the surface expression is ≥ 0 (change [initial]), or write the surface with the other sign")),
+                _ => Ok(()),
+            },
         }
     }
 }

@@ -12,6 +12,8 @@ pub(crate) struct InvariantAudit {
     names: Vec<String>,
     conserved: Vec<bool>,
     initial: Option<Vec<f64>>,
+    /// The sum of the jumps at impacts, per invariant.
+    jumps: Vec<f64>,
     last: Vec<f64>,
     max_abs: Vec<f64>,
     max_rel: Vec<f64>,
@@ -30,6 +32,7 @@ impl InvariantAudit {
                 .map(|inv| if inv.name == "H" { d.hamiltonian_conserved } else { inv.name != "E" })
                 .collect(),
             initial: None,
+            jumps: vec![0.0; n],
             last: vec![0.0; n],
             max_abs: vec![0.0; n],
             max_rel: vec![0.0; n],
@@ -47,7 +50,7 @@ impl InvariantAudit {
     pub(crate) fn observe(&mut self, inv: &[f64]) {
         let init = self.initial.get_or_insert_with(|| inv.to_vec());
         for k in 0..inv.len() {
-            let a = (inv[k] - init[k]).abs();
+            let a = (inv[k] - init[k] - self.jumps[k]).abs();
             if a.is_finite() {
                 self.max_abs[k] = self.max_abs[k].max(a);
                 let scale = init[k].abs();
@@ -55,6 +58,14 @@ impl InvariantAudit {
             }
         }
         self.last.copy_from_slice(inv);
+    }
+
+    /// Records the jump of the invariants at an impact, from `before` to
+    /// `after`: the drift measured after it leaves the jump out.
+    pub(crate) fn jump(&mut self, before: &[f64], after: &[f64]) {
+        for ((j, b), a) in self.jumps.iter_mut().zip(before).zip(after) {
+            *j += a - b;
+        }
     }
 
     /// One audit per invariant.
@@ -68,6 +79,7 @@ impl InvariantAudit {
                 final_value: self.last[k],
                 max_abs_drift: self.max_abs[k],
                 max_rel_drift: self.max_rel[k],
+                impact_change: self.jumps[k],
             })
             .collect()
     }

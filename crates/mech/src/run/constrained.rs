@@ -473,7 +473,16 @@ impl Constrained {
             h_size: 0.0,
         };
         let initial = (y0[..n].to_vec(), y0[n..2 * n].to_vec());
-        let start = Start { solver, y0, initial, method, form: Form::Lagrange, dt: None, pilot_rhs_evaluations: 0 };
+        let start = Start {
+            solver,
+            y0,
+            initial,
+            method,
+            form: Form::Lagrange,
+            dt: None,
+            pilot_rhs_evaluations: 0,
+            restart: None,
+        };
         Ok((constrained, start))
     }
 }
@@ -534,6 +543,7 @@ impl Stepping for Constrained {
                 final_value: self.hw_last,
                 max_abs_drift: self.hw_abs,
                 max_rel_drift: if self.h_size > 0.0 { self.hw_abs / self.h_size } else { self.hw_abs },
+                impact_change: 0.0,
             });
         }
         constraints.clone_from(&self.audits);

@@ -144,7 +144,21 @@ impl Plain {
         let promise = promise.map(|bound| Promise { bound, explained, h0: None, drift: 0.0 });
         let plain = Plain { system: probe_system, names: dynamics.coordinate_names().to_vec(), form, n, promise };
         let initial = (q0.to_vec(), qd0.to_vec());
-        Ok((plain, Start { solver, y0, initial, method, form, dt, pilot_rhs_evaluations: pilot_rhs }))
+        // After an impact: the same method and step, started afresh at the new state.
+        let restart_config = Config { dt, ..solver_config };
+        let restart: super::Restart = Box::new(move |t, q, qd| {
+            let mut system = system.clone();
+            let y = system.initial_state(t, q, qd).map_err(|e| e.message)?;
+            let solver = if form == Form::Separable {
+                method.build_separable(system, t, &y, &restart_config)
+            } else {
+                method.build(system, t, &y, &restart_config)
+            };
+            solver.map_err(|e| e.to_string())
+        });
+        let start =
+            Start { solver, y0, initial, method, form, dt, pilot_rhs_evaluations: pilot_rhs, restart: Some(restart) };
+        Ok((plain, start))
     }
 }
 

@@ -78,10 +78,14 @@ pub struct Audit {
     pub initial: f64,
     /// Value at the last row.
     pub final_value: f64,
-    /// Largest |I(t) − I(0)| over the rows.
+    /// Largest |I(t) − I(0)| over the rows (the jumps at impacts left out).
     pub max_abs_drift: f64,
-    /// Largest |I(t) − I(0)| / |I(0)| (or the absolute drift where I(0) = 0).
+    /// Largest |I(t) − I(0)| / |I(0)| (or the absolute drift where I(0) = 0),
+    /// the jumps at impacts left out.
     pub max_rel_drift: f64,
+    /// The sum of its jumps at impacts (0 without impacts): the drifts measure
+    /// I(t) − I(0) less the jumps before t.
+    pub impact_change: f64,
 }
 
 /// What a run did.
@@ -133,6 +137,8 @@ pub struct RunReport {
     pub wall_seconds: f64,
     /// With constraints: the audit of each constraint (empty otherwise).
     pub constraints: Vec<ConstraintAudit>,
+    /// With `[[impacts]]`: what happened at each surface (empty otherwise).
+    pub impacts: Vec<super::ImpactTally>,
 }
 
 /// Why a run failed midway, as data beside the message: what happened, at
@@ -181,6 +187,23 @@ pub enum RunFailure {
     /// The run could not reach its end time within its step budget: it spent
     /// the budget, or its pace was foreseen far beyond it.
     StepBudget(StepBudget),
+    /// Impacts accumulated (Zeno) or left the motion resting on a surface,
+    /// a contact the run does not model; or a surface was found crossed.
+    Zeno {
+        /// When.
+        t: f64,
+        /// The impact's name.
+        impact: String,
+        /// Impacts so far, on every surface.
+        impacts: usize,
+    },
+    /// A row was found past an impact surface that no event saw crossed.
+    SurfaceCrossed {
+        /// When.
+        t: f64,
+        /// The impact's name.
+        impact: String,
+    },
 }
 
 impl RunFailure {
@@ -194,6 +217,8 @@ impl RunFailure {
             RunFailure::Step { .. } => "step",
             RunFailure::Row { .. } => "row",
             RunFailure::StepBudget(_) => "step_budget",
+            RunFailure::Zeno { .. } => "zeno",
+            RunFailure::SurfaceCrossed { .. } => "surface_crossed",
         }
     }
 }

@@ -38,8 +38,8 @@ class Model:
     ``name``, ``coordinates``, ``parameters``, ``gravity``, ``lagrangian``,
     ``kinetic``, ``potential``, ``dissipation``, ``forces`` (coordinate →
     generalized force), ``initial`` (``"th"``/``"th'"`` → value),
-    ``particles``, ``bodies`` and ``constraints`` (lists of dicts with the
-    file's keys). ``set`` overrides parameter values; ``folder`` is where body
+    ``particles``, ``bodies``, ``constraints`` and ``impacts`` (lists of dicts
+    with the file's keys). ``set`` overrides parameter values; ``folder`` is where body
     files the model names are read from. Bad input raises
     :class:`lagrange.ModelError` pointing into the model's text
     (``model.source``).
@@ -61,6 +61,7 @@ class Model:
         initial: Optional[Mapping[Any, Any]] = None,
         bodies: Optional[Sequence[Mapping[str, Any]]] = None,
         constraints: Optional[Sequence[Mapping[str, Any]]] = None,
+        impacts: Optional[Sequence[Mapping[str, Any]]] = None,
         set: Optional[Mapping[str, float]] = None,
         folder: Optional[PathLike] = None,
     ) -> None:
@@ -73,7 +74,12 @@ class Model:
             top={"gravity": gravity, "lagrangian": lagrangian, "kinetic": kinetic, "potential": potential,
                  "dissipation": dissipation},
             tables={"forces": forces or {}, "initial": initial or {}},
-            arrays={"particles": particles or [], "bodies": bodies or [], "constraints": constraints or []},
+            arrays={
+                "particles": particles or [],
+                "bodies": bodies or [],
+                "constraints": constraints or [],
+                "impacts": impacts or [],
+            },
         )
         try:
             native = _native.from_toml(text, "<model>", _floats(set), _folder(folder))

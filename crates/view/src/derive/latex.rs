@@ -59,6 +59,11 @@ impl Latex<'_> {
                 format!("0 &= {}", self.l(c.expr)),
                 Some(format!("constraint {} ({})", c.name, c.kind.name())),
             ),
+            Item::Impact(i) => (
+                Self::CONSTRAINTS,
+                format!("0 &\\le {}", self.l(i.surface)),
+                Some(format!("impact {} (restitution ${}$)", i.name, self.l(i.restitution))),
+            ),
             Item::MultiplierEquation(i, e) => (
                 Self::CONSTRAINTS,
                 format!("0 &= {}", self.l(e)),

@@ -239,6 +239,21 @@ impl<'a> MathMl<'a> {
                 }
             }
             Item::ConstraintForces => self.constraint_forces(),
+            Item::Impact(i) => {
+                let words = format!("{} (e = {})", i.name, pool.print(i.restitution, sym::PrintOptions::text()));
+                self.row(
+                    "<mn>0</mn>".into(),
+                    format!("<mo>&#x2264;</mo>{}", self.m(i.surface)),
+                    Self::note(&words, ""),
+                );
+                let gradient: Vec<String> = i.gradient.iter().map(|&g| self.m(g)).collect();
+                let v_n = sub("v", "<mi>n</mi>");
+                self.para(&format!(
+                    "{}, {}",
+                    inline(&format!("<mo>&#x2207;</mo><mi>&#x3C6;</mi>{EQUALS}{}", tuple(&gradient))),
+                    inline(&format!("{v_n}{EQUALS}{}", self.m(i.normal_velocity)))
+                ));
+            }
             Item::Cyclic => self.cyclic(),
             Item::Symmetries => self.symmetries(),
             Item::Hamiltonian(Some(h)) => self.row("<mi>H</mi>".into(), self.m(h), None),
@@ -362,6 +377,13 @@ impl<'a> MathMl<'a> {
                         dotted_twice(q)
                     )),
                     inline(&format!("<mi>λ</mi>{EQUALS}{}", tuple(&lambdas)))
+                ));
+            }
+            Section::Impacts => {
+                self.heading("Impacts");
+                self.para(&format!(
+                    "The motion keeps each surface φ(q, t) ≥ 0; where φ = 0 with the normal velocity v_n = ∇φ·q' + ∂φ/∂t < 0, {}.",
+                    escape(mech::IMPACT_LAW)
                 ));
             }
             Section::Hamiltonian => self.heading(&format!(

@@ -150,6 +150,15 @@ impl Text<'_> {
                     }
                 }
             }
+            Item::Impact(i) => {
+                let _ = writeln!(o, "  {}: {} ≥ 0,  restitution {}", i.name, self.s(i.surface), self.s(i.restitution));
+                let gradient: Vec<String> = i.gradient.iter().map(|&g| self.s(g)).collect();
+                let _ = writeln!(o, "    ∇φ = [{}]", gradient.join(", "));
+                if !pool.is_zero(i.rate) {
+                    let _ = writeln!(o, "    ∂φ/∂t = {}", self.s(i.rate));
+                }
+                let _ = writeln!(o, "    v_n = {}", self.s(i.normal_velocity));
+            }
             Item::Cyclic => self.cyclic(&mut o),
             Item::Symmetries => {
                 let _ = writeln!(o, "\nsymmetries of L (Noether: Q = Σ p·ξ − F is conserved when δL = dF/dt)");
@@ -208,6 +217,11 @@ impl Text<'_> {
                 let lambdas: Vec<String> = d.constraints().list.iter().map(|c| self.s(c.multiplier)).collect();
                 writeln!(o, "\nequations with multipliers  M q'' = f + Aᵀλ,  λ = ({})", lambdas.join(", "))
             }
+            Section::Impacts => writeln!(
+                o,
+                "\nimpacts (the motion keeps φ(q, t) ≥ 0; where φ = 0 with v_n = ∇φ·q' + ∂φ/∂t < 0: {})",
+                mech::IMPACT_LAW
+            ),
             Section::Hamiltonian => writeln!(o, "\nHamiltonian  H = Σ q'·p − L, in (q, p, t)"),
             Section::Hamilton => writeln!(
                 o,
