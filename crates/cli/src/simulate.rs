@@ -12,7 +12,7 @@
 use crate::diagnostics::Failure;
 use crate::interrupt::{self, Signal};
 use crate::stream::RowWriter;
-use mech::{Derivation, RunConfig, RunError, RunSettings, SettingError, StopCondition};
+use mech::{Derivation, RunConfig, RunError, RunSettings, Section, SettingError, StopCondition};
 use num::Method;
 use std::io::{IsTerminal, Write};
 use std::ops::ControlFlow;
@@ -83,10 +83,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     }
     let mut section = match &opts.section {
         Some(text) => {
-            let condition = parse_stop(&derivation, text, "--section")?;
-            let axes = opts.section_axes.as_deref();
-            let s = mech::Section::new(&derivation, condition, axes)
-                .map_err(|e| Failure::expression("--section-axes", axes.unwrap_or_default(), e, 0))?;
+            let s = parse_section(&derivation, text, opts.section_axes.as_deref())?;
             config.crossings.push(s.condition().clone());
             Some(s)
         }
@@ -385,6 +382,14 @@ pub(crate) fn input_failure(path: &Path, source: &str, e: RunError) -> Failure {
 /// `EXPR < RHS`, `EXPR > RHS` or `EXPR` (any crossing of zero), for the option `option`.
 fn parse_stop(d: &Derivation, text: &str, option: &str) -> Result<StopCondition, Failure> {
     StopCondition::parse(d, text, option).map_err(|e| Failure::expression(option, text, e, 0))
+}
+
+/// The Poincaré section of `--section TEXT` drawn in the plane of
+/// `--section-axes AXES` (by default the first coordinate the condition does
+/// not name, and its momentum), refused as bad input naming the option at fault.
+pub(crate) fn parse_section(d: &Derivation, text: &str, axes: Option<&str>) -> Result<Section, Failure> {
+    let condition = parse_stop(d, text, "--section")?;
+    Section::new(d, condition, axes).map_err(|e| Failure::expression("--section-axes", axes.unwrap_or_default(), e, 0))
 }
 
 fn progress_bar(until: f64) -> Option<indicatif::ProgressBar> {

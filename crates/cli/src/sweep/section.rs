@@ -44,7 +44,7 @@ struct Points {
 
 /// Runs the sweep and writes its points and figure.
 pub fn run(d: &Derivation, grid: &Grid, opts: &Options<'_>) -> Result<(), Failure> {
-    let section = section_of(d, opts)?;
+    let section = crate::simulate::parse_section(d, opts.condition, opts.axes)?;
     let mut columns = vec!["run".to_string()];
     columns.extend(grid.axes.iter().map(|a| a.name.clone()));
     let mut row_columns = mech::row_columns(d);
@@ -162,14 +162,6 @@ pub fn run(d: &Derivation, grid: &Grid, opts: &Options<'_>) -> Result<(), Failur
         return Err(Failure::run(format!("{} of {n_runs} runs failed{kept}", failures.len())));
     }
     Ok(())
-}
-
-/// The section of `--section` and `--section-axes`, refused as bad input in their names.
-fn section_of(d: &Derivation, opts: &Options<'_>) -> Result<Section, Failure> {
-    let condition = StopCondition::parse(d, opts.condition, "--section")
-        .map_err(|e| Failure::expression("--section", opts.condition, e, 0))?;
-    Section::new(d, condition, opts.axes)
-        .map_err(|e| Failure::expression("--section-axes", opts.axes.unwrap_or_default(), e, 0))
 }
 
 /// The grid point of a run as a label: `y0 = 0.1, py0 = 0`.
