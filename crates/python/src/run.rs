@@ -241,11 +241,7 @@ impl Derived {
         let figure = match &section {
             Some(s) => {
                 let points = section_points.len();
-                if let serde_json::Value::Object(map) = &mut summary {
-                    let value =
-                        serde_json::json!({"condition": s.condition().text, "axes": s.axes(), "points": points});
-                    map.insert("section".into(), value);
-                }
+                summary["section"] = view::simulate::section_json(s, points);
                 text.push_str(&format!(
                     "{points} point{} on the section {}\n",
                     if points == 1 { "" } else { "s" },

@@ -1,5 +1,6 @@
 //! The summary of a simulated run, for people ([`summary_text`]) and as the
-//! `lagrange.simulate/1` JSON value ([`summary_json`]).
+//! `lagrange.simulate/1` JSON value ([`summary_json`], with [`section_json`]
+//! for a run with a Poincaré section).
 //!
 //! The run is `mech::simulate`'s [`RunReport`]; what only the front end knows
 //! comes as plain data: the signal that stopped the run ([`Interrupted`]), the
@@ -103,6 +104,12 @@ pub fn summary_json(
         v["stabilization"] = json!("projection after every step (positions by Gauss-Newton, then velocities)");
     }
     v
+}
+
+/// The `section` field of the JSON summary of a run with a Poincaré section:
+/// its condition as written, the plane's two axes, and the number of points.
+pub fn section_json(section: &mech::Section, points: usize) -> Value {
+    json!({"condition": section.condition().text, "axes": section.axes(), "points": points})
 }
 
 /// A run's warning in words, with the settings a user can change spelled as

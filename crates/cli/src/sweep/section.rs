@@ -207,8 +207,7 @@ fn one_run(
     config.crossings = vec![section.condition().clone()];
     let mut lines = String::new();
     let mut plane = Vec::new();
-    let mut bodies = mech::BodyRecorder::new(d);
-    let mut body_values = vec![0.0; bodies.as_ref().map_or(0, |b| b.columns().len())];
+    let mut fields = crate::simulate::RowFields::new(d);
     let mut line: Vec<u8> = Vec::with_capacity(256);
     let result = mech::simulate(d, &config, |row| {
         if interrupt::received().is_some() {
@@ -225,15 +224,7 @@ fn one_run(
             crate::decimal::push_f64(&mut line, *v);
         }
         line.push(b',');
-        crate::decimal::push_f64(&mut line, row.t);
-        if let Some(b) = bodies.as_mut() {
-            b.eval(row.t, row.q, row.qd, &mut body_values);
-        }
-        let state = row.q.iter().chain(row.qd).chain(row.invariants).chain(&body_values).chain(row.constraints);
-        for &v in state.chain(extra.iter().map(|&k| &point[k])) {
-            line.push(b',');
-            crate::decimal::push_f64(&mut line, v);
-        }
+        fields.push(&mut line, row, Some(&point), extra);
         line.push(b'\n');
         lines.push_str(&String::from_utf8_lossy(&line));
         plane.push(point);
