@@ -57,11 +57,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let mut config = crate::simulate::run_config(path, &settings)?;
     let mut section = match &args.section {
         Some(text) => {
-            let condition = mech::StopCondition::parse(&d, text, "--section")
-                .map_err(|e| Failure::expression("--section", text, e, 0))?;
-            let axes = args.section_axes.as_deref();
-            let s = mech::Section::new(&d, condition, axes)
-                .map_err(|e| Failure::expression("--section-axes", axes.unwrap_or_default(), e, 0))?;
+            let s = crate::simulate::parse_section(&d, text, args.section_axes.as_deref())?;
             config.crossings.push(s.condition().clone());
             Some(s)
         }

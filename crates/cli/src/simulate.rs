@@ -12,7 +12,7 @@
 use crate::diagnostics::Failure;
 use crate::interrupt::{self, Signal};
 use crate::stream::RowWriter;
-use mech::{Derivation, RunConfig, RunError, RunSettings, SettingError, StopCondition};
+use mech::{Derivation, RunConfig, RunError, RunSettings, Section, SettingError, StopCondition};
 use num::Method;
 use std::io::{IsTerminal, Write};
 use std::ops::ControlFlow;
@@ -83,10 +83,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     }
     let mut section = match &opts.section {
         Some(text) => {
-            let condition = parse_stop(&derivation, text, "--section")?;
-            let axes = opts.section_axes.as_deref();
-            let s = mech::Section::new(&derivation, condition, axes)
-                .map_err(|e| Failure::expression("--section-axes", axes.unwrap_or_default(), e, 0))?;
+            let s = parse_section(&derivation, text, opts.section_axes.as_deref())?;
             config.crossings.push(s.condition().clone());
             Some(s)
         }
@@ -103,9 +100,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     // A section's CSV: its points' rows, then the plane's axes where they are not columns already.
     let mut section_columns: Vec<usize> = Vec::new();
     let inv_names: Vec<String> = mech::invariants_of(&derivation).into_iter().map(|i| i.name).collect();
-    // Rigid bodies: ω and L per body as extra columns.
-    let mut bodies = mech::BodyRecorder::new(&derivation);
-    let mut body_values = vec![0.0; bodies.as_ref().map_or(0, |b| b.columns().len())];
+    let mut fields = RowFields::new(&derivation);
     // The file is opened and locked before the run (one that cannot be written
     // is bad input). A new file gets its header at once, so that a run stopped
     // before its first row, even by SIGKILL, leaves a CSV that reads as one
@@ -183,20 +178,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
         if let Some(w) = csv.as_mut() {
             let r = (|| -> std::io::Result<()> {
                 line.clear();
-                crate::decimal::push_f64(&mut line, row.t);
-                if let Some(b) = bodies.as_mut() {
-                    b.eval(row.t, row.q, row.qd, &mut body_values);
-                }
-                for &v in row.q.iter().chain(row.qd).chain(row.invariants).chain(&body_values).chain(row.constraints) {
-                    line.push(b',');
-                    crate::decimal::push_f64(&mut line, v);
-                }
-                if let Some(point) = point {
-                    for &k in &section_columns {
-                        line.push(b',');
-                        crate::decimal::push_f64(&mut line, point[k]);
-                    }
-                }
+                fields.push(&mut line, row, point.as_ref(), &section_columns);
                 if with_events {
                     // Conditions are quoted: they may contain commas (atan2(y, x) < 0).
                     write!(
@@ -290,11 +272,8 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     let mut text = if opts.summary_json {
         let timing = view::simulate::Timing { derive_seconds: derived, setup_seconds: first_row };
         let mut value = view::simulate::summary_json(&report, &names, &timing, interrupted.as_ref(), &crate::TERMS);
-        if let (Some(s), serde_json::Value::Object(map)) = (&section, &mut value) {
-            map.insert(
-                "section".into(),
-                serde_json::json!({"condition": s.condition().text, "axes": s.axes(), "points": crossings_seen}),
-            );
+        if let Some(s) = &section {
+            value["section"] = view::simulate::section_json(s, crossings_seen);
         }
         let mut s = serde_json::to_string_pretty(&value).unwrap_or_default();
         s.push('\n');
@@ -332,6 +311,39 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
     match failure {
         Some(message) => Err(Failure::run(format!("{message}{}", keeps("the rows up to there")))),
         None => Ok(()),
+    }
+}
+
+/// The CSV fields of a run's rows, as `simulate --out` writes them and
+/// `sweep --section` after each row's run and grid values.
+pub(crate) struct RowFields {
+    /// Rigid bodies' ω and L, six columns per body (None without bodies).
+    bodies: Option<mech::BodyRecorder>,
+    body_values: Vec<f64>,
+}
+
+impl RowFields {
+    pub(crate) fn new(d: &Derivation) -> RowFields {
+        let bodies = mech::BodyRecorder::new(d);
+        let body_values = vec![0.0; bodies.as_ref().map_or(0, |b| b.columns().len())];
+        RowFields { bodies, body_values }
+    }
+
+    /// Appends the fields of `row` to `line`, comma separated, in the order of
+    /// `mech::row_columns`: t, the coordinates, the velocities, the invariants,
+    /// the bodies' ω and L, the constraints' columns; then, for a section's
+    /// `point`, its axes `extra` (those that are not columns already).
+    pub(crate) fn push(&mut self, line: &mut Vec<u8>, row: &mech::Row<'_>, point: Option<&[f64; 2]>, extra: &[usize]) {
+        crate::decimal::push_f64(line, row.t);
+        if let Some(b) = self.bodies.as_mut() {
+            b.eval(row.t, row.q, row.qd, &mut self.body_values);
+        }
+        let state = row.q.iter().chain(row.qd).chain(row.invariants).chain(&self.body_values).chain(row.constraints);
+        let axes = point.into_iter().flat_map(|p| extra.iter().map(move |&k| &p[k]));
+        for &v in state.chain(axes) {
+            line.push(b',');
+            crate::decimal::push_f64(line, v);
+        }
     }
 }
 
@@ -388,6 +400,14 @@ pub(crate) fn input_failure(path: &Path, source: &str, e: RunError) -> Failure {
 /// `EXPR < RHS`, `EXPR > RHS` or `EXPR` (any crossing of zero), for the option `option`.
 fn parse_stop(d: &Derivation, text: &str, option: &str) -> Result<StopCondition, Failure> {
     StopCondition::parse(d, text, option).map_err(|e| Failure::expression(option, text, e, 0))
+}
+
+/// The Poincaré section of `--section TEXT` drawn in the plane of
+/// `--section-axes AXES` (by default the first coordinate the condition does
+/// not name, and its momentum), refused as bad input naming the option at fault.
+pub(crate) fn parse_section(d: &Derivation, text: &str, axes: Option<&str>) -> Result<Section, Failure> {
+    let condition = parse_stop(d, text, "--section")?;
+    Section::new(d, condition, axes).map_err(|e| Failure::expression("--section-axes", axes.unwrap_or_default(), e, 0))
 }
 
 fn progress_bar(until: f64) -> Option<indicatif::ProgressBar> {

@@ -285,14 +285,21 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     if let Some(code) = code {
         eprintln!("{code}");
     }
-    Ok(())
+    // Some rows failing is what a sweep finds out; all of them, that it found nothing.
+    match &tally.first_failure {
+        Some((run, reason)) if tally.failed == tally.rows => {
+            Err(Failure::run(format!("every run failed ({}); the first, run {run}: {reason}", tally.rows)))
+        }
+        _ => Ok(()),
+    }
 }
 
-/// The rows written so far and how many of them failed.
+/// The rows written so far, how many of them failed, and the first that did.
 #[derive(Default)]
 struct Tally {
     rows: usize,
     failed: usize,
+    first_failure: Option<(usize, String)>,
 }
 
 impl Tally {
@@ -301,6 +308,7 @@ impl Tally {
         self.rows += 1;
         if !row.failure.is_empty() {
             self.failed += 1;
+            self.first_failure.get_or_insert_with(|| (row.run, row.failure.clone()));
         }
         if let Some(map) = map {
             map.add(row);

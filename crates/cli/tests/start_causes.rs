@@ -32,14 +32,19 @@ fn refused(command: &[&str], model: &str, extra: &[&str], expect: &[&str]) {
 }
 
 /// A sweep over g of `model` (`extra` arguments): every row fails at the
-/// start with all of `expect` in its failure.
+/// start with all of `expect` in its failure, so the sweep exits 1 with the
+/// first run's reason, and the CSV keeps both rows.
 #[track_caller]
 fn rows_fail(model: &str, extra: &[&str], expect: &[&str]) {
     let out = TempFile::new("sweep", "csv");
     let mut args = vec!["sweep", model, "--until", "1", "--grid", "g=1:2:2", "--out", out.path()];
     args.extend(extra);
     let r: Run = run(&args);
-    assert_eq!(r.code, Some(0), "{}", r.describe());
+    assert_eq!(r.code, Some(1), "{}", r.describe());
+    assert!(r.stderr.contains("every run failed (2); the first, run 0: "), "{}", r.describe());
+    for e in expect {
+        assert!(r.stderr.contains(e), "expected `{e}` in:\n{}", r.describe());
+    }
     let text = std::fs::read_to_string(out.path()).unwrap();
     let rows: Vec<&str> = text.lines().filter(|l| !l.starts_with('#') && !l.starts_with("run,")).collect();
     assert_eq!(rows.len(), 2, "{text}");

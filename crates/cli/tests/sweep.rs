@@ -183,6 +183,38 @@ fn a_run_whose_series_is_not_finite_fails_alone() {
     assert_eq!(rows[4].split_once(',').unwrap().1, alone.split_once(',').unwrap().1);
 }
 
+/// A sweep whose every run fails found nothing: exit 1 with the first run's
+/// reason, every row written all the same.
+#[test]
+fn a_sweep_whose_every_run_fails_exits_1_with_the_first_reason() {
+    let model = scratch("sweep-test", "root-all.toml");
+    std::fs::write(
+        &model,
+        "name = \"falling root\"\ncoordinates = [\"x\"]\nlagrangian = \"x'^2/2 - x^(3/2)\"\n\
+         [initial]\nx = 1.0\n\"x'\" = 0.0\n",
+    )
+    .unwrap();
+    let out = scratch("sweep-test", "root-all.csv");
+    let r = lagrange(&[
+        "sweep",
+        model.to_str().unwrap(),
+        "--until",
+        "0.5",
+        "--grid",
+        "x=-1:-0.5:3",
+        "--no-lyapunov",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(r.code, Some(1), "{}", r.describe());
+    assert!(
+        r.stderr.contains("every run failed (3); the first, run 0: right-hand side failed at t = 0"),
+        "{}",
+        r.stderr
+    );
+    assert_eq!(text(&out).lines().skip(2).count(), 3);
+}
+
 /// A row whose parameter values the model refuses (here a hinge axis of length
 /// 0 at lam = 0.1 + 0.2 = 0.30000000000000004) fails with the reason `--set`
 /// gives for that value, and the rows beside it run as they do alone.

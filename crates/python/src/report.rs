@@ -39,19 +39,10 @@ impl Derived {
             let mut config =
                 RunConfig::from_settings(&settings).map_err(|e| crate::run::setting_error(py, "report", e))?;
             let d = &self.d;
-            let mut section = match &section {
-                Some(text) => {
-                    let condition = mech::StopCondition::parse(d, text, "section")
-                        .map_err(|e| errors::expression_error(py, "section", text, &e))?;
-                    let axes = section_axes.as_deref();
-                    let s = mech::Section::new(d, condition, axes)
-                        .map_err(|e| errors::expression_error(py, "section_axes", axes.unwrap_or_default(), &e))?;
-                    config.crossings.push(s.condition().clone());
-                    Some(s)
-                }
-                None if section_axes.is_some() => return Err(usage("section_axes= needs section=".into())),
-                None => None,
-            };
+            let mut section = crate::run::parse_section(py, d, "report", section.as_deref(), section_axes.as_deref())?;
+            if let Some(s) = &section {
+                config.crossings.push(s.condition().clone());
+            }
             config.check().map_err(|e| usage(e.to_string()))?;
             let page =
                 py.detach(|| view::report::run_page(d, &config, until, started, 0.0, &crate::TERMS, section.as_mut()));

@@ -9,7 +9,9 @@
 use crate::errors::{self, guarded};
 use crate::model::Derived;
 use crate::signals::Signals;
-use mech::{BudgetAdvice, RunConfig, RunError, RunSettings, Section, SettingError, StepBudget, StopCondition};
+use mech::{
+    BudgetAdvice, Derivation, RunConfig, RunError, RunSettings, Section, SettingError, StepBudget, StopCondition,
+};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::ops::ControlFlow;
@@ -61,24 +63,14 @@ impl Derived {
             initial: o.initial.clone(),
             ..base
         };
-        let section = match &o.section {
-            Some(_) if !o.crossing.is_empty() => {
-                let message = "section= and crossing= do not go together: a section's table holds its points only";
-                return Err(errors::plain_error(py, "simulate", message, None));
-            }
-            Some(text) => {
-                let condition = conditions(std::slice::from_ref(text), "section")?.remove(0);
-                let axes = o.section_axes.as_deref();
-                let s = Section::new(&self.d, condition, axes)
-                    .map_err(|e| errors::expression_error(py, "section_axes", axes.unwrap_or_default(), &e))?;
-                config.crossings.push(s.condition().clone());
-                Some(s)
-            }
-            None if o.section_axes.is_some() => {
-                return Err(errors::plain_error(py, "simulate", "section_axes= needs section=", None));
-            }
-            None => None,
-        };
+        if o.section.is_some() && !o.crossing.is_empty() {
+            let message = "section= and crossing= do not go together: a section's table holds its points only";
+            return Err(errors::plain_error(py, "simulate", message, None));
+        }
+        let section = parse_section(py, &self.d, "simulate", o.section.as_deref(), o.section_axes.as_deref())?;
+        if let Some(s) = &section {
+            config.crossings.push(s.condition().clone());
+        }
         config.check().map_err(|e| self.refused(py, e))?;
         Ok((config, section))
     }
@@ -250,11 +242,7 @@ impl Derived {
         let figure = match &section {
             Some(s) => {
                 let points = section_points.len();
-                if let serde_json::Value::Object(map) = &mut summary {
-                    let value =
-                        serde_json::json!({"condition": s.condition().text, "axes": s.axes(), "points": points});
-                    map.insert("section".into(), value);
-                }
+                summary["section"] = view::simulate::section_json(s, points);
                 text.push_str(&format!(
                     "{points} point{} on the section {}\n",
                     if points == 1 { "" } else { "s" },
@@ -285,6 +273,29 @@ impl Derived {
         out.set_item("plot", Bound::new(py, plot)?)?;
         Ok(out)
     }
+}
+
+/// The Poincaré section of `section=` drawn in the plane of `section_axes=`
+/// (None without `section=`), refused as `lagrange.ModelError` naming the
+/// argument at fault; `what` is the method that took them.
+pub(crate) fn parse_section(
+    py: Python<'_>,
+    d: &Derivation,
+    what: &str,
+    section: Option<&str>,
+    axes: Option<&str>,
+) -> PyResult<Option<Section>> {
+    let Some(text) = section else {
+        return match axes {
+            Some(_) => Err(errors::plain_error(py, what, "section_axes= needs section=", None)),
+            None => Ok(None),
+        };
+    };
+    let condition =
+        StopCondition::parse(d, text, "section").map_err(|e| errors::expression_error(py, "section", text, &e))?;
+    let s = Section::new(d, condition, axes)
+        .map_err(|e| errors::expression_error(py, "section_axes", axes.unwrap_or_default(), &e))?;
+    Ok(Some(s))
 }
 
 /// A run's setting that cannot be used, as `lagrange.ModelError` naming the

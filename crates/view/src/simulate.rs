@@ -1,5 +1,6 @@
 //! The summary of a simulated run, for people ([`summary_text`]) and as the
-//! `lagrange.simulate/1` JSON value ([`summary_json`]).
+//! `lagrange.simulate/1` JSON value ([`summary_json`], with [`section_json`]
+//! for a run with a Poincaré section).
 //!
 //! The run is `mech::simulate`'s [`RunReport`]; what only the front end knows
 //! comes as plain data: the signal that stopped the run ([`Interrupted`]), the
@@ -119,6 +120,12 @@ pub fn impacts_json(impacts: &[mech::ImpactTally]) -> Value {
             .map(|i| json!({"name": i.name, "count": i.count, "energy_lost": i.energy_lost, "fastest_normal_speed": i.fastest}))
             .collect(),
     )
+}
+
+/// The `section` field of the JSON summary of a run with a Poincaré section:
+/// its condition as written, the plane's two axes, and the number of points.
+pub fn section_json(section: &mech::Section, points: usize) -> Value {
+    json!({"condition": section.condition().text, "axes": section.axes(), "points": points})
 }
 
 /// A run's warning in words, with the settings a user can change spelled as

@@ -44,7 +44,7 @@ struct Points {
 
 /// Runs the sweep and writes its points and figure.
 pub fn run(d: &Derivation, grid: &Grid, opts: &Options<'_>) -> Result<(), Failure> {
-    let section = section_of(d, opts)?;
+    let section = crate::simulate::parse_section(d, opts.condition, opts.axes)?;
     let mut columns = vec!["run".to_string()];
     columns.extend(grid.axes.iter().map(|a| a.name.clone()));
     let mut row_columns = mech::row_columns(d);
@@ -164,14 +164,6 @@ pub fn run(d: &Derivation, grid: &Grid, opts: &Options<'_>) -> Result<(), Failur
     Ok(())
 }
 
-/// The section of `--section` and `--section-axes`, refused as bad input in their names.
-fn section_of(d: &Derivation, opts: &Options<'_>) -> Result<Section, Failure> {
-    let condition = StopCondition::parse(d, opts.condition, "--section")
-        .map_err(|e| Failure::expression("--section", opts.condition, e, 0))?;
-    Section::new(d, condition, opts.axes)
-        .map_err(|e| Failure::expression("--section-axes", opts.axes.unwrap_or_default(), e, 0))
-}
-
 /// The grid point of a run as a label: `y0 = 0.1, py0 = 0`.
 fn label(grid: &Grid, run: usize) -> String {
     let values = grid.point(run);
@@ -215,8 +207,7 @@ fn one_run(
     config.crossings = vec![section.condition().clone()];
     let mut lines = String::new();
     let mut plane = Vec::new();
-    let mut bodies = mech::BodyRecorder::new(d);
-    let mut body_values = vec![0.0; bodies.as_ref().map_or(0, |b| b.columns().len())];
+    let mut fields = crate::simulate::RowFields::new(d);
     let mut line: Vec<u8> = Vec::with_capacity(256);
     let result = mech::simulate(d, &config, |row| {
         if interrupt::received().is_some() {
@@ -233,15 +224,7 @@ fn one_run(
             crate::decimal::push_f64(&mut line, *v);
         }
         line.push(b',');
-        crate::decimal::push_f64(&mut line, row.t);
-        if let Some(b) = bodies.as_mut() {
-            b.eval(row.t, row.q, row.qd, &mut body_values);
-        }
-        let state = row.q.iter().chain(row.qd).chain(row.invariants).chain(&body_values).chain(row.constraints);
-        for &v in state.chain(extra.iter().map(|&k| &point[k])) {
-            line.push(b',');
-            crate::decimal::push_f64(&mut line, v);
-        }
+        fields.push(&mut line, row, Some(&point), extra);
         line.push(b'\n');
         lines.push_str(&String::from_utf8_lossy(&line));
         plane.push(point);

@@ -70,7 +70,8 @@ class RunError(LagrangeError):
 
     Attributes: ``message``, ``t`` (the time it reached, or None) and ``run``
     (a :class:`lagrange.Run` with every row computed up to there, or None
-    where there are no rows, e.g. a failed extremal).
+    where there are no rows, e.g. a failed extremal). A sweep whose every
+    run failed raises it too, its ``run`` the sweep's :class:`lagrange.Table`.
     """
 
     def __init__(self, message: str = "", t: Optional[float] = None, run: Any = None) -> None:

@@ -14,7 +14,7 @@ from typing import Any, Dict, List, Mapping, NamedTuple, Optional, Sequence, Tup
 import numpy as np
 
 from . import _native
-from .errors import Interrupted, LagrangeError
+from .errors import Interrupted, LagrangeError, RunError
 
 
 class Linspace(NamedTuple):
@@ -176,6 +176,11 @@ def sweep(
     keeps the runs of the shards that finished; ``resume=`` that exception
     runs only the failed shards.
 
+    Runs that fail (blow up, meet a singular mass matrix) have NaN and their
+    reason in ``failures``; when every run fails, the sweep found nothing and
+    raises :class:`lagrange.RunError` with the first run's reason, its
+    ``.run`` the table all the same (``lagrange sweep`` exits 1).
+
     Ctrl-C stops a local sweep and raises :class:`lagrange.Interrupted` holding
     the runs finished so far, in grid order.
     """
@@ -185,7 +190,7 @@ def sweep(
         table = Table(out["csv"])
         if out["interrupt"] is not None:
             raise Interrupted(f"interrupted after {len(table)} runs; the exception's .run keeps them", table) from out["interrupt"]
-        return table
+        return _found(table)
     if shard is not None:
         raise ValueError("give either shard= (one part, here) or client= (every part, on the cluster)")
     options = _options(until, spec, method, rtol, atol, lyapunov, threads, None)
@@ -219,7 +224,17 @@ def sweep(
     if failed:
         raise ShardsFailed(sweep_of, n, done, failed)
     merged = _native.merge([(f"shard {i}/{n}", done[i]) for i in range(n)])
-    return Table(merged)
+    return _found(Table(merged))
+
+
+def _found(table: Table) -> Table:
+    """``table``, unless every run of it failed: then :class:`RunError` with
+    the first run's reason, as ``lagrange sweep`` exits 1 with it."""
+    if len(table) and all(table.failures):
+        raise RunError(
+            f"every run failed ({len(table)}); the first, run {table.runs[0]}: {table.failures[0]}", run=table
+        )
+    return table
 
 
 class ShardsFailed(LagrangeError):
