@@ -95,8 +95,9 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
 
     // Columns: t, coordinates, velocities, invariants.
     let names: Vec<String> = derivation.coordinate_names().iter().map(|s| s.to_string()).collect();
-    // Crossings and impacts mark their rows in an `event` column.
-    let with_events = !opts.crossing.is_empty() || !derivation.impacts().is_empty();
+    // Crossings and impacts mark their rows in an `event` column (a section's
+    // rows are all its crossings, and no impact row is one of its points).
+    let with_events = !opts.crossing.is_empty() || (!derivation.impacts().is_empty() && section.is_none());
     // A section's CSV: its points' rows, then the plane's axes where they are not columns already.
     let mut section_columns: Vec<usize> = Vec::new();
     let inv_names: Vec<String> = mech::invariants_of(&derivation).into_iter().map(|i| i.name).collect();
@@ -207,7 +208,7 @@ pub fn run(opts: &Options) -> Result<(), Failure> {
         // Impact rows are drawn (the kink of a bounce); crossings are not samples.
         let drawn = row.event.is_none_or(|e| e.starts_with("impact "));
         if let Some(keeper) = plot_data.as_mut().filter(|_| drawn) {
-            keeper.push(row.t, row.q, row.qd, row.invariants);
+            keeper.push(row.t, row.q, row.qd, &row.invariants_less_jumps());
         }
         if let Some(pb) = &progress {
             pb.set_position((row.t / until * 1000.0) as u64);

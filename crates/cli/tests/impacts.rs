@@ -334,3 +334,36 @@ fn bad_impacts_are_refused_with_their_place() {
     assert_eq!(r.code, Some(2), "{}", r.describe());
     assert!(r.stderr.contains("a sweep does not run models with [[impacts]] yet"), "{}", r.describe());
 }
+
+/// `sweep --section` runs `simulate`'s own runs, impacts and all: each run's
+/// points are those of `simulate --section` with its start.
+#[test]
+fn a_sweep_of_sections_runs_the_impacts() {
+    let out = TempFile::new("impact-sweep", "csv");
+    let wall = example("pendulum_wall.toml");
+    let r =
+        lagrange(&["sweep", &wall, "--grid", "e=0.5;1", "--until", "10", "--section", "th' = 0", "--out", out.path()]);
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    let text = std::fs::read_to_string(out.path()).unwrap();
+    let single = TempFile::new("impact-single", "csv");
+    let s = lagrange(&[
+        "simulate",
+        &wall,
+        "--set",
+        "e=1",
+        "--until",
+        "10",
+        "--section",
+        "th' = 0",
+        "--rtol",
+        "1e-10",
+        "--out",
+        single.path(),
+    ]);
+    assert_eq!(s.code, Some(0), "{}", s.describe());
+    let single = std::fs::read_to_string(single.path()).unwrap();
+    let run1: Vec<&str> = text.lines().filter_map(|l| l.strip_prefix("1,1,")).collect();
+    let points: Vec<&str> = single.lines().skip(1).collect();
+    assert!(points.len() >= 5);
+    assert_eq!(run1, points, "run 1 (e = 1) is simulate's run with e = 1");
+}

@@ -26,7 +26,6 @@ pub(crate) mod constrained;
 pub(crate) mod dynamics;
 pub(crate) mod ensemble;
 mod impacts;
-pub use impacts::ImpactTally;
 pub(crate) mod jacobian;
 mod plain;
 mod report;
@@ -46,7 +45,7 @@ use num::{
     integrate, integrate_projected, integrate_resumed, Event, Method, ObservationKind, Resume, RhsError, SolveError,
     Solver, StopReason, Summary,
 };
-pub use report::{Audit, ConstraintAudit, Row, RunError, RunFailure, RunReport, RunWarning};
+pub use report::{Audit, ConstraintAudit, ImpactTally, Row, RunError, RunFailure, RunReport, RunWarning};
 use std::cell::{Cell, RefCell};
 use std::ops::ControlFlow;
 
@@ -365,6 +364,7 @@ fn drive(
             is_event: row.is_event,
             event,
             constraints: &row.constraints,
+            jumps: if first_guard > first_impact { invariant_audit.jumps() } else { &[] },
         });
         if flow.is_break() {
             // Not taken: the run ends at the row before, which the summary reports.

@@ -204,7 +204,7 @@ impl Derived {
                 }
                 // Impact rows are drawn (the kink of a bounce); crossings are not samples.
                 if row.event.is_none_or(|e| e.starts_with("impact ")) {
-                    plot.push(row.t, row.q, row.qd, row.invariants);
+                    plot.push(row.t, row.q, row.qd, &row.invariants_less_jumps());
                 }
                 data.push(row.t);
                 if let Some(b) = bodies.as_mut() {

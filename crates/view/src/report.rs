@@ -117,7 +117,8 @@ impl Recorder {
                 t: row.t,
                 q: row.q.to_vec(),
                 qd: row.qd.to_vec(),
-                invariants: row.invariants.to_vec(),
+                // Drawn as drift: the jumps at impacts are not the integrator's.
+                invariants: row.invariants_less_jumps().into_owned(),
                 constraints: row.constraints.to_vec(),
                 event: row.event.map(str::to_string),
             },
@@ -658,6 +659,7 @@ mod tests {
                 is_event: event.is_some(),
                 event,
                 constraints: &[],
+                jumps: &[],
             });
             assert!(r.even.len() <= r.cap && r.turns.len() <= r.cap, "row {i}: memory grows");
         }

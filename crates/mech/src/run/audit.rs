@@ -68,6 +68,11 @@ impl InvariantAudit {
         }
     }
 
+    /// The sum of each invariant's jumps at impacts so far.
+    pub(crate) fn jumps(&self) -> &[f64] {
+        &self.jumps
+    }
+
     /// One audit per invariant.
     pub(crate) fn audits(&self) -> Vec<Audit> {
         let initial = self.initial.as_ref().unwrap_or(&self.last);

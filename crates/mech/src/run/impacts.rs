@@ -12,7 +12,7 @@
 //! follows is not modelled; so does a surface found crossed between events.
 
 use super::dynamics::{Dynamics, Form, System};
-use super::report::RunFailure;
+use super::report::{ImpactTally, RunFailure};
 use crate::derive::{Derivation, Layout};
 use crate::error::ModelError;
 use num::{Direction, Event};
@@ -44,19 +44,6 @@ const MAX_IMPACTS_AT_ONCE: usize = 1000;
 /// A surface crossed by more than this between events (an impact the events
 /// missed: two crossings within one probe interval) fails the run.
 const CROSSED_BY: f64 = 1e-6;
-
-/// What happened at one surface along a run.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ImpactTally {
-    /// The impact's name.
-    pub name: String,
-    /// How many impacts there were.
-    pub count: usize,
-    /// The kinetic energy they took, Σ ½(q'⁻ᵀMq'⁻ − q'⁺ᵀMq'⁺) (0 for e = 1).
-    pub energy_lost: f64,
-    /// The fastest normal speed |v_n| of an impact.
-    pub fastest: f64,
-}
 
 /// The impacts of a run: their surfaces and laws compiled, and what they did.
 pub(crate) struct Impacts {

@@ -65,6 +65,21 @@ pub struct Row<'a> {
     /// With constraints: λ, |Aᵀλ| and the residuals, in the order of
     /// [`crate::constraint_columns`] (empty otherwise).
     pub constraints: &'a [f64],
+    /// With impacts: the sum of each invariant's jumps at the impacts so far
+    /// (in the order of `invariants`; empty without impacts).
+    pub jumps: &'a [f64],
+}
+
+impl<'a> Row<'a> {
+    /// The invariants less their jumps at impacts so far: what drifts only by
+    /// the integrator's error, for plots of the drift (the rows and the CSV
+    /// keep the invariants themselves).
+    pub fn invariants_less_jumps(&self) -> std::borrow::Cow<'a, [f64]> {
+        if self.jumps.is_empty() {
+            return std::borrow::Cow::Borrowed(self.invariants);
+        }
+        std::borrow::Cow::Owned(self.invariants.iter().zip(self.jumps).map(|(i, j)| i - j).collect())
+    }
 }
 
 /// The audit of one invariant.
@@ -138,7 +153,20 @@ pub struct RunReport {
     /// With constraints: the audit of each constraint (empty otherwise).
     pub constraints: Vec<ConstraintAudit>,
     /// With `[[impacts]]`: what happened at each surface (empty otherwise).
-    pub impacts: Vec<super::ImpactTally>,
+    pub impacts: Vec<ImpactTally>,
+}
+
+/// What happened at one surface along a run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImpactTally {
+    /// The impact's name.
+    pub name: String,
+    /// How many impacts there were.
+    pub count: usize,
+    /// The kinetic energy they took, Σ ½(q'⁻ᵀMq'⁻ − q'⁺ᵀMq'⁺) (0 for e = 1).
+    pub energy_lost: f64,
+    /// The fastest normal speed |v_n| of an impact.
+    pub fastest: f64,
 }
 
 /// Why a run failed midway, as data beside the message: what happened, at

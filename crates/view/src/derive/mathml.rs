@@ -382,7 +382,7 @@ impl<'a> MathMl<'a> {
             Section::Impacts => {
                 self.heading("Impacts");
                 self.para(&format!(
-                    "The motion keeps each surface φ(q, t) ≥ 0; where φ = 0 with the normal velocity v_n = ∇φ·q' + ∂φ/∂t < 0, {}.",
+                    "The motion keeps each surface φ(q, t) ≥ 0; where φ = 0 with the normal velocity v_n = ∇φ·q' + ∂φ/∂t < 0, {}. What is conserved holds between impacts: each impact changes what its impulse acts on.",
                     escape(mech::IMPACT_LAW)
                 ));
             }

@@ -158,6 +158,12 @@ impl Text<'_> {
                     let _ = writeln!(o, "    ∂φ/∂t = {}", self.s(i.rate));
                 }
                 let _ = writeln!(o, "    v_n = {}", self.s(i.normal_velocity));
+                if d.impacts().last().is_some_and(|last| std::ptr::eq(last, i)) {
+                    let _ = writeln!(
+                        o,
+                        "  what is conserved below holds between impacts: each impact changes what its impulse acts on"
+                    );
+                }
             }
             Item::Cyclic => self.cyclic(&mut o),
             Item::Symmetries => {
