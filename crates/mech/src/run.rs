@@ -406,8 +406,13 @@ fn drive(
             }
             other => break other,
         };
-        let (Some(impacts), Some(restart)) = (&impacts, restart.as_mut()) else { break Ok(summary) };
-        let Some(impacts::StateAt { t, mut q, mut qd, .. }) = struck_at.borrow().clone() else { break Ok(summary) };
+        // (The stepping of constrained models cannot restart; the model refuses impacts with constraints.)
+        let (Some(impacts), Some(restart), Some(at)) = (&impacts, restart.as_mut(), struck_at.borrow().clone()) else {
+            let t = summary.t;
+            impact_error = Some((RunFailure::Step { t }, format!("the run cannot go on after the impact at t = {t}")));
+            break Ok(Summary { stop: StopReason::Observer, ..summary });
+        };
+        let impacts::StateAt { t, mut q, mut qd, .. } = at;
         let struck = impacts.borrow_mut().strike(k, t, &mut q, &mut qd, layout);
         let struck = match struck {
             Ok(struck) => struck,

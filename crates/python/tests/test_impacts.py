@@ -83,7 +83,7 @@ def test_a_model_built_in_python_bounces() -> None:
         impacts=[{"name": "floor", "surface": y, "restitution": e}],
         initial={"y": 2.0, "y'": 0.0},
     )
-    assert "floor: y ≥ 0,  restitution e" in str(model.derivation)
+    assert "floor: y ≥ 0,  restitution e" in str(model.derive())
     run = model.simulate(until=1.0)
     (i, before), (j, after) = run.events[:2]
     assert (before, after) == ("impact floor before", "impact floor after")
