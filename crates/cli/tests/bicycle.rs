@@ -7,9 +7,7 @@
 //! paper's table; and the weave and capsize speeds the paper's 4.292382 and
 //! 6.024262 m/s.
 
-mod common;
-
-use common::json;
+use crate::common::json;
 use serde_json::Value;
 
 const MODEL: &str = "examples/bicycle/benchmark_bicycle.toml";

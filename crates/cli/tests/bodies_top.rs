@@ -11,9 +11,7 @@
 //!   reaches both (at the rows where β' = 0), the mean precession rate, and the
 //!   free top's α̇ = A/sin β₀ with the fixed z axis along L.
 
-mod common;
-
-use common::{is_close, json, repo_root, run as lagrange, scratch};
+use crate::common::{is_close, json, repo_root, run as lagrange, scratch};
 use serde_json::Value;
 use std::collections::HashMap;
 use std::path::Path;

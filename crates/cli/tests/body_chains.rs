@@ -3,9 +3,9 @@
 //! axis compose to one angle sum, and forty, past the expanded derivation's
 //! bound, derive on the shared path and move as the same chain of particles.
 
-mod common;
+use crate::common;
 
-use common::{run, TempFile};
+use crate::common::{run, TempFile};
 
 /// A planar chain of `n` equal rods, rod k hanging from the end of rod k − 1
 /// and turning by its own relative angle qk.

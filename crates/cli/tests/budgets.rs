@@ -5,9 +5,9 @@
 //! not "the motion blew up"), its summary ending where the run stood, and a
 //! stop event as accurate as the steps and audited like every row.
 
-mod common;
+use crate::common;
 
-use common::{close, run, Csv, TempFile};
+use crate::common::{close, run, Csv, TempFile};
 use serde_json::Value;
 
 /// Runs the binary and expects `code`, with each of `needles` in stderr and

@@ -16,9 +16,9 @@
 //! - bad input: inconsistent initial values, a nonlinear velocity constraint, a
 //!   name clash, a method that cannot be projected — exit 2 with the place.
 
-mod common;
+use crate::common;
 
-use common::{json, ok, run as lagrange, Csv, TempFile};
+use crate::common::{json, ok, run as lagrange, Csv, TempFile};
 use serde_json::Value;
 
 fn num(v: &Value) -> f64 {

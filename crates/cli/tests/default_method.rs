@@ -3,9 +3,7 @@
 //! cubic potential, rigid bodies tumbling near their Euler angles' gimbal
 //! singularity), and that the summary says what the tolerance controlled.
 
-mod common;
-
-use common::{close, json, run, Csv, TempFile};
+use crate::common::{close, json, run, Csv, TempFile};
 use serde_json::Value;
 
 const RUNAWAY: &str = "crates/cli/tests/robust/cubic_runaway.toml";

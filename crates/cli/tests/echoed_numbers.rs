@@ -2,9 +2,7 @@
 //! round-trip digits: `1e300`, never a 1 and three hundred zeros (`f64`'s
 //! `Display`), whichever flag, parameter or check echoes it.
 
-mod common;
-
-use common::{run, scratch};
+use crate::common::{run, scratch};
 
 /// Each command with a number of the user's as `{}`: flags, `--set` values
 /// that a check refuses, grid values.

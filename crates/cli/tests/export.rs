@@ -13,8 +13,8 @@
 //! file alone; an FMU holds its description, source and binary, and without a
 //! C compiler is refused with exit 2 (FMPy runs the FMUs: `test_fmu.py`).
 
-mod common;
-use common::{json, ok, run, scratch};
+use crate::common;
+use crate::common::{json, ok, run, scratch};
 use std::path::Path;
 use std::process::Command;
 

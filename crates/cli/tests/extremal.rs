@@ -8,8 +8,7 @@ use serde_json::Value;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
-mod common;
-use common::{close, json, repo_root, run, scratch, Run};
+use crate::common::{close, json, repo_root, run, scratch, Run};
 
 /// `lagrange extremal ARGS --format json`, which must succeed.
 #[track_caller]

@@ -2,9 +2,7 @@
 //! stage equations do not converge are taken as sub-steps, the run reaches its end,
 //! and its warnings say so, with the drift of H that shows the result is off.
 
-mod common;
-
-use common::json;
+use crate::common::json;
 use serde_json::Value;
 
 /// The runaway model to t = 3 under `method`: its JSON summary (exit 0).

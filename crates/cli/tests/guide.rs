@@ -44,7 +44,7 @@
 //! the examples per chapter. This runner is small and keeps trycmd's two wildcards, so the
 //! guide would move to trycmd unchanged if that changes.
 
-mod common;
+use crate::common;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

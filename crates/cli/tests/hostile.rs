@@ -2,9 +2,7 @@
 //! regression test: files that are not regular or too large, outputs that would
 //! overwrite an input, and user text that must not become live LaTeX.
 
-mod common;
-
-use common::{close, json, repo_root, run, scratch};
+use crate::common::{close, json, repo_root, run, scratch};
 
 /// Runs the binary and expects bad input: exit 2 with `needle` in the message.
 #[track_caller]

@@ -5,9 +5,7 @@
 //! zero must now be proven; when it is neither proven nor refuted, nothing is
 //! claimed and the output says so. True identities are still proven.
 
-mod common;
-
-use common::{json, run, TempFile};
+use crate::common::{json, run, TempFile};
 use serde_json::Value;
 
 /// The Lagrangian x'^2/2 - exp(-1000000*x^2): a barrier of height 1 and

@@ -9,9 +9,7 @@
 //! wall, and a floor that moves (the law on the relative velocity). Then the
 //! reports and bad input (exit 2).
 
-mod common;
-
-use common::{repo_root, run as lagrange, TempFile};
+use crate::common::{repo_root, run as lagrange, TempFile};
 use serde_json::Value;
 
 /// A CSV whose last column is `event` (quoted text, or empty).

@@ -6,8 +6,7 @@
 
 use serde_json::Value;
 
-mod common;
-use common::{close, is_close, json, repo_root, run, scratch, Run};
+use crate::common::{close, is_close, json, repo_root, run, scratch, Run};
 
 /// `lagrange inertia ARGS --format json`, which must succeed.
 #[track_caller]

@@ -5,9 +5,7 @@
 //! partial output must end as the file of an uninterrupted run, byte for byte.
 //! What is asserted does not depend on when the signals land.
 
-mod common;
-
-use common::{ok, run as lagrange, scratch, start};
+use crate::common::{ok, run as lagrange, scratch, start};
 use std::path::Path;
 use std::process::{Child, Command, Output};
 use std::thread::sleep;

@@ -8,8 +8,8 @@
 
 use serde_json::Value;
 
-mod common;
-use common::{close, json, run, Run};
+use crate::common;
+use crate::common::{close, json, run, Run};
 
 fn floats(v: &Value) -> Vec<f64> {
     v.as_array().expect("an array").iter().map(|x| x.as_f64().expect("a number")).collect()

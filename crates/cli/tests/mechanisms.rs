@@ -5,9 +5,9 @@
 //! modes, the cart's momentum under its input force, and the angular momentum
 //! in space of a body under a torque fixed in space.
 
-mod common;
+use crate::common;
 
-use common::{json, ok, run as lagrange, Csv, TempFile};
+use crate::common::{json, ok, run as lagrange, Csv, TempFile};
 
 /// The double compound pendulum's frequencies against the 2×2 secular equation
 /// of T and U written from the rods' kinematics: the lower rod's centre moves

@@ -7,8 +7,8 @@
 use serde_json::Value;
 use std::f64::consts::PI;
 
-mod common;
-use common::{close, json, run, scratch, Run, TempFile};
+use crate::common;
+use crate::common::{close, json, run, scratch, Run, TempFile};
 
 fn floats(v: &Value) -> Vec<f64> {
     v.as_array().expect("an array").iter().map(|x| x.as_f64().expect("a number")).collect()

@@ -11,9 +11,7 @@
 //!   two coordinates together;
 //! - models without a symmetry beyond the cyclic coordinates: nothing new.
 
-mod common;
-
-use common::{json, TempFile};
+use crate::common::{json, TempFile};
 use serde_json::Value;
 
 /// The `conserved` entries whose `why.code` is `symmetry`.

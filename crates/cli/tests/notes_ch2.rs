@@ -21,8 +21,7 @@ use std::path::Path;
 
 use serde_json::Value;
 
-mod common;
-use common::{is_close, json, repo_root, run, Run};
+use crate::common::{is_close, json, repo_root, run, Run};
 
 /// Random sample points per comparison (coordinates, velocities, accelerations,
 /// momenta, `t`, and the parameters scaled by a random factor in [0.6, 1.4]).

@@ -3,9 +3,9 @@
 //! body file, by its path or a link) are refused by every output of every
 //! command, with exit 2, before anything is written.
 
-mod common;
+use crate::common;
 
-use common::{run, scratch};
+use crate::common::{run, scratch};
 use std::fs::File;
 use std::path::Path;
 

@@ -3,9 +3,9 @@
 //! its particles); long runs stay small; bad input is refused. The page's
 //! script is tested in a browser by `tests/browser/` (see `.ci/run`).
 
-mod common;
+use crate::common;
 
-use common::{ok, repo_root, run, scratch, Csv};
+use crate::common::{ok, repo_root, run, scratch, Csv};
 use serde_json::Value;
 
 /// The `lagrange.report/1` data inlined in a page.

@@ -2,9 +2,7 @@
 //! case 10): 0.1*3 − 0.3 is 5.6e-17 in f64, and a term carrying it made a
 //! cyclic coordinate "not cyclic", so its momentum was never audited.
 
-mod common;
-
-use common::{json, TempFile};
+use crate::common::{json, TempFile};
 
 fn model(coefficient: &str) -> TempFile {
     let text = format!(

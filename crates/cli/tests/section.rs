@@ -7,9 +7,7 @@
 //! crossing it the one way asked, on the energy surface to the run's
 //! tolerance. Then the plane's axes, the figure, and bad input (exit 2).
 
-mod common;
-
-use common::{ok, run as lagrange, Csv, TempFile};
+use crate::common::{ok, run as lagrange, Csv, TempFile};
 use std::f64::consts::{PI, SQRT_2};
 
 /// x'' = −x and y'' = −2y, from x = 0, x' = 1, y = 1, y' = 0: x = sin t, y = cos(√2 t).

@@ -18,9 +18,7 @@
 //! the physics (a wrong coefficient shows at 1e-3 or worse). Each check says why
 //! its own tolerance is what it is.
 
-mod common;
-
-use common::{ok, repo_root, run as lagrange, Csv, Run, TempFile};
+use crate::common::{ok, repo_root, run as lagrange, Csv, Run, TempFile};
 use serde_json::Value;
 use std::f64::consts::PI;
 

@@ -1,9 +1,7 @@
 //! `simulate --plot`: the figure of a run knows its model (angles wrapped,
 //! particles' paths in the plane, the drift of conserved quantities only).
 
-mod common;
-
-use common::{ok, scratch};
+use crate::common::{ok, scratch};
 
 /// The figure `simulate MODEL --until T --plot` draws.
 fn plot(model: &str, until: &str) -> String {

@@ -7,15 +7,13 @@
 //! `git diff crates/cli/tests/snapshots`; accept it by regenerating:
 //!
 //! ```text
-//! INSTA_UPDATE=always cargo test -p lagrange-cli --test snapshots
+//! INSTA_UPDATE=always cargo test -p lagrange-cli --test cli snapshots::
 //! ```
 //!
 //! A new example or bad model gets its snapshot the same way; a snapshot whose model
 //! is gone fails `no_orphan_snapshots`.
 
-mod common;
-
-use common::{repo_root, run};
+use crate::common::{repo_root, run};
 use std::path::Path;
 
 /// The `.toml` files of a folder (relative to the repository root), sorted by name.
@@ -52,9 +50,15 @@ fn check_all(dir: &str, prefix: &str, extra_args: &[&str]) {
         let mut args = vec!["derive", path.as_str()];
         args.extend_from_slice(extra_args);
         let output = snapshot(&args);
-        let name = format!("{prefix}{}", file.trim_end_matches(".toml"));
+        // Named in full (`snapshots__derive__pendulum`), not after the module path,
+        // which depends on how the test binary is laid out.
+        let name = format!("snapshots__{prefix}{}", file.trim_end_matches(".toml"));
         let result = std::panic::catch_unwind(|| {
-            insta::with_settings!({ description => format!("lagrange {}", args.join(" ")), omit_expression => true }, {
+            insta::with_settings!({
+                description => format!("lagrange {}", args.join(" ")),
+                omit_expression => true,
+                prepend_module_to_snapshot => false,
+            }, {
                 insta::assert_snapshot!(name, output);
             });
         });

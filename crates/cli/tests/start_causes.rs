@@ -7,8 +7,7 @@
 //! reported as "the equations cannot be evaluated" or "the coordinates are
 //! singular"; the models are the examples with one thing changed.
 
-mod common;
-use common::{repo_root, run, Run, TempFile};
+use crate::common::{repo_root, run, Run, TempFile};
 
 /// An example's text with `from` replaced by `to` (which must occur).
 fn edited(example: &str, from: &str, to: &str) -> String {

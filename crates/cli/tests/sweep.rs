@@ -2,9 +2,7 @@
 //! (rows, shards merged back to the unsharded output, the heat map) and bad
 //! grids (exit 2); an axis of listed values (`a=0;1;5`).
 
-mod common;
-
-use common::{ok, repo_root, run as lagrange, scratch};
+use crate::common::{ok, repo_root, run as lagrange, scratch};
 use std::path::Path;
 
 fn text(path: &Path) -> String {

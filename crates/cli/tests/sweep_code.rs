@@ -3,9 +3,7 @@
 //! compiler or it fails. The rows are the same bits whichever ran, and the
 //! summary says which, with the compile time apart from the runs'.
 
-mod common;
-
-use common::{repo_root, scratch};
+use crate::common::{repo_root, scratch};
 use std::path::Path;
 use std::process::Command;
 

@@ -3,9 +3,9 @@
 //! audit on the chaotic double pendulum, and `sweep --method taylor` (batches
 //! of trajectories in lock step) against single runs of the same method.
 
-mod common;
+use crate::common;
 
-use common::{json, run, Run};
+use crate::common::{json, run, Run};
 use serde_json::Value;
 use std::f64::consts::PI;
 

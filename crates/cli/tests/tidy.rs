@@ -4,9 +4,7 @@
 //! that says what the file is for and where to enter it (see `STYLE.md`, "Files
 //! and modules"). Test files and test helpers are no exception.
 
-mod common;
-
-use common::repo_root;
+use crate::common::repo_root;
 use std::path::{Path, PathBuf};
 
 /// The folders of each crate whose Rust files are checked.
@@ -56,6 +54,47 @@ fn every_file_opens_with_a_module_doc_comment() {
     assert!(
         missing.is_empty(),
         "these files do not open with a `//!` comment saying what they are for:\n  {}",
+        missing.join("\n  ")
+    );
+}
+
+/// A crate whose tests are one binary (`autotests = false`, `tests/main.rs`) runs
+/// only the files `main.rs` names: a file left out would never run, so every
+/// `.rs` file and module folder of `tests/` must be named there.
+#[test]
+fn every_test_file_is_a_module_of_its_test_binary() {
+    let root = repo_root();
+    let mut checked = 0;
+    let mut missing = Vec::new();
+    for entry in std::fs::read_dir(root.join("crates")).expect("crates/ exists") {
+        let krate = entry.expect("a directory entry").path();
+        let Ok(manifest) = std::fs::read_to_string(krate.join("Cargo.toml")) else { continue };
+        if !manifest.lines().any(|line| line.trim() == "autotests = false") {
+            continue;
+        }
+        let tests = krate.join("tests");
+        let main = std::fs::read_to_string(tests.join("main.rs"))
+            .unwrap_or_else(|e| panic!("{} sets autotests = false but has no tests/main.rs: {e}", krate.display()));
+        let declared: Vec<&str> =
+            main.lines().filter_map(|line| line.trim().strip_prefix("mod ")?.strip_suffix(';')).collect();
+        for file in std::fs::read_dir(&tests).expect("tests/ exists") {
+            let path = file.expect("a directory entry").path();
+            let module = match path.extension() {
+                Some(ext) if ext == "rs" => path.file_stem().map(|s| s.to_string_lossy().into_owned()),
+                None if path.join("mod.rs").is_file() => path.file_name().map(|s| s.to_string_lossy().into_owned()),
+                _ => None,
+            };
+            let Some(module) = module.filter(|m| m != "main") else { continue };
+            checked += 1;
+            if !declared.contains(&module.as_str()) {
+                missing.push(path.strip_prefix(&root).unwrap_or(&path).display().to_string());
+            }
+        }
+    }
+    assert!(checked > 40, "found only {checked} test modules");
+    assert!(
+        missing.is_empty(),
+        "not named by a `mod` line of their tests/main.rs, so never run:\n  {}",
         missing.join("\n  ")
     );
 }

@@ -4,9 +4,9 @@
 //! URDFs (crates/cli/tests/bad_urdf) exit 2 at their place. The comparison with
 //! Pinocchio at random states is `pinocchio_urdf.py` beside this file.
 
-mod common;
+use crate::common;
 
-use common::{is_close, json, ok, run, TempFile};
+use crate::common::{is_close, json, ok, run, TempFile};
 
 const EXAMPLES: &[&str] = &["planar_arm", "spatial_arm", "cart_pendulum", "floating_body"];
 

@@ -4,9 +4,7 @@
 //! rotations multiplied out here and their velocities taken by central
 //! differences, so that nothing of the derivation's own tree code is reused.
 
-mod common;
-
-use common::{derive, show};
+use crate::common::{derive, show};
 
 /// Body-frame points (mass, r) of a rigid cluster, not coplanar.
 const CLUSTER: [(f64, [f64; 3]); 4] =

@@ -4,9 +4,7 @@
 //! the last state reached as its final state, and stop events located to the
 //! accuracy of the steps and audited like every row.
 
-mod common;
-
-use common::{derive, PENDULUM};
+use crate::common::{derive, PENDULUM};
 use mech::{BudgetAdvice, BudgetStage, Method, RunConfig, RunError, RunFailure, StepBudget, StopCondition, TimeScale};
 use std::ops::ControlFlow;
 

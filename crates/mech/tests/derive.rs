@@ -2,9 +2,9 @@
 //! `common`: momenta, `M q'' = f`, cyclic coordinates, H, and the verdicts as
 //! data, against what the lecture notes print.
 
-mod common;
+use crate::common;
 
-use common::{derive, show, DAMPED, KEPLER, PENDULUM, ROTATING_WIRE};
+use crate::common::{derive, show, DAMPED, KEPLER, PENDULUM, ROTATING_WIRE};
 use mech::{ConservationReason, ConservedReason, EnergyReason, RateTerm};
 
 #[test]

@@ -3,9 +3,7 @@
 //! other axes gives the same equations, and what cannot be is refused where it
 //! is written.
 
-mod common;
-
-use common::{derive, show};
+use crate::common::{derive, show};
 
 /// The notes' pendulum (y up, gravity along −y).
 const DOWN: &str = r#"

@@ -2,9 +2,7 @@
 //! one driver for plain and constrained models, stop conditions, and its
 //! typed errors.
 
-mod common;
-
-use common::{derive, run, BLOW_UP, CONSTRAINED_PENDULUM, PENDULUM};
+use crate::common::{derive, run, BLOW_UP, CONSTRAINED_PENDULUM, PENDULUM};
 use mech::RunFailure;
 use mech::{RunConfig, RunError, StopCondition};
 use std::f64::consts::PI;

@@ -1,11 +1,9 @@
 //! Dense output, events, long-time energy behaviour, stiffness, failures and bad input.
 
-mod common;
-
 use std::f64::consts::PI;
 use std::ops::ControlFlow;
 
-use common::*;
+use crate::common::*;
 use num::{
     integrate, integrate_to, Config, Direction, Event, Method, ObservationKind, OdeSystem, Output, RhsError,
     SolveError, Solver, StopReason,

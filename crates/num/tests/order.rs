@@ -1,8 +1,6 @@
 //! Measured orders of convergence of every method on problems with known solutions.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use num::{integrate_to, Config, Method, Solver};
 
 /// Error after one Kepler period (eccentricity `e`) with `steps` equal steps.

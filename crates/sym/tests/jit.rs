@@ -11,9 +11,7 @@
 use proptest::prelude::*;
 use sym::{Compiled, ExprId, Pool, Tape};
 
-mod common;
-
-use common::*;
+use crate::common::*;
 
 /// Bit for bit where `f64::powi` is compiler-rt's `__powidf2`, whose
 /// multiplications the JIT repeats; 1e-12 relative elsewhere.

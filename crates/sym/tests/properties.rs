@@ -11,9 +11,7 @@
 use proptest::prelude::*;
 use sym::{ExprId, Limits, ParseOptions, Pool, Tape};
 
-mod common;
-
-use common::*;
+use crate::common::*;
 
 fn env(p: &[f64; 5]) -> impl Fn(&str) -> Option<f64> + '_ {
     move |name: &str| SYMBOLS.iter().position(|s| s.2 == name).map(|i| p[i])
