@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Builds the playground into a folder any static host serves (default: target/web/site):
+# Builds the playground into a folder any static host serves (default: target/web/site,
+# under $CARGO_TARGET_DIR when that is set):
 #
 #     web/build.sh [OUT]
 #
@@ -10,7 +11,8 @@
 # examples.json.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-out=$(realpath -m "${1:-target/web/site}")
+target=$(realpath -m "${CARGO_TARGET_DIR:-target}")
+out=$(realpath -m "${1:-$target/web/site}")
 
 rustup target list --installed 2>/dev/null | grep -qx wasm32-unknown-unknown \
     || rustup target add wasm32-unknown-unknown
@@ -20,8 +22,8 @@ mkdir -p "$out"
 # A workspace of its own with its own lock file, in the dev profile: unoptimized it
 # builds in about a minute from scratch and writes the glue in about 3 s (optimized,
 # 3 minutes and 0.4 s).
-cargo run -q --locked --manifest-path crates/web/bindgen/Cargo.toml --target-dir target/bindgen -- \
-    target/wasm32-unknown-unknown/web/lagrange_web.wasm "$out/pkg"
+cargo run -q --locked --manifest-path crates/web/bindgen/Cargo.toml --target-dir "$target/bindgen" -- \
+    "$target/wasm32-unknown-unknown/web/lagrange_web.wasm" "$out/pkg"
 cp web/index.html web/playground.css web/playground.js web/worker.js "$out/"
 python3 - "$out/examples.json" <<'PY'
 import json, pathlib, re, sys
