@@ -331,3 +331,54 @@ fn an_fmu_holds_its_description_its_source_and_a_binary_for_this_machine() {
         assert!(text.contains(line), "no {line} in the model description");
     }
 }
+
+/// `-o` naming a pipe or a device writes into it and leaves it one (renaming
+/// the export onto it once replaced /dev/null with a regular file); a link is
+/// followed and stays a link.
+#[test]
+fn an_export_into_a_pipe_or_through_a_link_leaves_them_in_place() {
+    use std::os::unix::fs::FileTypeExt;
+    let printed = run(&["export", "examples/pendulum.toml", "--to", "c", "-o", "/dev/stdout"]);
+    assert_eq!(printed.code, Some(0), "{}", printed.describe());
+    assert!(printed.stdout.contains("lagrange_rhs"), "{}", printed.describe());
+
+    let fifo = scratch("export-nodes", "pipe.py");
+    let _ = std::fs::remove_file(&fifo);
+    assert!(Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs").success());
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || std::fs::read_to_string(fifo).expect("the pipe reads"))
+    };
+    ok(&["export", "examples/pendulum.toml", "--to", "python", "-o", fifo.to_str().unwrap()]);
+    assert!(reader.join().unwrap().contains("def rhs("));
+    assert!(std::fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo(), "the pipe is still a pipe");
+
+    let target = scratch("export-nodes", "target.c");
+    let link = scratch("export-nodes", "link.c");
+    std::fs::write(&target, "old").unwrap();
+    let _ = std::fs::remove_file(&link);
+    std::os::unix::fs::symlink(&target, &link).unwrap();
+    ok(&["export", "examples/pendulum.toml", "--to", "c", "-o", link.to_str().unwrap()]);
+    assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink(), "the link is still a link");
+    assert!(std::fs::read_to_string(&target).unwrap().contains("lagrange_rhs"));
+}
+
+/// Exported code has no events: a model with `[[impacts]]` is refused (exit 2,
+/// at the impact), for every target, and nothing is written, where it was once
+/// exported without a word and its ball fell through the floor.
+#[test]
+fn a_model_with_impacts_is_refused_at_its_impact() {
+    for (to, name) in [("c", "ball.c"), ("python", "ball.py"), ("fmu", "ball.fmu")] {
+        let out = scratch("export-impacts", name);
+        let _ = std::fs::remove_file(&out);
+        let r = run(&["export", "examples/impacts/bouncing_ball.toml", "--to", to, "-o", out.to_str().unwrap()]);
+        assert_eq!(r.code, Some(2), "{}", r.describe());
+        assert!(
+            r.stderr.starts_with("error: examples/impacts/bouncing_ball.toml:20:8: impact 'floor' cannot be exported"),
+            "{}",
+            r.describe()
+        );
+        assert!(r.stderr.contains("the surface y = 0"), "{}", r.describe());
+        assert!(!out.exists(), "{to}: nothing is written");
+    }
+}

@@ -33,11 +33,31 @@ use crate::error::ModelError;
 use std::ops::Range;
 use sym::{ExprId, Pool, Tape};
 
-/// Writes `bytes` to a new file beside `path` and renames it to `path`: the
-/// file at `path` is the old one or the whole new one, never a part (an export
-/// that fails, or is stopped, leaves an earlier export as it was).
+/// Writes `bytes` as the whole of the file at `path`.
+///
+/// A regular file (or none yet) is written to a new file beside it, which is then
+/// renamed to it: the file is the old one or the whole new one, never a part (an
+/// export that fails, or is stopped, leaves an earlier export as it was). A
+/// symbolic link is followed: the file it names is replaced so, and the link stays.
+/// A pipe or a device (`/dev/stdout`, a FIFO another program reads, `/dev/null`)
+/// is written into, as a shell's `>` would; renaming onto it would replace the
+/// node itself with a regular file. A folder is refused.
 pub fn write_whole(path: &std::path::Path, bytes: &[u8]) -> std::io::Result<()> {
-    use std::io::Write;
+    use std::io::{Error, ErrorKind, Write};
+    // `metadata` and `open` follow links as the system does, the magic ones of
+    // /proc (`/dev/stdout`) included; the rename needs the file's own path.
+    let path = &match std::fs::metadata(path) {
+        Ok(meta) if meta.is_dir() => {
+            return Err(Error::new(ErrorKind::InvalidInput, "it is a folder; an export is written to a file"))
+        }
+        Ok(meta) if !meta.is_file() => {
+            let mut node = std::fs::OpenOptions::new().write(true).open(path)?;
+            return node.write_all(bytes).and_then(|()| node.flush());
+        }
+        Ok(_) => std::fs::canonicalize(path)?,
+        Err(e) if e.kind() == ErrorKind::NotFound => follow_link(path)?,
+        Err(e) => return Err(e),
+    };
     let name = path.file_name().map_or_else(|| "export".into(), |n| n.to_string_lossy().into_owned());
     let temporary = path.with_file_name(format!(".{name}.{}.part", std::process::id()));
     let written = std::fs::File::create(&temporary).and_then(|mut f| {
@@ -51,6 +71,49 @@ pub fn write_whole(path: &std::path::Path, bytes: &[u8]) -> std::io::Result<()> 
             Err(e)
         }
     }
+}
+
+/// The file a path that names nothing yet stands for: the path itself, or, for
+/// a symbolic link to nothing, the file at the end of its links, which the
+/// export creates.
+fn follow_link(path: &std::path::Path) -> std::io::Result<std::path::PathBuf> {
+    let mut at = path.to_path_buf();
+    // A bound on the links followed, as the system's own (ELOOP).
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&at) {
+            Ok(meta) if meta.file_type().is_symlink() => {
+                let target = std::fs::read_link(&at)?;
+                at = match at.parent() {
+                    Some(folder) if target.is_relative() => folder.join(target),
+                    _ => target,
+                };
+            }
+            Ok(_) => return Ok(at),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(at),
+            Err(e) => return Err(e),
+        }
+    }
+    Err(std::io::Error::new(std::io::ErrorKind::InvalidInput, "too many levels of symbolic links"))
+}
+
+/// Refuses a model with `[[impacts]]`: exported code is a right-hand side with
+/// no events, and would carry the motion through each surface as if it were not
+/// there (an exported bouncing ball falls through its floor). Refused rather than
+/// exported without a word; the smooth motion between impacts is the export of
+/// the model without its `[[impacts]]` tables.
+fn refuse_impacts(d: &Derivation) -> Result<(), ModelError> {
+    let Some(first) = d.model().impacts.first() else { return Ok(()) };
+    Err(ModelError::at(
+        first.name_span.clone(),
+        format!(
+            "impact '{}' cannot be exported: exported code has no events, so its motion would pass through the surface {} = 0 as if it were not there",
+            first.name,
+            d.pool().display(first.surface.expr)
+        ),
+    )
+    .with_help(
+        "to export the smooth motion between impacts, export a copy of the model without its [[impacts]] tables, and apply the restitution law where the calling program finds φ = 0 (derive prints the law, ∇φ and the normal velocity)",
+    ))
 }
 
 /// The symbols exported code reads, in the order of a tape's inputs: the
@@ -117,5 +180,61 @@ fn hamiltonian(d: &Derivation) -> ExprId {
     match (d.energy, d.hamiltonian_is_energy) {
         (Some(e), Some(true)) => e,
         _ => d.energy_function,
+    }
+}
+
+#[cfg(all(test, unix))]
+mod tests {
+    use super::write_whole;
+    use std::os::unix::fs::FileTypeExt;
+    use std::path::PathBuf;
+
+    fn scratch(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("lagrange-write-whole-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    /// A pipe is written into and stays a pipe: renaming onto it would have put
+    /// a regular file in its place (as root, `-o /dev/null` replaced /dev/null).
+    #[test]
+    fn a_pipe_is_written_into_not_replaced() {
+        let dir = scratch("fifo");
+        let fifo = dir.join("out.c");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs");
+        assert!(made.success());
+        let reader = {
+            let fifo = fifo.clone();
+            std::thread::spawn(move || std::fs::read(fifo).expect("the pipe reads"))
+        };
+        write_whole(&fifo, b"int main;\n").expect("written into the pipe");
+        assert_eq!(reader.join().unwrap(), b"int main;\n");
+        assert!(std::fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo(), "the pipe is still a pipe");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A link is followed: the file it names gets the export, the link stays a
+    /// link, also when it names a file not made yet.
+    #[test]
+    fn a_link_is_followed_and_kept() {
+        let dir = scratch("link");
+        let target = dir.join("model.c");
+        std::fs::write(&target, "old").unwrap();
+        let link = dir.join("link.c");
+        std::os::unix::fs::symlink("model.c", &link).unwrap();
+        write_whole(&link, b"new").unwrap();
+        assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+        assert_eq!(std::fs::read(&target).unwrap(), b"new");
+        let dangling = dir.join("later.c");
+        std::os::unix::fs::symlink(dir.join("made_now.c"), &dangling).unwrap();
+        write_whole(&dangling, b"made").unwrap();
+        assert!(std::fs::symlink_metadata(&dangling).unwrap().file_type().is_symlink());
+        assert_eq!(std::fs::read(dir.join("made_now.c")).unwrap(), b"made");
+        let folder = dir.join("folder");
+        std::fs::create_dir(&folder).unwrap();
+        let err = write_whole(&folder, b"x").unwrap_err();
+        assert!(err.to_string().contains("folder"), "{err}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

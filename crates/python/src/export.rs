@@ -1,6 +1,7 @@
 //! `Model.export(to, path)`: the model's equations as a C99 file, a numpy
 //! module or an FMI 2.0 FMU, as `lagrange export --to` writes them
-//! (`mech::export`), written whole or not at all.
+//! (`mech::export`), written whole or not at all, and never over the model's
+//! own file.
 
 use crate::errors::{self, guarded};
 use crate::model::Derived;
@@ -13,6 +14,7 @@ impl Derived {
     /// Writes the export `to` ("c", "python" or "fmu") to `path`.
     fn export(&self, py: Python<'_>, to: &str, path: PathBuf) -> PyResult<()> {
         guarded("exporting the model", || {
+            self.refuse_own_file(&path)?;
             // The derivation with the inputs as symbols: the export takes them as arguments.
             let d = self.shown();
             let version = env!("CARGO_PKG_VERSION");
@@ -33,6 +35,31 @@ impl Derived {
 }
 
 impl Derived {
+    /// Refuses `path` where it is the model's own file, by any name (a link,
+    /// another spelling): the export would replace the model, which the CLI
+    /// refuses too. Only a file that exists can be the model.
+    fn refuse_own_file(&self, path: &std::path::Path) -> PyResult<()> {
+        let (Ok(model), Ok(out)) = (std::fs::metadata(&self.file), std::fs::metadata(path)) else { return Ok(()) };
+        #[cfg(unix)]
+        let same = {
+            use std::os::unix::fs::MetadataExt;
+            model.dev() == out.dev() && model.ino() == out.ino()
+        };
+        #[cfg(not(unix))]
+        let same = {
+            let _ = (model, out);
+            std::fs::canonicalize(&self.file).ok() == std::fs::canonicalize(path).ok()
+        };
+        if same {
+            return Err(PyValueError::new_err(format!(
+                "{} is the model's own file {}: the export would replace it; choose another path",
+                path.display(),
+                self.file
+            )));
+        }
+        Ok(())
+    }
+
     /// The FMU: its sources, the binary from the system's C compiler, the archive.
     fn fmu(&self, py: Python<'_>, path: &std::path::Path) -> PyResult<()> {
         use mech::export::fmu;

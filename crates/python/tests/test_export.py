@@ -160,3 +160,30 @@ def test_model_export_writes_what_the_cli_writes(tmp_path):
         kink.export("python", kept)
     assert e.value.kind == "unsupported"
     assert kept.read_text() == "# an earlier export\n"
+
+
+def test_an_export_never_replaces_the_model_it_comes_from(tmp_path):
+    import lagrange
+
+    model = tmp_path / "pendulum.toml"
+    text = (EXAMPLES / "pendulum.toml").read_text()
+    model.write_text(text)
+    link = tmp_path / "link.c"
+    link.symlink_to(model)
+    pendulum = lagrange.load(model)
+    for path in (model, tmp_path / "." / "pendulum.toml", link):
+        with pytest.raises(ValueError, match="the model's own file"):
+            pendulum.export("c", path)
+    assert model.read_text() == text
+    pendulum.export("c", tmp_path / "pendulum.c")
+    assert "lagrange_rhs" in (tmp_path / "pendulum.c").read_text()
+
+
+def test_a_model_with_impacts_is_refused(tmp_path):
+    import lagrange
+
+    ball = lagrange.load(EXAMPLES / "impacts" / "bouncing_ball.toml")
+    for to in ("c", "python", "fmu"):
+        with pytest.raises(lagrange.ModelError, match="impact 'floor' cannot be exported"):
+            ball.export(to, tmp_path / f"ball.{to}")
+        assert not (tmp_path / f"ball.{to}").exists()

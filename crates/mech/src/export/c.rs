@@ -28,6 +28,7 @@ pub const SINGULAR_PIVOT_RATIO: f64 = 1e-14;
 ///   `lagrange_constraint_rates` (A q' + a_t), `lagrange_constraint_jacobian`
 ///   (A) and `lagrange_multipliers` (λ).
 pub fn to_c(d: &Derivation, version: &str) -> Result<String, ModelError> {
+    super::refuse_impacts(d)?;
     let model = d.model();
     let reads = Reads::new(d, &[]);
     let inputs = d.inputs().len();

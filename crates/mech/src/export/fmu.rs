@@ -74,20 +74,21 @@ pub fn sources(d: &Derivation, version: &str, identifier: &str) -> Result<Source
     let env = |name: &str| model.parameter(name);
 
     let mut variables = Vec::new();
-    for (i, name) in names.iter().enumerate() {
-        variables.push(Variable::state(name, &format!("coordinate {name}"), start[i]));
+    let states: Vec<String> = names.iter().map(|name| fmi_name("coordinate", name)).collect();
+    for (i, (name, state)) in names.iter().zip(&states).enumerate() {
+        variables.push(Variable::state(state, &format!("coordinate {name}"), start[i]));
     }
-    for (i, name) in names.iter().enumerate() {
-        variables.push(Variable::state(&format!("{name}'"), &format!("velocity of {name}"), start[n + i]));
+    for (i, (name, state)) in names.iter().zip(&states).enumerate() {
+        variables.push(Variable::state(&format!("{state}'"), &format!("velocity of {name}"), start[n + i]));
     }
-    for (i, name) in names.iter().enumerate() {
-        variables.push(Variable::derivative(&format!("der({name})"), i + 1));
+    for (i, state) in states.iter().enumerate() {
+        variables.push(Variable::derivative(&format!("der({state})"), i + 1));
     }
-    for (i, name) in names.iter().enumerate() {
-        variables.push(Variable::derivative(&format!("der({name}')"), n + i + 1));
+    for (i, state) in states.iter().enumerate() {
+        variables.push(Variable::derivative(&format!("der({state}')"), n + i + 1));
     }
     for p in &model.parameters {
-        variables.push(Variable::parameter(&p.name, "parameter", p.value));
+        variables.push(Variable::parameter(&fmi_name("parameter", &p.name), "parameter", p.value));
     }
     for u in &model.inputs {
         let expression = d.pool().display(u.value.expr).to_string();
@@ -95,7 +96,7 @@ pub fn sources(d: &Derivation, version: &str, identifier: &str) -> Result<Source
         let at_zero = d.pool().eval(u.value.expr, &|name: &str| if name == "t" { Some(0.0) } else { env(name) });
         let value = at_zero.ok().filter(|v| v.is_finite()).unwrap_or(0.0);
         variables.push(Variable {
-            name: u.name.clone(),
+            name: fmi_name("input", &u.name),
             description: format!("input {} (while never set: {expression})", u.name),
             attributes: "causality=\"input\" variability=\"continuous\"".into(),
             real: format!("<Real start=\"{}\"/>", number(value)),
@@ -191,6 +192,18 @@ impl Variable {
             attributes: "causality=\"output\" variability=\"continuous\" initial=\"calculated\"".into(),
             real: "<Real/>".into(),
         }
+    }
+}
+
+/// The FMU's name for the model's symbol `name`, a `kind` of symbol
+/// ("coordinate", "parameter", "input"): the name itself, but for `time`, which
+/// FMI tools take for the clock (FMPy's results and input signals have a column
+/// `time`, and the coordinate's would be lost in it), so it is `coordinate.time`.
+fn fmi_name(kind: &str, name: &str) -> String {
+    if name == "time" {
+        format!("{kind}.{name}")
+    } else {
+        name.to_string()
     }
 }
 
@@ -385,6 +398,28 @@ mod tests {
         assert_eq!(a.len(), 38);
         assert!(a.starts_with('{') && a.ends_with('}'));
         assert_eq!(a.matches('-').count(), 4);
+    }
+
+    /// A symbol named `time` would be taken for the clock by FMI tools.
+    #[test]
+    fn a_symbol_named_time_is_not_the_fmus_time() {
+        let d = crate::test_models::derive(
+            "coordinates = [\"time\", \"y\"]\nlagrangian = \"m/2*(time'^2 + y'^2) - time^2 - time*y\"\n\
+             [parameters]\nm = 1.0\n[initial]\ntime = 0.5\n",
+        );
+        let description = sources(&d, "0", "clock").expect("the FMU's sources").model_description;
+        for name in
+            ["coordinate.time", "coordinate.time'", "der(coordinate.time)", "der(coordinate.time')", "y", "der(y)"]
+        {
+            assert!(description.contains(&format!("name=\"{name}\"")), "no variable {name}:\n{description}");
+        }
+        assert!(!description.contains("name=\"time\""), "{description}");
+        let d = crate::test_models::derive(
+            "coordinates = [\"x\"]\nlagrangian = \"x'^2/2 - time*x^2/2\"\n[parameters]\ntime = 2.0\n[initial]\nx = 1.0\n",
+        );
+        let description = sources(&d, "0", "clock").expect("the FMU's sources").model_description;
+        assert!(description.contains("name=\"parameter.time\""), "{description}");
+        assert!(!description.contains("name=\"time\""), "{description}");
     }
 
     #[test]

@@ -16,6 +16,7 @@ use sym::{ExprId, Func, Node, Pool};
 /// `constraint_rates`, `constraint_jacobian` and `multipliers`. A model with
 /// `abs()` in its equations is refused: its Jacobian has no value at the kink.
 pub fn to_python(d: &Derivation, version: &str) -> Result<String, ModelError> {
+    super::refuse_impacts(d)?;
     let model = d.model();
     let n = d.q.len();
     let constraints = &d.constraints().list;
