@@ -29,6 +29,11 @@ fn broken_urdfs_exit_2_at_their_place() {
         ("two_parents", "7:66", "link 'b' is the child of joints 'k' and 'l'"),
         ("no_inertial", "3:3", "link 'arm' moves (joint 'j' is continuous) but it has no <inertial>"),
         ("bad_number", "5:18", "`xyz` is \"0 0 one\": 'one' is not a finite number"),
+        (
+            "no_moving_joint",
+            "3:3",
+            "the robot has only fixed joints: every link is welded to the root link 'base_link'",
+        ),
     ];
     for (name, at, message) in cases {
         let path = format!("crates/cli/tests/bad_urdf/{name}.urdf");

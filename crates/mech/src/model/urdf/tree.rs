@@ -241,6 +241,22 @@ pub(crate) fn plan(robot: &Robot, floating_base: bool) -> Result<Plan, ModelErro
         let lost = (0..n_links).find(|l| place[*l].is_none()).unwrap_or_default();
         return Err(cycle(robot, &parent_joint, lost));
     }
+    if coordinates.is_empty() {
+        // A model without coordinates has nothing to derive or run: say so here,
+        // at the URDF, rather than let every command refuse the written model.
+        let root_link = &robot.links[root];
+        let joints = if robot.joints.is_empty() { "no joint" } else { "only fixed joints" };
+        return Err(ModelError::at(
+            root_link.span.clone(),
+            format!(
+                "the robot has {joints}: every link is welded to the root link '{}', so nothing moves and the model would have no coordinates",
+                root_link.name
+            ),
+        )
+        .with_help(
+            "a robot that moves as a whole (a quadrotor, a satellite) needs a floating base: six coordinates for its root link; otherwise give it a revolute, continuous or prismatic joint",
+        ));
+    }
 
     // Inertials, summed per body about its reference point.
     let mut grounded = Vec::new();
@@ -453,6 +469,18 @@ mod tests {
         let span = err.span.clone().expect("a place");
         assert!(text[span.start..].starts_with(at), "at {:?}, expected {at:?}: {}", &text[span.start..], err.message);
         assert!(err.message.contains(message), "{}", err.message);
+    }
+
+    /// A robot with nothing that moves is refused at its root link, not written
+    /// as a model without coordinates; with a floating base it moves as a whole.
+    #[test]
+    fn a_robot_without_moving_joints_is_refused_unless_its_base_floats() {
+        let only_fixed = [joint("weld", "fixed", "base", "arm")];
+        check_error(&["base", "arm"], &only_fixed, "<link name=\"base\"", "only fixed joints");
+        check_error(&["base"], &[], "<link name=\"base\"", "the robot has no joint");
+        let text = format!(r#"<robot name="r"><link name="base">{INERTIAL}</link></robot>"#);
+        let floating = plan(&super::super::xml::read(&text).expect("the XML"), true).expect("a floating base moves");
+        assert_eq!(floating.coordinates.len(), 6);
     }
 
     #[test]
