@@ -223,3 +223,25 @@ fn sweep_section_options_that_do_not_go_together_exit_2() {
         assert_eq!(r.code, Some(2), "{}", r.describe());
     }
 }
+
+/// A section condition without a value where the motion goes (sqrt(x) at
+/// x < 0) ends the run naming the condition, the time and the state, where
+/// it once said "event function 0 is not finite".
+#[test]
+fn a_condition_without_a_value_is_named_with_the_state() {
+    let model = TempFile::with_text("section-undefined", OSCILLATORS);
+    let r = lagrange(&["simulate", model.path(), "--until", "10", "--section", "sqrt(x) = 0.5", "--summary", "json"]);
+    assert_eq!(r.code, Some(1), "{}", r.describe());
+    assert!(r.stderr.contains("the condition `sqrt(x) = 0.5` has no value at t = "), "{}", r.describe());
+    assert!(r.stderr.contains("(x = -"), "the state is named: {}", r.describe());
+    assert!(!r.stderr.contains("event function"), "{}", r.describe());
+    let summary = r.json();
+    assert_eq!(summary["failure_reason"]["code"], "undefined_condition", "{}", r.describe());
+    assert_eq!(summary["failure_reason"]["condition"], "sqrt(x) = 0.5", "{}", r.describe());
+    let t = summary["failure_reason"]["t"].as_f64().unwrap();
+    // x = sin t turns negative at t = π; the condition is evaluated at the steps'
+    // ends, the first of them past π.
+    assert!(t > PI && t < 2.0 * PI, "t = {t}");
+    let x: f64 = r.stderr.split("(x = ").nth(1).and_then(|s| s.split(',').next()).unwrap().parse().unwrap();
+    assert!(x < 0.0 && (x - t.sin()).abs() < 1e-4, "the state at t = {t} is x = sin t, not {x}");
+}

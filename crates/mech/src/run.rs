@@ -297,6 +297,7 @@ fn drive(
     }
     events.extend(body::guard_events(guards));
     let impact_labels: Vec<[String; 2]> = impacts.as_ref().map_or_else(Vec::new, |i| i.labels.clone());
+    let impact_names: Vec<String> = impacts.as_ref().map_or_else(Vec::new, |i| i.names.clone());
     let impacts = impacts.map(RefCell::new);
     // Set while the row after an impact is handed over: that impact's index.
     let after_impact: Cell<Option<usize>> = Cell::new(None);
@@ -344,7 +345,7 @@ fn drive(
         };
         if let Some(i) = &impacts {
             if let Some((k, phi)) = i.borrow_mut().crossed(obs.t, &row.q, &row.qd, layout) {
-                let name = &impact_labels[k][0]["impact ".len()..impact_labels[k][0].len() - " before".len()];
+                let name = &impact_names[k];
                 row_error = Some((
                     RunFailure::SurfaceCrossed { t: obs.t, impact: name.to_string() },
                     format!(
@@ -519,6 +520,36 @@ fn drive(
                 }
             }
             conclude(report, summary.stop, &conditions, row_error)
+        }
+        Err(SolveError::EventNonFinite { event, t }) => {
+            // Name the condition and the state, not "event function k".
+            let (condition, what) = if event < first_impact {
+                let text = conditions[event].0.text.clone();
+                (text.clone(), format!("the condition `{text}`"))
+            } else if event < first_guard {
+                let name = impact_names[event - first_impact].clone();
+                (name.clone(), format!("the surface of impact '{name}'"))
+            } else {
+                ("the gimbal guard".to_string(), "a body's gimbal guard".to_string())
+            };
+            // The state at t: the event was evaluated there, within the last step
+            // (dense output), or at the step's end.
+            let mut y = solver.state().to_vec();
+            if solver.interpolate(t, &mut y).is_err() {
+                y = solver.state().to_vec();
+            }
+            let state = d
+                .coordinate_names()
+                .iter()
+                .zip(&y)
+                .map(|(name, value)| format!("{name} = {}", num::Shortest(*value)))
+                .collect::<Vec<_>>()
+                .join(", ");
+            let message = format!(
+                "{what} has no value at t = {} ({state}): it must be defined wherever the motion goes",
+                num::Shortest(t)
+            );
+            Err(failed(report, RunFailure::UndefinedCondition { t, condition }, message))
         }
         Err(e) => {
             let at = (solver.t(), solver.state().to_vec());

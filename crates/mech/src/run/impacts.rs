@@ -58,6 +58,8 @@ pub(crate) struct Impacts {
     system: System,
     /// "impact NAME before" and "impact NAME after", the rows' event labels.
     pub(crate) labels: Vec<[String; 2]>,
+    /// The impacts' names, in the order of their events.
+    pub(crate) names: Vec<String>,
     pub(crate) tallies: Vec<ImpactTally>,
 }
 
@@ -116,6 +118,7 @@ impl Impacts {
                 .iter()
                 .map(|l| [format!("impact {} before", l.name), format!("impact {} after", l.name)])
                 .collect(),
+            names: laws.iter().map(|l| l.name.clone()).collect(),
             tallies: laws
                 .iter()
                 .map(|l| ImpactTally { name: l.name.clone(), count: 0, energy_lost: 0.0, fastest: 0.0 })

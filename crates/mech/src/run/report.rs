@@ -225,6 +225,14 @@ pub enum RunFailure {
         /// Impacts so far, on every surface.
         impacts: usize,
     },
+    /// A condition the run watches (a stop condition, a section, an impact's
+    /// surface) has no value at the state reached (`sqrt(x) = 0.5` at x < 0).
+    UndefinedCondition {
+        /// When.
+        t: f64,
+        /// The condition as written, or the impact's name.
+        condition: String,
+    },
     /// A row was found past an impact surface that no event saw crossed.
     SurfaceCrossed {
         /// When.
@@ -246,6 +254,7 @@ impl RunFailure {
             RunFailure::Row { .. } => "row",
             RunFailure::StepBudget(_) => "step_budget",
             RunFailure::Zeno { .. } => "zeno",
+            RunFailure::UndefinedCondition { .. } => "undefined_condition",
             RunFailure::SurfaceCrossed { .. } => "surface_crossed",
         }
     }
