@@ -185,3 +185,14 @@ def test_the_file_of_an_error_in_text_is_none():
         lagrange.Model.from_toml(BAD)
     assert info.value.file is None and info.value.line == 3
     assert str(info.value).startswith("<string>:3:")
+
+
+def test_a_matrix_is_indexed_by_entry_or_by_row():
+    pendulum = lagrange.load(EXAMPLES / "double_pendulum.toml").derive()
+    m = pendulum.mass_matrix
+    assert [str(e) for e in m[0]] == [str(e) for e in list(m)[0]] and len(m[1]) == 2
+    assert str(m[0, 1]) == str(m[0][1]) == str(list(m)[0][1])
+    with pytest.raises(IndexError, match=r"two indices, m\[i, j\]"):
+        m[0, 1, 0]
+    with pytest.raises(TypeError, match=r"m\[i, j\] \(an entry\) or m\[i\] \(a row\)"):
+        m[0:1]

@@ -14,7 +14,7 @@ pass a dict: ``e({"ph'": 0.3})``. Parameters not given take the model's values.
 
 from __future__ import annotations
 
-from typing import Any, Dict, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 
@@ -118,9 +118,22 @@ class Matrix:
     def __init__(self, rows: Sequence[Sequence[Expr]]) -> None:
         self.rows = [list(r) for r in rows]
 
-    def __getitem__(self, ij: Tuple[int, int]) -> Expr:
-        i, j = ij
-        return self.rows[i][j]
+    @overload
+    def __getitem__(self, ij: Tuple[int, int]) -> Expr: ...
+
+    @overload
+    def __getitem__(self, ij: int) -> List[Expr]: ...
+
+    def __getitem__(self, ij: Union[int, Tuple[int, int]]) -> Union[Expr, List[Expr]]:
+        """``m[i, j]`` is an entry and ``m[i]`` a row, as iterating gives rows."""
+        if isinstance(ij, tuple):
+            if len(ij) != 2:
+                raise IndexError(f"a matrix takes two indices, m[i, j], not {len(ij)}")
+            i, j = ij
+            return self.rows[i][j]
+        if isinstance(ij, slice):
+            raise TypeError("a matrix is indexed by m[i, j] (an entry) or m[i] (a row), not by a slice")
+        return list(self.rows[ij])
 
     def __len__(self) -> int:
         return len(self.rows)
