@@ -285,13 +285,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     if let Some(code) = code {
         eprintln!("{code}");
     }
-    // Some rows failing is what a sweep finds out; all of them, that it found nothing.
-    match &tally.first_failure {
-        Some((run, reason)) if tally.failed == tally.rows => {
-            Err(Failure::run(format!("every run failed ({}); the first, run {run}: {reason}", tally.rows)))
-        }
-        _ => Ok(()),
-    }
+    tally.verdict()
 }
 
 /// The rows written so far, how many of them failed, and the first that did.
@@ -312,6 +306,18 @@ impl Tally {
         }
         if let Some(map) = map {
             map.add(row);
+        }
+    }
+
+    /// The exit of a sweep with these rows, run or merged alike: some rows
+    /// failing is what a sweep finds out (exit 0); all of them, that it found
+    /// nothing (exit 1, with the first run's reason).
+    fn verdict(&self) -> Result<(), Failure> {
+        match &self.first_failure {
+            Some((run, reason)) if self.failed == self.rows => {
+                Err(Failure::run(format!("every run failed ({}); the first, run {run}: {reason}", self.rows)))
+            }
+            _ => Ok(()),
         }
     }
 }
@@ -383,20 +389,24 @@ fn merge(args: &Args, out: &Path) -> Result<(), Failure> {
         shards.push((name, table));
     }
     let table = mech::merge(&shards).map_err(|e| Failure::usage(e.to_string()))?;
-    let map = match &args.heatmap {
-        Some(_) => {
-            let mut map = HeatMap::new(&table.header, &args.color).map_err(heatmap_usage)?;
-            table.rows.iter().for_each(|row| map.add(row));
-            Some(map)
-        }
+    let mut map = match &args.heatmap {
+        Some(_) => Some(HeatMap::new(&table.header, &args.color).map_err(heatmap_usage)?),
         None => None,
     };
+    let mut tally = Tally::default();
+    table.rows.iter().for_each(|row| tally.add(row, map.as_mut()));
     write_csv(&table, out)?;
     if let (Some(svg), Some(map)) = (&args.heatmap, &map) {
         crate::files::write_figure(svg, "the heat map", map.svg()).map_err(Failure::run)?;
     }
-    eprintln!("merged {} shards: {} runs into {}", shards.len(), table.rows.len(), out.display());
-    Ok(())
+    eprintln!(
+        "merged {} shards: {} runs into {}; {} failed",
+        shards.len(),
+        table.rows.len(),
+        out.display(),
+        tally.failed
+    );
+    tally.verdict()
 }
 
 /// Writes a merged table to `out`.

@@ -52,6 +52,25 @@ fn rows_fail(model: &str, extra: &[&str], expect: &[&str]) {
             assert!(row.contains(e), "expected `{e}` in the row {row}");
         }
     }
+    // The same rule for the shards and for their merge: every row failed, exit 1.
+    let parts = [TempFile::new("sweep-shard", "csv"), TempFile::new("sweep-shard", "csv")];
+    for (k, part) in parts.iter().enumerate() {
+        let shard = format!("{k}/2");
+        let mut args =
+            vec!["sweep", model, "--until", "1", "--grid", "g=1:2:2", "--shard", &shard, "--out", part.path()];
+        args.extend(extra);
+        let r = run(&args);
+        assert_eq!(r.code, Some(1), "{}", r.describe());
+    }
+    let merged = TempFile::new("sweep-merged", "csv");
+    let r = run(&["sweep", "--merge", merged.path(), parts[0].path(), parts[1].path()]);
+    assert_eq!(r.code, Some(1), "{}", r.describe());
+    assert!(r.stderr.contains("merged 2 shards: 2 runs into"), "{}", r.describe());
+    assert!(r.stderr.contains("every run failed (2); the first, run 0: "), "{}", r.describe());
+    assert_eq!(
+        std::fs::read_to_string(merged.path()).unwrap().lines().filter(|l| l.starts_with(char::is_numeric)).count(),
+        2
+    );
 }
 
 const STARTING: [&[&str]; 4] =
