@@ -164,6 +164,11 @@ fn a_sweep_of_sections_is_each_runs_simulate_section_in_grid_order() {
         ]);
         assert!(r.stderr.contains("3 runs, 0 failed, on the section x = 0"), "{}", r.describe());
         let sweep = Csv::read(out.path());
+        // A grid over a start (y') names its column apart from the point's y'.
+        let name = grid.split('=').next().unwrap();
+        assert_eq!(sweep.header.iter().filter(|h| h.as_str() == name).count(), 1, "{:?}", sweep.header);
+        let grid_column = if name == "y'" { "grid.y'" } else { name };
+        assert_eq!(sweep.header[1], grid_column, "{:?}", sweep.header);
         let runs = sweep.column("run");
         assert!(runs.windows(2).all(|w| w[0] <= w[1]), "grid order");
         assert_eq!(runs.iter().fold(0.0f64, |m, &r| m.max(r)), 2.0);

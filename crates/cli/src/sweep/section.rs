@@ -45,11 +45,19 @@ struct Points {
 /// Runs the sweep and writes its points and figure.
 pub fn run(d: &Derivation, grid: &Grid, opts: &Options<'_>) -> Result<(), Failure> {
     let section = crate::simulate::parse_section(d, opts.condition, opts.axes)?;
-    let mut columns = vec!["run".to_string()];
-    columns.extend(grid.axes.iter().map(|a| a.name.clone()));
     let mut row_columns = mech::row_columns(d);
     let extra: Vec<usize> = (0..2).filter(|&k| !row_columns.contains(&section.axes()[k])).collect();
     row_columns.extend(extra.iter().map(|&k| section.axes()[k].clone()));
+    // A grid over a coordinate's start would name the column of that coordinate
+    // at the point a second time: the grid's is `grid.NAME`.
+    let mut columns = vec!["run".to_string()];
+    columns.extend(grid.axes.iter().map(|a| {
+        if row_columns.contains(&a.name) {
+            format!("grid.{}", a.name)
+        } else {
+            a.name.clone()
+        }
+    }));
     columns.extend(row_columns);
     let header = format!("{}\n", columns.join(","));
     let write_error = |e: &std::io::Error| match opts.out {
