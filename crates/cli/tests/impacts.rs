@@ -367,3 +367,25 @@ fn a_sweep_of_sections_runs_the_impacts() {
     assert!(points.len() >= 5);
     assert_eq!(run1, points, "run 1 (e = 1) is simulate's run with e = 1");
 }
+
+/// A ball set on its floor at rest is a resting contact, which runs do not
+/// model: the run ends saying so, not advising more samples (which cannot
+/// help). A ball that has bounced and is then found past the floor is still
+/// the missed crossing it was.
+#[test]
+fn a_start_resting_on_a_surface_is_named_as_resting_contact() {
+    let ball = example("bouncing_ball.toml");
+    let r = lagrange(&["simulate", &ball, "--until", "1", "--set", "h0=0", "--summary", "json"]);
+    assert_eq!(r.code, Some(1), "{}", r.describe());
+    assert!(
+        r.stderr.contains("the motion starts resting on the surface of impact 'floor'")
+            && r.stderr.contains("resting contact is not modelled"),
+        "{}",
+        r.describe()
+    );
+    assert!(!r.stderr.contains("more output samples"), "{}", r.describe());
+    assert_eq!(r.json()["failure_reason"]["code"], "surface_crossed");
+    // Newton's cradle starts with balls touching at rest and nothing pressing them: it runs.
+    let (code, _, _) = simulate(&example("newtons_cradle.toml"), &["--until", "1"]);
+    assert_eq!(code, Some(0));
+}

@@ -271,7 +271,7 @@ fn drive(
     let conditions: Vec<(&StopCondition, bool)> =
         config.stop_when.iter().map(|c| (c, true)).chain(config.crossings.iter().map(|c| (c, false))).collect();
     let first_impact = conditions.len();
-    let impacts = impacts::Impacts::new(d, dynamics).map_err(RunError::Input)?;
+    let mut impacts = impacts::Impacts::new(d, dynamics).map_err(RunError::Input)?;
     let first_guard = first_impact + impacts.as_ref().map_or(0, |i| i.len());
     let mut events: Vec<Event<'_>> = Vec::new();
     for &(cond, terminal) in &conditions {
@@ -298,6 +298,11 @@ fn drive(
     events.extend(body::guard_events(guards));
     let impact_labels: Vec<[String; 2]> = impacts.as_ref().map_or_else(Vec::new, |i| i.labels.clone());
     let impact_names: Vec<String> = impacts.as_ref().map_or_else(Vec::new, |i| i.names.clone());
+    // The surfaces the start rests on, to tell a resting contact from a missed bounce.
+    let resting_at_start: Vec<bool> = match impacts.as_mut() {
+        Some(i) => i.resting(0.0, &initial.0, &initial.1, layout),
+        None => Vec::new(),
+    };
     let impacts = impacts.map(RefCell::new);
     // Set while the row after an impact is handed over: that impact's index.
     let after_impact: Cell<Option<usize>> = Cell::new(None);
@@ -344,16 +349,24 @@ fn drive(
             _ => None,
         };
         if let Some(i) = &impacts {
-            if let Some((k, phi)) = i.borrow_mut().crossed(obs.t, &row.q, &row.qd, layout) {
+            let crossed = i.borrow_mut().crossed(obs.t, &row.q, &row.qd, layout);
+            if let Some((k, phi)) = crossed {
                 let name = &impact_names[k];
-                row_error = Some((
-                    RunFailure::SurfaceCrossed { t: obs.t, impact: name.to_string() },
+                let never_struck = i.borrow().tallies[k].count == 0;
+                let message = if resting_at_start[k] && never_struck {
+                    format!(
+                        "the motion starts resting on the surface of impact '{name}' (in contact, not moving off it) and is pressed through it (it is {} at t = {}): resting contact is not modelled, only impacts; start above the surface or moving off it",
+                        num::Shortest(phi),
+                        num::Shortest(obs.t)
+                    )
+                } else {
                     format!(
                         "the surface of impact '{name}' is crossed at t = {} (it is {} there) without an impact found: two crossings within one probe of the events; more output samples or a tighter tolerance find them",
                         num::Shortest(obs.t),
                         num::Shortest(phi)
-                    ),
-                ));
+                    )
+                };
+                row_error = Some((RunFailure::SurfaceCrossed { t: obs.t, impact: name.to_string() }, message));
                 return ControlFlow::Break(());
             }
         }

@@ -166,6 +166,20 @@ impl Impacts {
         (o[0], o[1], &o[2..2 + self.n], o[w - 1])
     }
 
+    /// Which surfaces the state (t, q, q') rests on: in contact (|φ| within
+    /// [`CONTACT_GAP`]) and not moving off (v_n ≤ 0). A surface crossed later
+    /// without an impact was then a resting contact, which runs do not model,
+    /// not a bounce the events missed.
+    pub(crate) fn resting(&mut self, t: f64, q: &[f64], qd: &[f64], layout: &Layout) -> Vec<bool> {
+        self.eval(t, q, qd, layout);
+        (0..self.len())
+            .map(|k| {
+                let (phi, v_n, _, _) = self.of(k);
+                phi.abs() <= CONTACT_GAP && v_n <= 0.0
+            })
+            .collect()
+    }
+
     /// The surface a row has crossed by more than [`CROSSED_BY`] (an impact
     /// the events did not see), with φ there.
     pub(crate) fn crossed(&mut self, t: f64, q: &[f64], qd: &[f64], layout: &Layout) -> Option<(usize, f64)> {
