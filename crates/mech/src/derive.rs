@@ -569,6 +569,13 @@ impl Derivation {
         self.model.coordinates.iter().map(|c| c.name.as_str()).collect()
     }
 
+    /// The coordinates at `q` as messages show them: `(x = 0.6, y = -0.8)`.
+    pub(crate) fn point_text(&self, q: &[f64]) -> String {
+        let parts: Vec<String> =
+            self.coordinate_names().iter().zip(q).map(|(n, v)| format!("{n} = {}", num::Shortest(*v))).collect();
+        format!("({})", parts.join(", "))
+    }
+
     /// True when M is diagonal (each coordinate's acceleration appears in its own equation only).
     pub fn mass_matrix_is_diagonal(&self) -> bool {
         let n = self.q.len();

@@ -551,16 +551,10 @@ fn drive(
             if solver.interpolate(t, &mut y).is_err() {
                 y = solver.state().to_vec();
             }
-            let state = d
-                .coordinate_names()
-                .iter()
-                .zip(&y)
-                .map(|(name, value)| format!("{name} = {}", num::Shortest(*value)))
-                .collect::<Vec<_>>()
-                .join(", ");
             let message = format!(
-                "{what} has no value at t = {} ({state}): it must be defined wherever the motion goes",
-                num::Shortest(t)
+                "{what} has no value at t = {} {}: it must be defined wherever the motion goes",
+                num::Shortest(t),
+                d.point_text(&y)
             );
             Err(failed(report, RunFailure::UndefinedCondition { t, condition }, message))
         }

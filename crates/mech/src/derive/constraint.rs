@@ -157,10 +157,7 @@ impl Derivation {
             model.parameter(name)
         };
         let pool = self.pool();
-        let point = || {
-            let parts: Vec<String> = names.iter().zip(q).map(|(n, v)| format!("{n} = {}", num::Shortest(*v))).collect();
-            format!("({})", parts.join(", "))
-        };
+        let point = || self.point_text(q);
         for c in &self.constraints.list {
             let value = |e: ExprId| pool.eval(e, &env).unwrap_or(f64::NAN);
             let holonomic = c.kind == ConstraintKind::Holonomic;
